@@ -1,0 +1,57 @@
+# omniloc: one entry point for everything. CMake (build/) builds the C++ and the Verilator models;
+# CTest runs every test kind. `make deps` installs missing Debian packages (as root).
+#
+#   make            build everything (Release)
+#   make test       every test: generated files, lint, formal, RTL cycle tests, host tests
+#   make demo       the whole system on the simulated robot and board
+#   make lint       verilator --lint-only -Wall on every RTL file
+#   make formal     yosys + yosys-smtbmc (z3) proofs
+#   make bitstream  iCEBreaker bitstream with the open iCE40 flow
+#   make bench      benchmarks (each against a naive reference, ratio printed)
+#   make generate   regenerate headers and docs from common/regmap.json
+#   make clean      remove build/
+
+BUILD      ?= build
+BUILD_TYPE ?= Release
+JOBS       ?= $(shell nproc)
+CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
+CTEST      := ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
+
+.PHONY: all deps configure build test demo lint formal bitstream bench generate clean
+
+all: build
+
+deps:
+	@bash scripts/deps.sh
+
+$(BUILD)/CMakeCache.txt: | deps
+	cmake -S . -B $(BUILD) $(CMAKE_GEN) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE)
+
+configure: deps $(BUILD)/CMakeCache.txt
+
+build: configure
+	cmake --build $(BUILD) -j $(JOBS)
+
+test: build
+	$(CTEST)
+
+lint: configure
+	$(CTEST) -L lint
+
+formal: configure
+	$(CTEST) -L formal
+
+demo: build
+	@bash scripts/demo.sh $(BUILD)
+
+bitstream: deps
+	@bash scripts/bitstream.sh $(BUILD)
+
+bench: build
+	@bash scripts/bench.sh $(BUILD)
+
+generate:
+	python3 common/gen_regmap.py
+
+clean:
+	rm -rf $(BUILD)

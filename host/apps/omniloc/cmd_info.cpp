@@ -1,0 +1,45 @@
+// `omniloc version` and `omniloc regmap`: what the host was built against.
+#include <cstdio>
+
+#include "commands.hpp"
+#include "omniloc/regmap.hpp"
+
+namespace omniloc::cli {
+
+namespace {
+const char* access_name(regmap::Access a) {
+  switch (a) {
+    case regmap::Access::kReadOnly: return "RO";
+    case regmap::Access::kReadWrite: return "RW";
+    case regmap::Access::kWriteOneToClear: return "W1C";
+    case regmap::Access::kReadOnlyLatching: return "RO (latches snapshot)";
+  }
+  return "?";
+}
+}  // namespace
+
+int cmd_version(std::span<const std::string_view> args) {
+  if (!args.empty()) {
+    std::fprintf(stderr, "usage: omniloc version\n");
+    return 2;
+  }
+  const auto v = regmap::kVersionValue;
+  std::printf("omniloc host, register map %u.%u.%u, board ID 0x%08X\n", regmap::kVersionMajor.get(v),
+              regmap::kVersionMinor.get(v), regmap::kVersionPatch.get(v), regmap::kIdValue);
+  return 0;
+}
+
+int cmd_regmap(std::span<const std::string_view> args) {
+  if (!args.empty()) {
+    std::fprintf(stderr, "usage: omniloc regmap\n");
+    return 2;
+  }
+  std::printf("%-8s %-18s %s\n", "address", "register", "access");
+  for (const auto& r : regmap::kRegisters) {
+    std::printf("0x%02X     %-18.*s %s\n", r.address, static_cast<int>(r.name.size()), r.name.data(),
+                access_name(r.access));
+  }
+  return 0;
+}
+
+}  // namespace omniloc::cli

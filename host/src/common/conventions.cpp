@@ -1,0 +1,38 @@
+#include "omniloc/conventions.hpp"
+
+#include <cmath>
+
+namespace omniloc {
+
+double wrap_deg(double angle_deg) {
+  double wrapped = std::fmod(angle_deg, 360.0);
+  if (wrapped <= -180.0) wrapped += 360.0;
+  if (wrapped > 180.0) wrapped -= 360.0;
+  return wrapped;
+}
+
+double angle_diff_deg(double a_deg, double b_deg) { return wrap_deg(a_deg - b_deg); }
+
+Eigen::Vector2d robot_to_field(const Eigen::Vector2d& v_robot, double yaw_deg) {
+  const double c = std::cos(deg_to_rad(yaw_deg));
+  const double s = std::sin(deg_to_rad(yaw_deg));
+  return {c * v_robot.x() - s * v_robot.y(), s * v_robot.x() + c * v_robot.y()};
+}
+
+Eigen::Vector2d field_to_robot(const Eigen::Vector2d& v_field, double yaw_deg) {
+  return robot_to_field(v_field, -yaw_deg);
+}
+
+Eigen::Matrix<double, 4, 3> wheel_jacobian(double motor_angle_deg, double center_to_wheel_cm) {
+  const double s = std::sin(deg_to_rad(motor_angle_deg));
+  const double c = std::cos(deg_to_rad(motor_angle_deg));
+  const double r = center_to_wheel_cm;
+  Eigen::Matrix<double, 4, 3> j;
+  j << -s, -c, r,  //
+      -s, c, r,    //
+      s, -c, r,    //
+      s, c, r;
+  return j;
+}
+
+}  // namespace omniloc
