@@ -83,6 +83,10 @@ def verilog(spec, regs):
     out.append("// Register addresses")
     for reg in regs:
         out.append(f"`define OMNILOC_REG_{reg['name']} {aw}'h{reg['addr']:02X}")
+    known = " || ".join(f"((a) == {aw}'h{r['addr']:02X})" for r in regs)
+    writable = " || ".join(f"((a) == {aw}'h{r['addr']:02X})" for r in regs if r["access"] in ("rw", "w1c"))
+    out.append(f"`define OMNILOC_ADDR_KNOWN(a) ({known})")
+    out.append(f"`define OMNILOC_ADDR_WRITABLE(a) ({writable})")
     out.append("")
     out.append("// Register fields: _LSB and _W")
     for reg in regs:

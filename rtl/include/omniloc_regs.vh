@@ -16,9 +16,11 @@
 `define OMNILOC_REG_PERIOD 8'h04
 `define OMNILOC_REG_STATUS 8'h05
 `define OMNILOC_REG_TIMESTAMP 8'h06
+`define OMNILOC_REG_LINK_ERRORS 8'h07
 `define OMNILOC_REG_SNAP_SEQ 8'h08
 `define OMNILOC_REG_SNAP_TIMESTAMP 8'h09
 `define OMNILOC_REG_SNAP_DIR 8'h0A
+`define OMNILOC_REG_SNAP_STATUS 8'h0B
 `define OMNILOC_REG_SNAP_COUNT0 8'h0C
 `define OMNILOC_REG_SNAP_COUNT1 8'h0D
 `define OMNILOC_REG_SNAP_COUNT2 8'h0E
@@ -31,6 +33,8 @@
 `define OMNILOC_REG_ERROR_COUNT1 8'h15
 `define OMNILOC_REG_ERROR_COUNT2 8'h16
 `define OMNILOC_REG_ERROR_COUNT3 8'h17
+`define OMNILOC_ADDR_KNOWN(a) (((a) == 8'h00) || ((a) == 8'h01) || ((a) == 8'h02) || ((a) == 8'h03) || ((a) == 8'h04) || ((a) == 8'h05) || ((a) == 8'h06) || ((a) == 8'h07) || ((a) == 8'h08) || ((a) == 8'h09) || ((a) == 8'h0A) || ((a) == 8'h0B) || ((a) == 8'h0C) || ((a) == 8'h0D) || ((a) == 8'h0E) || ((a) == 8'h0F) || ((a) == 8'h10) || ((a) == 8'h11) || ((a) == 8'h12) || ((a) == 8'h13) || ((a) == 8'h14) || ((a) == 8'h15) || ((a) == 8'h16) || ((a) == 8'h17))
+`define OMNILOC_ADDR_WRITABLE(a) (((a) == 8'h02) || ((a) == 8'h03) || ((a) == 8'h04) || ((a) == 8'h05))
 
 // Register fields: _LSB and _W
 `define OMNILOC_VERSION_PATCH_LSB 0
@@ -58,6 +62,10 @@
 `define OMNILOC_STATUS_OVERRUN_W 1
 `define OMNILOC_STATUS_BAD_WRITE_LSB 5
 `define OMNILOC_STATUS_BAD_WRITE_W 1
+`define OMNILOC_LINK_ERRORS_FRAMING_LSB 0
+`define OMNILOC_LINK_ERRORS_FRAMING_W 16
+`define OMNILOC_LINK_ERRORS_OVERRUN_LSB 16
+`define OMNILOC_LINK_ERRORS_OVERRUN_W 16
 `define OMNILOC_SNAP_DIR_DIR_LSB 0
 `define OMNILOC_SNAP_DIR_DIR_W 4
 

@@ -12,5 +12,7 @@ using Command = int (*)(std::span<const std::string_view> args);
 
 int cmd_version(std::span<const std::string_view> args);
 int cmd_regmap(std::span<const std::string_view> args);
+int cmd_probe(std::span<const std::string_view> args);
+int cmd_builddb(std::span<const std::string_view> args);
 
 }  // namespace omniloc::cli

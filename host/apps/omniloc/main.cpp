@@ -17,6 +17,8 @@ struct Entry {
 constexpr Entry kCommands[] = {
     {"version", "print the host version and the register-map version it speaks", omniloc::cli::cmd_version},
     {"regmap", "print the register map the host was built against", omniloc::cli::cmd_regmap},
+    {"probe", "find omniloc boards on USB, print ID/version/status and live counts", omniloc::cli::cmd_probe},
+    {"builddb", "build the vision feature database (field x camera x grid) with progress", omniloc::cli::cmd_builddb},
 };
 
 void usage(std::FILE* out) {

@@ -38,9 +38,11 @@ inline constexpr std::uint8_t kRegFilter = 0x03;
 inline constexpr std::uint8_t kRegPeriod = 0x04;
 inline constexpr std::uint8_t kRegStatus = 0x05;
 inline constexpr std::uint8_t kRegTimestamp = 0x06;
+inline constexpr std::uint8_t kRegLinkErrors = 0x07;
 inline constexpr std::uint8_t kRegSnapSeq = 0x08;
 inline constexpr std::uint8_t kRegSnapTimestamp = 0x09;
 inline constexpr std::uint8_t kRegSnapDir = 0x0A;
+inline constexpr std::uint8_t kRegSnapStatus = 0x0B;
 inline constexpr std::uint8_t kRegSnapCount0 = 0x0C;
 inline constexpr std::uint8_t kRegSnapCount1 = 0x0D;
 inline constexpr std::uint8_t kRegSnapCount2 = 0x0E;
@@ -69,9 +71,11 @@ inline constexpr Field kPeriodCycles{0, 32};
 inline constexpr Field kStatusIllegal{0, 4};
 inline constexpr Field kStatusOverrun{4, 1};
 inline constexpr Field kStatusBadWrite{5, 1};
+inline constexpr Field kLinkErrorsFraming{0, 16};
+inline constexpr Field kLinkErrorsOverrun{16, 16};
 inline constexpr Field kSnapDirDir{0, 4};
 
-inline constexpr std::array<Register, 22> kRegisters{{
+inline constexpr std::array<Register, 24> kRegisters{{
     {"ID", 0x00, Access::kReadOnly},
     {"VERSION", 0x01, Access::kReadOnly},
     {"CONTROL", 0x02, Access::kReadWrite},
@@ -79,9 +83,11 @@ inline constexpr std::array<Register, 22> kRegisters{{
     {"PERIOD", 0x04, Access::kReadWrite},
     {"STATUS", 0x05, Access::kWriteOneToClear},
     {"TIMESTAMP", 0x06, Access::kReadOnly},
+    {"LINK_ERRORS", 0x07, Access::kReadOnly},
     {"SNAP_SEQ", 0x08, Access::kReadOnlyLatching},
     {"SNAP_TIMESTAMP", 0x09, Access::kReadOnly},
     {"SNAP_DIR", 0x0A, Access::kReadOnly},
+    {"SNAP_STATUS", 0x0B, Access::kReadOnly},
     {"SNAP_COUNT0", 0x0C, Access::kReadOnly},
     {"SNAP_COUNT1", 0x0D, Access::kReadOnly},
     {"SNAP_COUNT2", 0x0E, Access::kReadOnly},

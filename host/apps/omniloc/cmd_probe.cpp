@@ -1,0 +1,190 @@
+// `omniloc probe`: finds omniloc boards on USB, prints ID, version and status, then a live table of
+// window counts and link errors (or one snapshot with --once).
+#include <atomic>
+#include <charconv>
+#include <csignal>
+#include <cstdio>
+#include <optional>
+#include <string>
+
+#include "commands.hpp"
+#include "omniloc/board_client.hpp"
+#include "omniloc/usb_transport.hpp"
+
+namespace omniloc::cli {
+
+namespace {
+
+// SIGINT ends the live table cleanly (CONTROL restored). A signal handler can only reach a
+// process-wide flag; nothing else in the program touches it.
+std::atomic<bool> g_interrupted{false};
+extern "C" void on_sigint(int) { g_interrupted = true; }
+
+void usage(std::FILE* out) {
+  std::fprintf(out,
+               "usage: omniloc probe [--once] [--serial SERIAL] [--baud N] [--enable] [--seconds N]\n"
+               "  Finds omniloc encoder boards (FT2232H 0403:6010, product \"omniloc encoder board\"),\n"
+               "  prints ID, version and status, then streams windows and prints a table of counts and\n"
+               "  errors every 10 windows until Ctrl-C (or --seconds N). --once: one snapshot, then exit.\n"
+               "  --enable sets CONTROL.ENABLE if it is off (it is restored on exit).\n"
+               "  Exit status: 0 success, 1 no board or link failure, 2 bad usage.\n");
+}
+
+std::optional<unsigned long> parse_number(std::string_view s) {
+  unsigned long v = 0;
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec != std::errc() || p != s.data() + s.size()) return std::nullopt;
+  return v;
+}
+
+void print_row(const protocol::Window& w, const protocol::DecoderCounters& dc, const TransportCounters& tc,
+               std::uint64_t retries) {
+  std::printf("%10u %11d %11d %11d %11d  0x%X  0x%02X %7llu %7llu %7llu %7llu %7llu\n", w.seq, w.count[0], w.count[1],
+              w.count[2], w.count[3], w.dir, w.status, static_cast<unsigned long long>(dc.telemetry_lost),
+              static_cast<unsigned long long>(dc.bad_crc + dc.bad_length + dc.unknown_type),
+              static_cast<unsigned long long>(dc.resync_bytes),
+              static_cast<unsigned long long>(tc.line_framing + tc.line_overrun + tc.line_parity + tc.line_break),
+              static_cast<unsigned long long>(retries));
+}
+
+void print_header() {
+  std::printf("%10s %11s %11s %11s %11s  %3s  %4s %7s %7s %7s %7s %7s\n", "seq", "count0", "count1", "count2",
+              "count3", "dir", "stat", "lost", "badfrm", "resync", "lineerr", "retries");
+}
+
+}  // namespace
+
+int cmd_probe(std::span<const std::string_view> args) {
+  bool once = false;
+  bool enable = false;
+  unsigned long seconds = 0;
+  UsbTransportOptions opt;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const auto a = args[i];
+    auto value = [&]() -> std::optional<std::string_view> {
+      if (i + 1 >= args.size()) return std::nullopt;
+      return args[++i];
+    };
+    if (a == "--help" || a == "-h") {
+      usage(stdout);
+      return 0;
+    } else if (a == "--once") {
+      once = true;
+    } else if (a == "--enable") {
+      enable = true;
+    } else if (a == "--serial") {
+      const auto v = value();
+      if (!v) {
+        usage(stderr);
+        return 2;
+      }
+      opt.serial = std::string(*v);
+    } else if (a == "--baud" || a == "--seconds") {
+      const auto v = value();
+      const auto n = v ? parse_number(*v) : std::nullopt;
+      if (!n) {
+        std::fprintf(stderr, "omniloc probe: %.*s needs a number\n", static_cast<int>(a.size()), a.data());
+        return 2;
+      }
+      if (a == "--baud") {
+        opt.baud = static_cast<std::uint32_t>(*n);
+      } else {
+        seconds = *n;
+      }
+    } else {
+      std::fprintf(stderr, "omniloc probe: unknown argument '%.*s'\n", static_cast<int>(a.size()), a.data());
+      usage(stderr);
+      return 2;
+    }
+  }
+
+  const auto boards = find_usb_boards(opt.product);
+  int found = 0;
+  for (const auto& b : boards) {
+    std::printf("FT2232H %03d/%03d  product '%s'  serial '%s'%s%s\n", b.bus, b.address, b.product.c_str(),
+                b.serial.c_str(), b.is_omniloc ? "  <- omniloc board" : "",
+                b.error.empty() ? "" : ("  (" + b.error + ")").c_str());
+    found += b.is_omniloc ? 1 : 0;
+  }
+  if (found == 0) {
+    std::fprintf(stderr,
+                 "omniloc probe: no omniloc board found: no FT2232H (0403:6010) with product \"%s\" on USB "
+                 "(%zu other FT2232H seen). Is the board plugged in, its EEPROM written (firmware/), and the "
+                 "USB device readable by this user?\n",
+                 opt.product.c_str(), boards.size());
+    return 1;
+  }
+
+  UsbTransport usb(opt);
+  BoardClient client(usb);
+  namespace r = regmap;
+  const std::uint32_t id = client.read_register(r::kRegId);
+  if (id != r::kIdValue) {
+    std::fprintf(stderr, "omniloc probe: %s answers ID 0x%08X, not 0x%08X: not an omniloc core\n",
+                 usb.status().description.c_str(), id, r::kIdValue);
+    return 1;
+  }
+  const std::uint32_t version = client.read_register(r::kRegVersion);
+  const std::uint32_t control = client.read_register(r::kRegControl);
+  const std::uint32_t status = client.read_register(r::kRegStatus);
+  const std::uint32_t period = client.read_register(r::kRegPeriod);
+  const std::uint32_t link = client.read_register(r::kRegLinkErrors);
+  std::printf("%s\n", usb.status().description.c_str());
+  std::printf("ID 0x%08X  register map %u.%u.%u (host speaks %u.%u.%u)\n", id, r::kVersionMajor.get(version),
+              r::kVersionMinor.get(version), r::kVersionPatch.get(version), r::kVersionMajor.get(r::kVersionValue),
+              r::kVersionMinor.get(r::kVersionValue), r::kVersionPatch.get(r::kVersionValue));
+  std::printf("CONTROL 0x%08X (ENABLE %u, DECODE %u, STREAM %u)  PERIOD %u cycles  STATUS 0x%08X "
+              "(ILLEGAL 0x%X, OVERRUN %u, BAD_WRITE %u)\n",
+              control, r::kControlEnable.get(control), r::kControlDecode.get(control), r::kControlStream.get(control),
+              period, status, r::kStatusIllegal.get(status), r::kStatusOverrun.get(status),
+              r::kStatusBadWrite.get(status));
+  std::printf("LINK_ERRORS framing %u overrun %u  ERROR_COUNT", r::kLinkErrorsFraming.get(link),
+              r::kLinkErrorsOverrun.get(link));
+  for (int ch = 0; ch < r::kChannels; ++ch) {
+    std::printf(" %u", client.read_register(static_cast<std::uint8_t>(r::kRegErrorCount0 + ch)));
+  }
+  std::printf("\n");
+  if (version != r::kVersionValue) {
+    std::fprintf(stderr, "warning: the board's register map differs from the host's\n");
+  }
+
+  if (once) {
+    const auto w = client.snapshot();
+    print_header();
+    print_row(w, client.decoder_counters(), usb.status().counters, client.counters().retries);
+    return 0;
+  }
+
+  if (!r::kControlEnable.get(control)) {
+    if (!enable) {
+      std::fprintf(stderr, "CONTROL.ENABLE is 0: the board captures no windows; run with --enable to set it\n");
+      return 1;
+    }
+    client.write_register(r::kRegControl, r::kControlEnable.put(control, 1));
+  }
+  std::signal(SIGINT, on_sigint);
+  client.set_streaming(true);
+  print_header();
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(seconds);
+  try {
+    while (!g_interrupted && (seconds == 0 || std::chrono::steady_clock::now() < until)) {
+      const auto w = client.poll_telemetry(std::chrono::milliseconds(500));
+      if (!w) {
+        std::fprintf(stderr, "no telemetry for 500 ms\n");
+        continue;
+      }
+      if (w->seq % 10 == 0) {
+        print_row(*w, client.decoder_counters(), usb.status().counters, client.counters().retries);
+        std::fflush(stdout);
+      }
+    }
+  } catch (const TransportError& e) {
+    std::fprintf(stderr, "omniloc probe: %s\n", e.what());
+    return 1;  // the device is gone: nothing to restore
+  }
+  client.write_register(r::kRegControl, control);  // streaming and ENABLE as they were
+  std::signal(SIGINT, SIG_DFL);
+  return 0;
+}
+
+}  // namespace omniloc::cli

@@ -1,0 +1,75 @@
+// Omni-camera model (the meta.json "camera" contract of issue 7): image centre, a monotonic table
+// from pixel radius to ground distance (interpolated linearly both ways), the camera's yaw offset,
+// mirroring, and the robot's own body and mast that hide part of the floor.
+//
+// A floor point at ground distance d and bearing b (robot frame) appears at image radius r =
+// radius_px(d) and image angle phi = b + yaw_offset_deg: u = cx + r cos(phi), v = cy - r sin(phi)
+// (u = cx - r cos(phi) when mirrored).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace cv {
+class FileNode;
+}
+
+namespace omniloc {
+
+/// One calibration mark: a floor point at ground_cm appears at radius_px from the image centre.
+struct RadiusMark {
+  double radius_px;
+  double ground_cm;
+};
+
+/// A sector of bearings (robot frame) hidden by the mast or another part of the robot.
+struct MastSector {
+  double bearing_deg = 180.0;
+  double half_width_deg = 0.0;
+};
+
+struct CameraModel {
+  int width_px = 640;
+  int height_px = 480;
+  Eigen::Vector2d center_px{320.0, 240.0};
+  std::vector<RadiusMark> radius_lut;  // strictly increasing in both columns, at least two rows
+  double yaw_offset_deg = 0.0;
+  bool mirrored = false;
+  double body_radius_px = 0.0;  // everything closer to the centre is the robot itself
+  std::vector<MastSector> masts;
+
+  /// Largest radius whose full circle is inside the image and the table (at most 254 px, the
+  /// largest radius the uint8 feature format stores).
+  [[nodiscard]] double view_radius_px() const;
+  /// Smallest radius at which the floor is visible (body radius or the table's first row).
+  [[nodiscard]] double min_radius_px() const;
+  /// Ground distance at pixel radius r (linear in the table); NaN outside the table.
+  [[nodiscard]] double ground_cm_at_radius(double radius_px) const;
+  /// Pixel radius of a ground distance (inverse of the table); NaN outside the table.
+  [[nodiscard]] double radius_px_at_ground(double ground_cm) const;
+  /// Image pixel of a floor point given in the robot frame (cm); nullopt if it is out of the table.
+  [[nodiscard]] std::optional<Eigen::Vector2d> pixel_of_robot_point(const Eigen::Vector2d& p_robot_cm) const;
+  /// Floor point (robot frame, cm) seen at pixel (u, v); nullopt outside the calibrated ring.
+  [[nodiscard]] std::optional<Eigen::Vector2d> robot_point_of_pixel(const Eigen::Vector2d& px) const;
+  /// Image angle (deg) of a robot-frame bearing, and back.
+  [[nodiscard]] double image_angle_deg(double bearing_deg) const { return bearing_deg + yaw_offset_deg; }
+  /// True when the bearing (robot frame, deg) lies in a mast sector.
+  [[nodiscard]] bool bearing_hidden(double bearing_deg) const;
+  /// Hash of everything that changes where the floor appears (for database headers).
+  [[nodiscard]] std::uint64_t fingerprint() const;
+};
+
+/// Reads a camera from a JSON object node (a camera file's root or meta.json's "camera" block).
+/// `context` names the file/field for errors. Validates: positive size, centre inside the image,
+/// at least two table rows, strictly increasing, finite; optional "mask" {body_radius_px, masts:
+/// [{bearing_deg, half_width_deg}]}.
+[[nodiscard]] CameraModel camera_from_json(const cv::FileNode& node, const std::string& context);
+
+/// Loads a camera file by name ("default" -> common/cameras/default.json) or path.
+[[nodiscard]] CameraModel load_camera(const std::string& name_or_path);
+
+}  // namespace omniloc

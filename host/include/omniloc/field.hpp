@@ -1,0 +1,117 @@
+// Field model: the white lines of a soccer field, loaded from a geometry file (common/fields/),
+// as the one description shared by the renderer, the database builder and the matcher.
+//
+// Every line is stored by its centre line; a point is white when it lies within line_width_cm / 2
+// of a segment or an arc (segment ends are extended by the half width so that corners close).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace omniloc {
+
+/// A straight white line between two points (its centre line), field frame cm.
+struct FieldSegment {
+  Eigen::Vector2d a_cm;
+  Eigen::Vector2d b_cm;
+};
+
+/// A white arc: centre, radius of its centre line, and the counter-clockwise sweep start..end.
+struct FieldArc {
+  Eigen::Vector2d centre_cm;
+  double radius_cm = 0.0;
+  double start_deg = 0.0;
+  double end_deg = 360.0;  // end_deg > start_deg; a span of 360 is a full circle
+};
+
+/// A filled white disc (penalty or free-ball mark).
+struct FieldDisc {
+  Eigen::Vector2d centre_cm;
+  double radius_cm = 0.0;
+};
+
+struct FieldGeometry {
+  std::string name;
+  std::string source;  // file it was read from, for error messages
+  double field_length_cm = 0.0;  // playing area, along field x
+  double field_width_cm = 0.0;   // playing area, along field y
+  double border_cm = 0.0;        // carpet around the playing area
+  double line_width_cm = 0.0;
+  std::vector<FieldSegment> segments;
+  std::vector<FieldArc> arcs;
+  std::vector<FieldDisc> discs;
+
+  /// Extent of the carpet (playing area plus border): the field frame spans [0, total].
+  [[nodiscard]] double total_x_cm() const { return field_length_cm + 2.0 * border_cm; }
+  [[nodiscard]] double total_y_cm() const { return field_width_cm + 2.0 * border_cm; }
+  [[nodiscard]] Eigen::Vector2d centre_cm() const { return {total_x_cm() / 2.0, total_y_cm() / 2.0}; }
+  /// Hash of everything that changes the lines (not the name or source), for database headers.
+  [[nodiscard]] std::uint64_t fingerprint() const;
+};
+
+/// Loads a geometry file by name ("fira-robosot", "robocup-msl") or path. Throws
+/// std::runtime_error naming the file and the field for a missing, malformed or invalid entry.
+[[nodiscard]] FieldGeometry load_field(const std::string& name_or_path);
+
+/// True when the floor point p (field frame, cm) is on a white line.
+[[nodiscard]] bool is_white(const FieldGeometry& field, const Eigen::Vector2d& p_cm);
+
+/// is_white() for many points (the renderer calls it per pixel): a 10 cm bucket grid over the
+/// carpet lists the few lines near each bucket. Same answers as is_white() on and off the carpet.
+class WhiteLineIndex {
+ public:
+  explicit WhiteLineIndex(const FieldGeometry& field);
+  [[nodiscard]] bool is_white(const Eigen::Vector2d& p_cm) const;
+
+ private:
+  FieldGeometry field_;
+  double cell_cm_ = 10.0;
+  int nx_ = 0, ny_ = 0;
+  std::vector<std::uint32_t> offsets_;  // bucket b's lines are items_[offsets_[b] .. offsets_[b + 1])
+  std::vector<std::uint16_t> items_;    // segment i, then arc nseg + i, then disc nseg + narc + i
+};
+
+/// True when p lies on the carpet (playing area or border).
+[[nodiscard]] bool on_carpet(const FieldGeometry& field, const Eigen::Vector2d& p_cm);
+
+/// A stretch [enter, exit] of a ray p + t * dir (t in cm, dir a unit vector) that is white.
+struct WhiteInterval {
+  double enter_cm;
+  double exit_cm;
+};
+
+/// Casts rays through the lines: the white stretches along origin + t dir for t in
+/// [t_min, t_max], merged and sorted (an interval already white at t_min starts at t_min).
+/// Holds per-line data (frames, bounding circles, arc end directions) computed once, because the
+/// database builder and the refinement cast hundreds of thousands of rays.
+class RayCaster {
+ public:
+  explicit RayCaster(const FieldGeometry& field);
+  void intervals(const Eigen::Vector2d& origin_cm, const Eigen::Vector2d& dir, double t_min_cm, double t_max_cm,
+                 std::vector<WhiteInterval>& out) const;
+
+ private:
+  struct Seg {
+    Eigen::Vector2d a, ex, mid;
+    double len, bound;
+  };
+  struct Arc {
+    FieldArc arc;
+    Eigen::Vector2d e_start, e_end;
+    bool full, half_or_less;
+  };
+  double half_width_cm_;
+  std::vector<Seg> segs_;
+  std::vector<Arc> arcs_;
+  std::vector<FieldDisc> discs_;
+};
+
+/// One-off form of RayCaster::intervals.
+void white_intervals(const FieldGeometry& field, const Eigen::Vector2d& origin_cm,
+                     const Eigen::Vector2d& dir, double t_min_cm, double t_max_cm,
+                     std::vector<WhiteInterval>& out);
+
+}  // namespace omniloc

@@ -1,0 +1,80 @@
+// Line scan: the white-line feature of equations (1)-(4). For each of 360 field-frame directions,
+// the pixel radii (from the image centre) of the first four white-line crossings, where a crossing
+// is the entry edge of a white run. Radii are uint8 (0..254); kNoCrossing marks "no further
+// crossing within view"; a ray hidden by the mast or an obstacle is marked invalid in ray_valid
+// (never zero radii), so the matcher can leave it out.
+//
+// Sampling (shared by the image scan and the geometric scan so that they agree): along each ray,
+// integer radii k = ceil(min_radius_px) .. floor(view_radius_px), each read at the nearest pixel; a
+// crossing is a white sample preceded by at least min_gap_px non-white samples (counted from the
+// first sample, so a run already white there is not a crossing). The gap rule keeps a line that
+// runs nearly along a ray from producing a zig-zag of crossings out of pixel rounding.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core/mat.hpp>
+
+#include "omniloc/camera.hpp"
+#include "omniloc/field.hpp"
+
+namespace omniloc {
+
+inline constexpr int kScanRays = 360;
+inline constexpr int kCrossingsPerRay = 4;
+inline constexpr int kFeatureBytes = kScanRays * kCrossingsPerRay;
+inline constexpr std::uint8_t kNoCrossing = 255;
+
+/// A field-frame scan: ray k points along field direction k degrees; radii_px[4 k + n] is its
+/// (n+1)-th crossing. Contiguous so that matching can use SIMD.
+struct Scan {
+  std::array<std::uint8_t, kFeatureBytes> radii_px{};
+  std::array<std::uint8_t, kScanRays> ray_valid{};  // 1 seen, 0 missing (mast or obstacle)
+  [[nodiscard]] int rays_valid() const;
+};
+
+/// Colour classes on the HSV of OpenCV's 8-bit conversion (S and V in 0..255). White lines are
+/// bright and unsaturated (survives a lighting gradient that scales brightness); an obstacle is a
+/// run of dark pixels; the green carpet and what lies beyond the border are neither.
+struct ScanParams {
+  int white_v_min = 150;
+  int white_s_max = 70;
+  int dark_v_max = 45;
+  int dark_run_px = 3;  // this many dark samples in a row hide the rest of the ray
+  int min_gap_px = 2;   // must match the database (expected_features uses the default)
+};
+
+/// Scans a BGR 8-bit image taken at robot heading yaw_deg into field-frame rays. Classifies only
+/// the pixels on the rays. Throws std::invalid_argument for an image that does not match the camera.
+[[nodiscard]] Scan scan_image(const cv::Mat& bgr, const CameraModel& camera, double yaw_deg,
+                              const ScanParams& params = {});
+
+/// The straightforward version: OpenCV cvtColor + inRange masks of the whole image, then the same
+/// rays. Same result as scan_image; kept as its reference and benchmark baseline.
+[[nodiscard]] Scan scan_image_reference(const cv::Mat& bgr, const CameraModel& camera, double yaw_deg,
+                                        const ScanParams& params = {});
+
+/// Scan in the robot frame at a finer angular step, for estimating the yaw: ray j has bearing
+/// j / rays_per_degree. rotate_to_field() picks, for each field direction, the nearest ray.
+struct BearingScan {
+  int rays_per_degree = 4;
+  std::vector<std::uint8_t> radii_px;   // 360 * rays_per_degree * 4
+  std::vector<std::uint8_t> ray_valid;  // 360 * rays_per_degree
+};
+[[nodiscard]] BearingScan scan_image_bearings(const cv::Mat& bgr, const CameraModel& camera,
+                                              int rays_per_degree, const ScanParams& params = {});
+[[nodiscard]] Scan rotate_to_field(const BearingScan& scan, double yaw_deg);
+
+/// The scan a robot at `position_cm` would see, by casting rays through the field model and the
+/// camera's radius table (no obstacles, no mast: every ray valid). This is a database entry.
+[[nodiscard]] Scan expected_scan(const FieldGeometry& field, const CameraModel& camera,
+                                 const Eigen::Vector2d& position_cm);
+
+/// As expected_scan, writing the 1440 radii to `out`; `scratch` is reused between calls.
+void expected_features(const FieldGeometry& field, const CameraModel& camera, const Eigen::Vector2d& position_cm,
+                       std::uint8_t* out, std::vector<WhiteInterval>& scratch, int min_gap_px = ScanParams{}.min_gap_px);
+
+}  // namespace omniloc

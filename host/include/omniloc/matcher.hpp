@@ -1,0 +1,121 @@
+// Matcher: equation (5)'s sum of absolute differences between an observed scan and database
+// entries, leaving out missing rays and normalised by the rays used (so that a match threshold
+// E_TH means the same with or without obstacles), the global search (6) over every grid point,
+// the local search within a range A around a pose, sub-grid refinement by ray casting, yaw
+// estimation from the scan, and an ambiguity report (best versus second-best distinct minimum).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core/mat.hpp>
+
+#include "omniloc/camera.hpp"
+#include "omniloc/feature_db.hpp"
+#include "omniloc/field.hpp"
+#include "omniloc/line_scan.hpp"
+
+namespace omniloc {
+
+/// An observed scan ready for matching: radii with missing rays zeroed, and the byte mask
+/// (0xFF for bytes of valid rays, 0 otherwise).
+struct PreparedScan {
+  alignas(32) std::array<std::uint8_t, kFeatureBytes> masked{};
+  alignas(32) std::array<std::uint8_t, kFeatureBytes> mask{};
+  int rays_used = 0;
+};
+[[nodiscard]] PreparedScan prepare_scan(const Scan& scan);
+
+/// Equation (5) on the valid rays, straightforward scalar code (the reference).
+[[nodiscard]] std::uint32_t sad_reference(const std::uint8_t* db_entry, const Scan& scan);
+/// The same sum, vectorised (AVX2 when the CPU has it, else a portable loop the compiler vectorises).
+[[nodiscard]] std::uint32_t sad_fast(const std::uint8_t* db_entry, const PreparedScan& scan);
+
+/// How image_to_position goes below the grid step.
+enum class Refinement {
+  kNone,         // the best grid point
+  kInterpolate,  // V-shaped fit of the error at the best point and its four neighbours (~1 us)
+  kRayCast,      // then a pattern search on errors of ray-cast scans at off-grid points (~1 ms)
+};
+
+struct MatchOptions {
+  double ambiguity_separation_cm = 50.0;  // a second minimum must lie at least this far away
+  double ambiguity_ratio = 1.25;          // ambiguous when second_error <= ratio * best error
+  Refinement refinement = Refinement::kInterpolate;
+  double refine_start_step_cm = 2.5;      // ray-cast pattern search: first and last step
+  double refine_min_step_cm = 0.625;
+};
+
+inline constexpr double kNoError = std::numeric_limits<double>::infinity();
+
+struct MatchResult {
+  Eigen::Vector2d position_cm{0.0, 0.0};       // refined when requested, else the grid point
+  Eigen::Vector2d grid_position_cm{0.0, 0.0};  // best grid point
+  int cell = -1;
+  double error = kNoError;          // normalised: SAD / rays used, at the best grid point
+  double refined_error = kNoError;  // at position_cm (equals error without refinement)
+  double second_error = kNoError;   // best distinct local minimum elsewhere (global search)
+  Eigen::Vector2d second_position_cm{0.0, 0.0};
+  bool ambiguous = false;
+  int rays_used = 0;
+  int cells_searched = 0;
+};
+
+/// Global search over all grid points.
+[[nodiscard]] MatchResult global_search(const FeatureDb& db, const Scan& scan, const MatchOptions& options = {});
+/// Global search with sad_reference and no shortcuts: the test and benchmark reference.
+[[nodiscard]] MatchResult global_search_reference(const FeatureDb& db, const Scan& scan, const MatchOptions& options = {});
+/// Grid points within range_cm (per axis) of the grid point nearest to centre_cm: 0 -> 1 point,
+/// 10 -> 3 x 3, 20 -> 5 x 5, 30 -> 7 x 7 on a 10 cm grid.
+[[nodiscard]] MatchResult local_search(const FeatureDb& db, const Scan& scan, const Eigen::Vector2d& centre_cm,
+                                       double range_cm, const MatchOptions& options = {});
+
+/// Normalised error of the scan against the expected scan at any position (ray cast on the fly).
+[[nodiscard]] double error_at(const FieldGeometry& field, const CameraModel& camera, const PreparedScan& scan,
+                              const Eigen::Vector2d& position_cm);
+
+/// Sub-grid position from the database errors at the best grid point and its four neighbours,
+/// fitting a V (the shape of a sum of absolute differences) along x and along y; updates
+/// position_cm (within half a step of the grid point). refined_error is left unchanged.
+void interpolate_match(const FeatureDb& db, const Scan& scan, MatchResult& result);
+
+/// Pattern search on ray-cast errors from result.position_cm with halving steps (4 neighbours per
+/// step); updates position_cm and refined_error.
+void refine_match(const FieldGeometry& field, const CameraModel& camera, const Scan& scan, MatchResult& result,
+                  const MatchOptions& options = {});
+
+/// Yaw from the scan itself: the heading within yaw_hint_deg +- range_deg (step 1 / rays_per_degree)
+/// whose field-frame rotation of `bearings` best matches the expected scan at position_cm.
+struct YawEstimate {
+  double yaw_deg = 0.0;
+  double error = kNoError;
+};
+[[nodiscard]] YawEstimate estimate_yaw(const FieldGeometry& field, const CameraModel& camera, const BearingScan& bearings,
+                                       const Eigen::Vector2d& position_cm, double yaw_hint_deg, double range_deg);
+
+/// Global search without a heading (no gyro, or after a kidnapping): every yaw from 0 to 360 in
+/// yaw_step_deg steps is tried on `bearings` (rotate_to_field + global_search); the best (cell,
+/// yaw) is refined with estimate_yaw and a local search at that yaw. The second candidate is the
+/// best result at a position at least ambiguity_separation_cm away: on a point-symmetric field the
+/// mirror pose (centre * 2 - p, yaw + 180) sees exactly the same lines, so such a match is flagged
+/// ambiguous and the caller must decide with another cue (gyro, odometry, goal colour).
+struct PoseMatch {
+  MatchResult match;  // at yaw_deg; second_* and ambiguous refer to the second candidate below
+  double yaw_deg = 0.0;
+  double second_yaw_deg = 0.0;
+};
+[[nodiscard]] PoseMatch global_search_any_yaw(const FeatureDb& db, const FieldGeometry& field, const CameraModel& camera,
+                                              const BearingScan& bearings, double yaw_step_deg = 2.0,
+                                              const MatchOptions& options = {});
+
+/// The whole image-to-pose step: scan the image at the given yaw, search (globally when
+/// around_cm is null, else locally within range_cm), then options.refinement.
+[[nodiscard]] MatchResult image_to_position(const cv::Mat& bgr, const CameraModel& camera, const FieldGeometry& field,
+                                            const FeatureDb& db, double yaw_deg, const Eigen::Vector2d* around_cm,
+                                            double range_cm, const MatchOptions& options = {},
+                                            const ScanParams& scan_params = {});
+
+}  // namespace omniloc

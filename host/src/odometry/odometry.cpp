@@ -1,0 +1,188 @@
+// The correct odometry variant. Derivation and the numbers behind the defaults: docs/ODOMETRY.md.
+#include "omniloc/odometry.hpp"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace omniloc {
+namespace {
+
+using Matrix43 = Eigen::Matrix<double, 4, 3>;
+using Matrix42 = Eigen::Matrix<double, 4, 2>;
+
+// Translation of one window with the rotation fixed to the gyro's, each wheel weighted by w.
+// Fixing the rotation leaves 4 equations for 2 unknowns: two redundant ones, which is what lets a
+// single bad wheel be isolated (with only the 4x3 system the residual is one number for all wheels).
+Eigen::Vector2d weighted_translation(const Matrix43& j, const Eigen::Vector4d& travel_cm,
+                                     double rotation_rad, const Eigen::Vector4d& w) {
+  const Matrix42 a = j.leftCols<2>();
+  const Eigen::Vector4d y = travel_cm - j.col(2) * rotation_rad;
+  const Eigen::Matrix2d m = a.transpose() * w.asDiagonal() * a;
+  return m.ldlt().solve(a.transpose() * w.asDiagonal() * y);
+}
+
+Eigen::Vector3d weighted_motion(const Matrix43& j, const Eigen::Vector4d& travel_cm,
+                                const Eigen::Vector4d& w) {
+  const Eigen::Matrix3d m = j.transpose() * w.asDiagonal() * j;
+  return m.ldlt().solve(j.transpose() * w.asDiagonal() * travel_cm);
+}
+
+struct Isolation {
+  int wheel = 0;            // index 0..3
+  double magnitude_cm = 0.0;
+};
+
+// Which wheel? Leaving out wheel k, the other three still over-determine the translation (the
+// rotation is the gyro's); the wheel whose removal leaves the smallest residual explains the
+// disagreement. Diagonal wheels (1,4) and (2,3) leave the same residual signature, so the motion
+// prior (`predicted` body translation from the last velocity, good to about a_max dt^2) decides.
+Isolation isolate_wheel(const Matrix43& j, const Eigen::Vector4d& travel, double rotation_rad,
+                        const Eigen::Vector2d& predicted, double sigma_meas, double sigma_prior) {
+  Isolation best;
+  double best_score = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 4; ++k) {
+    Eigen::Vector4d w = Eigen::Vector4d::Ones();
+    w[k] = 0.0;
+    const Eigen::Vector2d t = weighted_translation(j, travel, rotation_rad, w);
+    const Eigen::Vector4d r = travel - j * Eigen::Vector3d(t.x(), t.y(), rotation_rad);
+    const double others = r.squaredNorm() - r[k] * r[k];
+    const double score = others / (sigma_meas * sigma_meas) + (t - predicted).squaredNorm() / (sigma_prior * sigma_prior);
+    if (score < best_score) {
+      best_score = score;
+      best = {k, r[k]};
+    }
+  }
+  return best;
+}
+
+void check_window(const EncoderWindow& w, const char* who) {
+  if (!std::isfinite(w.t_end_ms) || !std::isfinite(w.gyro_yaw_deg)) {
+    std::ostringstream os;
+    os << who << ": window seq " << w.seq << " has a non-finite t_end_ms or gyro_yaw_deg";
+    throw std::invalid_argument(os.str());
+  }
+}
+
+// sin(x)/x: a window turning by dtheta at a steady rate moves along a chord that much shorter
+// than the path the wheels measured.
+double sinc(double x) { return std::abs(x) < 1e-6 ? 1.0 - x * x / 6.0 : std::sin(x) / x; }
+
+}  // namespace
+
+Eigen::Matrix<double, 3, 4> wheel_pseudo_inverse(const RobotConfig& config) {
+  const Matrix43 j = wheel_jacobian(config.motor_angle_deg, config.center_to_wheel_cm);
+  return (j.transpose() * j).inverse() * j.transpose();
+}
+
+Eigen::Vector3d least_squares_motion(const Eigen::Matrix<double, 3, 4>& pinv,
+                                     const Eigen::Vector4d& wheel_travel) {
+  return pinv * wheel_travel;
+}
+
+Eigen::Vector4d wheel_travel_cm(const RobotConfig& config, const std::array<std::int32_t, 4>& counts) {
+  const double k = cm_per_count(config);
+  return Eigen::Vector4d(counts[0], counts[1], counts[2], counts[3]) * k;
+}
+
+Odometry::Odometry(const RobotConfig& config)
+    : config_(config),
+      jacobian_(wheel_jacobian(config.motor_angle_deg, config.center_to_wheel_cm)),
+      pinv_(wheel_pseudo_inverse(config)),
+      cm_per_count_(cm_per_count(config)) {
+  validate_robot_config(config, "Odometry config");
+}
+
+void Odometry::reset(const Pose2& pose, double sigma_xy_cm, double sigma_yaw_deg) {
+  if (!have_window_) last_gyro_deg_ = pose.yaw_deg;  // gyro aligned with the field at start-up
+  yaw_offset_deg_ = angle_diff_deg(pose.yaw_deg, last_gyro_deg_);
+  // The motion prior's velocity turns with the heading correction.
+  last_velocity_field_ = robot_to_field(last_velocity_field_, angle_diff_deg(pose.yaw_deg, est_.pose.yaw_deg));
+  est_.pose = {pose.x_cm, pose.y_cm, wrap_deg(pose.yaw_deg)};
+  est_.sigma_xy_cm = sigma_xy_cm;
+  est_.sigma_yaw_deg = sigma_yaw_deg;
+  est_.distance_cm = 0.0;
+  est_.wheel_yaw_deg = est_.pose.yaw_deg;
+}
+
+const OdometryEstimate& Odometry::update(const EncoderWindow& window) {
+  check_window(window, "Odometry");
+  double dt_s = config_.window_period_ms / 1000.0;  // only the very first window has no start time
+  if (have_window_) {
+    dt_s = (window.t_end_ms - last_t_ms_) / 1000.0;
+    if (!(dt_s > 0.0)) {
+      std::ostringstream os;
+      os << "Odometry: window seq " << window.seq << " ends at " << window.t_end_ms
+         << " ms, not after the previous window (" << last_t_ms_ << " ms)";
+      throw std::invalid_argument(os.str());
+    }
+  }
+  const Eigen::Vector4d travel = wheel_travel_cm(config_, window.counts);
+  const double dyaw_deg = angle_diff_deg(window.gyro_yaw_deg, last_gyro_deg_);
+  const double dyaw_rad = deg_to_rad(dyaw_deg);
+  const double yaw_start_deg = last_gyro_deg_ + yaw_offset_deg_;
+  const double yaw_mid_deg = yaw_start_deg + 0.5 * dyaw_deg;
+
+  // Plain LS through the precomputed pseudo-inverse. Eq. (9)'s rotation column is orthogonal to
+  // the translation columns, so this translation equals the gyro-constrained LS one.
+  const Eigen::Vector3d ls = least_squares_motion(pinv_, travel);
+  Eigen::Vector2d body = ls.head<2>();
+  double wheel_dyaw_rad = ls.z();
+  const Eigen::Vector4d residual = travel - jacobian_ * Eigen::Vector3d(ls.x(), ls.y(), dyaw_rad);
+
+  // The threshold: the configured rate, raised to 6 sigma of the expected random wheel noise when
+  // the wheels travel fast (the residual's norm is Rayleigh-like: P(> 6 sigma) ~ 1e-8 per window).
+  SlipReport slip;
+  const double noise_cm = config_.wheel_noise_cm_per_sqrt_cm * std::sqrt(travel.cwiseAbs().mean());
+  const double thr_cm = std::max(config_.slip_threshold_cm_per_s * dt_s, 6.0 * noise_cm);
+  slip.residual_cm_per_s = residual.norm() / dt_s;
+  slip.threshold_cm_per_s = thr_cm / dt_s;
+  if (residual.norm() > thr_cm) {
+    const Eigen::Vector2d predicted = field_to_robot(last_velocity_field_ * dt_s, yaw_mid_deg);
+    const double sigma_meas = std::max(0.25 * thr_cm, 2.0 * cm_per_count_);
+    const double sigma_prior = std::max(config_.max_accel_cm_per_s2 * dt_s * dt_s, 2.0 * cm_per_count_);
+    const Isolation iso = isolate_wheel(jacobian_, travel, dyaw_rad, predicted, sigma_meas, sigma_prior);
+    slip.detected = true;
+    slip.wheel = iso.wheel + 1;
+    slip.magnitude_cm = iso.magnitude_cm;
+    slip.magnitude_cm_per_s = iso.magnitude_cm / dt_s;
+    // Down-weight rather than drop: a weight that shrinks with the square of the disagreement.
+    Eigen::Vector4d w = Eigen::Vector4d::Ones();
+    const double ratio = 0.1 * thr_cm / std::abs(iso.magnitude_cm);
+    w[iso.wheel] = std::min(1.0, ratio * ratio);
+    body = weighted_translation(jacobian_, travel, dyaw_rad, w);
+    wheel_dyaw_rad = weighted_motion(jacobian_, travel, w).z();
+  }
+
+  const Eigen::Vector2d delta_field = robot_to_field(body, yaw_mid_deg) * sinc(0.5 * dyaw_rad);
+  const double step_cm = delta_field.norm();
+
+  est_.t_ms = window.t_end_ms;
+  est_.pose.x_cm += delta_field.x();
+  est_.pose.y_cm += delta_field.y();
+  est_.pose.yaw_deg = wrap_deg(window.gyro_yaw_deg + yaw_offset_deg_);
+  est_.speed_cm_per_s = step_cm / dt_s;
+  est_.yaw_rate_deg_per_s = dyaw_deg / dt_s;
+  est_.distance_cm += step_cm;
+  est_.wheel_yaw_deg = wrap_deg(est_.wheel_yaw_deg + rad_to_deg(wheel_dyaw_rad));
+  // Uncertainty: a fraction of the wheel travel, the heading uncertainty acting on it, and the
+  // whole slip magnitude (the isolation may have picked the wrong wheel of a diagonal pair).
+  est_.sigma_yaw_deg = std::sqrt(est_.sigma_yaw_deg * est_.sigma_yaw_deg +
+                                 config_.gyro_arw_deg_per_sqrt_s * config_.gyro_arw_deg_per_sqrt_s * dt_s);
+  // Wheel errors also displace the centre while turning on the spot, so the growth uses the
+  // wheels' rotational travel R * |dtheta| as well as the centre's path.
+  est_.sigma_xy_cm += config_.odometry_noise_fraction * (step_cm + config_.center_to_wheel_cm * std::abs(dyaw_rad)) +
+                      deg_to_rad(est_.sigma_yaw_deg) * step_cm +
+                      (slip.detected ? std::abs(slip.magnitude_cm) : 0.0);
+  est_.slip = slip;
+
+  last_velocity_field_ = delta_field / dt_s;
+  last_t_ms_ = window.t_end_ms;
+  last_gyro_deg_ = window.gyro_yaw_deg;
+  have_window_ = true;
+  return est_;
+}
+
+}  // namespace omniloc

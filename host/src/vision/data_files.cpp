@@ -1,0 +1,52 @@
+#include "omniloc/data_files.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <stdexcept>
+#include <system_error>
+#include <vector>
+
+namespace omniloc {
+
+namespace fs = std::filesystem;
+
+namespace {
+void add_with_parents(fs::path dir, std::vector<fs::path>& out) {
+  std::error_code ec;
+  dir = fs::weakly_canonical(dir, ec);
+  if (ec) return;
+  while (true) {
+    out.push_back(dir / "common");
+    if (!dir.has_parent_path() || dir.parent_path() == dir) break;
+    dir = dir.parent_path();
+  }
+}
+}  // namespace
+
+fs::path resolve_data_file(const std::string& kind, const std::string& name_or_path) {
+  std::error_code ec;
+  if (fs::is_regular_file(name_or_path, ec)) return fs::path(name_or_path);
+  if (name_or_path.find('/') != std::string::npos || name_or_path.ends_with(".json")) {
+    throw std::runtime_error("data file '" + name_or_path + "' does not exist");
+  }
+  std::vector<fs::path> roots;
+  if (const char* env = std::getenv("OMNILOC_DATA_DIR"); env != nullptr && *env != '\0') {
+    roots.emplace_back(env);
+  }
+  add_with_parents(fs::current_path(ec), roots);
+  add_with_parents(fs::read_symlink("/proc/self/exe", ec).parent_path(), roots);
+  std::string searched;
+  std::vector<fs::path> seen;
+  for (const auto& root : roots) {
+    if (std::find(seen.begin(), seen.end(), root) != seen.end()) continue;
+    seen.push_back(root);
+    const fs::path candidate = root / kind / (name_or_path + ".json");
+    if (fs::is_regular_file(candidate, ec)) return candidate;
+    if (!searched.empty()) searched += ", ";
+    searched += (root / kind).string();
+  }
+  throw std::runtime_error("no " + kind + " file named '" + name_or_path + "' (searched " + searched +
+                           "; set OMNILOC_DATA_DIR to the folder holding " + kind + "/)");
+}
+
+}  // namespace omniloc

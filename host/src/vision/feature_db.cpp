@@ -1,0 +1,174 @@
+#include "omniloc/feature_db.hpp"
+
+#include <atomic>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+#include "fnv.hpp"
+
+namespace omniloc {
+
+namespace {
+
+constexpr char kMagic[8] = {'O', 'M', 'N', 'I', 'F', 'D', 'B', '\0'};
+
+// Fixed little-endian header; the payload follows, then an FNV-1a 64 checksum of everything before it.
+struct Header {
+  char magic[8];
+  std::uint32_t version;
+  std::uint32_t header_bytes;
+  std::int32_t nx;
+  std::int32_t ny;
+  double x0_cm;
+  double y0_cm;
+  double step_cm;
+  std::uint32_t rays;
+  std::uint32_t crossings;
+  std::uint64_t field_fingerprint;
+  std::uint64_t camera_fingerprint;
+  std::uint64_t payload_bytes;
+};
+static_assert(std::endian::native == std::endian::little, "the database format is little-endian");
+
+std::string hex(std::uint64_t v) {
+  char buf[24];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
+  return buf;
+}
+
+}  // namespace
+
+GridSpec GridSpec::covering(const FieldGeometry& field, double step_cm) {
+  if (!(step_cm >= 1.0) || step_cm > 100.0) {
+    throw std::invalid_argument("grid step must be between 1 and 100 cm, got " + std::to_string(step_cm));
+  }
+  GridSpec g;
+  g.step_cm = step_cm;
+  g.nx = static_cast<int>(std::floor(field.total_x_cm() / step_cm + 1e-9));
+  g.ny = static_cast<int>(std::floor(field.total_y_cm() / step_cm + 1e-9));
+  // Centre the points on the carpet: the leftover is split equally on both sides.
+  g.x0_cm = (field.total_x_cm() - (g.nx - 1) * step_cm) / 2.0;
+  g.y0_cm = (field.total_y_cm() - (g.ny - 1) * step_cm) / 2.0;
+  return g;
+}
+
+FeatureDb build_feature_db(const FieldGeometry& field, const CameraModel& camera, const GridSpec& grid,
+                           const BuildProgress& progress, unsigned threads) {
+  if (grid.nx <= 0 || grid.ny <= 0 || !(grid.step_cm > 0.0)) throw std::invalid_argument("build_feature_db: empty grid");
+  FeatureDb db;
+  db.grid = grid;
+  db.field_fingerprint = field.fingerprint();
+  db.camera_fingerprint = camera.fingerprint();
+  db.features.resize(static_cast<std::size_t>(grid.cells()) * kFeatureBytes);
+  if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
+  std::atomic<int> next_row{0};
+  int rows_done = 0;
+  std::mutex progress_mutex;
+  auto work = [&] {
+    std::vector<WhiteInterval> scratch;
+    for (int j = next_row++; j < grid.ny; j = next_row++) {
+      for (int i = 0; i < grid.nx; ++i) {
+        expected_features(field, camera, grid.position(i, j),
+                          db.features.data() + static_cast<std::size_t>(j * grid.nx + i) * kFeatureBytes, scratch);
+      }
+      // Counted under the lock so that reports arrive in increasing order.
+      const std::lock_guard lock(progress_mutex);
+      const int done = ++rows_done;
+      if (progress) progress(done * grid.nx, grid.cells());
+    }
+  };
+  std::vector<std::thread> pool;
+  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  return db;
+}
+
+void save_feature_db(const FeatureDb& db, const std::string& path) {
+  Header h{};
+  std::memcpy(h.magic, kMagic, sizeof kMagic);
+  h.version = kFeatureDbVersion;
+  h.header_bytes = sizeof(Header);
+  h.nx = db.grid.nx;
+  h.ny = db.grid.ny;
+  h.x0_cm = db.grid.x0_cm;
+  h.y0_cm = db.grid.y0_cm;
+  h.step_cm = db.grid.step_cm;
+  h.rays = kScanRays;
+  h.crossings = kCrossingsPerRay;
+  h.field_fingerprint = db.field_fingerprint;
+  h.camera_fingerprint = db.camera_fingerprint;
+  h.payload_bytes = db.features.size();
+  if (db.features.size() != static_cast<std::size_t>(db.grid.cells()) * kFeatureBytes) {
+    throw std::invalid_argument("save_feature_db: feature array does not match the grid");
+  }
+  std::uint64_t sum = detail::fnv1a(&h, sizeof h);
+  sum = detail::fnv1a(db.features.data(), db.features.size(), sum);
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) throw std::runtime_error(path + ": cannot open for writing");
+  out.write(reinterpret_cast<const char*>(&h), sizeof h);
+  out.write(reinterpret_cast<const char*>(db.features.data()), static_cast<std::streamsize>(db.features.size()));
+  out.write(reinterpret_cast<const char*>(&sum), sizeof sum);
+  out.close();
+  if (!out) throw std::runtime_error(path + ": write failed");
+}
+
+FeatureDb load_feature_db(const std::string& path, const FieldGeometry& field, const CameraModel& camera) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path + ": cannot open feature database");
+  const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string where = path + ": ";
+  if (bytes.size() < sizeof(Header)) {
+    throw std::runtime_error(where + "truncated feature database (" + std::to_string(bytes.size()) +
+                             " bytes, shorter than its header)");
+  }
+  Header h{};
+  std::memcpy(&h, bytes.data(), sizeof h);
+  if (std::memcmp(h.magic, kMagic, sizeof kMagic) != 0) throw std::runtime_error(where + "not an omniloc feature database");
+  if (h.version != kFeatureDbVersion) {
+    throw std::runtime_error(where + "database format version " + std::to_string(h.version) + ", this build reads version " +
+                             std::to_string(kFeatureDbVersion) + ": rebuild it with `omniloc builddb`");
+  }
+  if (h.header_bytes != sizeof(Header) || h.rays != kScanRays || h.crossings != kCrossingsPerRay || h.nx <= 0 ||
+      h.ny <= 0 || h.nx > 100000 || h.ny > 100000 || !(h.step_cm > 0.0) ||
+      h.payload_bytes != static_cast<std::uint64_t>(h.nx) * static_cast<std::uint64_t>(h.ny) * kFeatureBytes) {
+    throw std::runtime_error(where + "corrupt header (grid " + std::to_string(h.nx) + " x " + std::to_string(h.ny) +
+                             ", " + std::to_string(h.rays) + " rays x " + std::to_string(h.crossings) + ")");
+  }
+  const std::uint64_t expected = sizeof(Header) + h.payload_bytes + sizeof(std::uint64_t);
+  if (bytes.size() != expected) {
+    throw std::runtime_error(where + (bytes.size() < expected ? "truncated" : "oversized") + " feature database: " +
+                             std::to_string(bytes.size()) + " bytes, the header announces " + std::to_string(expected));
+  }
+  std::uint64_t stored = 0;
+  std::memcpy(&stored, bytes.data() + sizeof(Header) + h.payload_bytes, sizeof stored);
+  const std::uint64_t actual = detail::fnv1a(bytes.data(), sizeof(Header) + h.payload_bytes);
+  if (stored != actual) {
+    throw std::runtime_error(where + "checksum mismatch (stored " + hex(stored) + ", computed " + hex(actual) +
+                             "): the file is corrupt");
+  }
+  if (h.field_fingerprint != field.fingerprint()) {
+    throw std::runtime_error(where + "built for a different field geometry (fingerprint " + hex(h.field_fingerprint) +
+                             ", field '" + field.name + "' has " + hex(field.fingerprint()) +
+                             "): rebuild it with `omniloc builddb`");
+  }
+  if (h.camera_fingerprint != camera.fingerprint()) {
+    throw std::runtime_error(where + "built for a different camera radius table (fingerprint " +
+                             hex(h.camera_fingerprint) + ", camera in use has " + hex(camera.fingerprint()) +
+                             "): rebuild it with `omniloc builddb`");
+  }
+  FeatureDb db;
+  db.grid = {h.x0_cm, h.y0_cm, h.step_cm, h.nx, h.ny};
+  db.field_fingerprint = h.field_fingerprint;
+  db.camera_fingerprint = h.camera_fingerprint;
+  db.features.assign(bytes.begin() + sizeof(Header), bytes.begin() + static_cast<std::ptrdiff_t>(sizeof(Header) + h.payload_bytes));
+  return db;
+}
+
+}  // namespace omniloc

@@ -1,0 +1,397 @@
+#include "omniloc/field.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "fnv.hpp"
+#include "json_read.hpp"
+#include "omniloc/conventions.hpp"
+#include "omniloc/data_files.hpp"
+
+namespace omniloc {
+
+namespace {
+
+using detail::read_number;
+using detail::read_positive;
+
+void check(bool ok, const std::string& context, const std::string& what) {
+  if (!ok) throw std::runtime_error(context + ": " + what);
+}
+
+FieldGeometry build_from_json(const cv::FileNode& root, const std::string& file) {
+  FieldGeometry f;
+  f.source = file;
+  const cv::FileNode name = root["name"];
+  check(name.isString(), file, "field 'name' must be a string");
+  f.name = name.string();
+  f.field_length_cm = read_positive(root, "field_length_cm", file);
+  f.field_width_cm = read_positive(root, "field_width_cm", file);
+  f.border_cm = read_positive(root, "border_cm", file, true);
+  f.line_width_cm = read_positive(root, "line_width_cm", file);
+  const double cc_r = read_positive(root, "centre_circle_radius_cm", file, true);
+  const double corner_r = read_positive(root, "corner_arc_radius_cm", file, true);
+  const double L = f.field_length_cm;
+  const double W = f.field_width_cm;
+  check(cc_r < W / 2.0, file, "field 'centre_circle_radius_cm' must be < field_width_cm / 2");
+  check(corner_r < W / 2.0, file, "field 'corner_arc_radius_cm' must be < field_width_cm / 2");
+
+  auto area = [&](const char* key, double& depth, double& width) {
+    const cv::FileNode n = root[key];
+    const std::string ctx = file + ": field '" + key + "'";
+    check(n.isMap(), file, std::string("missing object '") + key + "'");
+    depth = read_positive(n, "depth_cm", ctx, true);
+    width = read_positive(n, "width_cm", ctx, true);
+    check(depth < L / 2.0, ctx, "depth_cm must be < field_length_cm / 2");
+    check(width < W, ctx, "width_cm must be < field_width_cm");
+  };
+  double goal_d = 0, goal_w = 0, pen_d = 0, pen_w = 0;
+  area("goal_area", goal_d, goal_w);
+  area("penalty_area", pen_d, pen_w);
+
+  const cv::FileNode arc_node = root["penalty_arc"];
+  check(arc_node.isMap(), file, "missing object 'penalty_arc'");
+  const std::string arc_ctx = file + ": field 'penalty_arc'";
+  const double pa_r = read_positive(arc_node, "radius_cm", arc_ctx, true);
+  const double pa_c = read_positive(arc_node, "centre_from_goal_line_cm", arc_ctx, true);
+  check(pa_c + pa_r < L / 2.0, arc_ctx, "arc must stay within its half of the field");
+
+  const double x0 = f.border_cm, x1 = f.border_cm + L;
+  const double y0 = f.border_cm, y1 = f.border_cm + W;
+  const Eigen::Vector2d c = f.centre_cm();
+  auto seg = [&](double ax, double ay, double bx, double by) {
+    f.segments.push_back({Eigen::Vector2d(ax, ay), Eigen::Vector2d(bx, by)});
+  };
+  seg(x0, y0, x1, y0);
+  seg(x1, y0, x1, y1);
+  seg(x1, y1, x0, y1);
+  seg(x0, y1, x0, y0);
+  seg(c.x(), y0, c.x(), y1);
+  for (const double side : {1.0, -1.0}) {
+    const double xg = side > 0 ? x0 : x1;  // this end's goal line
+    for (const auto& [d, w] : {std::pair{goal_d, goal_w}, std::pair{pen_d, pen_w}}) {
+      if (d <= 0.0 || w <= 0.0) continue;
+      const double xf = xg + side * d;
+      seg(xg, c.y() - w / 2, xf, c.y() - w / 2);
+      seg(xf, c.y() - w / 2, xf, c.y() + w / 2);
+      seg(xf, c.y() + w / 2, xg, c.y() + w / 2);
+    }
+    if (pa_r > 0.0) {
+      // Only the part of the arc in front of the penalty area is drawn.
+      const double cosine = std::clamp((pen_d - pa_c) / pa_r, -1.0, 1.0);
+      const double half = rad_to_deg(std::acos(cosine));
+      if (half > 0.0) {
+        const double mid = side > 0 ? 0.0 : 180.0;
+        f.arcs.push_back({Eigen::Vector2d(xg + side * pa_c, c.y()), pa_r, mid - half, mid + half});
+      }
+    }
+  }
+  if (cc_r > 0.0) f.arcs.push_back({c, cc_r, 0.0, 360.0});
+  if (corner_r > 0.0) {
+    f.arcs.push_back({Eigen::Vector2d(x0, y0), corner_r, 0.0, 90.0});
+    f.arcs.push_back({Eigen::Vector2d(x1, y0), corner_r, 90.0, 180.0});
+    f.arcs.push_back({Eigen::Vector2d(x1, y1), corner_r, 180.0, 270.0});
+    f.arcs.push_back({Eigen::Vector2d(x0, y1), corner_r, 270.0, 360.0});
+  }
+
+  const cv::FileNode marks = root["marks"];
+  if (!marks.empty() && !marks.isNone()) {
+    const std::string ctx = file + ": field 'marks'";
+    check(marks.isMap(), file, "field 'marks' must be an object");
+    const double r = read_positive(marks, "radius_cm", ctx);
+    const cv::FileNode list = marks["from_centre_cm"];
+    check(list.isSeq(), ctx, "field 'from_centre_cm' must be a list of [dx, dy] pairs");
+    for (int i = 0; i < static_cast<int>(list.size()); ++i) {
+      double dx = 0, dy = 0;
+      detail::read_pair(list[i], ctx + " from_centre_cm[" + std::to_string(i) + "]", dx, dy);
+      check(std::abs(dx) + r < L / 2.0 + 1e-9 && std::abs(dy) + r < W / 2.0, ctx,
+            "from_centre_cm[" + std::to_string(i) + "] lies outside the playing area");
+      f.discs.push_back({c + Eigen::Vector2d(dx, dy), r});
+    }
+  }
+  return f;
+}
+
+bool angle_in_sweep(double angle_deg, const FieldArc& a) {
+  if (a.end_deg - a.start_deg >= 360.0) return true;
+  double rel = std::fmod(angle_deg - a.start_deg, 360.0);
+  if (rel < 0.0) rel += 360.0;
+  return rel <= a.end_deg - a.start_deg;
+}
+
+bool in_arc(const FieldArc& a, double half_w, const Eigen::Vector2d& p) {
+  const Eigen::Vector2d d = p - a.centre_cm;
+  const double r = d.norm();
+  if (std::abs(r - a.radius_cm) > half_w) return false;
+  return angle_in_sweep(rad_to_deg(std::atan2(d.y(), d.x())), a);
+}
+
+bool in_segment(const FieldSegment& s, double half_w, const Eigen::Vector2d& p) {
+  const Eigen::Vector2d ab = s.b_cm - s.a_cm;
+  const double len = ab.norm();
+  const Eigen::Vector2d ex = ab / len;
+  const Eigen::Vector2d ap = p - s.a_cm;
+  const double along = ap.dot(ex);
+  const double across = ex.x() * ap.y() - ex.y() * ap.x();
+  return along >= -half_w && along <= len + half_w && std::abs(across) <= half_w;
+}
+
+// Quick reject: does the ray segment [t_lo, t_hi] pass within `radius` of `centre`?
+bool ray_near(const Eigen::Vector2d& o, const Eigen::Vector2d& u, double t_lo, double t_hi,
+              const Eigen::Vector2d& centre, double radius) {
+  const Eigen::Vector2d f = centre - o;
+  const double along = f.dot(u);
+  const double perp2 = f.squaredNorm() - along * along;
+  if (perp2 > radius * radius) return false;
+  return along + radius >= t_lo && along - radius <= t_hi;
+}
+
+// Roots of |o + t u - c| = r (u unit); returns the count (0 or 2).
+int circle_hits(const Eigen::Vector2d& o, const Eigen::Vector2d& u, const Eigen::Vector2d& c, double r,
+                double& t0, double& t1) {
+  const Eigen::Vector2d f = o - c;
+  const double b = f.dot(u);
+  const double disc = b * b - (f.squaredNorm() - r * r);
+  if (disc <= 0.0) return 0;
+  const double s = std::sqrt(disc);
+  t0 = -b - s;
+  t1 = -b + s;
+  return 2;
+}
+
+void push_clipped(double a, double b, double t_lo, double t_hi, std::vector<WhiteInterval>& out) {
+  a = std::max(a, t_lo);
+  b = std::min(b, t_hi);
+  if (b > a) out.push_back({a, b});
+}
+
+}  // namespace
+
+std::uint64_t FieldGeometry::fingerprint() const {
+  using detail::fnv1a_double;
+  std::uint64_t h = detail::kFnvOffset;
+  for (double v : {field_length_cm, field_width_cm, border_cm, line_width_cm}) h = fnv1a_double(v, h);
+  for (const auto& s : segments) {
+    for (double v : {s.a_cm.x(), s.a_cm.y(), s.b_cm.x(), s.b_cm.y()}) h = fnv1a_double(v, h);
+  }
+  for (const auto& a : arcs) {
+    for (double v : {a.centre_cm.x(), a.centre_cm.y(), a.radius_cm, a.start_deg, a.end_deg}) h = fnv1a_double(v, h);
+  }
+  for (const auto& d : discs) {
+    for (double v : {d.centre_cm.x(), d.centre_cm.y(), d.radius_cm}) h = fnv1a_double(v, h);
+  }
+  return h;
+}
+
+FieldGeometry load_field(const std::string& name_or_path) {
+  const std::string file = resolve_data_file("fields", name_or_path).string();
+  cv::FileStorage fs = detail::open_json(file);
+  return build_from_json(fs.root(), file);
+}
+
+bool on_carpet(const FieldGeometry& field, const Eigen::Vector2d& p) {
+  return p.x() >= 0.0 && p.y() >= 0.0 && p.x() <= field.total_x_cm() && p.y() <= field.total_y_cm();
+}
+
+bool is_white(const FieldGeometry& field, const Eigen::Vector2d& p) {
+  const double h = field.line_width_cm / 2.0;
+  // Bounding-box rejects first: most points are far from most lines (the renderer calls this per pixel).
+  for (const auto& s : field.segments) {
+    if (p.x() < std::min(s.a_cm.x(), s.b_cm.x()) - h || p.x() > std::max(s.a_cm.x(), s.b_cm.x()) + h ||
+        p.y() < std::min(s.a_cm.y(), s.b_cm.y()) - h || p.y() > std::max(s.a_cm.y(), s.b_cm.y()) + h) {
+      continue;
+    }
+    if (in_segment(s, h, p)) return true;
+  }
+  for (const auto& a : field.arcs) {
+    const double reach = a.radius_cm + h;
+    if (std::abs(p.x() - a.centre_cm.x()) > reach || std::abs(p.y() - a.centre_cm.y()) > reach) continue;
+    if (in_arc(a, h, p)) return true;
+  }
+  for (const auto& d : field.discs) {
+    if ((p - d.centre_cm).squaredNorm() <= d.radius_cm * d.radius_cm) return true;
+  }
+  return false;
+}
+
+WhiteLineIndex::WhiteLineIndex(const FieldGeometry& field) : field_(field) {
+  const double h = field_.line_width_cm / 2.0;
+  nx_ = static_cast<int>(std::ceil(field_.total_x_cm() / cell_cm_)) + 1;
+  ny_ = static_cast<int>(std::ceil(field_.total_y_cm() / cell_cm_)) + 1;
+  struct Box {
+    double x0, y0, x1, y1;
+  };
+  std::vector<Box> boxes;
+  for (const auto& sg : field_.segments) {
+    boxes.push_back({std::min(sg.a_cm.x(), sg.b_cm.x()) - h, std::min(sg.a_cm.y(), sg.b_cm.y()) - h,
+                     std::max(sg.a_cm.x(), sg.b_cm.x()) + h, std::max(sg.a_cm.y(), sg.b_cm.y()) + h});
+  }
+  for (const auto& a : field_.arcs) {
+    const double r = a.radius_cm + h;
+    boxes.push_back({a.centre_cm.x() - r, a.centre_cm.y() - r, a.centre_cm.x() + r, a.centre_cm.y() + r});
+  }
+  for (const auto& d : field_.discs) {
+    boxes.push_back({d.centre_cm.x() - d.radius_cm, d.centre_cm.y() - d.radius_cm, d.centre_cm.x() + d.radius_cm,
+                     d.centre_cm.y() + d.radius_cm});
+  }
+  if (boxes.size() > 65535) throw std::invalid_argument("WhiteLineIndex: too many lines");
+  std::vector<std::vector<std::uint16_t>> buckets(static_cast<std::size_t>(nx_ * ny_));
+  for (std::size_t b = 0; b < boxes.size(); ++b) {
+    const int i0 = std::max(0, static_cast<int>(std::floor(boxes[b].x0 / cell_cm_)));
+    const int i1 = std::min(nx_ - 1, static_cast<int>(std::floor(boxes[b].x1 / cell_cm_)));
+    const int j0 = std::max(0, static_cast<int>(std::floor(boxes[b].y0 / cell_cm_)));
+    const int j1 = std::min(ny_ - 1, static_cast<int>(std::floor(boxes[b].y1 / cell_cm_)));
+    for (int j = j0; j <= j1; ++j) {
+      for (int i = i0; i <= i1; ++i) buckets[static_cast<std::size_t>(j * nx_ + i)].push_back(static_cast<std::uint16_t>(b));
+    }
+  }
+  offsets_.push_back(0);
+  for (const auto& bucket : buckets) {
+    items_.insert(items_.end(), bucket.begin(), bucket.end());
+    offsets_.push_back(static_cast<std::uint32_t>(items_.size()));
+  }
+}
+
+bool WhiteLineIndex::is_white(const Eigen::Vector2d& p) const {
+  // Lines lie on the carpet; buckets cover it (boxes reaching past it are clipped to the edge
+  // buckets, so points just outside the carpet fall back to the full test).
+  if (p.x() < 0.0 || p.y() < 0.0) return omniloc::is_white(field_, p);
+  const int i = static_cast<int>(p.x() / cell_cm_), j = static_cast<int>(p.y() / cell_cm_);
+  if (i >= nx_ || j >= ny_) return omniloc::is_white(field_, p);
+  const double h = field_.line_width_cm / 2.0;
+  const std::size_t nseg = field_.segments.size(), narc = field_.arcs.size();
+  const auto b = static_cast<std::size_t>(j * nx_ + i);
+  for (std::uint32_t k = offsets_[b]; k < offsets_[b + 1]; ++k) {
+    const std::size_t id = items_[k];
+    if (id < nseg) {
+      if (in_segment(field_.segments[id], h, p)) return true;
+    } else if (id < nseg + narc) {
+      if (in_arc(field_.arcs[id - nseg], h, p)) return true;
+    } else {
+      const FieldDisc& d = field_.discs[id - nseg - narc];
+      if ((p - d.centre_cm).squaredNorm() <= d.radius_cm * d.radius_cm) return true;
+    }
+  }
+  return false;
+}
+
+RayCaster::RayCaster(const FieldGeometry& field) : half_width_cm_(field.line_width_cm / 2.0) {
+  const double h = half_width_cm_;
+  for (const auto& sg : field.segments) {
+    const Eigen::Vector2d ab = sg.b_cm - sg.a_cm;
+    const double len = ab.norm();
+    segs_.push_back({sg.a_cm, ab / len, (sg.a_cm + sg.b_cm) / 2.0, len, len / 2.0 + h * 1.5});
+  }
+  for (const auto& a : field.arcs) {
+    const double span = a.end_deg - a.start_deg;
+    arcs_.push_back({a,
+                     Eigen::Vector2d(std::cos(deg_to_rad(a.start_deg)), std::sin(deg_to_rad(a.start_deg))),
+                     Eigen::Vector2d(std::cos(deg_to_rad(a.end_deg)), std::sin(deg_to_rad(a.end_deg))),
+                     span >= 360.0, span <= 180.0});
+  }
+  discs_ = field.discs;
+}
+
+void RayCaster::intervals(const Eigen::Vector2d& o, const Eigen::Vector2d& u, double t_lo, double t_hi,
+                          std::vector<WhiteInterval>& out) const {
+  out.clear();
+  const double h = half_width_cm_;
+  for (const auto& sg : segs_) {
+    if (!ray_near(o, u, t_lo, t_hi, sg.mid, sg.bound)) continue;
+    const Eigen::Vector2d ao = o - sg.a;
+    // Slab test in the segment's frame: along in [-h, len + h], across in [-h, h].
+    double enter = t_lo, exit = t_hi;
+    const double p_along = ao.dot(sg.ex), d_along = u.dot(sg.ex);
+    const double p_across = sg.ex.x() * ao.y() - sg.ex.y() * ao.x(), d_across = sg.ex.x() * u.y() - sg.ex.y() * u.x();
+    bool hit = true;
+    for (const auto& [p, d, lo, hi] :
+         {std::tuple{p_along, d_along, -h, sg.len + h}, std::tuple{p_across, d_across, -h, h}}) {
+      if (std::abs(d) < 1e-12) {
+        if (p < lo || p > hi) hit = false;
+        continue;
+      }
+      double ta = (lo - p) / d, tb = (hi - p) / d;
+      if (ta > tb) std::swap(ta, tb);
+      enter = std::max(enter, ta);
+      exit = std::min(exit, tb);
+    }
+    if (hit) push_clipped(enter, exit, t_lo, t_hi, out);
+  }
+  for (const auto& d : discs_) {
+    if (!ray_near(o, u, t_lo, t_hi, d.centre_cm, d.radius_cm)) continue;
+    double t0 = 0, t1 = 0;
+    if (circle_hits(o, u, d.centre_cm, d.radius_cm, t0, t1) == 2) push_clipped(t0, t1, t_lo, t_hi, out);
+  }
+  for (const auto& pa : arcs_) {
+    const FieldArc& a = pa.arc;
+    if (!ray_near(o, u, t_lo, t_hi, a.centre_cm, a.radius_cm + h)) continue;
+    // Inside the annulus sector? Sweeps up to 180 deg by two cross products, longer ones by angle.
+    auto inside = [&](const Eigen::Vector2d& p) {
+      const Eigen::Vector2d d = p - a.centre_cm;
+      const double r2 = d.squaredNorm();
+      const double r_in = std::max(0.0, a.radius_cm - h), r_out = a.radius_cm + h;
+      if (r2 < r_in * r_in || r2 > r_out * r_out) return false;
+      if (pa.full) return true;
+      if (pa.half_or_less) {
+        return pa.e_start.x() * d.y() - pa.e_start.y() * d.x() >= 0.0 && d.x() * pa.e_end.y() - d.y() * pa.e_end.x() >= 0.0;
+      }
+      return angle_in_sweep(rad_to_deg(std::atan2(d.y(), d.x())), a);
+    };
+    // Candidate boundaries: both circles of the annulus and the two radial end cuts; every piece
+    // between consecutive candidates is wholly in or out, decided at its midpoint.
+    double cand[8];
+    int n = 0;
+    cand[n++] = t_lo;
+    double t0 = 0, t1 = 0;
+    if (circle_hits(o, u, a.centre_cm, a.radius_cm + h, t0, t1) == 2) {
+      cand[n++] = t0;
+      cand[n++] = t1;
+    }
+    if (a.radius_cm > h && circle_hits(o, u, a.centre_cm, a.radius_cm - h, t0, t1) == 2) {
+      cand[n++] = t0;
+      cand[n++] = t1;
+    }
+    if (!pa.full) {
+      for (const Eigen::Vector2d* e : {&pa.e_start, &pa.e_end}) {
+        const double den = u.x() * e->y() - u.y() * e->x();
+        if (std::abs(den) < 1e-12) continue;
+        const Eigen::Vector2d f = a.centre_cm - o;
+        cand[n++] = (f.x() * e->y() - f.y() * e->x()) / den;
+      }
+    }
+    for (int i = 2; i < n; ++i) {  // insertion sort of at most 6 values (cand[0] = t_lo stays first)
+      for (int k = i; k > 1 && cand[k - 1] > cand[k]; --k) std::swap(cand[k - 1], cand[k]);
+    }
+    double prev = t_lo;
+    double run_start = -1.0;
+    bool in_run = false;
+    for (int i = 1; i <= n; ++i) {
+      const double next = i < n ? std::clamp(cand[i], t_lo, t_hi) : t_hi;
+      if (next <= prev) continue;
+      const bool in = inside(o + u * (0.5 * (prev + next)));
+      if (in && !in_run) run_start = prev;
+      if (!in && in_run) push_clipped(run_start, prev, t_lo, t_hi, out);
+      in_run = in;
+      prev = next;
+    }
+    if (in_run) push_clipped(run_start, t_hi, t_lo, t_hi, out);
+  }
+  std::sort(out.begin(), out.end(), [](const WhiteInterval& x, const WhiteInterval& y) { return x.enter_cm < y.enter_cm; });
+  std::size_t w = 0;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    if (w > 0 && out[i].enter_cm <= out[w - 1].exit_cm) {
+      out[w - 1].exit_cm = std::max(out[w - 1].exit_cm, out[i].exit_cm);
+    } else {
+      out[w++] = out[i];
+    }
+  }
+  out.resize(w);
+}
+
+void white_intervals(const FieldGeometry& field, const Eigen::Vector2d& o, const Eigen::Vector2d& u, double t_lo,
+                     double t_hi, std::vector<WhiteInterval>& out) {
+  RayCaster(field).intervals(o, u, t_lo, t_hi, out);
+}
+
+}  // namespace omniloc

@@ -1,0 +1,209 @@
+#include "omniloc/line_scan.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/imgproc.hpp>
+
+#include "omniloc/conventions.hpp"
+
+namespace omniloc {
+
+namespace {
+
+enum class Px : std::uint8_t { kOther = 0, kWhite = 1, kDark = 2 };
+
+// OpenCV's 8-bit BGR->HSV saturation, bit for bit (color_hsv: hsv_shift 12, rounded table), so that
+// the per-ray classification equals cvtColor + inRange.
+struct SatTable {
+  int div[256];
+  SatTable() {
+    div[0] = 0;
+    for (int i = 1; i < 256; ++i) div[i] = static_cast<int>(std::lround((255 << 12) / static_cast<double>(i)));
+  }
+};
+const SatTable& sat_table() {
+  static const SatTable t;  // immutable lookup table, built once
+  return t;
+}
+
+inline Px classify(const std::uint8_t* bgr, const ScanParams& p, const int* sdiv) {
+  const int b = bgr[0], g = bgr[1], r = bgr[2];
+  const int v = std::max({b, g, r});
+  if (v <= p.dark_v_max) return Px::kDark;
+  if (v < p.white_v_min) return Px::kOther;
+  const int diff = v - std::min({b, g, r});
+  const int s = (diff * sdiv[v] + (1 << 11)) >> 12;
+  return s <= p.white_s_max ? Px::kWhite : Px::kOther;
+}
+
+void check_image(const cv::Mat& bgr, const CameraModel& cam) {
+  if (bgr.empty()) throw std::invalid_argument("scan: empty image");
+  if (bgr.type() != CV_8UC3) throw std::invalid_argument("scan: image must be 8-bit BGR (CV_8UC3), got type " + std::to_string(bgr.type()));
+  if (bgr.cols != cam.width_px || bgr.rows != cam.height_px) {
+    throw std::invalid_argument("scan: image is " + std::to_string(bgr.cols) + " x " + std::to_string(bgr.rows) +
+                                " but the camera model expects " + std::to_string(cam.width_px) + " x " +
+                                std::to_string(cam.height_px));
+  }
+}
+
+// Walks one ray at image angle phi (rad). classify_at(u, v) gives the class of a pixel. Writes 4
+// radii (kNoCrossing-padded) and returns false when an obstacle hides the ray before its fourth
+// crossing.
+template <class ClassifyAt>
+bool walk_ray(const CameraModel& cam, double phi, int k0, int k1, const ScanParams& p, std::uint8_t* out,
+              ClassifyAt classify_at) {
+  const double cu = std::cos(phi) * (cam.mirrored ? -1.0 : 1.0);
+  const double sv = -std::sin(phi);
+  const double cx = cam.center_px.x(), cy = cam.center_px.y();
+  int found = 0;
+  int dark = 0;
+  int gap = 0;  // non-white samples since the last white one (or since the first sample)
+  std::fill(out, out + kCrossingsPerRay, kNoCrossing);
+  for (int k = k0; k <= k1 && found < kCrossingsPerRay; ++k) {
+    // Nearest pixel; coordinates are >= 0 inside the view circle, so +0.5 and truncation is
+    // lround without its library call.
+    const int u = static_cast<int>(cx + k * cu + 0.5);
+    const int v = static_cast<int>(cy + k * sv + 0.5);
+    const Px c = classify_at(u, v);
+    if (c == Px::kDark) {
+      if (++dark >= p.dark_run_px) return false;
+    } else {
+      dark = 0;
+    }
+    if (c == Px::kWhite) {
+      if (gap >= p.min_gap_px) out[found++] = static_cast<std::uint8_t>(k);
+      gap = 0;
+    } else {
+      ++gap;
+    }
+  }
+  return true;
+}
+
+int first_sample(const CameraModel& cam) { return static_cast<int>(std::ceil(cam.min_radius_px())); }
+int last_sample(const CameraModel& cam) { return static_cast<int>(std::floor(cam.view_radius_px())); }
+
+template <class ClassifyAt>
+Scan scan_with(const CameraModel& cam, double yaw_deg, const ScanParams& p, ClassifyAt classify_at) {
+  Scan s;
+  const int k0 = first_sample(cam), k1 = last_sample(cam);
+  for (int k = 0; k < kScanRays; ++k) {
+    const double bearing = static_cast<double>(k) - yaw_deg;
+    std::uint8_t* out = s.radii_px.data() + k * kCrossingsPerRay;
+    if (cam.bearing_hidden(bearing)) {
+      std::fill(out, out + kCrossingsPerRay, kNoCrossing);
+      s.ray_valid[static_cast<std::size_t>(k)] = 0;
+      continue;
+    }
+    const double phi = deg_to_rad(cam.image_angle_deg(bearing));
+    s.ray_valid[static_cast<std::size_t>(k)] = walk_ray(cam, phi, k0, k1, p, out, classify_at) ? 1 : 0;
+    if (s.ray_valid[static_cast<std::size_t>(k)] == 0) std::fill(out, out + kCrossingsPerRay, kNoCrossing);
+  }
+  return s;
+}
+
+}  // namespace
+
+int Scan::rays_valid() const {
+  int n = 0;
+  for (auto v : ray_valid) n += v != 0;
+  return n;
+}
+
+Scan scan_image(const cv::Mat& bgr, const CameraModel& cam, double yaw_deg, const ScanParams& p) {
+  check_image(bgr, cam);
+  const int* sdiv = sat_table().div;
+  return scan_with(cam, yaw_deg, p, [&](int u, int v) { return classify(bgr.ptr<std::uint8_t>(v) + 3 * u, p, sdiv); });
+}
+
+Scan scan_image_reference(const cv::Mat& bgr, const CameraModel& cam, double yaw_deg, const ScanParams& p) {
+  check_image(bgr, cam);
+  cv::Mat hsv, white, dark;
+  cv::cvtColor(bgr, hsv, cv::COLOR_BGR2HSV);
+  cv::inRange(hsv, cv::Scalar(0, 0, p.white_v_min), cv::Scalar(255, p.white_s_max, 255), white);
+  cv::inRange(hsv, cv::Scalar(0, 0, 0), cv::Scalar(255, 255, p.dark_v_max), dark);
+  return scan_with(cam, yaw_deg, p, [&](int u, int v) {
+    if (dark.at<std::uint8_t>(v, u) != 0) return Px::kDark;
+    return white.at<std::uint8_t>(v, u) != 0 ? Px::kWhite : Px::kOther;
+  });
+}
+
+BearingScan scan_image_bearings(const cv::Mat& bgr, const CameraModel& cam, int rays_per_degree, const ScanParams& p) {
+  check_image(bgr, cam);
+  if (rays_per_degree < 1 || rays_per_degree > 20) {
+    throw std::invalid_argument("scan_image_bearings: rays_per_degree must be 1..20, got " + std::to_string(rays_per_degree));
+  }
+  const int* sdiv = sat_table().div;
+  BearingScan s;
+  s.rays_per_degree = rays_per_degree;
+  const int n = kScanRays * rays_per_degree;
+  s.radii_px.assign(static_cast<std::size_t>(n) * kCrossingsPerRay, kNoCrossing);
+  s.ray_valid.assign(static_cast<std::size_t>(n), 0);
+  const int k0 = first_sample(cam), k1 = last_sample(cam);
+  for (int j = 0; j < n; ++j) {
+    const double bearing = static_cast<double>(j) / rays_per_degree;
+    if (cam.bearing_hidden(bearing)) continue;
+    std::uint8_t* out = s.radii_px.data() + static_cast<std::size_t>(j) * kCrossingsPerRay;
+    const bool ok = walk_ray(cam, deg_to_rad(cam.image_angle_deg(bearing)), k0, k1, p, out,
+                             [&](int u, int v) { return classify(bgr.ptr<std::uint8_t>(v) + 3 * u, p, sdiv); });
+    if (ok) {
+      s.ray_valid[static_cast<std::size_t>(j)] = 1;
+    } else {
+      std::fill(out, out + kCrossingsPerRay, kNoCrossing);
+    }
+  }
+  return s;
+}
+
+Scan rotate_to_field(const BearingScan& b, double yaw_deg) {
+  Scan s;
+  const int n = kScanRays * b.rays_per_degree;
+  if (static_cast<int>(b.ray_valid.size()) != n) throw std::invalid_argument("rotate_to_field: malformed bearing scan");
+  for (int k = 0; k < kScanRays; ++k) {
+    long j = std::lround((static_cast<double>(k) - yaw_deg) * b.rays_per_degree) % n;
+    if (j < 0) j += n;
+    s.ray_valid[static_cast<std::size_t>(k)] = b.ray_valid[static_cast<std::size_t>(j)];
+    std::copy_n(b.radii_px.begin() + j * kCrossingsPerRay, kCrossingsPerRay, s.radii_px.begin() + k * kCrossingsPerRay);
+  }
+  return s;
+}
+
+void expected_features(const FieldGeometry& field, const CameraModel& cam, const Eigen::Vector2d& pos,
+                       std::uint8_t* out, std::vector<WhiteInterval>& iv, int min_gap_px) {
+  const int k0 = first_sample(cam), k1 = last_sample(cam);
+  const double t_lo = cam.ground_cm_at_radius(k0);
+  const double t_hi = cam.ground_cm_at_radius(k1);
+  const RayCaster caster(field);
+  for (int k = 0; k < kScanRays; ++k) {
+    const double a = deg_to_rad(k);
+    const Eigen::Vector2d dir(std::cos(a), std::sin(a));
+    caster.intervals(pos, dir, t_lo, t_hi, iv);
+    std::uint8_t* o = out + k * kCrossingsPerRay;
+    std::fill(o, o + kCrossingsPerRay, kNoCrossing);
+    int found = 0;
+    int last_white = k0 - 1;  // as if white just before the first sample: it cannot be an entry
+    for (const auto& w : iv) {
+      // The integer samples inside this run, exactly as the image scan would visit them.
+      int ka = static_cast<int>(std::ceil(cam.radius_px_at_ground(w.enter_cm) - 1e-9));
+      int kb = static_cast<int>(std::floor(cam.radius_px_at_ground(w.exit_cm) + 1e-9));
+      ka = std::max(ka, k0);
+      kb = std::min(kb, k1);
+      if (ka > kb) continue;
+      if (ka - last_white - 1 >= min_gap_px && found < kCrossingsPerRay) o[found++] = static_cast<std::uint8_t>(ka);
+      last_white = kb;
+    }
+  }
+}
+
+Scan expected_scan(const FieldGeometry& field, const CameraModel& cam, const Eigen::Vector2d& pos) {
+  Scan s;
+  std::vector<WhiteInterval> scratch;
+  expected_features(field, cam, pos, s.radii_px.data(), scratch, ScanParams{}.min_gap_px);
+  s.ray_valid.fill(1);
+  return s;
+}
+
+}  // namespace omniloc

@@ -1,0 +1,247 @@
+#include "omniloc/matcher.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "omniloc/conventions.hpp"
+
+namespace omniloc {
+
+namespace {
+
+struct Window {
+  int i0, i1, j0, j1;  // inclusive
+};
+
+// Fills the errors of a window of cells, picks the best, the second distinct minimum and the
+// ambiguity flag. `sad_of(cell)` returns the raw SAD.
+template <class SadOf>
+MatchResult search_window(const FeatureDb& db, const Window& w, int rays_used, const MatchOptions& opt, SadOf sad_of) {
+  MatchResult r;
+  r.rays_used = rays_used;
+  if (rays_used == 0) return r;  // nothing seen: error stays kNoError
+  const int wi = w.i1 - w.i0 + 1, wj = w.j1 - w.j0 + 1;
+  std::vector<std::uint32_t> err(static_cast<std::size_t>(wi * wj));
+  std::uint32_t best = UINT32_MAX;
+  int best_at = 0;
+  for (int j = 0; j < wj; ++j) {
+    const int row = (w.j0 + j) * db.grid.nx;
+    for (int i = 0; i < wi; ++i) {
+      const std::uint32_t e = sad_of(row + w.i0 + i);
+      err[static_cast<std::size_t>(j * wi + i)] = e;
+      if (e < best) {
+        best = e;
+        best_at = j * wi + i;
+      }
+    }
+  }
+  r.cells_searched = wi * wj;
+  const int bi = best_at % wi, bj = best_at / wi;
+  r.cell = (w.j0 + bj) * db.grid.nx + w.i0 + bi;
+  r.grid_position_cm = db.grid.position(r.cell);
+  r.position_cm = r.grid_position_cm;
+  r.error = static_cast<double>(best) / rays_used;
+  r.refined_error = r.error;
+  // Second-best distinct minimum: a local minimum of the error surface far enough from the best.
+  const double sep2 = opt.ambiguity_separation_cm * opt.ambiguity_separation_cm;
+  std::uint32_t second = UINT32_MAX;
+  for (int j = 0; j < wj; ++j) {
+    for (int i = 0; i < wi; ++i) {
+      const std::uint32_t e = err[static_cast<std::size_t>(j * wi + i)];
+      if (e >= second) continue;
+      const double dx = (i - bi) * db.grid.step_cm, dy = (j - bj) * db.grid.step_cm;
+      if (dx * dx + dy * dy < sep2) continue;
+      bool local_min = true;
+      for (int dj = -1; dj <= 1 && local_min; ++dj) {
+        for (int di = -1; di <= 1; ++di) {
+          const int ni = i + di, nj = j + dj;
+          if ((di == 0 && dj == 0) || ni < 0 || nj < 0 || ni >= wi || nj >= wj) continue;
+          if (err[static_cast<std::size_t>(nj * wi + ni)] < e) {
+            local_min = false;
+            break;
+          }
+        }
+      }
+      if (local_min) {
+        second = e;
+        r.second_position_cm = db.grid.position((w.j0 + j) * db.grid.nx + w.i0 + i);
+      }
+    }
+  }
+  if (second != UINT32_MAX) {
+    r.second_error = static_cast<double>(second) / rays_used;
+    r.ambiguous = r.second_error <= opt.ambiguity_ratio * r.error;
+  }
+  return r;
+}
+
+Window full_window(const FeatureDb& db) { return {0, db.grid.nx - 1, 0, db.grid.ny - 1}; }
+
+void check_db(const FeatureDb& db) {
+  if (db.grid.cells() <= 0 || db.features.size() != static_cast<std::size_t>(db.grid.cells()) * kFeatureBytes) {
+    throw std::invalid_argument("matcher: feature database is empty or does not match its grid");
+  }
+}
+
+}  // namespace
+
+MatchResult global_search(const FeatureDb& db, const Scan& scan, const MatchOptions& opt) {
+  check_db(db);
+  const PreparedScan p = prepare_scan(scan);
+  return search_window(db, full_window(db), p.rays_used, opt, [&](int c) { return sad_fast(db.cell_features(c), p); });
+}
+
+MatchResult global_search_reference(const FeatureDb& db, const Scan& scan, const MatchOptions& opt) {
+  check_db(db);
+  return search_window(db, full_window(db), scan.rays_valid(), opt,
+                       [&](int c) { return sad_reference(db.cell_features(c), scan); });
+}
+
+MatchResult local_search(const FeatureDb& db, const Scan& scan, const Eigen::Vector2d& centre, double range_cm,
+                         const MatchOptions& opt) {
+  check_db(db);
+  if (!(range_cm >= 0.0) || !centre.allFinite()) {
+    throw std::invalid_argument("local_search: range must be >= 0 cm and the centre finite");
+  }
+  const GridSpec& g = db.grid;
+  const int ci = std::clamp(static_cast<int>(std::lround((centre.x() - g.x0_cm) / g.step_cm)), 0, g.nx - 1);
+  const int cj = std::clamp(static_cast<int>(std::lround((centre.y() - g.y0_cm) / g.step_cm)), 0, g.ny - 1);
+  const int reach = static_cast<int>(std::floor(range_cm / g.step_cm + 1e-9));
+  const Window w{std::max(0, ci - reach), std::min(g.nx - 1, ci + reach), std::max(0, cj - reach),
+                 std::min(g.ny - 1, cj + reach)};
+  const PreparedScan p = prepare_scan(scan);
+  return search_window(db, w, p.rays_used, opt, [&](int c) { return sad_fast(db.cell_features(c), p); });
+}
+
+double error_at(const FieldGeometry& field, const CameraModel& camera, const PreparedScan& p, const Eigen::Vector2d& pos) {
+  if (p.rays_used == 0) return kNoError;
+  alignas(32) std::array<std::uint8_t, kFeatureBytes> expected{};
+  std::vector<WhiteInterval> scratch;
+  expected_features(field, camera, pos, expected.data(), scratch);
+  return static_cast<double>(sad_fast(expected.data(), p)) / p.rays_used;
+}
+
+void interpolate_match(const FeatureDb& db, const Scan& scan, MatchResult& r) {
+  if (r.cell < 0 || r.rays_used == 0) return;
+  const PreparedScan p = prepare_scan(scan);
+  const GridSpec& g = db.grid;
+  const int i = r.cell % g.nx, j = r.cell / g.nx;
+  const double e0 = sad_fast(db.cell_features(r.cell), p);
+  auto err = [&](int ii, int jj) -> double {
+    if (ii < 0 || jj < 0 || ii >= g.nx || jj >= g.ny) return -1.0;
+    return sad_fast(db.cell_features(jj * g.nx + ii), p);
+  };
+  // Equiangular fit: E(x) = a |x - x0| + b through (-1, em), (0, e0), (1, ep), x0 in [-0.5, 0.5].
+  auto offset = [&](double em, double ep) {
+    if (em < 0.0 || ep < 0.0) return 0.0;  // at the grid's edge: stay on the grid point
+    double x0 = 0.0;
+    if (em >= ep && em > e0) x0 = 0.5 * (em - ep) / (em - e0);
+    if (ep > em && ep > e0) x0 = -0.5 * (ep - em) / (ep - e0);
+    return std::clamp(x0, -0.5, 0.5);
+  };
+  r.position_cm = r.grid_position_cm + g.step_cm * Eigen::Vector2d(offset(err(i - 1, j), err(i + 1, j)),
+                                                                   offset(err(i, j - 1), err(i, j + 1)));
+}
+
+void refine_match(const FieldGeometry& field, const CameraModel& camera, const Scan& scan, MatchResult& r,
+                  const MatchOptions& opt) {
+  if (r.cell < 0 || r.rays_used == 0) return;
+  const PreparedScan p = prepare_scan(scan);
+  Eigen::Vector2d pos = r.position_cm;
+  double best = pos == r.grid_position_cm ? r.error : error_at(field, camera, p, pos);
+  const Eigen::Vector2d steps[] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+  const double limit = opt.refine_start_step_cm * 4.0;  // stay near the grid point
+  for (double step = opt.refine_start_step_cm; step >= opt.refine_min_step_cm - 1e-9;) {
+    Eigen::Vector2d best_pos = pos;
+    for (const auto& d : steps) {
+      const Eigen::Vector2d q = pos + step * d;
+      if ((q - r.grid_position_cm).cwiseAbs().maxCoeff() > limit) continue;
+      const double e = error_at(field, camera, p, q);
+      if (e < best) {
+        best = e;
+        best_pos = q;
+      }
+    }
+    if (best_pos == pos) {
+      step /= 2.0;
+    } else {
+      pos = best_pos;
+    }
+  }
+  r.position_cm = pos;
+  r.refined_error = best;
+}
+
+YawEstimate estimate_yaw(const FieldGeometry& field, const CameraModel& camera, const BearingScan& bearings,
+                         const Eigen::Vector2d& position_cm, double yaw_hint_deg, double range_deg) {
+  if (!(range_deg >= 0.0) || range_deg > 180.0) throw std::invalid_argument("estimate_yaw: range must be 0..180 deg");
+  alignas(32) std::array<std::uint8_t, kFeatureBytes> expected{};
+  std::vector<WhiteInterval> scratch;
+  expected_features(field, camera, position_cm, expected.data(), scratch);
+  YawEstimate best;
+  const int steps = static_cast<int>(std::floor(range_deg * bearings.rays_per_degree + 1e-9));
+  for (int s = -steps; s <= steps; ++s) {
+    const double yaw = yaw_hint_deg + static_cast<double>(s) / bearings.rays_per_degree;
+    const PreparedScan p = prepare_scan(rotate_to_field(bearings, yaw));
+    if (p.rays_used == 0) continue;
+    const double e = static_cast<double>(sad_fast(expected.data(), p)) / p.rays_used;
+    if (e < best.error) best = {yaw, e};
+  }
+  return best;
+}
+
+PoseMatch global_search_any_yaw(const FeatureDb& db, const FieldGeometry& field, const CameraModel& camera,
+                                const BearingScan& bearings, double yaw_step_deg, const MatchOptions& opt) {
+  if (!(yaw_step_deg >= 0.25) || yaw_step_deg > 45.0) {
+    throw std::invalid_argument("global_search_any_yaw: yaw step must be 0.25..45 deg");
+  }
+  struct Candidate {
+    MatchResult m;
+    double yaw;
+  };
+  std::vector<Candidate> per_yaw;
+  for (double yaw = 0.0; yaw < 360.0 - 1e-9; yaw += yaw_step_deg) {
+    per_yaw.push_back({global_search(db, rotate_to_field(bearings, yaw), opt), yaw});
+  }
+  auto better = [](const Candidate& a, const Candidate& b) { return a.m.error < b.m.error; };
+  const Candidate best = *std::min_element(per_yaw.begin(), per_yaw.end(), better);
+  PoseMatch out;
+  if (best.m.cell < 0) {
+    out.match = best.m;
+    return out;
+  }
+  // Finer yaw at the best grid point, then the position again at that yaw.
+  const YawEstimate y = estimate_yaw(field, camera, bearings, best.m.grid_position_cm, best.yaw, yaw_step_deg);
+  const Scan scan = rotate_to_field(bearings, y.yaw_deg);
+  out.match = local_search(db, scan, best.m.grid_position_cm, db.grid.step_cm, opt);
+  out.yaw_deg = wrap_deg(y.yaw_deg);
+  if (opt.refinement != Refinement::kNone) interpolate_match(db, scan, out.match);
+  if (opt.refinement == Refinement::kRayCast) refine_match(field, camera, scan, out.match, opt);
+  // Second candidate: the best per-yaw result far enough from the chosen position.
+  out.match.second_error = kNoError;
+  out.match.ambiguous = false;
+  for (const auto& c : per_yaw) {
+    if (c.m.cell < 0 || (c.m.grid_position_cm - out.match.grid_position_cm).norm() < opt.ambiguity_separation_cm) continue;
+    if (c.m.error < out.match.second_error) {
+      out.match.second_error = c.m.error;
+      out.match.second_position_cm = c.m.grid_position_cm;
+      out.second_yaw_deg = wrap_deg(c.yaw);
+    }
+  }
+  out.match.ambiguous = out.match.second_error <= opt.ambiguity_ratio * best.m.error;
+  out.match.cells_searched = db.grid.cells() * static_cast<int>(per_yaw.size());
+  return out;
+}
+
+MatchResult image_to_position(const cv::Mat& bgr, const CameraModel& camera, const FieldGeometry& field,
+                              const FeatureDb& db, double yaw_deg, const Eigen::Vector2d* around_cm, double range_cm,
+                              const MatchOptions& opt, const ScanParams& scan_params) {
+  const Scan scan = scan_image(bgr, camera, yaw_deg, scan_params);
+  MatchResult r = around_cm != nullptr ? local_search(db, scan, *around_cm, range_cm, opt) : global_search(db, scan, opt);
+  if (opt.refinement != Refinement::kNone) interpolate_match(db, scan, r);
+  if (opt.refinement == Refinement::kRayCast) refine_match(field, camera, scan, r, opt);
+  return r;
+}
+
+}  // namespace omniloc

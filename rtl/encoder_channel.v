@@ -1,0 +1,96 @@
+// encoder_channel: one encoder (A and B pins) from the pins to the captured window.
+//
+// input_conditioner x2 -> quadrature_decoder -> window_counter, plus the per-channel illegal
+// transition counter (saturating, never cleared except by reset).
+// Latency from a pin change to the count: conditioner (3 cycles, or FILTER + 2 when FILTER > 1)
+// + decoder (1 cycle); a pulse of the decoder is in the window whose capture_i is at or after it.
+//
+// Assumptions: a_i/b_i asynchronous; filter_len_i, mode_i and en_i from the register file
+// (mode_i never 3); capture_i one-cycle pulses. rst_i synchronous, active high.
+`resetall
+`timescale 1ns / 1ps
+`default_nettype none
+
+module encoder_channel (
+    input  wire        clk_i,
+    input  wire        rst_i,
+    input  wire        a_i,
+    input  wire        b_i,
+    input  wire [7:0]  filter_len_i,
+    input  wire        en_i,
+    input  wire [1:0]  mode_i,
+    input  wire        capture_i,
+    output wire [31:0] win_count_o,
+    output wire [31:0] win_position_o,
+    output wire        win_dir_o,
+    output wire [31:0] position_o,
+    output wire        dir_o,
+    // One-cycle pulse per illegal transition, and their saturating count.
+    output wire        err_o,
+    output wire [31:0] err_count_o
+);
+
+wire a_clean;
+wire b_clean;
+wire a_valid;
+wire b_valid;
+wire up;
+wire down;
+
+input_conditioner #(.LEN_W(8)) u_cond_a (
+    .clk_i(clk_i), .rst_i(rst_i), .in_i(a_i), .len_i(filter_len_i),
+    .out_o(a_clean), .valid_o(a_valid)
+);
+
+input_conditioner #(.LEN_W(8)) u_cond_b (
+    .clk_i(clk_i), .rst_i(rst_i), .in_i(b_i), .len_i(filter_len_i),
+    .out_o(b_clean), .valid_o(b_valid)
+);
+
+quadrature_decoder u_dec (
+    .clk_i(clk_i), .rst_i(rst_i), .a_i(a_clean), .b_i(b_clean),
+    .valid_i(a_valid & b_valid), .en_i(en_i), .mode_i(mode_i),
+    .up_o(up), .down_o(down), .dir_o(dir_o), .err_o(err_o)
+);
+
+window_counter #(.W(32)) u_win (
+    .clk_i(clk_i), .rst_i(rst_i), .up_i(up), .down_i(down), .dir_i(dir_o),
+    .capture_i(capture_i), .win_count_o(win_count_o), .win_position_o(win_position_o),
+    .win_dir_o(win_dir_o), .position_o(position_o)
+);
+
+reg [31:0] err_count_q;
+assign err_count_o = err_count_q;
+
+always @(posedge clk_i) begin
+    if (rst_i) begin
+        err_count_q <= 32'd0;
+    end else if (err_o && err_count_q != 32'hFFFF_FFFF) begin
+        err_count_q <= err_count_q + 32'd1;
+    end
+end
+
+`ifdef FORMAL
+// End to end (pins -> position): no count without enable. The submodules' own properties and
+// assumptions (constant filter length <= 6, mode != 3) are part of this proof.
+reg f_past_valid = 1'b0;
+reg f_en_q = 1'b0;
+always @(posedge clk_i) begin
+    f_past_valid <= 1'b1;
+    f_en_q <= en_i;
+end
+initial assume (rst_i);
+
+always @(posedge clk_i) begin
+    if (f_past_valid && !$past(rst_i) && !rst_i) begin
+        // A pulse needs enable at the decoder's edge, one edge before the counter moves.
+        if (!$past(f_en_q)) assert (position_o == $past(position_o));
+        // The error counter moves by at most one and only on an error pulse.
+        if (err_count_q != $past(err_count_q)) assert ($past(err_o) && err_count_q == $past(err_count_q) + 32'd1);
+    end
+end
+`endif
+
+endmodule
+
+`resetall

@@ -1,0 +1,101 @@
+// encoder_core: four quadrature encoder channels counted in windows (paper section 2.2).
+//
+// tick_generator (window clock, PERIOD register) -> capture = tick while CONTROL.ENABLE; four
+// encoder_channel (synchronizer, glitch filter, decoder, window counter, position, error count);
+// encoder_regs (register bus, status, window bank and its snapshot). See docs/RTL.md.
+//
+// Window outputs for the streamer: win_valid_o pulses for one cycle after each capture; win_seq_o,
+// win_timestamp_o, win_count_o (4 x signed 32, channel 0 in the low bits), win_position_o,
+// win_dir_o and status_o (STATUS as it stood at the capture) then hold until the next capture.
+// win_consumed_i (one-cycle strobe) marks the window as taken, for STATUS.OVERRUN.
+//
+// Assumptions: enc_a_i/enc_b_i asynchronous; a single clock; rst_i synchronous, active high,
+// and held for at least one cycle. CLK_HZ / TICK_HZ >= PERIOD_MIN_CYCLES.
+`resetall
+`timescale 1ns / 1ps
+`default_nettype none
+
+module encoder_core #(
+    parameter CLK_HZ = 40000000,
+    parameter TICK_HZ = 100
+) (
+    input  wire         clk_i,
+    input  wire         rst_i,
+    input  wire [3:0]   enc_a_i,
+    input  wire [3:0]   enc_b_i,
+    // register bus
+    input  wire [7:0]   reg_addr_i,
+    input  wire         reg_rd_i,
+    input  wire         reg_wr_i,
+    input  wire [31:0]  reg_wdata_i,
+    output wire [31:0]  reg_rdata_o,
+    output wire         reg_ack_o,
+    output wire         reg_err_o,
+    // windows for streaming
+    output wire         win_valid_o,
+    output wire [31:0]  win_seq_o,
+    output wire [31:0]  win_timestamp_o,
+    output wire [127:0] win_count_o,
+    output wire [127:0] win_position_o,
+    output wire [3:0]   win_dir_o,
+    output wire [7:0]   status_o,
+    input  wire         win_consumed_i,
+    output wire         stream_en_o,
+    output wire         tick_o
+);
+
+wire        enable;
+wire [1:0]  decode;
+wire [7:0]  filter_len;
+wire [31:0] period;
+wire [31:0] timestamp;
+wire        tick;
+wire [3:0]  illegal;
+wire [127:0] err_count;
+wire        capture = tick & enable;
+
+assign tick_o = tick;
+
+tick_generator #(.CLK_HZ(CLK_HZ), .TICK_HZ(TICK_HZ)) u_tick (
+    .clk_i(clk_i), .rst_i(rst_i), .period_i(period), .tick_o(tick),
+    /* verilator lint_off PINCONNECTEMPTY */
+    .period_o(),
+    /* verilator lint_on PINCONNECTEMPTY */
+    .timestamp_o(timestamp)
+);
+
+genvar ch;
+generate
+    for (ch = 0; ch < 4; ch = ch + 1) begin : g_ch
+        encoder_channel u_ch (
+            .clk_i(clk_i), .rst_i(rst_i), .a_i(enc_a_i[ch]), .b_i(enc_b_i[ch]),
+            .filter_len_i(filter_len), .en_i(enable), .mode_i(decode), .capture_i(capture),
+            .win_count_o(win_count_o[32*ch +: 32]), .win_position_o(win_position_o[32*ch +: 32]),
+            .win_dir_o(win_dir_o[ch]),
+            /* verilator lint_off PINCONNECTEMPTY */
+            .position_o(), .dir_o(),
+            /* verilator lint_on PINCONNECTEMPTY */
+            .err_o(illegal[ch]), .err_count_o(err_count[32*ch +: 32])
+        );
+    end
+endgenerate
+
+encoder_regs #(.CLK_HZ(CLK_HZ), .TICK_HZ(TICK_HZ)) u_regs (
+    .clk_i(clk_i), .rst_i(rst_i),
+    .reg_addr_i(reg_addr_i), .reg_rd_i(reg_rd_i), .reg_wr_i(reg_wr_i), .reg_wdata_i(reg_wdata_i),
+    .reg_rdata_o(reg_rdata_o), .reg_ack_o(reg_ack_o), .reg_err_o(reg_err_o),
+    .enable_o(enable), .decode_o(decode), .stream_o(stream_en_o), .filter_len_o(filter_len),
+    .period_o(period),
+    .capture_i(capture), .illegal_i(illegal), .win_consumed_i(win_consumed_i),
+    .timestamp_i(timestamp), .win_count_i(win_count_o), .win_position_i(win_position_o),
+    .win_dir_i(win_dir_o), .err_count_i(err_count),
+    .win_valid_o(win_valid_o), .win_seq_o(win_seq_o), .win_timestamp_o(win_timestamp_o),
+    .win_status_o(status_o),
+    /* verilator lint_off PINCONNECTEMPTY */
+    .status_o()
+    /* verilator lint_on PINCONNECTEMPTY */
+);
+
+endmodule
+
+`resetall

@@ -1,0 +1,291 @@
+// encoder_regs: register file of the encoder core, the window bank and its snapshot.
+//
+// Bus: a request (reg_rd_i or reg_wr_i, one cycle, with reg_addr_i/reg_wdata_i) is answered
+// in the next cycle by reg_ack_o with reg_rdata_o; reg_err_o comes with the ack when the address
+// is unknown, the register is read-only, the value is refused, or rd and wr are both high.
+// A refused write changes nothing but STATUS.BAD_WRITE. Addresses and fields come from the
+// generated omniloc_regs.vh (single source of truth: common/regmap.json).
+//
+// Window bank: at capture_i (tick while enabled) the sequence number increments and the capture
+// timestamp and STATUS are recorded; the channels' window registers update in the same edge.
+// win_valid_o pulses in the cycle after, when all of it is visible. Reading SNAP_SEQ copies the
+// whole bank (seq, timestamp, status, dir, counts, positions) into a shadow that SNAP_* read, so
+// the reads that follow belong to the same window even if captures happen meanwhile.
+// STATUS.OVERRUN: a capture while the previous window was neither latched through SNAP_SEQ nor
+// acknowledged by win_consumed_i. A flag set and cleared (W1C) in the same cycle stays set.
+//
+// Assumptions: capture_i and illegal_i are one-cycle pulses; rst_i synchronous, active high.
+`resetall
+`timescale 1ns / 1ps
+`default_nettype none
+
+`include "omniloc_regs.vh"
+
+module encoder_regs #(
+    parameter CLK_HZ = 40000000,
+    parameter TICK_HZ = 100
+) (
+    input  wire         clk_i,
+    input  wire         rst_i,
+    // register bus
+    input  wire [7:0]   reg_addr_i,
+    input  wire         reg_rd_i,
+    input  wire         reg_wr_i,
+    input  wire [31:0]  reg_wdata_i,
+    output wire [31:0]  reg_rdata_o,
+    output wire         reg_ack_o,
+    output wire         reg_err_o,
+    // control to the datapath
+    output wire         enable_o,
+    output wire [1:0]   decode_o,
+    output wire         stream_o,
+    output wire [7:0]   filter_len_o,
+    output wire [31:0]  period_o,
+    // events and live values from the datapath
+    input  wire         capture_i,
+    input  wire [3:0]   illegal_i,
+    input  wire         win_consumed_i,
+    input  wire [31:0]  timestamp_i,
+    input  wire [127:0] win_count_i,
+    input  wire [127:0] win_position_i,
+    input  wire [3:0]   win_dir_i,
+    input  wire [127:0] err_count_i,
+    // window bank, valid from the cycle after the capture until the next one
+    output wire         win_valid_o,
+    output wire [31:0]  win_seq_o,
+    output wire [31:0]  win_timestamp_o,
+    output wire [7:0]   win_status_o,
+    output wire [7:0]   status_o
+);
+
+localparam [31:0] DEFAULT_PERIOD_CYCLES = CLK_HZ / TICK_HZ;
+localparam [31:0] PERIOD_MIN_CYCLES = `OMNILOC_PERIOD_MIN_CYCLES;
+localparam ILL_LSB = `OMNILOC_STATUS_ILLEGAL_LSB;
+localparam OVR_BIT = `OMNILOC_STATUS_OVERRUN_LSB;
+localparam BAD_BIT = `OMNILOC_STATUS_BAD_WRITE_LSB;
+localparam DEC_LSB = `OMNILOC_CONTROL_DECODE_LSB;
+
+// ---- control registers ----
+reg         enable_q;
+reg [1:0]   decode_q;
+reg         stream_q;
+reg [7:0]   filter_q;
+reg [31:0]  period_q;
+reg [5:0]   status_q;
+
+assign enable_o = enable_q;
+assign decode_o = decode_q;
+assign stream_o = stream_q;
+assign filter_len_o = filter_q;
+assign period_o = period_q;
+assign status_o = {2'b00, status_q};
+
+// ---- window bank and snapshot ----
+reg         win_valid_q;
+reg [31:0]  seq_q;
+reg [31:0]  win_ts_q;
+reg [7:0]   win_status_q;
+reg         pending_q;
+
+reg [31:0]  snap_ts_q;
+reg [7:0]   snap_status_q;
+reg [3:0]   snap_dir_q;
+reg [127:0] snap_count_q;
+reg [127:0] snap_pos_q;
+
+assign win_valid_o = win_valid_q;
+assign win_seq_o = seq_q;
+assign win_timestamp_o = win_ts_q;
+assign win_status_o = win_status_q;
+
+// ---- request decode ----
+wire rd = reg_rd_i && !reg_wr_i;
+wire wr = reg_wr_i && !reg_rd_i;
+wire both = reg_rd_i && reg_wr_i;
+
+wire addr_control = (reg_addr_i == `OMNILOC_REG_CONTROL);
+wire addr_filter = (reg_addr_i == `OMNILOC_REG_FILTER);
+wire addr_period = (reg_addr_i == `OMNILOC_REG_PERIOD);
+wire addr_status = (reg_addr_i == `OMNILOC_REG_STATUS);
+wire addr_snap_seq = (reg_addr_i == `OMNILOC_REG_SNAP_SEQ);
+
+// Value checks of the writable registers.
+wire [1:0] wdecode = reg_wdata_i[DEC_LSB +: 2];
+wire control_ok = (reg_wdata_i[31:4] == 28'd0) && (wdecode != 2'd3);
+wire filter_ok = (reg_wdata_i[31:8] == 24'd0);
+wire period_ok = (reg_wdata_i >= PERIOD_MIN_CYCLES);
+
+wire wr_control = wr && addr_control && control_ok;
+wire wr_filter = wr && addr_filter && filter_ok;
+wire wr_period = wr && addr_period && period_ok;
+wire wr_status = wr && addr_status;
+wire refused = wr && ((addr_control && !control_ok) || (addr_filter && !filter_ok)
+                      || (addr_period && !period_ok));
+
+// Read mux (combinational on the request; registered into reg_rdata_q).
+reg [31:0] rdata;
+reg        known;
+reg        writable;
+always @(*) begin
+    rdata = 32'd0;
+    known = 1'b1;
+    writable = 1'b0;
+    case (reg_addr_i)
+        `OMNILOC_REG_ID: rdata = `OMNILOC_ID;
+        `OMNILOC_REG_VERSION: rdata = `OMNILOC_VERSION;
+        `OMNILOC_REG_CONTROL: begin
+            rdata = {28'd0, stream_q, decode_q, enable_q};
+            writable = 1'b1;
+        end
+        `OMNILOC_REG_FILTER: begin
+            rdata = {24'd0, filter_q};
+            writable = 1'b1;
+        end
+        `OMNILOC_REG_PERIOD: begin
+            rdata = period_q;
+            writable = 1'b1;
+        end
+        `OMNILOC_REG_STATUS: begin
+            rdata = {26'd0, status_q};
+            writable = 1'b1;
+        end
+        `OMNILOC_REG_TIMESTAMP: rdata = timestamp_i;
+        `OMNILOC_REG_SNAP_SEQ: rdata = seq_q;
+        `OMNILOC_REG_SNAP_TIMESTAMP: rdata = snap_ts_q;
+        `OMNILOC_REG_SNAP_DIR: rdata = {28'd0, snap_dir_q};
+        `OMNILOC_REG_SNAP_STATUS: rdata = {24'd0, snap_status_q};
+        `OMNILOC_REG_SNAP_COUNT0: rdata = snap_count_q[31:0];
+        `OMNILOC_REG_SNAP_COUNT1: rdata = snap_count_q[63:32];
+        `OMNILOC_REG_SNAP_COUNT2: rdata = snap_count_q[95:64];
+        `OMNILOC_REG_SNAP_COUNT3: rdata = snap_count_q[127:96];
+        `OMNILOC_REG_SNAP_POSITION0: rdata = snap_pos_q[31:0];
+        `OMNILOC_REG_SNAP_POSITION1: rdata = snap_pos_q[63:32];
+        `OMNILOC_REG_SNAP_POSITION2: rdata = snap_pos_q[95:64];
+        `OMNILOC_REG_SNAP_POSITION3: rdata = snap_pos_q[127:96];
+        `OMNILOC_REG_ERROR_COUNT0: rdata = err_count_i[31:0];
+        `OMNILOC_REG_ERROR_COUNT1: rdata = err_count_i[63:32];
+        `OMNILOC_REG_ERROR_COUNT2: rdata = err_count_i[95:64];
+        `OMNILOC_REG_ERROR_COUNT3: rdata = err_count_i[127:96];
+        default: known = 1'b0;
+    endcase
+end
+
+wire latch_snapshot = rd && addr_snap_seq;
+wire consumed = latch_snapshot || win_consumed_i;
+wire overrun = capture_i && pending_q && !consumed;
+
+// STATUS after this cycle's events: set wins over a simultaneous write-one-to-clear.
+reg [5:0] status_set;
+always @(*) begin
+    status_set = 6'd0;
+    status_set[ILL_LSB +: 4] = illegal_i;
+    status_set[OVR_BIT] = overrun;
+    status_set[BAD_BIT] = refused;
+end
+wire [5:0] status_clr = wr_status ? reg_wdata_i[5:0] : 6'd0;
+wire [5:0] status_next = (status_q & ~status_clr) | status_set;
+
+reg [31:0] reg_rdata_q;
+reg        reg_ack_q;
+reg        reg_err_q;
+assign reg_rdata_o = reg_rdata_q;
+assign reg_ack_o = reg_ack_q;
+assign reg_err_o = reg_err_q;
+
+always @(posedge clk_i) begin
+    if (rst_i) begin
+        enable_q <= 1'b0;
+        decode_q <= `OMNILOC_CONTROL_DECODE_X4;
+        stream_q <= 1'b0;
+        filter_q <= 8'd0;
+        period_q <= DEFAULT_PERIOD_CYCLES;
+        status_q <= 6'd0;
+        win_valid_q <= 1'b0;
+        seq_q <= 32'd0;
+        win_ts_q <= 32'd0;
+        win_status_q <= 8'd0;
+        pending_q <= 1'b0;
+        snap_ts_q <= 32'd0;
+        snap_status_q <= 8'd0;
+        snap_dir_q <= 4'd0;
+        snap_count_q <= 128'd0;
+        snap_pos_q <= 128'd0;
+        reg_rdata_q <= 32'd0;
+        reg_ack_q <= 1'b0;
+        reg_err_q <= 1'b0;
+    end else begin
+        if (wr_control) begin
+            enable_q <= reg_wdata_i[`OMNILOC_CONTROL_ENABLE_LSB];
+            decode_q <= wdecode;
+            stream_q <= reg_wdata_i[`OMNILOC_CONTROL_STREAM_LSB];
+        end
+        if (wr_filter) filter_q <= reg_wdata_i[7:0];
+        if (wr_period) period_q <= reg_wdata_i;
+        status_q <= status_next;
+
+        win_valid_q <= capture_i;
+        if (capture_i) begin
+            seq_q <= seq_q + 32'd1;
+            win_ts_q <= timestamp_i;
+            win_status_q <= {2'b00, status_next};
+            pending_q <= 1'b1;
+        end else if (consumed) begin
+            pending_q <= 1'b0;
+        end
+
+        // The bank is copied as it stands before this edge, so it is one window even when a
+        // capture happens in the same cycle (the new window goes to the bank, not the shadow).
+        if (latch_snapshot) begin
+            snap_ts_q <= win_ts_q;
+            snap_status_q <= win_status_q;
+            snap_dir_q <= win_dir_i;
+            snap_count_q <= win_count_i;
+            snap_pos_q <= win_position_i;
+        end
+
+        reg_ack_q <= reg_rd_i || reg_wr_i;
+        reg_err_q <= both || (rd && !known) || (wr && (!known || !writable)) || refused;
+        reg_rdata_q <= rd ? rdata : 32'd0;
+    end
+end
+
+`ifdef FORMAL
+reg f_past_valid = 1'b0;
+always @(posedge clk_i) f_past_valid <= 1'b1;
+initial assume (rst_i);
+
+always @(*) begin
+    if (f_past_valid && !rst_i) begin
+        // A refused value never gets into the datapath.
+        assert (decode_q != 2'd3);
+        assert (period_q >= PERIOD_MIN_CYCLES);
+        assert (win_status_q[7:6] == 2'b00);
+    end
+end
+
+always @(posedge clk_i) begin
+    if (f_past_valid && !$past(rst_i) && !rst_i) begin
+        // Every request is answered exactly one cycle later.
+        assert (reg_ack_q == ($past(reg_rd_i) || $past(reg_wr_i)));
+        // A refused or erroneous write leaves the control registers unchanged.
+        if (reg_err_q) begin
+            assert (enable_q == $past(enable_q) && decode_q == $past(decode_q));
+            assert (filter_q == $past(filter_q) && period_q == $past(period_q));
+        end
+        // Sticky flags: an event is never lost, even against a simultaneous clear.
+        if ($past(refused)) assert (status_q[BAD_BIT]);
+        if ($past(overrun)) assert (status_q[OVR_BIT]);
+        if ($past(illegal_i) != 4'd0) assert ((status_q[ILL_LSB +: 4] & $past(illegal_i)) == $past(illegal_i));
+        // A flag only clears on a write of one to it.
+        if (($past(status_q) & ~status_q) != 6'd0) assert ($past(wr_status));
+        // The sequence number moves only at a capture, by one.
+        if ($past(capture_i)) assert (seq_q == $past(seq_q) + 32'd1);
+        else assert (seq_q == $past(seq_q));
+        assert (win_valid_q == $past(capture_i));
+    end
+end
+`endif
+
+endmodule
+
+`resetall

@@ -1,0 +1,183 @@
+// frame_rx: parses request frames from the UART byte stream (docs/REGISTER_MAP.md, "UART frames").
+//
+// A frame is SYNC, LEN, TYPE, body, CRC-16 (high byte first) over LEN, TYPE and body. The parser
+// hunts for SYNC, collects LEN bytes (at most MAX_LEN), checks the CRC, and then the type and length:
+//   - CRC wrong                           -> error BAD_CRC, detail = TYPE byte
+//   - LEN 0 or above MAX_LEN              -> error MALFORMED, detail = LEN (the frame is not buffered)
+//   - CRC right, unknown TYPE or wrong LEN -> error MALFORMED, detail = TYPE byte
+//   - a gap longer than TIMEOUT_CYCLES inside a frame (truncated) -> error MALFORMED, detail = 0xFF
+// Only a frame that passes every check becomes a request, so a bad frame can never write a register.
+// Assumptions: one event is outstanding at a time; while it is not taken (ev_ready_i low) no byte
+// is accepted (the UART receiver counts an overrun if the host does not wait for its answer).
+`resetall
+`timescale 1ns / 1ps
+`default_nettype none
+`include "omniloc_regs.vh"
+
+module frame_rx #(
+    parameter integer TIMEOUT_CYCLES = 12_000   // 1 ms at 12 MHz: 100 byte times at 1 Mbaud
+) (
+    input  wire        clk_i,
+    input  wire        rst_i,
+    // bytes from the UART receiver
+    input  wire [7:0]  byte_i,
+    input  wire        byte_valid_i,
+    output wire        byte_ready_o,
+    // one event: a request (ev_error_o = 0, ev_code_o = frame TYPE) or an error to report
+    // (ev_error_o = 1, ev_code_o = error code, ev_addr_o = detail)
+    output reg         ev_valid_o,
+    input  wire        ev_ready_i,
+    output reg         ev_error_o,
+    output reg  [7:0]  ev_code_o,
+    output reg  [7:0]  ev_addr_o,
+    output reg  [31:0] ev_data_o
+);
+
+    localparam integer MAX_LEN = 1 + `OMNILOC_FRAME_WRITE_REQ_BODY_BYTES;
+    localparam integer TIMER_W = $clog2(TIMEOUT_CYCLES + 1);
+    localparam integer TIMEOUT_I = TIMEOUT_CYCLES;
+    localparam [TIMER_W-1:0] TIMEOUT = TIMEOUT_I[TIMER_W-1:0];
+
+    localparam [2:0] S_HUNT = 3'd0, S_LEN = 3'd1, S_TYPE = 3'd2, S_BODY = 3'd3,
+                     S_CRC_HI = 3'd4, S_CRC_LO = 3'd5, S_EVENT = 3'd6;
+
+    reg [2:0]         state_q;
+    reg [7:0]         len_q;
+    reg [7:0]         left_q;      // body bytes still to come
+    reg [7:0]         type_q;
+    reg [39:0]        body_q;      // body bytes, first byte in [7:0]
+    reg [15:0]        crc_q;
+    reg [7:0]         crc_hi_q;
+    reg [TIMER_W-1:0] timer_q;
+
+    wire [15:0] crc_next;
+    crc16_ccitt crc_step (.crc_i(crc_q), .data_i(byte_i), .crc_o(crc_next));
+
+    assign byte_ready_o = (state_q != S_EVENT);
+    wire take = byte_valid_i && byte_ready_o;
+
+    // Is (TYPE, LEN) a request this board serves?
+    wire [7:0] body_len = len_q - 8'd1;
+    wire known_read  = (type_q == `OMNILOC_FRAME_READ_REQ)     && (body_len == `OMNILOC_FRAME_READ_REQ_BODY_BYTES);
+    wire known_write = (type_q == `OMNILOC_FRAME_WRITE_REQ)    && (body_len == `OMNILOC_FRAME_WRITE_REQ_BODY_BYTES);
+    wire known_snap  = (type_q == `OMNILOC_FRAME_SNAPSHOT_REQ) && (body_len == `OMNILOC_FRAME_SNAPSHOT_REQ_BODY_BYTES);
+
+    task raise_error(input [7:0] code, input [7:0] detail);
+        begin
+            ev_error_o <= 1'b1;
+            ev_code_o  <= code;
+            ev_addr_o  <= detail;
+            ev_data_o  <= 32'd0;
+            ev_valid_o <= 1'b1;
+            state_q    <= S_EVENT;
+        end
+    endtask
+
+    always @(posedge clk_i) begin
+        if (rst_i) begin
+            state_q    <= S_HUNT;
+            len_q      <= 8'd0;
+            left_q     <= 8'd0;
+            type_q     <= 8'd0;
+            body_q     <= 40'd0;
+            crc_q      <= `OMNILOC_CRC_INIT;
+            crc_hi_q   <= 8'd0;
+            timer_q    <= {TIMER_W{1'b0}};
+            ev_valid_o <= 1'b0;
+            ev_error_o <= 1'b0;
+            ev_code_o  <= 8'd0;
+            ev_addr_o  <= 8'd0;
+            ev_data_o  <= 32'd0;
+        end else begin
+            // Inter-byte timeout inside a frame.
+            if (state_q != S_HUNT && state_q != S_EVENT) begin
+                if (take) timer_q <= {TIMER_W{1'b0}};
+                else if (timer_q != TIMEOUT) timer_q <= timer_q + 1'b1;
+            end else begin
+                timer_q <= {TIMER_W{1'b0}};
+            end
+
+            if (state_q != S_HUNT && state_q != S_EVENT && !take && timer_q == TIMEOUT) begin
+                raise_error(`OMNILOC_ERR_MALFORMED, 8'hFF);
+            end else begin
+                case (state_q)
+                    S_HUNT: if (take && byte_i == `OMNILOC_FRAME_SYNC) begin
+                        state_q <= S_LEN;
+                        crc_q   <= `OMNILOC_CRC_INIT;
+                    end
+                    S_LEN: if (take) begin
+                        if (byte_i == 8'd0 || byte_i > MAX_LEN[7:0]) begin
+                            raise_error(`OMNILOC_ERR_MALFORMED, byte_i);
+                        end else begin
+                            len_q   <= byte_i;
+                            left_q  <= byte_i - 8'd1;
+                            crc_q   <= crc_next;
+                            state_q <= S_TYPE;
+                        end
+                    end
+                    S_TYPE: if (take) begin
+                        type_q  <= byte_i;
+                        crc_q   <= crc_next;
+                        body_q  <= 40'd0;
+                        state_q <= (left_q == 8'd0) ? S_CRC_HI : S_BODY;
+                    end
+                    S_BODY: if (take) begin
+                        body_q  <= {byte_i, body_q[39:8]};
+                        crc_q   <= crc_next;
+                        left_q  <= left_q - 8'd1;
+                        if (left_q == 8'd1) state_q <= S_CRC_HI;
+                    end
+                    S_CRC_HI: if (take) begin
+                        crc_hi_q <= byte_i;
+                        state_q  <= S_CRC_LO;
+                    end
+                    S_CRC_LO: if (take) begin
+                        if ({crc_hi_q, byte_i} != crc_q) begin
+                            raise_error(`OMNILOC_ERR_BAD_CRC, type_q);
+                        end else if (!(known_read || known_write || known_snap)) begin
+                            raise_error(`OMNILOC_ERR_MALFORMED, type_q);
+                        end else begin
+                            // The body was shifted in from the top: realign it to byte 0.
+                            ev_error_o <= 1'b0;
+                            ev_code_o  <= type_q;
+                            ev_addr_o  <= known_write ? body_q[7:0]  : body_q[39:32];
+                            ev_data_o  <= known_write ? body_q[39:8] : 32'd0;
+                            ev_valid_o <= 1'b1;
+                            state_q    <= S_EVENT;
+                        end
+                    end
+                    default: if (ev_ready_i) begin   // S_EVENT
+                        ev_valid_o <= 1'b0;
+                        state_q    <= S_HUNT;
+                    end
+                endcase
+            end
+        end
+    end
+
+`ifdef FORMAL
+    reg f_past_valid = 1'b0;
+    always @(posedge clk_i) f_past_valid <= 1'b1;
+    always @(*) if (!f_past_valid) assume(rst_i);   // start from reset
+    always @(posedge clk_i) begin
+        if (f_past_valid && !$past(rst_i)) begin
+            // An event is held stable until taken.
+            if ($past(ev_valid_o) && !$past(ev_ready_i))
+                assert(ev_valid_o && ev_error_o == $past(ev_error_o) && ev_code_o == $past(ev_code_o)
+                       && ev_addr_o == $past(ev_addr_o) && ev_data_o == $past(ev_data_o));
+            // Only a request type this board serves leaves as a request.
+            if (ev_valid_o && !ev_error_o)
+                assert(ev_code_o == `OMNILOC_FRAME_READ_REQ || ev_code_o == `OMNILOC_FRAME_WRITE_REQ
+                       || ev_code_o == `OMNILOC_FRAME_SNAPSHOT_REQ);
+            // A new request event follows the last CRC byte of a frame (the CRC itself is
+            // checked against a golden model in tests/link/tb_frame_rx.cpp).
+            if (ev_valid_o && !$past(ev_valid_o) && !ev_error_o) assert($past(state_q) == S_CRC_LO);
+            assert(ev_valid_o == (state_q == S_EVENT));
+            assert(left_q < MAX_LEN);
+        end
+    end
+`endif
+
+endmodule
+
+`default_nettype wire

@@ -1,0 +1,122 @@
+// frame_tx: serialises one frame (SYNC, LEN, TYPE, body, CRC-16 high byte first) into bytes.
+//
+// The body is taken whole at start (start_i && ready_o), so the caller's data may change while the
+// frame is on the line. Assumptions: body_len_i <= MAX_BODY_BYTES. Guarantees: LEN = body_len + 1;
+// the CRC covers LEN, TYPE and body; one frame at a time, bytes in order, none dropped.
+`resetall
+`timescale 1ns / 1ps
+`default_nettype none
+`include "omniloc_regs.vh"
+
+module frame_tx #(
+    parameter integer MAX_BODY_BYTES = `OMNILOC_FRAME_TELEMETRY_BODY_BYTES
+) (
+    input  wire                        clk_i,
+    input  wire                        rst_i,
+    input  wire                        start_i,
+    output wire                        ready_o,
+    input  wire [7:0]                  type_i,
+    input  wire [7:0]                  body_len_i,
+    input  wire [8*MAX_BODY_BYTES-1:0] body_i,      // body byte k at [8k+7:8k]
+    output reg  [7:0]                  byte_o,
+    output reg                         byte_valid_o,
+    input  wire                        byte_ready_i
+);
+
+    localparam [2:0] S_IDLE = 3'd0, S_LEN = 3'd1, S_TYPE = 3'd2, S_BODY = 3'd3,
+                     S_CRC_HI = 3'd4, S_CRC_LO = 3'd5, S_SYNC = 3'd6;
+
+    reg [2:0]                  state_q;
+    reg [7:0]                  type_q;
+    reg [7:0]                  len_q;
+    reg [7:0]                  left_q;
+    reg [8*MAX_BODY_BYTES-1:0] body_q;
+    reg [15:0]                 crc_q;
+
+    assign ready_o = (state_q == S_IDLE);
+
+    // The byte that goes out next, by state, and the CRC after it.
+    reg [7:0] next_byte;
+    always @(*) begin
+        case (state_q)
+            S_SYNC:   next_byte = `OMNILOC_FRAME_SYNC;
+            S_LEN:    next_byte = len_q;
+            S_TYPE:   next_byte = type_q;
+            S_BODY:   next_byte = body_q[7:0];
+            S_CRC_HI: next_byte = crc_q[15:8];
+            default:  next_byte = crc_q[7:0];
+        endcase
+    end
+    wire [15:0] crc_next;
+    crc16_ccitt crc_step (.crc_i(crc_q), .data_i(next_byte), .crc_o(crc_next));
+
+    wire slot_free = !byte_valid_o || byte_ready_i;   // the output register can take a byte
+
+    always @(posedge clk_i) begin
+        if (rst_i) begin
+            state_q      <= S_IDLE;
+            type_q       <= 8'd0;
+            len_q        <= 8'd0;
+            left_q       <= 8'd0;
+            body_q       <= {8*MAX_BODY_BYTES{1'b0}};
+            crc_q        <= `OMNILOC_CRC_INIT;
+            byte_o       <= 8'd0;
+            byte_valid_o <= 1'b0;
+        end else begin
+            if (byte_valid_o && byte_ready_i) byte_valid_o <= 1'b0;
+            if (state_q == S_IDLE) begin
+                if (start_i) begin
+                    type_q  <= type_i;
+                    len_q   <= body_len_i + 8'd1;
+                    left_q  <= body_len_i;
+                    body_q  <= body_i;
+                    crc_q   <= `OMNILOC_CRC_INIT;
+                    state_q <= S_SYNC;
+                end
+            end else if (slot_free) begin
+                byte_o       <= next_byte;
+                byte_valid_o <= 1'b1;
+                case (state_q)
+                    S_SYNC: state_q <= S_LEN;
+                    S_LEN: begin
+                        crc_q   <= crc_next;
+                        state_q <= S_TYPE;
+                    end
+                    S_TYPE: begin
+                        crc_q   <= crc_next;
+                        state_q <= (left_q == 8'd0) ? S_CRC_HI : S_BODY;
+                    end
+                    S_BODY: begin
+                        crc_q   <= crc_next;
+                        body_q  <= {8'd0, body_q[8*MAX_BODY_BYTES-1:8]};
+                        left_q  <= left_q - 8'd1;
+                        if (left_q == 8'd1) state_q <= S_CRC_HI;
+                    end
+                    S_CRC_HI: state_q <= S_CRC_LO;
+                    default:  state_q <= S_IDLE;   // S_CRC_LO
+                endcase
+            end
+        end
+    end
+
+`ifdef FORMAL
+    reg f_past_valid = 1'b0;
+    always @(posedge clk_i) f_past_valid <= 1'b1;
+    always @(*) if (!f_past_valid) assume(rst_i);   // start from reset
+    always @(*) assume(body_len_i <= MAX_BODY_BYTES);
+    always @(posedge clk_i) begin
+        if (f_past_valid && !$past(rst_i)) begin
+            // A byte on offer is held until the UART takes it.
+            if ($past(byte_valid_o) && !$past(byte_ready_i)) assert(byte_valid_o && byte_o == $past(byte_o));
+            // A frame starts with SYNC: after it is put out, LEN is next.
+            if (state_q == S_LEN) assert(byte_valid_o && byte_o == `OMNILOC_FRAME_SYNC || !byte_valid_o);
+            if (state_q == S_LEN) assert(byte_o == `OMNILOC_FRAME_SYNC);
+            if (state_q == S_BODY) assert(left_q != 8'd0);
+            assert(left_q <= MAX_BODY_BYTES);
+        end
+    end
+`endif
+
+endmodule
+
+`default_nettype wire

@@ -1,0 +1,188 @@
+// link_engine: serves request frames on the register bus and streams telemetry.
+//
+// Requests (from frame_rx): READ_REQ -> one bus read -> READ_RESP or ERROR; WRITE_REQ -> one bus
+// write -> WRITE_ACK or ERROR; SNAPSHOT_REQ -> bus reads of SNAP_SEQ (which latches the snapshot),
+// SNAP_TIMESTAMP, SNAP_COUNT0..3, SNAP_DIR and STATUS -> SNAPSHOT_RESP, one consistent window.
+// Parser errors (bad CRC, malformed) are answered with ERROR frames. A bus error is classified with
+// the generated map: unknown address -> BAD_ADDRESS, write to a read-only register -> READ_ONLY,
+// otherwise the register refused the value -> BAD_VALUE; the detail byte is the address.
+// Streaming: with stream_en_i, each captured window (win_valid_i) is sent as one TELEMETRY frame
+// as soon as the transmitter is free, between responses, and acknowledged with win_consumed_o.
+// Assumptions: the register bus acks every access within a bounded time (encoder_regs: 1 cycle).
+`resetall
+`timescale 1ns / 1ps
+`default_nettype none
+`include "omniloc_regs.vh"
+
+module link_engine #(
+    parameter integer BODY_BYTES = `OMNILOC_FRAME_TELEMETRY_BODY_BYTES
+) (
+    input  wire                    clk_i,
+    input  wire                    rst_i,
+    // events from frame_rx
+    input  wire                    ev_valid_i,
+    output wire                    ev_ready_o,
+    input  wire                    ev_error_i,
+    input  wire [7:0]              ev_code_i,
+    input  wire [7:0]              ev_addr_i,
+    input  wire [31:0]             ev_data_i,
+    // frames to frame_tx
+    output reg                     tx_start_o,
+    input  wire                    tx_ready_i,
+    output reg  [7:0]              tx_type_o,
+    output reg  [7:0]              tx_body_len_o,
+    output reg  [8*BODY_BYTES-1:0] tx_body_o,
+    // register bus master
+    output reg  [7:0]              reg_addr_o,
+    output reg                     reg_rd_o,
+    output reg                     reg_wr_o,
+    output reg  [31:0]             reg_wdata_o,
+    input  wire [31:0]             reg_rdata_i,
+    input  wire                    reg_ack_i,
+    input  wire                    reg_err_i,
+    // window stream from the core
+    input  wire                    stream_en_i,
+    input  wire                    win_valid_i,
+    input  wire [31:0]             win_seq_i,
+    input  wire [31:0]             win_timestamp_i,
+    input  wire [127:0]            win_count_i,
+    input  wire [3:0]              win_dir_i,
+    input  wire [7:0]              status_i,
+    output reg                     win_consumed_o
+);
+
+    localparam [2:0] S_IDLE = 3'd0, S_BUS = 3'd1, S_SEND = 3'd2, S_SNAP = 3'd3;
+
+    reg [2:0]  state_q;
+    reg        tele_pending_q;
+    reg [7:0]  req_code_q;
+    reg [7:0]  req_addr_q;
+    reg [2:0]  snap_step_q;
+
+    // tx_start_o is a valid held until frame_tx takes the frame (tx_ready_i); the body stays stable.
+    assign ev_ready_o = (state_q == S_IDLE) && !tx_start_o && !tele_pending_q;
+
+    // Snapshot read order; the body slot of each read follows the SNAPSHOT_RESP layout.
+    function [7:0] snap_addr(input [2:0] step);
+        case (step)
+            3'd0:    snap_addr = `OMNILOC_REG_SNAP_SEQ;
+            3'd1:    snap_addr = `OMNILOC_REG_SNAP_TIMESTAMP;
+            3'd2:    snap_addr = `OMNILOC_REG_SNAP_COUNT0;
+            3'd3:    snap_addr = `OMNILOC_REG_SNAP_COUNT1;
+            3'd4:    snap_addr = `OMNILOC_REG_SNAP_COUNT2;
+            3'd5:    snap_addr = `OMNILOC_REG_SNAP_COUNT3;
+            3'd6:    snap_addr = `OMNILOC_REG_SNAP_DIR;
+            default: snap_addr = `OMNILOC_REG_STATUS;
+        endcase
+    endfunction
+
+    wire [7:0] bus_err_code = !(`OMNILOC_ADDR_KNOWN(req_addr_q)) ? `OMNILOC_ERR_BAD_ADDRESS :
+                              (req_code_q == `OMNILOC_FRAME_WRITE_REQ && !(`OMNILOC_ADDR_WRITABLE(req_addr_q)))
+                                  ? `OMNILOC_ERR_READ_ONLY : `OMNILOC_ERR_BAD_VALUE;
+
+    task send(input [7:0] frame_type, input [7:0] body_len);
+        begin
+            tx_type_o     <= frame_type;
+            tx_body_len_o <= body_len;
+            state_q       <= S_SEND;
+        end
+    endtask
+
+    always @(posedge clk_i) begin
+        if (rst_i) begin
+            state_q        <= S_IDLE;
+            tele_pending_q <= 1'b0;
+            req_code_q     <= 8'd0;
+            req_addr_q     <= 8'd0;
+            snap_step_q    <= 3'd0;
+            tx_start_o     <= 1'b0;
+            tx_type_o      <= 8'd0;
+            tx_body_len_o  <= 8'd0;
+            tx_body_o      <= {8*BODY_BYTES{1'b0}};
+            reg_addr_o     <= 8'd0;
+            reg_rd_o       <= 1'b0;
+            reg_wr_o       <= 1'b0;
+            reg_wdata_o    <= 32'd0;
+            win_consumed_o <= 1'b0;
+        end else begin
+            if (tx_start_o && tx_ready_i) tx_start_o <= 1'b0;
+            reg_rd_o       <= 1'b0;
+            reg_wr_o       <= 1'b0;
+            win_consumed_o <= 1'b0;
+            if (win_valid_i && stream_en_i) tele_pending_q <= 1'b1;
+
+            case (state_q)
+                S_IDLE: begin
+                    if (tx_start_o) begin
+                        // wait until frame_tx has taken the previous frame
+                    end else if (tele_pending_q && !win_valid_i) begin
+                        // Telemetry goes first: it is the time-critical traffic.
+                        tele_pending_q <= 1'b0;
+                        win_consumed_o <= 1'b1;
+                        tx_type_o      <= `OMNILOC_FRAME_TELEMETRY;
+                        tx_body_len_o  <= `OMNILOC_FRAME_TELEMETRY_BODY_BYTES;
+                        tx_body_o      <= {status_i, 4'd0, win_dir_i, win_count_i, win_timestamp_i, win_seq_i};
+                        tx_start_o     <= 1'b1;
+                    end else if (ev_valid_i) begin
+                        req_code_q <= ev_code_i;
+                        req_addr_q <= ev_addr_i;
+                        tx_body_o  <= {8*BODY_BYTES{1'b0}};
+                        if (ev_error_i) begin
+                            tx_body_o[15:0] <= {ev_addr_i, ev_code_i};
+                            send(`OMNILOC_FRAME_ERROR, `OMNILOC_FRAME_ERROR_BODY_BYTES);
+                        end else if (ev_code_i == `OMNILOC_FRAME_SNAPSHOT_REQ) begin
+                            snap_step_q <= 3'd0;
+                            reg_addr_o  <= snap_addr(3'd0);
+                            reg_rd_o    <= 1'b1;
+                            state_q     <= S_SNAP;
+                        end else begin
+                            reg_addr_o  <= ev_addr_i;
+                            reg_wdata_o <= ev_data_i;
+                            reg_rd_o    <= (ev_code_i == `OMNILOC_FRAME_READ_REQ);
+                            reg_wr_o    <= (ev_code_i == `OMNILOC_FRAME_WRITE_REQ);
+                            state_q     <= S_BUS;
+                        end
+                    end
+                end
+                S_BUS: if (reg_ack_i) begin
+                    if (reg_err_i) begin
+                        tx_body_o[15:0] <= {req_addr_q, bus_err_code};
+                        send(`OMNILOC_FRAME_ERROR, `OMNILOC_FRAME_ERROR_BODY_BYTES);
+                    end else if (req_code_q == `OMNILOC_FRAME_READ_REQ) begin
+                        tx_body_o[39:0] <= {reg_rdata_i, req_addr_q};
+                        send(`OMNILOC_FRAME_READ_RESP, `OMNILOC_FRAME_READ_RESP_BODY_BYTES);
+                    end else begin
+                        tx_body_o[7:0] <= req_addr_q;
+                        send(`OMNILOC_FRAME_WRITE_ACK, `OMNILOC_FRAME_WRITE_ACK_BODY_BYTES);
+                    end
+                end
+                S_SNAP: if (reg_ack_i) begin
+                    case (snap_step_q)
+                        3'd0:    tx_body_o[31:0]    <= reg_rdata_i;
+                        3'd1:    tx_body_o[63:32]   <= reg_rdata_i;
+                        3'd2:    tx_body_o[95:64]   <= reg_rdata_i;
+                        3'd3:    tx_body_o[127:96]  <= reg_rdata_i;
+                        3'd4:    tx_body_o[159:128] <= reg_rdata_i;
+                        3'd5:    tx_body_o[191:160] <= reg_rdata_i;
+                        3'd6:    tx_body_o[199:192] <= reg_rdata_i[7:0];
+                        default: tx_body_o[207:200] <= reg_rdata_i[7:0];
+                    endcase
+                    if (snap_step_q == 3'd7) begin
+                        send(`OMNILOC_FRAME_SNAPSHOT_RESP, `OMNILOC_FRAME_SNAPSHOT_RESP_BODY_BYTES);
+                    end else begin
+                        snap_step_q <= snap_step_q + 3'd1;
+                        reg_addr_o  <= snap_addr(snap_step_q + 3'd1);
+                        reg_rd_o    <= 1'b1;
+                    end
+                end
+                default: if (!tx_start_o) begin   // S_SEND
+                    tx_start_o <= 1'b1;
+                    state_q    <= S_IDLE;
+                end
+            endcase
+        end
+    end
+
+endmodule
+
+`default_nettype wire

@@ -1,0 +1,130 @@
+// omniloc_top: the board-independent design: encoder core + UART link.
+//
+// uart_rx -> frame_rx -> link_engine -> frame_tx -> uart_tx; link_engine masters the register
+// bus of encoder_core and streams its windows. LINK_ERRORS (UART receive error counters) is
+// answered here; every other address goes to the core.
+// Assumptions: one clock of CLK_HZ; rst_i synchronous, active high; uart_rx_i and the encoder
+// pins asynchronous (synchronised inside). CLK_HZ / BAUD >= 4 and should divide exactly
+// (docs/RTL.md lists the rates).
+`resetall
+`timescale 1ns / 1ps
+`default_nettype none
+`include "omniloc_regs.vh"
+
+module omniloc_top #(
+    parameter integer CLK_HZ  = 12_000_000,
+    parameter integer TICK_HZ = 100,
+    parameter integer BAUD    = 1_000_000
+) (
+    input  wire       clk_i,
+    input  wire       rst_i,
+    input  wire [3:0] enc_a_i,
+    input  wire [3:0] enc_b_i,
+    input  wire       uart_rx_i,
+    output wire       uart_tx_o,
+    output wire       activity_o,   // a byte went either way in the last ~50 ms
+    output wire       error_o       // a sticky error: illegal transition, refused write or UART error
+);
+
+    // ---- UART ----
+    wire [7:0]  rx_byte;
+    wire        rx_valid, rx_ready;
+    wire [15:0] rx_framing, rx_overruns;
+    uart_rx #(.CLK_HZ(CLK_HZ), .BAUD(BAUD)) u_uart_rx (
+        .clk_i(clk_i), .rst_i(rst_i), .rx_i(uart_rx_i),
+        .data_o(rx_byte), .valid_o(rx_valid), .ready_i(rx_ready),
+        .framing_errors_o(rx_framing), .overruns_o(rx_overruns));
+
+    wire [7:0] tx_byte;
+    wire       tx_valid, tx_ready;
+    uart_tx #(.CLK_HZ(CLK_HZ), .BAUD(BAUD)) u_uart_tx (
+        .clk_i(clk_i), .rst_i(rst_i), .data_i(tx_byte), .valid_i(tx_valid), .ready_o(tx_ready),
+        .tx_o(uart_tx_o));
+
+    // ---- frames ----
+    wire        ev_valid, ev_ready, ev_error;
+    wire [7:0]  ev_code, ev_addr;
+    wire [31:0] ev_data;
+    frame_rx #(.TIMEOUT_CYCLES(CLK_HZ / 1000)) u_frame_rx (
+        .clk_i(clk_i), .rst_i(rst_i),
+        .byte_i(rx_byte), .byte_valid_i(rx_valid), .byte_ready_o(rx_ready),
+        .ev_valid_o(ev_valid), .ev_ready_i(ev_ready), .ev_error_o(ev_error),
+        .ev_code_o(ev_code), .ev_addr_o(ev_addr), .ev_data_o(ev_data));
+
+    localparam integer BODY_BYTES = `OMNILOC_FRAME_TELEMETRY_BODY_BYTES;
+    wire                    ftx_start, ftx_ready;
+    wire [7:0]              ftx_type, ftx_len;
+    wire [8*BODY_BYTES-1:0] ftx_body;
+    frame_tx #(.MAX_BODY_BYTES(BODY_BYTES)) u_frame_tx (
+        .clk_i(clk_i), .rst_i(rst_i),
+        .start_i(ftx_start), .ready_o(ftx_ready), .type_i(ftx_type), .body_len_i(ftx_len), .body_i(ftx_body),
+        .byte_o(tx_byte), .byte_valid_o(tx_valid), .byte_ready_i(tx_ready));
+
+    // ---- register bus: LINK_ERRORS here, the rest in the core ----
+    wire [7:0]  bus_addr;
+    wire        bus_rd, bus_wr;
+    wire [31:0] bus_wdata;
+    wire        to_link = (bus_addr == `OMNILOC_REG_LINK_ERRORS);
+
+    wire [31:0] core_rdata;
+    wire        core_ack, core_err;
+    reg         link_ack_q, link_err_q;
+    reg  [31:0] link_rdata_q;
+    always @(posedge clk_i) begin
+        if (rst_i) begin
+            link_ack_q   <= 1'b0;
+            link_err_q   <= 1'b0;
+            link_rdata_q <= 32'd0;
+        end else begin
+            link_ack_q   <= to_link && (bus_rd || bus_wr);
+            link_err_q   <= bus_wr;                    // read-only
+            link_rdata_q <= {rx_overruns, rx_framing};
+        end
+    end
+    wire [31:0] bus_rdata = link_ack_q ? link_rdata_q : core_rdata;
+    wire        bus_ack   = link_ack_q | core_ack;
+    wire        bus_err   = link_ack_q ? link_err_q : core_err;
+
+    wire         win_valid, win_consumed, stream_en, tick;
+    wire [31:0]  win_seq, win_ts;
+    wire [127:0] win_count, win_position;
+    wire [3:0]   win_dir;
+    wire [7:0]   status;
+    encoder_core #(.CLK_HZ(CLK_HZ), .TICK_HZ(TICK_HZ)) u_core (
+        .clk_i(clk_i), .rst_i(rst_i), .enc_a_i(enc_a_i), .enc_b_i(enc_b_i),
+        .reg_addr_i(bus_addr), .reg_rd_i(bus_rd && !to_link), .reg_wr_i(bus_wr && !to_link),
+        .reg_wdata_i(bus_wdata), .reg_rdata_o(core_rdata), .reg_ack_o(core_ack), .reg_err_o(core_err),
+        .win_valid_o(win_valid), .win_seq_o(win_seq), .win_timestamp_o(win_ts), .win_count_o(win_count),
+        .win_position_o(win_position), .win_dir_o(win_dir), .status_o(status),
+        .win_consumed_i(win_consumed), .stream_en_o(stream_en), .tick_o(tick));
+
+    link_engine u_link (
+        .clk_i(clk_i), .rst_i(rst_i),
+        .ev_valid_i(ev_valid), .ev_ready_o(ev_ready), .ev_error_i(ev_error), .ev_code_i(ev_code),
+        .ev_addr_i(ev_addr), .ev_data_i(ev_data),
+        .tx_start_o(ftx_start), .tx_ready_i(ftx_ready), .tx_type_o(ftx_type), .tx_body_len_o(ftx_len),
+        .tx_body_o(ftx_body),
+        .reg_addr_o(bus_addr), .reg_rd_o(bus_rd), .reg_wr_o(bus_wr), .reg_wdata_o(bus_wdata),
+        .reg_rdata_i(bus_rdata), .reg_ack_i(bus_ack), .reg_err_i(bus_err),
+        .stream_en_i(stream_en), .win_valid_i(win_valid), .win_seq_i(win_seq), .win_timestamp_i(win_ts),
+        .win_count_i(win_count), .win_dir_i(win_dir), .status_i(status), .win_consumed_o(win_consumed));
+
+    // ---- LEDs: activity held for 5 window ticks (~50 ms), errors sticky ----
+    // Counting ticks rather than clock cycles keeps the counter at 3 bits (no long carry chain).
+    reg [2:0] activity_q;
+    always @(posedge clk_i) begin
+        if (rst_i) activity_q <= 3'd0;
+        else if ((rx_valid && rx_ready) || (tx_valid && tx_ready)) activity_q <= 3'd5;
+        else if (tick && activity_q != 3'd0) activity_q <= activity_q - 3'd1;
+    end
+    assign activity_o = (activity_q != 3'd0);
+    assign error_o = (status[`OMNILOC_STATUS_ILLEGAL_LSB +: `OMNILOC_STATUS_ILLEGAL_W] != 4'd0)
+                   || status[`OMNILOC_STATUS_BAD_WRITE_LSB]
+                   || (rx_framing != 16'd0) || (rx_overruns != 16'd0);
+
+    // win_position is for other tops (e.g. a position display); unused here.
+    wire unused_ok = &{1'b0, win_position};
+
+endmodule
+
+`default_nettype wire

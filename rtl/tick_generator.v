@@ -1,0 +1,118 @@
+// tick_generator: the window clock of the encoder core (paper section 2.2: 40 MHz -> 100 Hz).
+//
+// Emits a one-cycle tick_o exactly every period cycles and a free-running timestamp.
+// The period is sampled at each tick (at reset it is CLK_HZ / TICK_HZ), so a new value written
+// to the PERIOD register takes effect at the next tick and never makes a window ragged.
+// The first tick comes CLK_HZ / TICK_HZ cycles after the last reset cycle.
+//
+// Assumptions (assumed/asserted in the FORMAL block):
+//   - period_i >= 2 whenever it is sampled (the register file refuses values below
+//     PERIOD_MIN_CYCLES = 64) and CLK_HZ / TICK_HZ >= 2.
+//   - rst_i is synchronous, active high.
+// Guarantees (proven by k-induction): the distance between two ticks equals the period sampled
+// at the first of them; the period in force changes only at a tick; the timestamp advances by one.
+`resetall
+`timescale 1ns / 1ps
+`default_nettype none
+
+module tick_generator #(
+    parameter CLK_HZ = 40000000,
+    parameter TICK_HZ = 100
+) (
+    input  wire        clk_i,
+    input  wire        rst_i,
+    // Period of the next window in clock cycles; sampled at each tick.
+    input  wire [31:0] period_i,
+    output wire        tick_o,
+    // Period in force for the current window.
+    output wire [31:0] period_o,
+    // Free-running clock-cycle counter, wraps at 2^32.
+    output wire [31:0] timestamp_o
+);
+
+localparam [31:0] DEFAULT_PERIOD_CYCLES = CLK_HZ / TICK_HZ;
+
+// Counts down to zero; the cycle after it reads zero is the tick, so tick_o is a plain flop.
+reg [31:0] remain_q;
+reg [31:0] period_q;
+reg        tick_q;
+reg [31:0] timestamp_q;
+
+assign tick_o = tick_q;
+assign period_o = period_q;
+assign timestamp_o = timestamp_q;
+
+always @(posedge clk_i) begin
+    if (rst_i) begin
+        remain_q <= DEFAULT_PERIOD_CYCLES - 32'd1;
+        period_q <= DEFAULT_PERIOD_CYCLES;
+        tick_q <= 1'b0;
+        timestamp_q <= 32'd0;
+    end else begin
+        timestamp_q <= timestamp_q + 32'd1;
+        tick_q <= (remain_q == 32'd0);
+        if (remain_q == 32'd0) begin
+            remain_q <= period_i - 32'd1;
+            period_q <= period_i;
+        end else begin
+            remain_q <= remain_q - 32'd1;
+        end
+    end
+end
+
+`ifdef FORMAL
+// Formal harness: prove exact tick spacing against an independent cycle counter.
+reg f_past_valid = 1'b0;
+always @(posedge clk_i) f_past_valid <= 1'b1;
+initial assume (rst_i);
+
+// Cycles since the last tick (or since reset); at a tick it holds the distance to the previous one.
+reg [31:0] f_since = 32'd0;
+// Period of the window that ends at the next tick.
+reg [31:0] f_ending_period = DEFAULT_PERIOD_CYCLES;
+always @(posedge clk_i) begin
+    if (rst_i) begin
+        f_since <= 32'd0;
+        f_ending_period <= DEFAULT_PERIOD_CYCLES;
+    end else begin
+        f_since <= tick_q ? 32'd1 : f_since + 32'd1;
+        if (remain_q == 32'd0) f_ending_period <= period_q;
+    end
+end
+
+always @(*) begin
+    assume (period_i >= 32'd2);
+    // Keeps the proof small; the logic does not depend on the value range.
+    assume (period_i <= 32'd12);
+end
+
+always @(*) begin
+    if (f_past_valid && !rst_i) begin
+        assert (period_q >= 32'd2 && period_q <= 32'd12);
+        assert (f_ending_period >= 32'd2 && f_ending_period <= 32'd12);
+        assert (remain_q < period_q);
+        if (tick_q) begin
+            // Tick spacing: exactly the period of the window that just ended.
+            assert (f_since == f_ending_period);
+            assert (remain_q == period_q - 32'd1);
+        end else begin
+            assert (f_since + remain_q == period_q - 32'd1);
+        end
+    end
+end
+
+always @(posedge clk_i) begin
+    if (f_past_valid && !$past(rst_i) && !rst_i) begin
+        // The period only changes at a tick.
+        if (!tick_q) assert (period_q == $past(period_q));
+        // Never two ticks in a row (period >= 2).
+        if ($past(tick_q)) assert (!tick_q);
+        // The timestamp advances by one every cycle.
+        assert (timestamp_q == $past(timestamp_q) + 32'd1);
+    end
+end
+`endif
+
+endmodule
+
+`resetall

@@ -1,0 +1,109 @@
+// window_counter: per-channel window count, capture at the tick, and the position accumulator.
+//
+// Counts up_i/down_i pulses into the running window. At capture_i the ending window's count is
+// copied out and the counter restarts in the same clock edge. A pulse present in the capture
+// cycle belongs to the ENDING window (it is added to the captured value and the counter restarts
+// at zero), so no edge is lost or counted twice. The position accumulator adds every pulse and is
+// never cleared (it wraps at 2^W): a host that misses a window still recovers the position as the
+// difference of two captured positions.
+//
+// Assumptions: up_i and down_i are never high together (quadrature_decoder guarantees it);
+// rst_i synchronous, active high.
+// Guarantees (proven by k-induction): position == captured position + running count at all times
+// (conservation: nothing lost or doubled across a capture); each captured count equals the
+// difference of consecutive captured positions; the position moves by exactly the pulse.
+`resetall
+`timescale 1ns / 1ps
+`default_nettype none
+
+module window_counter #(
+    parameter W = 32
+) (
+    input  wire         clk_i,
+    input  wire         rst_i,
+    input  wire         up_i,
+    input  wire         down_i,
+    input  wire         dir_i,
+    input  wire         capture_i,
+    // Signed count of the last captured window, its end position and direction.
+    output wire [W-1:0] win_count_o,
+    output wire [W-1:0] win_position_o,
+    output wire         win_dir_o,
+    // Live position accumulator.
+    output wire [W-1:0] position_o
+);
+
+reg [W-1:0] count_q;
+reg [W-1:0] position_q;
+reg [W-1:0] win_count_q;
+reg [W-1:0] win_position_q;
+reg         win_dir_q;
+
+assign win_count_o = win_count_q;
+assign win_position_o = win_position_q;
+assign win_dir_o = win_dir_q;
+assign position_o = position_q;
+
+// +1, -1 or 0 as a W-bit two's-complement step.
+wire [W-1:0] delta = up_i ? {{(W-1){1'b0}}, 1'b1} : (down_i ? {W{1'b1}} : {W{1'b0}});
+
+always @(posedge clk_i) begin
+    if (rst_i) begin
+        count_q <= {W{1'b0}};
+        position_q <= {W{1'b0}};
+        win_count_q <= {W{1'b0}};
+        win_position_q <= {W{1'b0}};
+        win_dir_q <= 1'b0;
+    end else begin
+        position_q <= position_q + delta;
+        if (capture_i) begin
+            win_count_q <= count_q + delta;
+            win_position_q <= position_q + delta;
+            win_dir_q <= dir_i;
+            count_q <= {W{1'b0}};
+        end else begin
+            count_q <= count_q + delta;
+        end
+    end
+end
+
+`ifdef FORMAL
+reg f_past_valid = 1'b0;
+always @(posedge clk_i) f_past_valid <= 1'b1;
+initial assume (rst_i);
+always @(*) assume (!(up_i && down_i));
+
+// Captured position of the window before the last one.
+reg [W-1:0] f_prev_win_position = {W{1'b0}};
+always @(posedge clk_i) begin
+    if (rst_i) f_prev_win_position <= {W{1'b0}};
+    else if (capture_i) f_prev_win_position <= win_position_q;
+end
+
+always @(*) begin
+    if (f_past_valid && !rst_i) begin
+        // Conservation: every pulse is in exactly one place, the last window or the running one.
+        assert (position_q == win_position_q + count_q);
+        assert (win_count_q == win_position_q - f_prev_win_position);
+    end
+end
+
+always @(posedge clk_i) begin
+    if (f_past_valid && !$past(rst_i) && !rst_i) begin
+        // The position moves by exactly the pulse of the previous cycle.
+        assert (position_q == $past(position_q) + $past(delta));
+        if ($past(capture_i)) begin
+            // Across the capture: window count + new counter = edges seen.
+            assert (win_count_q + count_q == $past(count_q) + $past(delta));
+            assert (count_q == {W{1'b0}});
+        end else begin
+            assert (count_q == $past(count_q) + $past(delta));
+            assert (win_count_q == $past(win_count_q));
+        end
+    end
+end
+`endif
+
+endmodule
+
+`resetall

@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# iCEBreaker bitstream with the open iCE40 flow: yosys synth_ice40 -> nextpnr-ice40 (timed at
+# 40 MHz, the paper's FPGA clock) -> icepack. Fails when timing fails; prints the achieved Fmax and
+# the utilisation from nextpnr's JSON report. Usage: scripts/bitstream.sh [BUILD_DIR]
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=$(realpath -m "${1:-build}")
+out="$build/icebreaker"
+mkdir -p "$out"
+cd "$root"
+
+mapfile -t sources < <(ls rtl/*.v)
+echo "bitstream: synthesising icebreaker_top from ${#sources[@]} RTL files (log: $out/yosys.log)"
+yosys -q -l "$out/yosys.log" -p "read_verilog -Irtl/include ${sources[*]}; synth_ice40 -top icebreaker_top -json $out/omniloc.json"
+
+echo "bitstream: place and route, target 40 MHz (log: $out/nextpnr.log)"
+if ! nextpnr-ice40 --up5k --package sg48 --json "$out/omniloc.json" --pcf constraints/icebreaker.pcf \
+     --asc "$out/omniloc.asc" --freq 40 --report "$out/report.json" --seed 1 -q -l "$out/nextpnr.log"; then
+  echo "bitstream: error: nextpnr failed (timing or placement); see $out/nextpnr.log" >&2
+  grep -E "Max frequency|ERROR" "$out/nextpnr.log" | tail -5 >&2 || true
+  exit 1
+fi
+icepack "$out/omniloc.asc" "$out/omniloc.bin"
+python3 scripts/nextpnr_report.py "$out/report.json" --min-mhz 40
+echo "bitstream: wrote $out/omniloc.bin ($(stat -c %s "$out/omniloc.bin") bytes)"

@@ -1,0 +1,249 @@
+#include "omniloc_sim/world.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "omniloc_sim/playing_area.hpp"
+
+namespace omniloc::sim {
+namespace {
+
+std::int64_t cycles_for(double clock_hz, double ms) { return std::llround(clock_hz * ms / 1000.0); }
+
+WorldConfig timed(const RobotConfig& robot, std::uint64_t seed) {
+  WorldConfig c;
+  c.robot = robot;
+  c.seed = seed;
+  c.step_cycles = cycles_for(robot.clock_hz, 1.0);
+  c.window_cycles = cycles_for(robot.clock_hz, robot.window_period_ms);
+  c.first_window_end_cycles = c.window_cycles;
+  return c;
+}
+
+// Height profile h(rho) = height/2 * (1 + cos(pi rho / radius)); returns the gradient at p.
+Eigen::Vector2d bump_gradient(const CarpetBump& b, const Eigen::Vector2d& p) {
+  const Eigen::Vector2d rel = p - b.centre_cm;
+  const double rho = rel.norm();
+  if (rho >= b.radius_cm || rho <= 0.0) return {0.0, 0.0};
+  const double dh = -0.5 * b.height_cm * kPi / b.radius_cm * std::sin(kPi * rho / b.radius_cm);
+  return dh * rel / rho;
+}
+
+}  // namespace
+
+WorldConfig WorldConfig::noise_free(const RobotConfig& robot, std::uint64_t seed) {
+  WorldConfig c = timed(robot, seed);
+  c.encoder = {0.0, 0.0};
+  c.gyro = GyroModel::noise_free();
+  return c;
+}
+
+WorldConfig WorldConfig::default_noise(const RobotConfig& robot, std::uint64_t seed) {
+  WorldConfig c = timed(robot, seed);
+  std::mt19937_64 rng(seed ^ 0xB0B5ULL);
+  const PlayingArea& f = kFiraRoboSot;
+  std::uniform_real_distribution<double> ux(f.x_min_cm, f.x_max_cm), uy(f.y_min_cm, f.y_max_cm);
+  for (int i = 0; i < 8; ++i) c.bumps.push_back({{ux(rng), uy(rng)}, 15.0, 0.8});
+  return c;
+}
+
+std::int64_t position_at(const StepSpan& span, int w, std::int64_t cycle) {
+  const auto i = static_cast<std::size_t>(w);
+  const std::int64_t n = span.end_cycle - span.begin_cycle;
+  const std::int64_t k = cycle - span.begin_cycle;
+  return span.begin_pos[i] + floor_div((span.end_pos[i] - span.begin_pos[i]) * k, n);
+}
+
+std::int64_t decoded_count(std::int64_t q, int decoding) {
+  switch (decoding) {
+    case 4: return q;
+    case 2: return floor_div(q + 3, 4) + floor_div(q + 1, 4);
+    case 1: return floor_div(q + 3, 4);
+    default: throw std::invalid_argument("decoded_count: decoding must be 1, 2 or 4, got " + std::to_string(decoding));
+  }
+}
+
+World::World(const WorldConfig& config, Trajectory trajectory)
+    : config_(config),
+      trajectory_(std::move(trajectory)),
+      rng_(config.seed),
+      jacobian_(wheel_jacobian(config.robot.motor_angle_deg, config.robot.center_to_wheel_cm)),
+      cm_per_quarter_(2.0 * kPi * config.robot.wheel_radius_cm /
+                      (4.0 * config.robot.counts_per_rev * config.robot.gear_ratio)),
+      pose_(trajectory_.start()),
+      prev_pose_(pose_),
+      gyro_(config.gyro, pose_.yaw_deg, rng_),
+      next_window_end_(config.first_window_end_cycles) {
+  validate_robot_config(config.robot, "WorldConfig.robot");
+  if (config.step_cycles <= 0 || config.window_cycles < config.step_cycles || config.first_window_end_cycles <= 0)
+    throw std::invalid_argument("WorldConfig: need step_cycles > 0, window_cycles >= step_cycles (got " +
+                                std::to_string(config.step_cycles) + ", " + std::to_string(config.window_cycles) +
+                                ") and first_window_end_cycles > 0");
+  for (std::size_t k = 1; k < config_.kidnaps.size(); ++k)
+    if (config_.kidnaps[k].at_s < config_.kidnaps[k - 1].at_s)
+      throw std::invalid_argument("WorldConfig: kidnap events must be in time order");
+  for (const SlipEvent& s : config.slips)
+    if (s.wheel < 1 || s.wheel > 4)
+      throw std::invalid_argument("WorldConfig: slip event wheel must be 1..4, got " + std::to_string(s.wheel));
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::uniform_real_distribution<double> phase(0.0, 4.0);
+  for (std::size_t i = 0; i < 4; ++i) {
+    wheel_scale_[i] = config.encoder.scale_sigma * n(rng_);
+    quarters_[i] = config.random_encoder_phase ? phase(rng_) : 0.0;
+    span_.end_pos[i] = std::llround(quarters_[i] * static_cast<double>(std::int64_t{1} << kFracBits));
+    window_start_quarter_[i] = decoded_count(quarter_of(span_.end_pos[i]), config.robot.decoding);
+  }
+  span_.begin_pos = span_.end_pos;
+  prev_gyro_raw_deg_ = gyro_.raw_yaw_deg();
+}
+
+double World::time_s() const { return static_cast<double>(span_.end_cycle) / config_.robot.clock_hz; }
+
+bool World::finished() const { return time_s() >= trajectory_.duration_s(); }
+
+Eigen::Vector2d World::wheel_position_cm(int w) const {
+  // Row i of eq. (9) is the wheel's drive direction u (first two columns) and R: the contact
+  // point p satisfies omega x p . u = omega R, i.e. p = R (u_y, -u_x).
+  const Eigen::Vector2d u = jacobian_.row(w).head<2>().transpose();
+  return config_.robot.center_to_wheel_cm * Eigen::Vector2d(u.y(), -u.x());
+}
+
+TrajectorySample World::reference(double t_s) const {
+  TrajectorySample s = trajectory_.sample(t_s);
+  const Eigen::Vector2d p = robot_to_field({s.pose.x_cm, s.pose.y_cm}, ref_yaw_deg_) + ref_shift_;
+  s.pose = {p.x(), p.y(), s.pose.yaw_deg + ref_yaw_deg_};
+  s.velocity_cm_per_s = robot_to_field(s.velocity_cm_per_s, ref_yaw_deg_);
+  return s;
+}
+
+void World::kidnap(const Pose2& to) {
+  // K(p) = to + R(dk) (p - here); the reference map becomes K o (current map).
+  const double dk = angle_diff_deg(to.yaw_deg, pose_.yaw_deg);
+  const Eigen::Vector2d here(pose_.x_cm, pose_.y_cm);
+  ref_shift_ = Eigen::Vector2d(to.x_cm, to.y_cm) + robot_to_field(ref_shift_ - here, dk);
+  ref_yaw_deg_ += dk;
+  pose_ = {to.x_cm, to.y_cm, pose_.yaw_deg + dk};
+  gyro_.step(dk, 0.0, rng_);
+  kidnap_flag_ = true;
+}
+
+void World::step() {
+  const double clock = config_.robot.clock_hz;
+  const std::int64_t c0 = span_.end_cycle;
+  const std::int64_t c1 = c0 + config_.step_cycles;
+  const double t0 = static_cast<double>(c0) / clock;
+  const double dt = static_cast<double>(config_.step_cycles) / clock;
+  while (next_kidnap_ < config_.kidnaps.size() && config_.kidnaps[next_kidnap_].at_s < t0 + dt) {
+    kidnap(config_.kidnaps[next_kidnap_++].to);
+  }
+
+  // Command: the reference's velocity plus a gentle pull back onto its path.
+  double omega_deg = 0.0;
+  Eigen::Vector2d v_field(0.0, 0.0);
+  if (t0 < trajectory_.duration_s()) {
+    const TrajectorySample now = reference(t0);
+    const TrajectorySample mid = reference(t0 + 0.5 * dt);
+    const double k = config_.tracking_gain_per_s;
+    v_field = mid.velocity_cm_per_s + k * Eigen::Vector2d(now.pose.x_cm - pose_.x_cm, now.pose.y_cm - pose_.y_cm);
+    omega_deg = mid.yaw_rate_deg_per_s + k * angle_diff_deg(now.pose.yaw_deg, pose_.yaw_deg);
+  }
+  const Eigen::Vector2d v_body = field_to_robot(v_field, pose_.yaw_deg + 0.5 * omega_deg * dt);
+  const double omega_rad = deg_to_rad(omega_deg);
+
+  // Exact motion under a constant body twist over the step.
+  const double dth = omega_rad * dt;
+  const double a = std::abs(dth) < 1e-9 ? 1.0 : std::sin(dth) / dth;
+  const double b = std::abs(dth) < 1e-9 ? 0.5 * dth : (1.0 - std::cos(dth)) / dth;
+  const Eigen::Vector2d chord_body(dt * (a * v_body.x() - b * v_body.y()), dt * (b * v_body.x() + a * v_body.y()));
+  const Eigen::Vector2d dp = robot_to_field(chord_body, pose_.yaw_deg);
+
+  const Eigen::Vector4d ground = jacobian_ * Eigen::Vector3d(v_body.x(), v_body.y(), omega_rad) * dt;
+  Eigen::Vector4d travel = ground;
+
+  // Slip: extra spin in the wheel's direction of travel, for the part of the step it overlaps.
+  for (const SlipEvent& s : config_.slips) {
+    const double overlap = std::min(t0 + dt, s.start_s + s.duration_s) - std::max(t0, s.start_s);
+    if (overlap <= 0.0) continue;
+    const int w = s.wheel - 1;
+    const double sign = ground[w] < 0.0 ? -1.0 : 1.0;
+    travel[w] += sign * s.extra_speed_cm_per_s * overlap;
+    slip_mask_ |= static_cast<std::uint8_t>(1u << w);
+  }
+  // Bumps: the wheel's path over the raised cosine is longer by sqrt(1 + slope^2).
+  if (!config_.bumps.empty()) {
+    const double mid_yaw = pose_.yaw_deg + 0.5 * rad_to_deg(dth);
+    const Eigen::Vector2d centre = Eigen::Vector2d(pose_.x_cm, pose_.y_cm) + 0.5 * dp;
+    for (int w = 0; w < 4; ++w) {
+      const Eigen::Vector2d p_body = wheel_position_cm(w);
+      const Eigen::Vector2d contact = centre + robot_to_field(p_body, mid_yaw);
+      const Eigen::Vector2d v_contact =
+          robot_to_field(v_body + omega_rad * Eigen::Vector2d(-p_body.y(), p_body.x()), mid_yaw);
+      const double speed = v_contact.norm();
+      if (speed <= 1e-9) continue;
+      for (const CarpetBump& bump : config_.bumps) {
+        const double slope = bump_gradient(bump, contact).dot(v_contact / speed);
+        if (slope == 0.0) continue;
+        travel[w] += ground[w] * (std::sqrt(1.0 + slope * slope) - 1.0);
+        bump_mask_ |= static_cast<std::uint8_t>(1u << w);
+      }
+    }
+  }
+  // Encoder errors, then the position in quarter-steps.
+  std::normal_distribution<double> n(0.0, 1.0);
+  span_.begin_cycle = c0;
+  span_.end_cycle = c1;
+  span_.begin_pos = span_.end_pos;
+  for (int w = 0; w < 4; ++w) {
+    const auto i = static_cast<std::size_t>(w);
+    double meas = travel[w] * (1.0 + wheel_scale_[i]);
+    if (config_.encoder.rolling_noise_cm_per_sqrt_cm > 0.0)
+      meas += config_.encoder.rolling_noise_cm_per_sqrt_cm * std::sqrt(std::abs(ground[w])) * n(rng_);
+    quarters_[i] += meas / cm_per_quarter_;
+    span_.end_pos[i] = std::llround(quarters_[i] * static_cast<double>(std::int64_t{1} << kFracBits));
+  }
+
+  prev_pose_ = pose_;
+  prev_distance_cm_ = distance_cm_;
+  pose_.x_cm += dp.x();
+  pose_.y_cm += dp.y();
+  pose_.yaw_deg += rad_to_deg(dth);
+  distance_cm_ += dp.norm();
+  prev_gyro_raw_deg_ = gyro_.raw_yaw_deg();
+  gyro_.step(rad_to_deg(dth), dt, rng_);
+}
+
+SimWindow World::next_window() {
+  while (span_.end_cycle < next_window_end_) step();
+  const std::int64_t c = next_window_end_;
+  // Where inside the last step the window ends (1 when aligned with the step end).
+  const double f = static_cast<double>(c - span_.begin_cycle) / static_cast<double>(span_.end_cycle - span_.begin_cycle);
+  SimWindow out;
+  out.t_end_cycles = c;
+  out.window.seq = seq_++;
+  out.window.t_end_ms = static_cast<double>(c) * 1000.0 / config_.robot.clock_hz;
+  for (int w = 0; w < 4; ++w) {
+    const auto i = static_cast<std::size_t>(w);
+    const std::int64_t count = decoded_count(quarter_of(position_at(span_, w, c)), config_.robot.decoding);
+    out.window.counts[i] = static_cast<std::int32_t>(count - window_start_quarter_[i]);
+    window_start_quarter_[i] = count;
+  }
+  out.window.gyro_yaw_deg = gyro_.report(prev_gyro_raw_deg_ + f * (gyro_.raw_yaw_deg() - prev_gyro_raw_deg_));
+  out.truth = {prev_pose_.x_cm + f * (pose_.x_cm - prev_pose_.x_cm),
+               prev_pose_.y_cm + f * (pose_.y_cm - prev_pose_.y_cm),
+               wrap_deg(prev_pose_.yaw_deg + f * (pose_.yaw_deg - prev_pose_.yaw_deg))};
+  out.truth_distance_cm = prev_distance_cm_ + f * (distance_cm_ - prev_distance_cm_);
+  out.slip_wheels = slip_mask_;
+  out.bump_wheels = bump_mask_;
+  out.kidnapped = kidnap_flag_;
+  // A step straddling the window end counts for both windows' fault masks.
+  const bool straddles = c < span_.end_cycle;
+  if (!straddles) {
+    slip_mask_ = bump_mask_ = 0;
+    kidnap_flag_ = false;
+  }
+  next_window_end_ += config_.window_cycles;
+  return out;
+}
+
+}  // namespace omniloc::sim

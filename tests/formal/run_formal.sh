@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# Prove the `ifdef FORMAL properties of one RTL module with yosys + yosys-smtbmc (z3).
+# No SymbiYosys on this machine, so this script does what an .sby file would:
+#   yosys: read_verilog -formal, chparam, prep, async2sync, dffunmap, write_smt2
+#   prove: BMC base case to DEPTH, then k-induction with DEPTH
+#   bmc:   bounded model check to DEPTH only (used where induction does not close)
+# On failure it prints the counterexample VCD path and exits 1.
+#
+# usage: run_formal.sh NAME TOP MODE DEPTH OUTDIR INCLUDE_DIR "CHPARAMS" FILE...
+#   CHPARAMS is a yosys chparam argument list (e.g. "-set CLK_HZ 8 -set TICK_HZ 1") or "".
+#   SMTBMC_FLAGS (environment, optional) adds yosys-smtbmc options, e.g. --unroll where z3's
+#   incremental mode stalls (frame_rx).
+set -euo pipefail
+
+if [[ $# -lt 8 ]]; then
+  echo "usage: $0 NAME TOP MODE(prove|bmc) DEPTH OUTDIR INCLUDE_DIR CHPARAMS FILE..." >&2
+  exit 2
+fi
+name=$1 top=$2 mode=$3 depth=$4 outdir=$5 incdir=$6 chparams=$7
+shift 7
+files=("$@")
+
+case $mode in prove|bmc) ;; *) echo "$0: mode must be prove or bmc, got '$mode'" >&2; exit 2 ;; esac
+mkdir -p "$outdir"
+smt2="$outdir/$name.smt2"
+log="$outdir/$name.log"
+
+chparam_cmd=""
+if [[ -n $chparams ]]; then chparam_cmd="chparam $chparams $top;"; fi
+
+if ! yosys -q -l "$log.yosys" -p "read_verilog -formal -I$incdir ${files[*]}; $chparam_cmd prep -top $top; async2sync; dffunmap; write_smt2 -wires $smt2"; then
+  echo "FORMAL $name: yosys failed, log: $log.yosys" >&2
+  exit 1
+fi
+
+run_smtbmc() {  # $1 = label, rest = extra yosys-smtbmc args
+  local label=$1; shift
+  local vcd="$outdir/${name}_${label}_cex.vcd"
+  rm -f "$vcd"
+  if yosys-smtbmc -s z3 ${SMTBMC_FLAGS:-} "$@" -t "$depth" --dump-vcd "$vcd" "$smt2" > "$log.$label" 2>&1 \
+      && grep -q "Status: PASSED" "$log.$label"; then
+    echo "FORMAL $name: $label depth $depth PASSED"
+  else
+    tail -n 20 "$log.$label"
+    echo "FORMAL $name: $label depth $depth FAILED"
+    if [[ -f $vcd ]]; then echo "counterexample trace: $vcd"; fi
+    echo "full log: $log.$label"
+    exit 1
+  fi
+}
+
+run_smtbmc bmc
+if [[ $mode == prove ]]; then
+  run_smtbmc induction -i
+fi

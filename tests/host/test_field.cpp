@@ -1,0 +1,175 @@
+// Field model: geometry files, white-line membership and ray intervals against hand-computed values.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "omniloc/field.hpp"
+
+namespace omniloc {
+namespace {
+
+TEST(Field, FiraGeometryFileBuildsTheDocumentedLines) {
+  const FieldGeometry f = load_field("fira-robosot");
+  EXPECT_EQ(f.name, "fira-robosot");
+  EXPECT_DOUBLE_EQ(f.total_x_cm(), 750.0);
+  EXPECT_DOUBLE_EQ(f.total_y_cm(), 550.0);
+  EXPECT_EQ(f.centre_cm(), Eigen::Vector2d(375.0, 275.0));
+  // 4 boundary + centre line + 2 x (goal area 3 + penalty area 3).
+  EXPECT_EQ(f.segments.size(), 17u);
+  // 2 penalty arcs + centre circle + 4 corner arcs.
+  EXPECT_EQ(f.arcs.size(), 7u);
+  EXPECT_EQ(f.discs.size(), 4u);
+}
+
+TEST(Field, WhitePointsByHand) {
+  const FieldGeometry f = load_field("fira-robosot");
+  auto white = [&](double x, double y) { return is_white(f, Eigen::Vector2d(x, y)); };
+  EXPECT_TRUE(white(375, 100));     // centre line
+  EXPECT_TRUE(white(435, 275));     // centre circle, r 60
+  EXPECT_TRUE(white(437.4, 275));   // inside the 5 cm line
+  EXPECT_FALSE(white(437.6, 275));  // just outside it
+  EXPECT_FALSE(white(300, 300));
+  EXPECT_TRUE(white(75, 200));      // left boundary
+  EXPECT_TRUE(white(72.6, 200));
+  EXPECT_FALSE(white(72.4, 200));
+  EXPECT_TRUE(white(115, 275));     // left goal area front (75 + 40)
+  EXPECT_TRUE(white(150, 180));     // left penalty area side line at y = 275 - 100 = 175 (+- 2.5)
+  EXPECT_TRUE(white(210, 275));     // left penalty arc: centre (150, 275), r 60, front half only
+  EXPECT_FALSE(white(150 - 42.43, 275 + 42.43));  // the arc's back half is not drawn
+  EXPECT_TRUE(white(75 + 25 * 0.70711, 75 + 25 * 0.70711));  // corner arc r 25
+  EXPECT_TRUE(white(300, 175));     // mark at centre + (-75, -100), r 5
+  EXPECT_FALSE(white(305.5, 175));
+  EXPECT_TRUE(on_carpet(f, {0, 0}));
+  EXPECT_TRUE(on_carpet(f, {750, 550}));
+  EXPECT_FALSE(on_carpet(f, {750.1, 300}));
+}
+
+TEST(Field, RayIntervalsByHand) {
+  const FieldGeometry f = load_field("fira-robosot");
+  std::vector<WhiteInterval> iv;
+  // From (200, 275) along +x: left penalty arc at x 210, centre circle at 315 and 435, centre line
+  // at 375, right penalty arc at 540 (centre 600, r 60), right penalty area front at 600, right
+  // goal area front at 635.
+  white_intervals(f, {200, 275}, {1, 0}, 0.0, 450.0, iv);
+  const double expected[][2] = {{7.5, 12.5}, {112.5, 117.5}, {172.5, 177.5}, {232.5, 237.5}, {337.5, 342.5}, {397.5, 402.5}, {432.5, 437.5}};
+  ASSERT_EQ(iv.size(), 7u);
+  for (std::size_t i = 0; i < iv.size(); ++i) {
+    EXPECT_NEAR(iv[i].enter_cm, expected[i][0], 1e-9) << i;
+    EXPECT_NEAR(iv[i].exit_cm, expected[i][1], 1e-9) << i;
+  }
+  // Standing on the centre line, looking along it (+y): white from t_min, the boundary is the
+  // same white region, so one merged interval from 0 to the far edge of the top boundary line.
+  white_intervals(f, {375, 300}, {0, 1}, 0.0, 400.0, iv);
+  ASSERT_EQ(iv.size(), 1u);
+  EXPECT_DOUBLE_EQ(iv[0].enter_cm, 0.0);
+  EXPECT_NEAR(iv[0].exit_cm, 177.5, 1e-9);
+}
+
+TEST(Field, RayIntervalsAgreeWithPointSamplingEverywhere) {
+  // Independent check of the analytic ray casting: sample is_white every 0.05 cm along rays.
+  const FieldGeometry f = load_field("fira-robosot");
+  std::vector<WhiteInterval> iv;
+  int checked = 0;
+  for (double x = 30; x < 750; x += 97.3) {
+    for (double y = 20; y < 550; y += 83.1) {
+      for (int k = 0; k < 360; k += 23) {
+        const Eigen::Vector2d o(x, y), u(std::cos(k * 3.14159265358979 / 180), std::sin(k * 3.14159265358979 / 180));
+        white_intervals(f, o, u, 10.0, 300.0, iv);
+        for (double t = 10.0; t <= 300.0; t += 0.05) {
+          bool in = false, near_edge = false;
+          for (const auto& w : iv) {
+            in = in || (t >= w.enter_cm && t <= w.exit_cm);
+            near_edge = near_edge || std::abs(t - w.enter_cm) < 1e-6 || std::abs(t - w.exit_cm) < 1e-6;
+          }
+          if (near_edge) continue;
+          ASSERT_EQ(in, is_white(f, o + t * u)) << "ray from (" << x << ", " << y << ") at " << k << " deg, t " << t;
+          ++checked;
+        }
+      }
+    }
+  }
+  EXPECT_GT(checked, 500000);
+}
+
+TEST(Field, WhiteLineIndexAgreesWithIsWhite) {
+  for (const char* name : {"fira-robosot", "robocup-msl"}) {
+    const FieldGeometry f = load_field(name);
+    const WhiteLineIndex index(f);
+    int white = 0;
+    for (double x = -20.0; x < f.total_x_cm() + 20.0; x += 0.37) {
+      for (double y = -20.0; y < f.total_y_cm() + 20.0; y += 1.13) {
+        const bool expected = is_white(f, {x, y});
+        ASSERT_EQ(index.is_white({x, y}), expected) << name << " (" << x << ", " << y << ")";
+        white += expected;
+      }
+    }
+    EXPECT_GT(white, 1000) << name;
+  }
+}
+
+TEST(Field, RoboCupMslIsASecondGeometry) {
+  const FieldGeometry m = load_field("robocup-msl");
+  EXPECT_DOUBLE_EQ(m.total_x_cm(), 2400.0);
+  EXPECT_DOUBLE_EQ(m.total_y_cm(), 1600.0);
+  EXPECT_EQ(m.arcs.size(), 5u);  // no penalty arcs: centre circle + 4 corners
+  EXPECT_EQ(m.discs.size(), 3u);
+  EXPECT_TRUE(is_white(m, {1200 + 200, 800}));           // centre circle r 200
+  EXPECT_TRUE(is_white(m, {100 + 225, 800}));            // penalty area front
+  EXPECT_TRUE(is_white(m, {100 + 6.0, 500}));            // 12.5 cm boundary line
+  EXPECT_FALSE(is_white(m, {100 + 6.5, 500}));
+  EXPECT_NE(m.fingerprint(), load_field("fira-robosot").fingerprint());
+}
+
+class BadFieldFile : public ::testing::Test {
+ protected:
+  std::string write(const std::string& body) {
+    path_ = (std::filesystem::temp_directory_path() / ("omniloc_field_" + std::to_string(::getpid()) + ".json")).string();
+    std::ofstream(path_) << body;
+    return path_;
+  }
+  void TearDown() override { std::filesystem::remove(path_); }
+  std::string path_;
+};
+
+std::string fira_with(const std::string& replace, const std::string& with) {
+  std::ifstream in("../common/fields/fira-robosot.json");
+  std::string s;
+  if (!in) {
+    // Located the way load_field does.
+    in.open(std::filesystem::path(load_field("fira-robosot").source));
+  }
+  s.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  const auto at = s.find(replace);
+  if (at == std::string::npos) return s;
+  return s.replace(at, replace.size(), with);
+}
+
+TEST_F(BadFieldFile, ErrorsNameFileAndField) {
+  auto expect_error = [&](const std::string& body, const std::string& what) {
+    const std::string p = write(body);
+    try {
+      (void)load_field(p);
+      FAIL() << "no error for " << what;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(p), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  expect_error(fira_with("\"line_width_cm\": 5", "\"line_width_cm\": -5"), "line_width_cm");
+  expect_error(fira_with("\"field_length_cm\": 600,", ""), "field_length_cm");
+  expect_error(fira_with("\"centre_circle_radius_cm\": 60", "\"centre_circle_radius_cm\": \"big\""), "centre_circle_radius_cm");
+  expect_error(fira_with("\"depth_cm\": 75", "\"depth_cm\": 400"), "penalty_area");
+  expect_error(fira_with("[75, 100]", "[75]"), "from_centre_cm[0]");
+  expect_error("{ \"name\": \"x\", ", "malformed JSON");
+  EXPECT_THROW((void)load_field("no-such-field"), std::runtime_error);
+  try {
+    (void)load_field("no-such-field");
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("no-such-field"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace omniloc

@@ -1,0 +1,216 @@
+// Matcher: the fast SAD against the scalar reference, the normalised error by hand, global search
+// against its reference, local-search windows, the right cell on noise-free images at every grid
+// point, refinement below the grid, yaw from the scan, and the ambiguity report.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <memory>
+#include <random>
+
+#include "omniloc/feature_db.hpp"
+#include "omniloc/matcher.hpp"
+#include "omniloc_sim/renderer.hpp"
+
+namespace omniloc {
+namespace {
+
+class Matcher : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    renderer_ = std::make_unique<sim::OmniRenderer>(load_field("fira-robosot"), load_camera("default"));
+    db_ = std::make_unique<FeatureDb>(
+        build_feature_db(renderer_->field(), renderer_->camera(), GridSpec::covering(renderer_->field(), 10.0)));
+  }
+  static void TearDownTestSuite() {
+    renderer_.reset();
+    db_.reset();
+  }
+  static Scan db_scan(int cell) {
+    Scan s;
+    std::copy_n(db_->cell_features(cell), kFeatureBytes, s.radii_px.begin());
+    s.ray_valid.fill(1);
+    return s;
+  }
+  // Renders a noise-free image at every grid point with the given parities and checks that the
+  // global search returns that point.
+  static void every_grid_point(int parity_i, int parity_j) {
+    const GridSpec& g = db_->grid;
+    int checked = 0, wrong = 0;
+    for (int j = parity_j; j < g.ny; j += 2) {
+      for (int i = parity_i; i < g.nx; i += 2) {
+        const Eigen::Vector2d p = g.position(i, j);
+        const double yaw = static_cast<double>((i * 37 + j * 101) % 360) - 180.0;
+        const Scan s = scan_image(renderer_->render({p.x(), p.y(), yaw}, sim::noise_free()), renderer_->camera(), yaw);
+        const MatchResult m = global_search(*db_, s);
+        ++checked;
+        if (m.cell != j * g.nx + i) {
+          ++wrong;
+          ADD_FAILURE() << "grid point (" << p.x() << ", " << p.y() << ") yaw " << yaw << " matched ("
+                        << m.grid_position_cm.x() << ", " << m.grid_position_cm.y() << ")";
+        }
+      }
+    }
+    std::printf("%d grid points checked, %d wrong\n", checked, wrong);
+  }
+  static std::unique_ptr<sim::OmniRenderer> renderer_;
+  static std::unique_ptr<FeatureDb> db_;
+};
+std::unique_ptr<sim::OmniRenderer> Matcher::renderer_;
+std::unique_ptr<FeatureDb> Matcher::db_;
+
+TEST_F(Matcher, FastSadEqualsScalarReference) {
+  const std::uint64_t seed = 4242;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  std::mt19937_64 rng(seed);
+  std::uniform_int_distribution<int> byte(0, 255), cell(0, db_->grid.cells() - 1), coin(0, 3);
+  for (int trial = 0; trial < 500; ++trial) {
+    Scan s;
+    for (auto& v : s.radii_px) v = static_cast<std::uint8_t>(byte(rng));
+    for (auto& v : s.ray_valid) v = coin(rng) == 0 ? 0 : 1;
+    const int c = cell(rng);
+    ASSERT_EQ(sad_fast(db_->cell_features(c), prepare_scan(s)), sad_reference(db_->cell_features(c), s)) << trial;
+  }
+  // Worst case: every byte differs by 255.
+  Scan zeros;
+  zeros.ray_valid.fill(1);
+  std::vector<std::uint8_t> full(kFeatureBytes, 255);
+  EXPECT_EQ(sad_fast(full.data(), prepare_scan(zeros)), 255u * 1440u);
+  EXPECT_EQ(sad_reference(full.data(), zeros), 255u * 1440u);
+}
+
+TEST_F(Matcher, ErrorIsNormalisedByTheRaysUsed) {
+  const int cell = 27 * 75 + 37;  // (375, 275)
+  Scan s = db_scan(cell);
+  for (auto& v : s.radii_px) v = v == kNoCrossing ? 254 : static_cast<std::uint8_t>(v + 1);  // every crossing off by 1
+  MatchResult m = local_search(*db_, s, {375, 275}, 0.0);
+  EXPECT_EQ(m.cells_searched, 1);
+  EXPECT_EQ(m.rays_used, 360);
+  EXPECT_DOUBLE_EQ(m.error, 4.0);  // 4 crossings x 1 px per ray
+  for (int k = 0; k < kScanRays; k += 2) s.ray_valid[static_cast<std::size_t>(k)] = 0;
+  for (int k = 100; k < 140; ++k) s.ray_valid[static_cast<std::size_t>(k)] = 0;
+  m = local_search(*db_, s, {375, 275}, 0.0);
+  EXPECT_EQ(m.rays_used, 160);
+  EXPECT_DOUBLE_EQ(m.error, 4.0);  // same E with a third of the rays hidden
+  // Nothing seen: no match.
+  s.ray_valid.fill(0);
+  m = global_search(*db_, s);
+  EXPECT_EQ(m.cell, -1);
+  EXPECT_EQ(m.error, kNoError);
+}
+
+TEST_F(Matcher, GlobalSearchEqualsReference) {
+  const std::uint64_t seed = 99;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> ux(20, 730), uy(20, 530), uyaw(-180, 180);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Pose2 pose{ux(rng), uy(rng), uyaw(rng)};
+    sim::RenderOptions opt;
+    opt.seed = seed + static_cast<std::uint64_t>(trial);
+    opt.obstacles = sim::random_obstacles(renderer_->field(), pose, 3, opt.seed);
+    const Scan s = scan_image(renderer_->render(pose, opt), renderer_->camera(), pose.yaw_deg);
+    const MatchResult a = global_search(*db_, s), b = global_search_reference(*db_, s);
+    EXPECT_EQ(a.cell, b.cell);
+    EXPECT_EQ(a.error, b.error);
+    EXPECT_EQ(a.second_error, b.second_error);
+    EXPECT_EQ(a.ambiguous, b.ambiguous);
+    EXPECT_EQ(a.cells_searched, 75 * 55);
+    EXPECT_LT((a.grid_position_cm - Eigen::Vector2d(pose.x_cm, pose.y_cm)).norm(), 7.1);  // the nearest grid point
+  }
+}
+
+TEST_F(Matcher, LocalSearchWindows) {
+  const Scan s = db_scan(0);
+  const int expected[] = {1, 9, 25, 49};
+  for (int r = 0; r < 4; ++r) {
+    EXPECT_EQ(local_search(*db_, s, {376, 273}, 10.0 * r).cells_searched, expected[r]) << "range " << 10 * r;
+  }
+  EXPECT_EQ(local_search(*db_, s, {5, 5}, 20.0).cells_searched, 9);  // clipped at the corner
+  const MatchResult m = local_search(*db_, db_scan(27 * 75 + 40), {376, 273}, 30.0);
+  EXPECT_EQ(m.cell, 27 * 75 + 40);  // (405, 275), inside the 7 x 7 window
+  EXPECT_EQ(m.error, 0.0);
+  EXPECT_THROW((void)local_search(*db_, s, {376, 273}, -1.0), std::invalid_argument);
+}
+
+TEST_F(Matcher, RightCellOnNoiseFreeImagesEverywhereEvenEven) { every_grid_point(0, 0); }
+TEST_F(Matcher, RightCellOnNoiseFreeImagesEverywhereOddEven) { every_grid_point(1, 0); }
+TEST_F(Matcher, RightCellOnNoiseFreeImagesEverywhereEvenOdd) { every_grid_point(0, 1); }
+TEST_F(Matcher, RightCellOnNoiseFreeImagesEverywhereOddOdd) { every_grid_point(1, 1); }
+
+TEST_F(Matcher, RefinementGoesBelowTheGrid) {
+  const Eigen::Vector2d points[] = {{228.7, 171.2}, {461.4, 333.3}, {102.5, 487.5}, {640.9, 96.1}, {371.0, 279.0}, {533.3, 216.6}};
+  double sum_grid = 0, sum_interp = 0, sum_ray = 0;
+  for (const auto& p : points) {
+    const Scan s = scan_image(renderer_->render({p.x(), p.y(), 12.0}, sim::noise_free()), renderer_->camera(), 12.0);
+    MatchResult m = global_search(*db_, s);
+    const double grid_err = (m.grid_position_cm - p).norm();
+    interpolate_match(*db_, s, m);
+    const double interp_err = (m.position_cm - p).norm();
+    EXPECT_LE((m.position_cm - m.grid_position_cm).cwiseAbs().maxCoeff(), 5.0);
+    refine_match(renderer_->field(), renderer_->camera(), s, m);
+    const double ray_err = (m.position_cm - p).norm();
+    std::printf("(%.1f, %.1f): grid point %.1f cm away, interpolated %.2f cm, ray-cast %.2f cm (E %.2f -> %.2f)\n",
+                p.x(), p.y(), grid_err, interp_err, ray_err, m.error, m.refined_error);
+    EXPECT_LT(ray_err, 1.5);
+    EXPECT_LE(m.refined_error, m.error);
+    sum_grid += grid_err;
+    sum_interp += interp_err;
+    sum_ray += ray_err;
+  }
+  EXPECT_LT(sum_interp, sum_grid * 0.75);
+  EXPECT_LT(sum_ray, sum_grid / 3.0);
+}
+
+TEST_F(Matcher, YawFromTheScan) {
+  const Pose2 truth{300.0, 210.0, 33.3};
+  sim::RenderOptions opt;
+  opt.seed = 5;
+  const cv::Mat image = renderer_->render(truth, opt);
+  const BearingScan b = scan_image_bearings(image, renderer_->camera(), 4);
+  // A gyro that drifted by 9 degrees; the scan brings it back to within the 0.25 deg step.
+  const YawEstimate y = estimate_yaw(renderer_->field(), renderer_->camera(), b, {300.0, 210.0}, 24.3, 15.0);
+  std::printf("yaw: truth %.2f, estimate %.2f (E %.2f)\n", truth.yaw_deg, y.yaw_deg, y.error);
+  EXPECT_NEAR(y.yaw_deg, truth.yaw_deg, 0.5);
+  // Without any gyro (hint 0, full circle) it still finds it.
+  const YawEstimate z = estimate_yaw(renderer_->field(), renderer_->camera(), b, {300.0, 210.0}, 0.0, 180.0);
+  EXPECT_NEAR(z.yaw_deg, truth.yaw_deg, 0.5);
+}
+
+TEST_F(Matcher, WithoutHeadingTheFieldSymmetryIsReportedAsAmbiguous) {
+  const Pose2 truth{225.0, 173.0, 63.7};
+  sim::RenderOptions opt;
+  opt.seed = 8;
+  const BearingScan b = scan_image_bearings(renderer_->render(truth, opt), renderer_->camera(), 4);
+  const PoseMatch pm = global_search_any_yaw(*db_, renderer_->field(), renderer_->camera(), b, 2.0);
+  // The point-symmetric pose sees the same lines: both must come out, flagged ambiguous.
+  const Eigen::Vector2d p(truth.x_cm, truth.y_cm), mirror = 2.0 * renderer_->field().centre_cm() - p;
+  std::printf("best (%.1f, %.1f) yaw %.2f E %.2f; second (%.1f, %.1f) yaw %.2f E %.2f\n", pm.match.position_cm.x(),
+              pm.match.position_cm.y(), pm.yaw_deg, pm.match.error, pm.match.second_position_cm.x(),
+              pm.match.second_position_cm.y(), pm.second_yaw_deg, pm.match.second_error);
+  EXPECT_TRUE(pm.match.ambiguous);
+  const bool best_is_truth = (pm.match.position_cm - p).norm() < 10.0;
+  const Eigen::Vector2d other = best_is_truth ? mirror : p;
+  EXPECT_LT((pm.match.position_cm - (best_is_truth ? p : mirror)).norm(), 5.0);
+  EXPECT_LT((pm.match.second_position_cm - other).norm(), 10.0);
+  const double best_yaw = best_is_truth ? truth.yaw_deg : truth.yaw_deg + 180.0;
+  EXPECT_NEAR(angle_diff_deg(pm.yaw_deg, best_yaw), 0.0, 1.0);
+  EXPECT_NEAR(angle_diff_deg(pm.second_yaw_deg, best_yaw + 180.0), 0.0, 2.0);
+}
+
+TEST_F(Matcher, AmbiguityWhenLittleIsSeen) {
+  const Pose2 truth{225.0, 175.0, 0.0};
+  Scan s = scan_image(renderer_->render(truth, sim::noise_free()), renderer_->camera(), truth.yaw_deg);
+  MatchResult m = global_search(*db_, s);
+  EXPECT_FALSE(m.ambiguous) << "E " << m.error << " second " << m.second_error;
+  EXPECT_GT(m.second_error, 3.0 * m.error + 10.0);
+  // Only the rays looking straight at the bottom boundary (field directions 265..275) are left:
+  // they see one line 100 cm away, as they would from anywhere along y = 175.
+  for (int k = 0; k < kScanRays; ++k) s.ray_valid[static_cast<std::size_t>(k)] = (k >= 265 && k <= 275) ? 1 : 0;
+  m = global_search(*db_, s);
+  EXPECT_TRUE(m.ambiguous) << "E " << m.error << " second " << m.second_error;
+  EXPECT_NEAR(m.second_position_cm.y(), 175.0, 10.0);
+  EXPECT_GE((m.second_position_cm - m.grid_position_cm).norm(), 50.0);
+}
+
+}  // namespace
+}  // namespace omniloc

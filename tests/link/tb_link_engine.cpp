@@ -1,0 +1,220 @@
+// link_engine against a golden register-file model and a golden response rule: random reads and
+// writes (known, unknown and read-only addresses, refused values), snapshot requests, parser
+// errors, and telemetry streaming of windows, with a transmitter that is busy for random times.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <random>
+#include <vector>
+
+#include "Vlink_engine.h"
+#include "golden_frames.hpp"
+#include "verilator_bench.hpp"
+
+namespace {
+
+namespace rm = omniloc::regmap;
+
+struct Frame {
+  std::uint8_t type;
+  std::vector<std::uint8_t> body;
+  bool operator==(const Frame&) const = default;
+};
+
+std::ostream& operator<<(std::ostream& os, const Frame& f) {
+  os << "type " << int(f.type) << " body";
+  for (auto b : f.body) os << ' ' << int(b);
+  return os;
+}
+
+// Golden register file: the regmap's addresses, with RW/W1C writable and PERIOD refusing values
+// below the minimum (the "refused value" case).
+struct RegisterModel {
+  std::map<std::uint8_t, std::uint32_t> values;
+  std::vector<std::uint8_t> reads;  // addresses read, in order
+  explicit RegisterModel(std::mt19937_64& rng) {
+    for (const auto& r : rm::kRegisters) values[r.address] = static_cast<std::uint32_t>(rng());
+  }
+  static const rm::Register* find(std::uint8_t a) {
+    for (const auto& r : rm::kRegisters)
+      if (r.address == a) return &r;
+    return nullptr;
+  }
+  // Returns {error, data}.
+  std::pair<bool, std::uint32_t> read(std::uint8_t a) {
+    reads.push_back(a);
+    if (!find(a)) return {true, 0};
+    return {false, values[a]};
+  }
+  bool write(std::uint8_t a, std::uint32_t v) {
+    const auto* r = find(a);
+    if (!r || (r->access != rm::Access::kReadWrite && r->access != rm::Access::kWriteOneToClear)) return true;
+    if (a == rm::kRegPeriod && v < rm::kPeriodMinCycles) return true;
+    values[a] = v;
+    return false;
+  }
+};
+
+std::vector<std::uint8_t> body_bytes(const Vlink_engine& dut, int n) {
+  std::vector<std::uint8_t> b;
+  for (int k = 0; k < n; ++k) b.push_back(static_cast<std::uint8_t>(dut.tx_body_o[k / 4] >> (8 * (k % 4))));
+  return b;
+}
+
+struct Window {
+  std::uint32_t seq, ts;
+  std::uint32_t count[4];
+  std::uint8_t dir, status;
+  [[nodiscard]] std::vector<std::uint8_t> body() const {
+    std::vector<std::uint8_t> b;
+    omniloc::tb::put_u32(b, seq);
+    omniloc::tb::put_u32(b, ts);
+    for (auto c : count) omniloc::tb::put_u32(b, c);
+    b.push_back(dir);
+    b.push_back(status);
+    return b;
+  }
+};
+
+TEST(LinkEngine, RequestsSnapshotsAndStreamingMatchGoldenModel) {
+  const auto seed = omniloc::tb::test_seed(51);
+  std::mt19937_64 rng(seed);
+  omniloc::tb::VerilatorBench<Vlink_engine> bench;
+  auto& dut = bench.dut();
+  bench.reset();
+  RegisterModel regs(rng);
+
+  std::vector<Frame> expected_responses, responses, telemetry, expected_telemetry;
+  int pending_bus = -1;  // cycles until the model acks; -1 none
+  bool bus_err = false;
+  std::uint32_t bus_data = 0;
+  int tx_busy = 0;
+  int requests_left = 3000;
+  bool event_up = false;
+  int next_window_in = 700;
+  Window win{};
+  std::uint32_t seq = 0;
+  int consumed = 0;
+  bool stream = false;
+
+  int drain = 2000;  // cycles to run on after the last request, for its answer to leave
+  for (std::uint64_t cycle = 0; cycle < 4'000'000 && drain > 0; ++cycle) {
+    if (requests_left == 0 && !event_up) --drain;
+    // Offer a new event when the previous one was taken.
+    if (!event_up && requests_left > 0 && rng() % 4 == 0) {
+      event_up = true;
+      --requests_left;
+      const int kind = static_cast<int>(rng() % 10);
+      dut.ev_error_i = 0;
+      dut.ev_data_i = static_cast<std::uint32_t>(rng());
+      // Mostly known addresses, sometimes any byte.
+      dut.ev_addr_i = rng() % 4 ? rm::kRegisters[rng() % rm::kRegisters.size()].address : static_cast<std::uint8_t>(rng());
+      if (kind < 4) {
+        dut.ev_code_i = rm::kFrameReadReq;
+      } else if (kind < 7) {
+        dut.ev_code_i = rm::kFrameWriteReq;
+        if (rng() % 3 == 0) dut.ev_addr_i = rm::kRegPeriod, dut.ev_data_i = static_cast<std::uint32_t>(rng() % 128);
+      } else if (kind < 9) {
+        dut.ev_code_i = rm::kFrameSnapshotReq;
+      } else {
+        dut.ev_error_i = 1;
+        dut.ev_code_i = rng() % 2 ? rm::kErrBadCrc : rm::kErrMalformed;
+      }
+    }
+    dut.ev_valid_i = event_up;
+
+    // Windows from the core; streaming toggles now and then.
+    dut.win_valid_i = 0;
+    if (--next_window_in == 0) {
+      next_window_in = 700 + static_cast<int>(rng() % 800);
+      win = {++seq, static_cast<std::uint32_t>(rng()), {}, static_cast<std::uint8_t>(rng() % 16), static_cast<std::uint8_t>(rng())};
+      for (auto& c : win.count) c = static_cast<std::uint32_t>(rng());
+      if (rng() % 10 == 0) stream = !stream;
+      dut.win_valid_i = 1;
+      if (stream) expected_telemetry.push_back({rm::kFrameTelemetry, win.body()});
+    }
+    dut.stream_en_i = stream;
+    dut.win_seq_i = win.seq;
+    dut.win_timestamp_i = win.ts;
+    for (int c = 0; c < 4; ++c) dut.win_count_i[c] = win.count[c];
+    dut.win_dir_i = win.dir;
+    dut.status_i = win.status;
+
+    // Register bus: ack one cycle after the strobe, like encoder_regs.
+    dut.reg_ack_i = 0;
+    if (pending_bus == 0) {
+      dut.reg_ack_i = 1;
+      dut.reg_err_i = bus_err;
+      dut.reg_rdata_i = bus_data;
+      pending_bus = -1;
+    }
+
+    // Transmitter: busy for a while after each frame.
+    dut.tx_ready_i = tx_busy == 0;
+
+    // Sample handshakes that happen at this edge.
+    const bool ev_taken = dut.ev_valid_i && dut.ev_ready_o;
+    if (ev_taken) {
+      const std::uint8_t a = dut.ev_addr_i;
+      if (dut.ev_error_i) {
+        expected_responses.push_back({rm::kFrameError, {dut.ev_code_i, a}});
+      } else if (dut.ev_code_i == rm::kFrameReadReq) {
+        const auto* r = RegisterModel::find(a);
+        if (!r) {
+          expected_responses.push_back({rm::kFrameError, {rm::kErrBadAddress, a}});
+        } else {
+          std::vector<std::uint8_t> b{a};
+          omniloc::tb::put_u32(b, regs.values[a]);
+          expected_responses.push_back({rm::kFrameReadResp, b});
+        }
+      } else if (dut.ev_code_i == rm::kFrameWriteReq) {
+        const auto* r = RegisterModel::find(a);
+        const bool writable = r && (r->access == rm::Access::kReadWrite || r->access == rm::Access::kWriteOneToClear);
+        if (!r) expected_responses.push_back({rm::kFrameError, {rm::kErrBadAddress, a}});
+        else if (!writable) expected_responses.push_back({rm::kFrameError, {rm::kErrReadOnly, a}});
+        else if (a == rm::kRegPeriod && dut.ev_data_i < rm::kPeriodMinCycles) expected_responses.push_back({rm::kFrameError, {rm::kErrBadValue, a}});
+        else expected_responses.push_back({rm::kFrameWriteAck, {a}});
+      } else {
+        std::vector<std::uint8_t> b;
+        for (auto addr : {rm::kRegSnapSeq, rm::kRegSnapTimestamp, rm::kRegSnapCount0, rm::kRegSnapCount1,
+                          rm::kRegSnapCount2, rm::kRegSnapCount3})
+          omniloc::tb::put_u32(b, regs.values[addr]);
+        b.push_back(static_cast<std::uint8_t>(regs.values[rm::kRegSnapDir]));
+        b.push_back(static_cast<std::uint8_t>(regs.values[rm::kRegStatus]));
+        expected_responses.push_back({rm::kFrameSnapshotResp, b});
+      }
+      event_up = false;
+    }
+    if (dut.reg_rd_o || dut.reg_wr_o) {
+      ASSERT_FALSE(dut.reg_rd_o && dut.reg_wr_o);
+      ASSERT_EQ(pending_bus, -1) << "a second bus access before the ack";
+      if (dut.reg_rd_o) {
+        std::tie(bus_err, bus_data) = regs.read(dut.reg_addr_o);
+      } else {
+        bus_err = regs.write(dut.reg_addr_o, dut.reg_wdata_o);
+        bus_data = 0;
+      }
+      pending_bus = 0;
+    }
+    if (dut.tx_start_o && dut.tx_ready_i) {
+      Frame f{dut.tx_type_o, body_bytes(dut, dut.tx_body_len_o)};
+      (f.type == rm::kFrameTelemetry ? telemetry : responses).push_back(f);
+      tx_busy = static_cast<int>(rng() % 200);
+    } else if (tx_busy > 0) {
+      --tx_busy;
+    }
+    if (dut.win_consumed_o) ++consumed;
+    bench.step();
+  }
+  ASSERT_EQ(responses.size(), expected_responses.size());
+  for (std::size_t i = 0; i < responses.size(); ++i) ASSERT_EQ(responses[i], expected_responses[i]) << "response " << i;
+  ASSERT_EQ(telemetry.size(), expected_telemetry.size());
+  for (std::size_t i = 0; i < telemetry.size(); ++i) ASSERT_EQ(telemetry[i], expected_telemetry[i]) << "telemetry " << i;
+  EXPECT_EQ(consumed, static_cast<int>(telemetry.size()));
+  std::printf("%zu responses and %zu telemetry frames checked\n", responses.size(), telemetry.size());
+  EXPECT_GT(telemetry.size(), 100u);
+}
+
+}  // namespace

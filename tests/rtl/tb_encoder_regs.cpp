@@ -1,0 +1,241 @@
+// encoder_regs testbench: random bus traffic (known and unknown addresses, accepted and refused
+// values, W1C) mixed with random captures, illegal pulses and consume strobes, every cycle
+// against a golden model of the register file written from common/regmap.json's semantics.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdint>
+#include <random>
+#include <string>
+
+#include <Vencoder_regs.h>
+#include <omniloc/regmap.hpp>
+
+#include "tb_clocked.hpp"
+
+namespace {
+
+using omniloc::rtl_tb::Clocked;
+using omniloc::rtl_tb::TraceRequest;
+namespace rm = omniloc::regmap;
+
+constexpr std::uint32_t kDefaultPeriodCycles = 40'000'000 / 100;
+
+struct Inputs {
+  std::uint8_t addr = 0;
+  bool rd = false;
+  bool wr = false;
+  std::uint32_t wdata = 0;
+  bool capture = false;
+  std::uint8_t illegal = 0;
+  bool consumed = false;
+  std::uint32_t timestamp = 0;
+  std::array<std::uint32_t, 4> count{};
+  std::array<std::uint32_t, 4> pos{};
+  std::uint8_t dir = 0;
+  std::array<std::uint32_t, 4> errs{};
+};
+
+// Golden register file: state after each clock edge.
+struct Model {
+  bool enable = false;
+  unsigned decode = 0;
+  bool stream = false;
+  std::uint32_t filter = 0;
+  std::uint32_t period = kDefaultPeriodCycles;
+  std::uint8_t status = 0;
+  bool win_valid = false;
+  std::uint32_t seq = 0;
+  std::uint32_t win_ts = 0;
+  std::uint8_t win_status = 0;
+  bool pending = false;
+  std::uint32_t snap_ts = 0;
+  std::uint8_t snap_status = 0;
+  std::uint8_t snap_dir = 0;
+  std::array<std::uint32_t, 4> snap_count{};
+  std::array<std::uint32_t, 4> snap_pos{};
+  std::uint32_t rdata = 0;
+  bool ack = false;
+  bool err = false;
+
+  void edge(const Inputs& in) {
+    Model n = *this;
+    const bool rd = in.rd && !in.wr;
+    const bool wr = in.wr && !in.rd;
+    bool known = true;
+    bool writable = false;
+    std::uint32_t value = 0;
+    switch (in.addr) {
+      case rm::kRegId: value = rm::kIdValue; break;
+      case rm::kRegVersion: value = rm::kVersionValue; break;
+      case rm::kRegControl: value = (enable ? 1u : 0u) | (decode << 1) | (stream ? 8u : 0u); writable = true; break;
+      case rm::kRegFilter: value = filter; writable = true; break;
+      case rm::kRegPeriod: value = period; writable = true; break;
+      case rm::kRegStatus: value = status; writable = true; break;
+      case rm::kRegTimestamp: value = in.timestamp; break;
+      case rm::kRegSnapSeq: value = seq; break;
+      case rm::kRegSnapTimestamp: value = snap_ts; break;
+      case rm::kRegSnapDir: value = snap_dir; break;
+      case rm::kRegSnapStatus: value = snap_status; break;
+      default:
+        if (in.addr >= rm::kRegSnapCount0 && in.addr <= rm::kRegSnapCount3) {
+          value = snap_count[in.addr - rm::kRegSnapCount0];
+        } else if (in.addr >= rm::kRegSnapPosition0 && in.addr <= rm::kRegSnapPosition3) {
+          value = snap_pos[in.addr - rm::kRegSnapPosition0];
+        } else if (in.addr >= rm::kRegErrorCount0 && in.addr <= rm::kRegErrorCount3) {
+          value = in.errs[in.addr - rm::kRegErrorCount0];
+        } else {
+          known = false;
+        }
+    }
+    bool refused = false;
+    if (wr && in.addr == rm::kRegControl) {
+      if ((in.wdata >> 4) != 0 || ((in.wdata >> 1) & 3) == 3) {
+        refused = true;
+      } else {
+        n.enable = in.wdata & 1;
+        n.decode = (in.wdata >> 1) & 3;
+        n.stream = (in.wdata >> 3) & 1;
+      }
+    }
+    if (wr && in.addr == rm::kRegFilter) {
+      if (in.wdata > 255) refused = true; else n.filter = in.wdata;
+    }
+    if (wr && in.addr == rm::kRegPeriod) {
+      if (in.wdata < rm::kPeriodMinCycles) refused = true; else n.period = in.wdata;
+    }
+    const bool latch = rd && in.addr == rm::kRegSnapSeq;
+    const bool consumed = latch || in.consumed;
+    const bool overrun = in.capture && pending && !consumed;
+    std::uint8_t next_status = status;
+    if (wr && in.addr == rm::kRegStatus) next_status &= static_cast<std::uint8_t>(~in.wdata & 0x3F);
+    next_status |= static_cast<std::uint8_t>((in.illegal & 0xF) | (overrun ? 0x10 : 0) | (refused ? 0x20 : 0));
+    n.status = next_status;
+    n.win_valid = in.capture;
+    if (in.capture) {
+      n.seq = seq + 1;
+      n.win_ts = in.timestamp;
+      n.win_status = next_status;
+      n.pending = true;
+    } else if (consumed) {
+      n.pending = false;
+    }
+    if (latch) {
+      n.snap_ts = win_ts;
+      n.snap_status = win_status;
+      n.snap_dir = in.dir;
+      n.snap_count = in.count;
+      n.snap_pos = in.pos;
+    }
+    n.ack = in.rd || in.wr;
+    n.err = (in.rd && in.wr) || (rd && !known) || (wr && (!known || !writable)) || refused;
+    n.rdata = rd ? value : 0;
+    *this = n;
+  }
+};
+
+std::string compare(Vencoder_regs& d, const Model& m) {
+  auto field = [](const char* name, std::uint64_t got, std::uint64_t want) {
+    return got == want ? std::string() : std::string(name) + " " + std::to_string(got) + " != golden " + std::to_string(want);
+  };
+  for (const auto& s : {field("reg_ack_o", d.reg_ack_o, m.ack), field("reg_err_o", d.reg_err_o, m.err),
+                        field("reg_rdata_o", d.reg_rdata_o, m.rdata), field("enable_o", d.enable_o, m.enable),
+                        field("decode_o", d.decode_o, m.decode), field("stream_o", d.stream_o, m.stream),
+                        field("filter_len_o", d.filter_len_o, m.filter), field("period_o", d.period_o, m.period),
+                        field("status_o", d.status_o, m.status), field("win_valid_o", d.win_valid_o, m.win_valid),
+                        field("win_seq_o", d.win_seq_o, m.seq), field("win_timestamp_o", d.win_timestamp_o, m.win_ts),
+                        field("win_status_o", d.win_status_o, m.win_status)}) {
+    if (!s.empty()) return s;
+  }
+  return {};
+}
+
+struct Result {
+  std::string failure;
+  std::uint64_t fail_cycle = 0;
+  std::uint64_t refused = 0;
+  std::uint64_t errors = 0;
+  std::uint64_t overruns = 0;
+};
+
+Result run(std::uint64_t seed, std::uint64_t cycles, const TraceRequest* trace) {
+  std::mt19937_64 rng(seed);
+  Result res;
+  Clocked<Vencoder_regs> dut(trace);
+  Model model;
+  dut.reset(2);
+  if (auto s = compare(dut.io(), model); !s.empty()) return res.failure = "after reset: " + s, res;
+  Inputs in;
+  const std::array<std::uint8_t, 8> hot = {rm::kRegControl, rm::kRegFilter, rm::kRegPeriod, rm::kRegStatus,
+                                           rm::kRegSnapSeq, rm::kRegSnapCount2, rm::kRegSnapStatus, rm::kRegId};
+  for (std::uint64_t i = 0; i < cycles; ++i) {
+    const unsigned r = static_cast<unsigned>(rng() % 100);
+    in.rd = r < 35 || r >= 98;
+    in.wr = (r >= 35 && r < 60) || r >= 98;
+    in.addr = (rng() % 4 == 0) ? static_cast<std::uint8_t>(rng() % 256) : hot[rng() % hot.size()];
+    switch (rng() % 6) {
+      case 0: in.wdata = static_cast<std::uint32_t>(rng()); break;
+      case 1: in.wdata = static_cast<std::uint32_t>(rng() % 16); break;        // CONTROL-like
+      case 2: in.wdata = static_cast<std::uint32_t>(rng() % 300); break;       // FILTER-like
+      case 3: in.wdata = static_cast<std::uint32_t>(60 + rng() % 8); break;    // around PERIOD_MIN
+      case 4: in.wdata = 0x3F; break;                                          // clear all flags
+      default: in.wdata = static_cast<std::uint32_t>(1u << (rng() % 6)); break;
+    }
+    in.capture = rng() % 23 == 0;
+    in.illegal = (rng() % 40 == 0) ? static_cast<std::uint8_t>(rng() % 16) : 0;
+    in.consumed = rng() % 30 == 0;
+    in.timestamp = static_cast<std::uint32_t>(dut.cycle());
+    if (in.capture || i == 0) {
+      for (int ch = 0; ch < 4; ++ch) {
+        in.count[ch] = static_cast<std::uint32_t>(rng());
+        in.pos[ch] = static_cast<std::uint32_t>(rng());
+        in.errs[ch] = static_cast<std::uint32_t>(rng());
+      }
+      in.dir = static_cast<std::uint8_t>(rng() % 16);
+    }
+    dut->reg_addr_i = in.addr;
+    dut->reg_rd_i = in.rd;
+    dut->reg_wr_i = in.wr;
+    dut->reg_wdata_i = in.wdata;
+    dut->capture_i = in.capture;
+    dut->illegal_i = in.illegal;
+    dut->win_consumed_i = in.consumed;
+    dut->timestamp_i = in.timestamp;
+    for (int ch = 0; ch < 4; ++ch) {
+      dut->win_count_i[ch] = in.count[ch];
+      dut->win_position_i[ch] = in.pos[ch];
+      dut->err_count_i[ch] = in.errs[ch];
+    }
+    dut->win_dir_i = in.dir;
+    const std::uint64_t e = dut.cycle();
+    const bool had_overrun = (model.status & 0x10) != 0;
+    dut.step();
+    model.edge(in);
+    if (auto s = compare(dut.io(), model); !s.empty()) {
+      res.failure = "edge " + std::to_string(e) + ": " + s;
+      res.fail_cycle = e;
+      return res;
+    }
+    res.errors += model.err;
+    res.refused += model.err && in.wr && !in.rd;
+    res.overruns += !had_overrun && (model.status & 0x10);
+  }
+  return res;
+}
+
+TEST(EncoderRegs, MatchesGoldenRegisterFile) {
+  const std::uint64_t seed = omniloc::rtl_tb::test_seed("encoder_regs", 2718);
+  const auto res = run(seed, 1'000'000, nullptr);
+  std::cout << "[encoder_regs] bus errors=" << res.errors << " refused or read-only writes=" << res.refused
+            << " overrun events=" << res.overruns << "\n";
+  if (!res.failure.empty()) {
+    const TraceRequest tr{omniloc::rtl_tb::trace_path("encoder_regs", seed),
+                          res.fail_cycle > 2000 ? res.fail_cycle - 2000 : 0};
+    run(seed, res.fail_cycle + 1, &tr);
+    FAIL() << res.failure << " seed " << seed << "; trace: " << tr.path;
+  }
+  EXPECT_GT(res.refused, 1000u);
+  EXPECT_GT(res.overruns, 100u);
+}
+
+}  // namespace
