@@ -70,27 +70,6 @@ always @(posedge clk_i) begin
     end
 end
 
-`ifdef FORMAL
-// End to end (pins -> position): no count without enable. The submodules' own properties and
-// assumptions (constant filter length <= 6, mode != 3) are part of this proof.
-reg f_past_valid = 1'b0;
-reg f_en_q = 1'b0;
-always @(posedge clk_i) begin
-    f_past_valid <= 1'b1;
-    f_en_q <= en_i;
-end
-initial assume (rst_i);
-
-always @(posedge clk_i) begin
-    if (f_past_valid && !$past(rst_i) && !rst_i) begin
-        // A pulse needs enable at the decoder's edge, one edge before the counter moves.
-        if (!$past(f_en_q)) assert (position_o == $past(position_o));
-        // The error counter moves by at most one and only on an error pulse.
-        if (err_count_q != $past(err_count_q)) assert ($past(err_o) && err_count_q == $past(err_count_q) + 32'd1);
-    end
-end
-`endif
-
 endmodule
 
 `resetall

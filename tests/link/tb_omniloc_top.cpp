@@ -7,14 +7,17 @@
 #include <array>
 #include <cstdint>
 #include <cstdio>
+#include <random>
 #include <vector>
 
 #include "omniloc/board_client.hpp"
 #include "omniloc/regmap.hpp"
 #include "omniloc/robot_config.hpp"
 #include "omniloc_sim/board_sim.hpp"
+#include "omniloc_sim/link_faults.hpp"
 #include "omniloc_sim/trajectory.hpp"
 #include "omniloc_sim/world.hpp"
+#include "golden_quadrature.hpp"
 #include "tb_util.hpp"
 
 namespace {
@@ -22,51 +25,6 @@ namespace {
 namespace rm = omniloc::regmap;
 using omniloc::sim::BoardSim;
 constexpr std::int64_t kCaptureLag = 4;
-
-// Passes the stream's levels to the board and keeps, for the last kRing cycles, the cumulative
-// x4 count of each encoder: the golden model the board's windows are checked against.
-class RecordingSource final : public omniloc::sim::EncoderSource {
- public:
-  static constexpr std::int64_t kRing = 1 << 19;
-
-  explicit RecordingSource(omniloc::sim::QuadratureStream& stream)
-      : stream_(stream), ring_(static_cast<std::size_t>(kRing)) {}
-
-  void fill_levels(std::int64_t first_cycle, std::span<std::uint8_t> out) override {
-    stream_.fill_levels(first_cycle, out);
-    for (std::size_t i = 0; i < out.size(); ++i) {
-      for (int m = 0; m < 4; ++m) {
-        const int a = (out[i] >> (2 * m)) & 1;
-        const int b = (out[i] >> (2 * m + 1)) & 1;
-        const int phase = b ? (a ? 2 : 3) : (a ? 1 : 0);  // AB = 00, 10, 11, 01
-        const int step = (phase - phase_[m] + 4) % 4;
-        if (step == 1) ++count_[m];
-        if (step == 3) --count_[m];
-        if (step == 2) ++illegal_;
-        phase_[m] = phase;
-      }
-      ring_[static_cast<std::size_t>((first_cycle + static_cast<std::int64_t>(i)) % kRing)] = count_;
-      last_cycle_ = first_cycle + static_cast<std::int64_t>(i);
-    }
-  }
-
-  /// Cumulative counts as they stood at `cycle` (which must be within the last kRing cycles).
-  [[nodiscard]] std::array<std::int64_t, 4> counts_at(std::int64_t cycle) const {
-    EXPECT_GT(cycle, last_cycle_ - kRing);
-    EXPECT_LE(cycle, last_cycle_);
-    return ring_[static_cast<std::size_t>(cycle % kRing)];
-  }
-  [[nodiscard]] int illegal() const { return illegal_; }
-  [[nodiscard]] std::array<std::int64_t, 4> total() const { return count_; }
-
- private:
-  omniloc::sim::QuadratureStream& stream_;
-  std::vector<std::array<std::int64_t, 4>> ring_;
-  std::array<std::int64_t, 4> count_{};
-  std::array<int, 4> phase_{};
-  std::int64_t last_cycle_ = -1;
-  int illegal_ = 0;
-};
 
 omniloc::sim::WorldConfig board_world(std::uint64_t seed) {
   auto robot = omniloc::load_named_robot_config("default");
@@ -82,7 +40,7 @@ omniloc::sim::WorldConfig board_world(std::uint64_t seed) {
 TEST(OmnilocTop, RegistersErrorsAndStreamedWindowsThroughTheUartPins) {
   const auto seed = omniloc::tb::test_seed(61);
   omniloc::sim::QuadratureStream stream(board_world(seed), omniloc::sim::make_trajectory("figure_eight", seed));
-  RecordingSource source(stream);
+  omniloc::tb::GoldenQuadrature source(stream, BoardSim::kClockHz / 100);
   BoardSim board(&source);
   omniloc::sim::SimTransport transport(board);
   omniloc::BoardClient client(transport);
@@ -139,8 +97,9 @@ TEST(OmnilocTop, RegistersErrorsAndStreamedWindowsThroughTheUartPins) {
     const auto begin = static_cast<std::int64_t>(prev.timestamp_cycles);
     const auto e = source.counts_at(end - kCaptureLag);
     const auto b = source.counts_at(begin - kCaptureLag);
+    ASSERT_TRUE(e && b) << "window " << cur.seq << " ends at cycle " << end << ", not at a window boundary";
     for (int m = 0; m < 4; ++m) {
-      ASSERT_EQ(cur.count[m], e[m] - b[m]) << "window " << cur.seq << " motor " << m + 1;
+      ASSERT_EQ(cur.count[m], (*e)[m] - (*b)[m]) << "window " << cur.seq << " motor " << m + 1;
       streamed_sum[m] += cur.count[m];
       moving += cur.count[m] != 0;
     }
@@ -158,6 +117,105 @@ TEST(OmnilocTop, RegistersErrorsAndStreamedWindowsThroughTheUartPins) {
   // A snapshot is the latest window, whole.
   const auto snap = client.snapshot();
   EXPECT_GE(snap.seq, windows.back().seq);
+}
+
+// The host's transport onto the board through a faulty line: bytes corrupted, dropped and cut off
+// in both directions. read() runs the board until bytes come through or the timeout has passed.
+class FaultyBoardTransport final : public omniloc::Transport {
+ public:
+  FaultyBoardTransport(BoardSim& board, omniloc::sim::FaultyUart& line) : board_(board), line_(line) {}
+  void write(std::span<const std::uint8_t> bytes) override { line_.to_board(bytes); }
+  std::size_t read(std::span<std::uint8_t> out, std::chrono::milliseconds timeout) override {
+    const std::int64_t deadline = board_.cycle() + timeout.count() * (BoardSim::kClockHz / 1000);
+    std::size_t n = line_.from_board(out);
+    while (n == 0 && board_.cycle() < deadline) {
+      board_.run_cycles(BoardSim::kClockHz / 10'000);
+      n = line_.from_board(out);
+    }
+    return n;
+  }
+  [[nodiscard]] omniloc::TransportStatus status() const override { return {true, false, "faulty line", {}}; }
+  [[nodiscard]] std::chrono::steady_clock::time_point now() const override { return omniloc::sim::board_time(board_); }
+
+ private:
+  BoardSim& board_;
+  omniloc::sim::FaultyUart& line_;
+};
+
+TEST(OmnilocTop, FaultyLineNeverDeliversACorruptWindowOrRegister) {
+  const auto seed = omniloc::tb::test_seed(62);
+  omniloc::sim::QuadratureStream stream(board_world(seed), omniloc::sim::make_trajectory("random_walk", seed));
+  omniloc::tb::GoldenQuadrature golden(stream, BoardSim::kClockHz / 100);
+  BoardSim board(&golden);
+  omniloc::sim::FaultRates rates;
+  rates.corrupt_per_byte = 1e-3;
+  rates.drop_per_byte = 1e-3;
+  rates.truncate_per_byte = 1e-3;
+  omniloc::sim::FaultyUart line(board, rates, rates, seed);
+  FaultyBoardTransport transport(board, line);
+  omniloc::BoardClientOptions options;
+  options.attempts = 8;
+  omniloc::BoardClient client(transport, options);
+
+  std::uint32_t control = rm::kControlEnable.put(0, 1);
+  control = rm::kControlDecode.put(control, rm::kControlDecodeX4);
+  control = rm::kControlStream.put(control, 1);
+  client.write_register(rm::kRegControl, control);
+
+  std::mt19937_64 rng(seed);
+  std::optional<omniloc::protocol::Window> prev;
+  std::uint32_t filter = 0;
+  int accepted = 0, lost = 0, register_checks = 0;
+  while (accepted < 200) {
+    const auto w = client.poll_telemetry(std::chrono::milliseconds(100));
+    if (!w.has_value()) {
+      const auto& d = client.decoder_counters();
+      ADD_FAILURE() << "the stream stopped after " << accepted << " windows at board cycle " << board.cycle()
+                    << "; frames ok " << d.frames_ok << ", bad CRC " << d.bad_crc << ", bad length " << d.bad_length
+                    << ", resync bytes " << d.resync_bytes << ", bytes pending on the board side "
+                    << board.pending_from_board() << ", to the board " << board.counters().bytes_to_board
+                    << ", from the board " << board.counters().bytes_from_board;
+      return;
+    }
+    ++accepted;
+    if (prev && w->seq > prev->seq) {
+      lost += static_cast<int>(w->seq - prev->seq - 1);
+      // Every window that arrives is whole: it equals the golden count over its own span.
+      const std::uint32_t windows = w->seq - prev->seq;
+      ASSERT_EQ(w->timestamp_cycles - prev->timestamp_cycles, windows * static_cast<std::uint32_t>(BoardSim::kClockHz / 100));
+      const auto e = golden.counts_at(static_cast<std::int64_t>(w->timestamp_cycles) - kCaptureLag);
+      const auto b = golden.counts_at(static_cast<std::int64_t>(w->timestamp_cycles) - kCaptureLag - BoardSim::kClockHz / 100);
+      ASSERT_TRUE(e && b);
+      for (int m = 0; m < 4; ++m) ASSERT_EQ(w->count[m], (*e)[m] - (*b)[m]) << "window " << w->seq << " motor " << m + 1;
+    }
+    prev = w;
+    // Now and then a write and a read back through the same faulty line: a value the host accepts
+    // is the value the board holds.
+    if (accepted % 10 == 0) {
+      // FILTER 0 and 1 both mean a 4-cycle pin-to-count latency, the lag the golden check uses.
+      filter = static_cast<std::uint32_t>(rng() % 2);
+      client.write_register(rm::kRegFilter, filter);
+      ASSERT_EQ(client.read_register(rm::kRegFilter), filter);
+      ASSERT_EQ(client.read_register(rm::kRegControl), control);
+      ++register_checks;
+    }
+  }
+  line.set_enabled(false);
+  const auto& faults_to = line.to_board_log();
+  const auto& faults_from = line.from_board_log();
+  const auto& dc = client.decoder_counters();
+  std::printf("%d windows accepted, %d lost (decoder counted %llu); %d register write/read checks, %llu retries; "
+              "faults: to board %llu corrupt %llu dropped, from board %llu corrupt %llu dropped; LINK_ERRORS 0x%08X\n",
+              accepted, lost, static_cast<unsigned long long>(dc.telemetry_lost), register_checks,
+              static_cast<unsigned long long>(client.counters().retries),
+              static_cast<unsigned long long>(faults_to.corrupted), static_cast<unsigned long long>(faults_to.dropped),
+              static_cast<unsigned long long>(faults_from.corrupted), static_cast<unsigned long long>(faults_from.dropped),
+              client.read_register(rm::kRegLinkErrors));
+  // Every loss shows in the counters.
+  EXPECT_EQ(static_cast<std::uint64_t>(lost), dc.telemetry_lost);
+  EXPECT_GT(faults_to.corrupted + faults_to.dropped, 0u);
+  EXPECT_GT(faults_from.corrupted + faults_from.dropped, 0u);
+  EXPECT_EQ(golden.illegal(), 0);
 }
 
 }  // namespace

@@ -45,8 +45,9 @@ struct MatchOptions {
   double ambiguity_separation_cm = 50.0;  // a second minimum must lie at least this far away
   double ambiguity_ratio = 1.25;          // ambiguous when second_error <= ratio * best error
   Refinement refinement = Refinement::kInterpolate;
-  double refine_start_step_cm = 2.5;      // ray-cast pattern search: first and last step
-  double refine_min_step_cm = 0.625;
+  double refine_start_step_cm = 2.5;      // ray-cast pattern search: first and last step (starting
+  double refine_min_step_cm = 0.625;      //   at 1.25 gets trapped where the interpolation is ~10 cm off)
+  double refine_reach_cm = 10.0;          // never further than this from the best grid point
 };
 
 inline constexpr double kNoError = std::numeric_limits<double>::infinity();

@@ -63,6 +63,11 @@ class Transport {
   /// Throws TransportError (kind kDeviceGone after an unplug, once buffered bytes are drained).
   virtual std::size_t read(std::span<std::uint8_t> out, std::chrono::milliseconds timeout) = 0;
   [[nodiscard]] virtual TransportStatus status() const = 0;
+
+  /// The clock that read() timeouts are measured in, and that BoardClient's deadlines use: wall time
+  /// for real hardware; a simulated board's own time for a simulated one (so that a board simulated
+  /// slower than real time never makes the host time out).
+  [[nodiscard]] virtual std::chrono::steady_clock::time_point now() const { return std::chrono::steady_clock::now(); }
 };
 
 }  // namespace omniloc

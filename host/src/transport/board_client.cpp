@@ -64,7 +64,7 @@ std::optional<protocol::Frame> BoardClient::next_frame(std::chrono::steady_clock
   while (true) {
     if (auto f = decoder_.next()) return f;
     if (last_try) return std::nullopt;
-    const auto now = std::chrono::steady_clock::now();
+    const auto now = transport_.now();
     // Past the deadline, one non-blocking read still runs: a zero timeout means "what is already here".
     std::chrono::milliseconds wait{0};
     if (now >= deadline) {
@@ -87,7 +87,7 @@ protocol::Frame BoardClient::transact(const protocol::Frame& request, Expect exp
     if (attempt > 0) ++counters_.retries;
     drain_input();
     transport_.write(bytes);
-    const auto deadline = std::chrono::steady_clock::now() + options_.response_timeout;
+    const auto deadline = transport_.now() + options_.response_timeout;
     bool resend = false;
     while (!resend) {
       auto f = next_frame(deadline);
@@ -149,7 +149,7 @@ void BoardClient::set_streaming(bool on) {
 }
 
 std::optional<protocol::Window> BoardClient::poll_telemetry(std::chrono::milliseconds timeout) {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  const auto deadline = transport_.now() + timeout;
   while (telemetry_.empty()) {
     auto f = next_frame(deadline);
     if (!f) return std::nullopt;

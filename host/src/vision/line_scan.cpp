@@ -83,6 +83,16 @@ bool walk_ray(const CameraModel& cam, double phi, int k0, int k1, const ScanPara
   return true;
 }
 
+// Unit vectors of the 360 field directions (immutable, built once).
+const std::array<Eigen::Vector2d, kScanRays>& ray_directions() {
+  static const std::array<Eigen::Vector2d, kScanRays> dirs = [] {
+    std::array<Eigen::Vector2d, kScanRays> d;
+    for (int k = 0; k < kScanRays; ++k) d[static_cast<std::size_t>(k)] = {std::cos(deg_to_rad(k)), std::sin(deg_to_rad(k))};
+    return d;
+  }();
+  return dirs;
+}
+
 int first_sample(const CameraModel& cam) { return static_cast<int>(std::ceil(cam.min_radius_px())); }
 int last_sample(const CameraModel& cam) { return static_cast<int>(std::floor(cam.view_radius_px())); }
 
@@ -177,10 +187,9 @@ void expected_features(const FieldGeometry& field, const CameraModel& cam, const
   const double t_lo = cam.ground_cm_at_radius(k0);
   const double t_hi = cam.ground_cm_at_radius(k1);
   const RayCaster caster(field);
+  const auto& dirs = ray_directions();
   for (int k = 0; k < kScanRays; ++k) {
-    const double a = deg_to_rad(k);
-    const Eigen::Vector2d dir(std::cos(a), std::sin(a));
-    caster.intervals(pos, dir, t_lo, t_hi, iv);
+    caster.intervals(pos, dirs[static_cast<std::size_t>(k)], t_lo, t_hi, iv);
     std::uint8_t* o = out + k * kCrossingsPerRay;
     std::fill(o, o + kCrossingsPerRay, kNoCrossing);
     int found = 0;

@@ -151,7 +151,7 @@ void refine_match(const FieldGeometry& field, const CameraModel& camera, const S
   Eigen::Vector2d pos = r.position_cm;
   double best = pos == r.grid_position_cm ? r.error : error_at(field, camera, p, pos);
   const Eigen::Vector2d steps[] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
-  const double limit = opt.refine_start_step_cm * 4.0;  // stay near the grid point
+  const double limit = opt.refine_reach_cm;
   for (double step = opt.refine_start_step_cm; step >= opt.refine_min_step_cm - 1e-9;) {
     Eigen::Vector2d best_pos = pos;
     for (const auto& d : steps) {

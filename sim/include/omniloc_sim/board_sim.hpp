@@ -80,6 +80,14 @@ class BoardSim final : public UartSide {
   std::unique_ptr<Impl> impl_;
 };
 
+/// A board's simulated time as a steady_clock time point (for Transport::now()).
+[[nodiscard]] inline std::chrono::steady_clock::time_point board_time(const BoardSim& board) {
+  const std::int64_t c = board.cycle();
+  const std::int64_t ns = (c / BoardSim::kClockHz) * 1'000'000'000 + (c % BoardSim::kClockHz) * 1'000'000'000 / BoardSim::kClockHz;
+  return std::chrono::steady_clock::time_point(
+      std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::nanoseconds(ns)));
+}
+
 /// The host's Transport straight onto a BoardSim: write() queues bytes for the board's RX pin;
 /// read() runs the board until bytes arrive or `timeout` of simulated time has passed.
 class SimTransport final : public Transport {
@@ -88,6 +96,8 @@ class SimTransport final : public Transport {
   void write(std::span<const std::uint8_t> bytes) override;
   std::size_t read(std::span<std::uint8_t> out, std::chrono::milliseconds timeout) override;
   [[nodiscard]] TransportStatus status() const override;
+  /// Board time: timeouts and the host's deadlines run on the simulated clock.
+  [[nodiscard]] std::chrono::steady_clock::time_point now() const override { return board_time(board_); }
 
  private:
   BoardSim& board_;

@@ -1,0 +1,163 @@
+// The core of the robot daemon `omnilocd`, free of processes and signals so that tests drive it
+// in-process: it opens the board through a factory (USB on the robot, the Verilated board in
+// simulation), streams encoder windows into the Localizer together with camera frames, publishes
+// one pose per window over UDP, records the session (REC_DIR contract, recording.hpp), prints a
+// status line once a second, and keeps going when the board is unplugged (reconnect loop) or the
+// camera stops (odometry only, flagged). Behaviour and formats: docs/DAEMON.md.
+#pragma once
+
+#include <csignal>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <opencv2/core/mat.hpp>
+
+#include "omniloc/camera.hpp"
+#include "omniloc/conventions.hpp"
+#include "omniloc/daemon_config.hpp"
+#include "omniloc/daemon_publish.hpp"
+#include "omniloc/feature_db.hpp"
+#include "omniloc/field.hpp"
+#include "omniloc/localizer.hpp"
+#include "omniloc/odometry.hpp"
+#include "omniloc/robot_config.hpp"
+#include "omniloc/transport.hpp"
+
+namespace omniloc::daemon {
+
+/// The daemon's time (ms): the wall clock on the robot, the simulated board's time in simulation
+/// (so a simulated run goes at the simulator's pace, not in real time).
+class DaemonClock {
+ public:
+  virtual ~DaemonClock() = default;
+  [[nodiscard]] virtual double now_ms() = 0;
+  /// Lets `ms` of daemon time pass (sleeps, or runs the simulation).
+  virtual void wait_ms(double ms) = 0;
+};
+
+/// std::chrono::steady_clock, 0 at construction.
+class SteadyClock final : public DaemonClock {
+ public:
+  SteadyClock();
+  double now_ms() override;
+  void wait_ms(double ms) override;
+
+ private:
+  std::int64_t start_ns_;
+};
+
+struct CameraFrame {
+  double t_ms = 0.0;  ///< daemon time the image was taken
+  cv::Mat bgr;
+};
+
+/// Camera frames; poll() never blocks for long.
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+  /// The newest frame taken at or before now_ms and not handed out yet (older undelivered frames
+  /// are dropped, as a live camera would); nullopt when there is none.
+  [[nodiscard]] virtual std::optional<CameraFrame> poll(double now_ms) = 0;
+  [[nodiscard]] virtual std::string describe() const = 0;
+};
+
+/// What the board's windows lack: a heading reference (the board has no gyro) and, in simulation,
+/// the ground truth (recorded to truth.csv and reported to observers).
+class WindowExtras {
+ public:
+  virtual ~WindowExtras() = default;
+  /// The gyro's integrated field-frame yaw at the end of `window` (its counts are filled in).
+  [[nodiscard]] virtual double gyro_yaw_deg(const EncoderWindow& window) = 0;
+  /// True if gyro_yaw_deg is an absolute heading (a gyro aligned at kick-off), false if it only
+  /// follows the wheels (the localizer then recovers without trusting it).
+  [[nodiscard]] virtual bool gyro_is_absolute() const = 0;
+  [[nodiscard]] virtual bool has_truth() const { return false; }
+  [[nodiscard]] virtual std::optional<Pose2> truth(double /*t_ms*/) { return std::nullopt; }
+};
+
+/// Without a gyro: the heading integrated from the wheels (eq. (9) least squares), starting at 0.
+class WheelYawExtras final : public WindowExtras {
+ public:
+  explicit WheelYawExtras(const RobotConfig& robot);
+  double gyro_yaw_deg(const EncoderWindow& window) override;
+  [[nodiscard]] bool gyro_is_absolute() const override { return false; }
+
+ private:
+  RobotConfig robot_;
+  Eigen::Matrix<double, 3, 4> pinv_;
+  double yaw_deg_ = 0.0;
+};
+
+/// Opens the board's byte pipe; throws TransportError (kNotFound / kDeviceGone / kConfig) when it
+/// is not there.
+using TransportFactory = std::function<std::unique_ptr<Transport>()>;
+
+/// The models the localizer works with, loaded once.
+struct DaemonModels {
+  FieldGeometry field;
+  CameraModel camera;
+  RobotConfig robot;
+  LocalizerConfig localizer;
+  FeatureDb db;
+  std::optional<Pose2> initial_pose;  ///< known start pose (else a global search)
+};
+
+/// Loads field, camera, robot and localizer configs and loads or builds the database, as the
+/// config says (a `database` path that does not exist yet is built and saved there). `progress`
+/// receives human-readable lines.
+[[nodiscard]] DaemonModels load_models(const DaemonConfig& config,
+                                       const std::function<void(const std::string&)>& progress = {});
+
+/// What happened in one window, for observers (tests, the demo, the simulator front end).
+struct PoseEvent {
+  PoseMessage message;              ///< as published
+  LocalizedPose localized;          ///< the localizer's full answer (source kNone while degraded)
+  std::optional<Pose2> truth;       ///< simulation only
+  bool from_window = true;          ///< false: a degraded pose published while the board is gone
+};
+
+struct DaemonReport {
+  std::uint64_t windows = 0;         ///< encoder windows given to the localizer
+  std::uint64_t frames = 0;          ///< camera frames given to the localizer
+  std::uint64_t published = 0;       ///< datagrams sent
+  std::uint64_t send_failed = 0;
+  std::uint64_t board_losses = 0;    ///< times the board went away
+  std::uint64_t reconnects = 0;      ///< times it came back
+  std::uint64_t camera_losses = 0;   ///< times the camera stopped delivering
+  double run_ms = 0.0;               ///< daemon time from start to stop
+  std::string stop_reason;           ///< "signal", "duration"
+  LocalizerStats localizer;
+};
+
+/// Everything the daemon talks to.
+struct DaemonIo {
+  DaemonClock* clock = nullptr;        ///< required
+  TransportFactory open_board;         ///< required
+  FrameSource* camera = nullptr;       ///< null: no camera (odometry only)
+  WindowExtras* extras = nullptr;      ///< required (WheelYawExtras when there is no gyro)
+  std::function<void(const PoseEvent&)> on_pose;   ///< optional observer, called per publish
+  std::function<void(const std::string&)> log;     ///< status lines and events (default: stderr)
+};
+
+class Daemon {
+ public:
+  /// `models` must outlive the daemon. Throws ConfigError for a bad config, std::runtime_error if
+  /// the UDP socket or the recording directory cannot be made.
+  Daemon(const DaemonConfig& config, const DaemonModels& models, DaemonIo io);
+  ~Daemon();
+  Daemon(const Daemon&) = delete;
+  Daemon& operator=(const Daemon&) = delete;
+
+  /// Runs until *stop becomes non-zero (a signal handler sets it) or config.duration_s of daemon
+  /// time has passed. Switches streaming off and closes the recording on the way out.
+  DaemonReport run(const volatile std::sig_atomic_t* stop);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace omniloc::daemon

@@ -1,0 +1,70 @@
+// Configuration of the robot daemon `omnilocd`: a JSON file (common/omnilocd/default.json, read with
+// cv::FileStorage) whose values command-line flags override. Every key is optional, unknown keys are
+// refused (a misspelt key must not fall back to its default silently), and every value is checked;
+// errors name the file (or "command line") and the field. Keys, defaults and units: docs/DAEMON.md.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "omniloc/robot_config.hpp"  // ConfigError
+
+namespace omniloc::daemon {
+
+struct DaemonConfig {
+  // --- board ---
+  std::string board = "usb";         ///< "usb" (FT2232H over libusb) or "sim" (Verilated board, simulated robot)
+  std::string board_serial;          ///< usb: the board's serial, empty for the first one found
+  double reconnect_period_ms = 500;  ///< time between reopen attempts after an unplug
+  // --- camera ---
+  std::string camera = "sim";        ///< "sim", "none", a V4L2 index ("0"), a device path or a video file
+  double camera_fps = 60.0;          ///< sim: frames per second of simulated time; real: requested rate
+  double camera_timeout_ms = 500;    ///< no frame for this long: odometry only, flagged
+  // --- models ---
+  std::string field = "fira-robosot";  ///< common/fields/<name>.json or a path
+  std::string camera_model = "default";  ///< common/cameras/<name>.json or a path
+  std::string robot = "default";       ///< common/robots/<name>.json or a path
+  std::string localizer = "default";   ///< common/localizer/<name>.json or a path
+  std::string database;                ///< feature DB file; empty: built in memory at start-up
+  double grid_step_cm = 10.0;          ///< grid of a database built at start-up
+  // --- output ---
+  std::string udp_address = "127.0.0.1";  ///< IPv4 address of the pose consumer
+  int udp_port = 5600;
+  double publish_hz = 100.0;           ///< one datagram per board window; checked to be the window rate
+  std::string record_dir;              ///< empty: no recording
+  double status_period_s = 1.0;        ///< status line on stderr; 0 disables it
+  double duration_s = 0.0;             ///< stop after this much (daemon) time; 0: until SIGINT/SIGTERM
+  // --- simulation (board "sim" / camera "sim") ---
+  std::string sim_trajectory = "boundary_tour";  ///< sim/world trajectory name
+  std::uint64_t sim_seed = 1;
+};
+
+/// Checks ranges and enumerations; throws ConfigError "<source>: field '<key>': <why> (got <value>)".
+void validate_daemon_config(const DaemonConfig& config, const std::string& source);
+
+/// Reads a JSON object of DaemonConfig keys over `base` (keys not present keep base's values) and
+/// validates the result. Throws ConfigError naming the path (and the field) when the file is
+/// missing, is not JSON, has an unknown key, a value of the wrong type or out of range.
+[[nodiscard]] DaemonConfig load_daemon_config(const std::string& path, const DaemonConfig& base = {});
+
+/// Sets one key from its text form (as a command-line flag gives it); throws ConfigError naming
+/// `source` and the key when the key is unknown or the text is not a valid value.
+void set_daemon_key(DaemonConfig& config, std::string_view key, std::string_view value, const std::string& source);
+
+/// What the command line asked for.
+struct DaemonArgs {
+  DaemonConfig config;
+  bool help = false;
+  std::string config_path;  ///< --config FILE, empty when not given
+};
+
+/// Parses `--config FILE` first (loaded over the defaults), then every `--key VALUE` flag (key with
+/// '-' or '_', e.g. --udp-port 5600) over it, then validates. Throws ConfigError on a bad flag.
+[[nodiscard]] DaemonArgs parse_daemon_args(std::span<const std::string_view> args);
+
+/// The --help text.
+[[nodiscard]] std::string daemon_usage();
+
+}  // namespace omniloc::daemon

@@ -1,0 +1,84 @@
+// Fuzzy choice of the local search range (paper section 2.5, Figs. 12-13): the robot's speed is
+// fuzzified into four terms (very low, low, high, very high), four rules map each speed term to a
+// search-range term, Mamdani min-max inference clips and unites the output sets, and the centroid
+// of the union (numerical integration over the output universe) is the crisp range, which is then
+// snapped to the nearest range the database search offers ({0, 10, 20, 30} cm).
+//
+// The paper prints the shapes but no numbers; the breakpoints live in the config file
+// (common/localizer/default.json) and are explained in docs/LOCALIZER.md.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace cv {
+class FileNode;
+}
+
+namespace omniloc {
+
+/// The four linguistic terms, in this order everywhere (config arrays, rules, firing strengths).
+enum class FuzzyTerm { kVeryLow = 0, kLow = 1, kHigh = 2, kVeryHigh = 3 };
+inline constexpr int kFuzzyTerms = 4;
+
+/// Trapezoidal membership a <= b <= c <= d: 0 outside [a, d], 1 on [b, c], linear between.
+/// b == c gives a triangle; a == b (or c == d) a vertical edge, i.e. a shoulder at the universe's
+/// end where the degree is 1 right at a (or d).
+struct Trapezoid {
+  double a = 0.0;
+  double b = 0.0;
+  double c = 0.0;
+  double d = 0.0;
+  [[nodiscard]] double degree(double x) const;
+};
+
+struct FuzzyConfig {
+  /// Input universe: robot speed over ground (cm/s). Inputs are clamped into it.
+  double speed_max_cm_per_s = 300.0;
+  std::array<Trapezoid, kFuzzyTerms> speed_terms{};  // VL, L, H, VH (Fig. 12)
+  /// Output universe: search range A (cm), [0, range_max_cm].
+  double range_max_cm = 30.0;
+  std::array<Trapezoid, kFuzzyTerms> range_terms{};  // VL, L, H, VH (Fig. 13)
+  /// rules[i] = output term for input term i; the paper's four rules are the identity
+  /// (speed very low -> range very low, ..., very high -> very high).
+  std::array<FuzzyTerm, kFuzzyTerms> rules{FuzzyTerm::kVeryLow, FuzzyTerm::kLow, FuzzyTerm::kHigh,
+                                           FuzzyTerm::kVeryHigh};
+  /// Integration step of the centroid (midpoint rule over [0, range_max_cm]).
+  double resolution_cm = 0.01;
+  /// Ranges the database search offers; the crisp output snaps to the nearest (ties go up).
+  std::vector<double> snap_ranges_cm{0.0, 10.0, 20.0, 30.0};
+
+  /// The defaults documented in docs/LOCALIZER.md (same numbers as common/localizer/default.json).
+  [[nodiscard]] static FuzzyConfig defaults();
+};
+
+struct FuzzyResult {
+  std::array<double, kFuzzyTerms> speed_degrees{};  ///< membership of the input in VL, L, H, VH
+  std::array<double, kFuzzyTerms> output_clip{};    ///< clip level of each output term (max over rules)
+  double crisp_cm = 0.0;    ///< centroid of the aggregated output
+  double snapped_cm = 0.0;  ///< nearest of snap_ranges_cm
+};
+
+/// Mamdani min-max inference + centroid. A speed below 0 or above the universe is clamped; NaN
+/// throws std::invalid_argument. If no rule fires (a gap in the input terms) the range is the
+/// largest snap range (search widely when unsure).
+[[nodiscard]] FuzzyResult fuzzy_search_range(const FuzzyConfig& config, double speed_cm_per_s);
+
+/// Nearest of `ranges_cm` (ties go to the larger).
+[[nodiscard]] double snap_to_ranges(double value_cm, const std::vector<double>& ranges_cm);
+
+/// Throws ConfigError (robot_config.hpp) naming `source` and the field: unordered or non-finite
+/// breakpoints, terms outside their universe, input terms that leave a speed uncovered, rule
+/// indices out of range, non-positive resolution, empty or unsorted snap ranges.
+void validate_fuzzy_config(const FuzzyConfig& config, const std::string& source);
+
+/// Reads {"speed_max_cm_per_s", "speed_terms": {"VL": [a,b,c,d], "L": ..., "H": ..., "VH": ...},
+/// "range_max_cm", "range_terms": {...}, "rules": {"VL": "VL", ...}, "resolution_cm",
+/// "snap_ranges_cm": [...]} from a cv::FileStorage node and validates it.
+[[nodiscard]] FuzzyConfig parse_fuzzy_config(const cv::FileNode& node, const std::string& source);
+
+/// "VL", "L", "H", "VH".
+[[nodiscard]] const char* fuzzy_term_name(FuzzyTerm term);
+
+}  // namespace omniloc

@@ -1,0 +1,227 @@
+// The integration localizer (paper section 2.5, Figs. 15-16) plus what a robot needs beyond it.
+//
+// Flow: a global search at start (or a given initial pose); once an image result's normalised
+// match error is below E_TH its pose becomes the odometry origin. Afterwards each camera frame is
+// matched by a local search around the odometry-predicted pose, in the range the fuzzy system
+// picks from the robot's speed. A good result (error < E_TH) is kept as the output, carried
+// forward by the odometry; a bad one leaves the odometry pose standing. Every reset period
+// (125 ms) with a good result, the odometry origin is reset to it.
+//
+// Timing: encoder windows (100 Hz) and frames (60 Hz) carry their own timestamps (the board's
+// time base); an image result is applied at the time the image was *taken*: the localizer keeps
+// a short history of odometry states and re-integrates the windows after the image time.
+// Frames may be given before the windows that cover their time (replay): they wait.
+//
+// Beyond the paper (LocalizerMode::kFull): sub-grid refinement, a minimum search range, refusal
+// of ambiguous matches, a cross-check by global search that detects being lost (a run of bad
+// matches, or image and odometry disagreeing beyond their uncertainty as after a kidnapping) and
+// recovers, and an uncertainty on every pose. LocalizerMode::kPaper does exactly what the paper
+// describes (no refinement, no lost detection) for side-by-side figures.
+//
+// One class serves omnilocd (live), `omniloc replay` and the demo. Not thread-safe: call it from
+// one thread (scan images elsewhere and pass the BearingScan to on_bearings() if needed).
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core/mat.hpp>
+
+#include "omniloc/camera.hpp"
+#include "omniloc/conventions.hpp"
+#include "omniloc/feature_db.hpp"
+#include "omniloc/field.hpp"
+#include "omniloc/fuzzy.hpp"
+#include "omniloc/line_scan.hpp"
+#include "omniloc/matcher.hpp"
+#include "omniloc/odometry.hpp"
+#include "omniloc/robot_config.hpp"
+
+namespace cv {
+class FileNode;
+}
+
+namespace omniloc {
+
+enum class LocalizerMode {
+  kPaper,  ///< Fig. 15 as printed: grid-point results, no lost detection, no ambiguity check
+  kFull,   ///< the paper plus refinement, lost detection/recovery, ambiguity refusal
+};
+
+struct LocalizerConfig {
+  LocalizerMode mode = LocalizerMode::kFull;
+  FuzzyConfig fuzzy = FuzzyConfig::defaults();
+  double e_th = 20.0;              ///< match threshold on the normalised error (paper: 20)
+  double reset_period_ms = 125.0;  ///< odometry origin reset period (paper: 125 ms)
+  double history_ms = 1000.0;      ///< odometry history kept for late frames; older frames are dropped
+  int scan_rays_per_degree = 4;    ///< on_image(): robot-frame scan step (for re-rotating by yaw)
+  // --- kFull only ---
+  Refinement refinement = Refinement::kInterpolate;
+  double min_range_cm = 10.0;      ///< local search at least this wide (0 would pin to one grid point)
+  bool refuse_ambiguous = true;    ///< a global result flagged ambiguous is never accepted
+  double image_sigma_cm = 2.0;     ///< 1-sigma of a good image position (uncertainty model)
+  double image_sigma_yaw_deg = 0.5;
+  int lost_after_bad_frames = 30;  ///< this many bad results in a row -> lost (0.5 s at 60 Hz)
+  double check_period_ms = 100.0;  ///< cross-check by global search at least this often while tracking
+  double disagree_min_cm = 30.0;   ///< global vs tracked pose farther than max(this, k sigma) ...
+  double disagree_sigmas = 4.0;    ///< ... (k) with the global result clearly better ...
+  double disagree_error_ratio = 0.7;  ///< ... (global error < ratio * local error) ...
+  int disagree_frames = 3;         ///< ... this many frames in a row -> relocalize there
+  bool gyro_yaw_known = true;      ///< false: recover with global_search_any_yaw (no trusted heading)
+
+  /// kPaper: refinement kNone, min range 0, no ambiguity refusal, no lost detection.
+  [[nodiscard]] static LocalizerConfig paper();
+};
+
+/// Reads the localizer config (common/localizer/default.json; docs/LOCALIZER.md) from a
+/// cv::FileStorage node, validating every field; errors (ConfigError) name `source` and the field.
+[[nodiscard]] LocalizerConfig parse_localizer_config(const cv::FileNode& node, const std::string& source);
+/// Loads a file by name ("default" -> common/localizer/default.json) or path.
+[[nodiscard]] LocalizerConfig load_localizer_config(const std::string& name_or_path);
+void validate_localizer_config(const LocalizerConfig& config, const std::string& source);
+
+enum class PoseSource {
+  kNone,        ///< no fix yet (waiting for a good global search); pose meaningless
+  kImage,       ///< an image result was applied in this window
+  kIntegrated,  ///< the last image result was good: its pose carried forward by odometry
+  kOdometry,    ///< the last image result was bad: odometry pose stands
+  kLost,        ///< lost (kFull): dead reckoning while global searches look for the robot
+};
+/// "none", "image", "integrated", "odometry", "lost" (the poses.csv `source` column).
+[[nodiscard]] const char* pose_source_name(PoseSource source);
+/// Inverse of pose_source_name; nullopt for anything else.
+[[nodiscard]] std::optional<PoseSource> parse_pose_source(const std::string& name);
+
+/// The localizer's answer for one encoder window.
+struct LocalizedPose {
+  double t_ms = 0.0;          ///< the window's end time
+  std::uint32_t seq = 0;
+  Pose2 pose;
+  PoseSource source = PoseSource::kNone;
+  double match_error = kNoError;   ///< last image result's normalised error (inf: none yet)
+  double search_range_cm = 0.0;    ///< range of the last local search (-1 after a global search)
+  double sigma_xy_cm = 0.0;        ///< 1-sigma position uncertainty
+  double sigma_yaw_deg = 0.0;
+  double image_age_ms = 0.0;       ///< t_ms minus the time of the last image applied (inf: none)
+  bool slip = false;               ///< the odometry saw a wheel slip in this window
+};
+
+/// What happened to one frame.
+enum class FrameOutcome {
+  kPending,       ///< waiting for the windows that cover its time
+  kDropped,       ///< older than the history, or no window before it
+  kAccepted,      ///< good result applied
+  kRejected,      ///< error >= E_TH: odometry stands
+  kAmbiguous,     ///< refused: ambiguous global result
+  kRelocalized,   ///< a global search (start, lost or disagreement) set the pose
+};
+[[nodiscard]] const char* frame_outcome_name(FrameOutcome outcome);
+
+struct FrameReport {
+  double t_ms = 0.0;
+  FrameOutcome outcome = FrameOutcome::kPending;
+  bool global = false;           ///< a global search decided this frame
+  Eigen::Vector2d position_cm{0.0, 0.0};
+  double yaw_deg = 0.0;
+  double error = kNoError;
+  double search_range_cm = 0.0;
+  double speed_cm_per_s = 0.0;
+  double predicted_offset_cm = 0.0;  ///< |image - odometry prediction|
+};
+
+struct LocalizerStats {
+  int frames = 0;
+  int accepted = 0;
+  int rejected = 0;
+  int ambiguous = 0;
+  int dropped = 0;
+  int global_searches = 0;
+  int relocalizations = 0;
+  int origin_resets = 0;
+  int lost_events = 0;
+};
+
+class Localizer {
+ public:
+  /// The references must outlive the localizer (the database is large and shared).
+  Localizer(const LocalizerConfig& config, const RobotConfig& robot, const FieldGeometry& field,
+            const CameraModel& camera, const FeatureDb& db, std::optional<Pose2> initial_pose = std::nullopt);
+
+  /// Integrates one encoder window (times must increase), applies any waiting frames whose time
+  /// it covers, and returns the pose at the window's end.
+  LocalizedPose on_window(const EncoderWindow& window);
+
+  /// A camera frame taken at t_ms (same time base as the windows). Processed now if a window at
+  /// or after t_ms has been seen, else kept until one arrives (the report then says kPending).
+  FrameReport on_image(double t_ms, const cv::Mat& bgr);
+  /// Same with a robot-frame scan already made (scan_image_bearings).
+  FrameReport on_bearings(double t_ms, BearingScan bearings);
+
+  /// The pose at the last window (source kNone before any).
+  [[nodiscard]] const LocalizedPose& pose() const { return last_pose_; }
+  [[nodiscard]] bool has_fix() const { return state_ != State::kSearching; }
+  [[nodiscard]] bool lost() const { return state_ == State::kLost; }
+  [[nodiscard]] const LocalizerStats& stats() const { return stats_; }
+  /// Reports of frames processed since the last call (pending ones appear once processed).
+  [[nodiscard]] std::vector<FrameReport> take_frame_reports();
+  [[nodiscard]] const LocalizerConfig& config() const { return config_; }
+
+ private:
+  enum class State { kSearching, kTracking, kLost };
+  struct HistoryEntry {
+    EncoderWindow window;
+    Odometry odometry;  // state after the window
+  };
+  struct PendingFrame {
+    double t_ms;
+    BearingScan bearings;
+  };
+  struct Anchor {      // last good image result, carried forward by odometry
+    bool valid = false;
+    double t_ms = 0.0;
+    Pose2 pose;
+    Pose2 odometry_at_t;  // odometry's pose at t_ms, to carry the anchor forward
+    double error = kNoError;
+  };
+
+  FrameReport process(double t_ms, const BearingScan& bearings);
+  [[nodiscard]] bool covered(double t_ms) const;
+  [[nodiscard]] Pose2 odometry_pose_at(double t_ms, double* speed_cm_per_s, double* sigma_xy_cm) const;
+  void reset_origin_at(double t_ms, const Pose2& pose, double sigma_xy_cm, double sigma_yaw_deg);
+  void set_anchor(double t_ms, const Pose2& pose, double error);
+  [[nodiscard]] LocalizedPose make_pose(const EncoderWindow& window);
+  void trim_history();
+
+  LocalizerConfig config_;
+  RobotConfig robot_;
+  const FieldGeometry& field_;
+  const CameraModel& camera_;
+  const FeatureDb& db_;
+  MatchOptions match_options_;
+  Odometry odometry_;
+  std::deque<HistoryEntry> history_;
+  std::deque<PendingFrame> pending_;
+  std::vector<FrameReport> reports_;
+  State state_ = State::kSearching;
+  Anchor anchor_;
+  double last_reset_ms_ = -1e300;
+  double last_check_ms_ = -1e300;
+  double last_image_ms_ = -1e300;
+  double last_error_ = kNoError;
+  double last_range_cm_ = 0.0;
+  bool last_good_ = false;
+  bool applied_this_window_ = false;
+  bool trimmed_ = false;       // history has lost its first windows: older frames are dropped
+  bool have_initial_ = false;
+  int bad_run_ = 0;
+  int disagree_run_ = 0;
+  Eigen::Vector2d disagree_position_cm_{0.0, 0.0};
+  LocalizedPose last_pose_;
+  LocalizerStats stats_;
+};
+
+}  // namespace omniloc

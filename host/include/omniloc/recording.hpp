@@ -1,0 +1,119 @@
+// Recordings: the REC_DIR contract of issue 7, read and written exactly.
+//
+//   meta.json    {"field": name or path, "camera": {...camera block...}, "robot": {...robot block...},
+//                 "initial_pose": {"x_cm", "y_cm", "yaw_deg"} (optional)}
+//   encoders.csv t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg      one row per encoder window
+//   camera.csv   t_ms,file                              file: PNG relative to REC_DIR
+//   truth.csv    t_ms,x_cm,y_cm,yaw_deg                 optional
+//   poses.csv    t_ms,x_cm,y_cm,yaw_deg,source,match_error,search_range_cm   (output of replay)
+//
+// Every error (RecordingError) names the file and, for CSV files, the line (1-based, header = 1).
+#pragma once
+
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <opencv2/core/mat.hpp>
+
+#include "omniloc/camera.hpp"
+#include "omniloc/conventions.hpp"
+#include "omniloc/localizer.hpp"
+#include "omniloc/odometry.hpp"
+#include "omniloc/robot_config.hpp"
+
+namespace omniloc {
+
+class RecordingError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct RecordingMeta {
+  std::string field = "fira-robosot";  ///< geometry name or path, as written in meta.json
+  CameraModel camera;
+  RobotConfig robot;
+  std::optional<Pose2> initial_pose;
+};
+
+struct FrameRef {
+  double t_ms = 0.0;
+  std::string file;  ///< relative to the recording directory
+};
+
+struct TruthSample {
+  double t_ms = 0.0;
+  Pose2 pose;
+};
+
+struct Recording {
+  std::filesystem::path dir;
+  RecordingMeta meta;
+  std::vector<EncoderWindow> windows;
+  std::vector<FrameRef> frames;
+  std::vector<TruthSample> truth;  ///< empty without truth.csv
+};
+
+/// Reads meta.json (cv::FileStorage; camera via camera_from_json, robot via parse_robot_config).
+[[nodiscard]] RecordingMeta read_meta(const std::filesystem::path& meta_json);
+[[nodiscard]] std::vector<EncoderWindow> read_encoders_csv(const std::filesystem::path& path);
+[[nodiscard]] std::vector<FrameRef> read_camera_csv(const std::filesystem::path& path);
+[[nodiscard]] std::vector<TruthSample> read_truth_csv(const std::filesystem::path& path);
+/// Reads the poses.csv that replay writes.
+[[nodiscard]] std::vector<LocalizedPose> read_poses_csv(const std::filesystem::path& path);
+
+/// Reads meta.json, encoders.csv, camera.csv and truth.csv if present; checks that every listed
+/// PNG exists (images are loaded on demand with load_frame).
+[[nodiscard]] Recording load_recording(const std::filesystem::path& dir);
+/// Loads a frame's PNG as BGR; throws RecordingError naming the file (and camera.csv's line) if it
+/// cannot be read or its size differs from the camera's.
+[[nodiscard]] cv::Mat load_frame(const Recording& recording, std::size_t frame_index);
+
+/// Truth pose at t_ms, linear between samples (yaw the short way); nullopt outside the samples.
+[[nodiscard]] std::optional<Pose2> truth_at(const std::vector<TruthSample>& truth, double t_ms);
+
+/// Writes a recording directory (created if needed; existing files are overwritten).
+class RecordingWriter {
+ public:
+  RecordingWriter(const std::filesystem::path& dir, const RecordingMeta& meta, bool with_truth);
+  ~RecordingWriter();
+  RecordingWriter(const RecordingWriter&) = delete;
+  RecordingWriter& operator=(const RecordingWriter&) = delete;
+
+  void add_window(const EncoderWindow& window);
+  /// Writes frames/NNNNNN.png and the camera.csv row.
+  void add_frame(double t_ms, const cv::Mat& bgr);
+  void add_truth(double t_ms, const Pose2& pose);
+  /// Flushes and closes (also done by the destructor, which cannot report errors).
+  void close();
+
+ private:
+  std::filesystem::path dir_;
+  std::FILE* encoders_ = nullptr;
+  std::FILE* camera_ = nullptr;
+  std::FILE* truth_ = nullptr;
+  int frame_count_ = 0;
+};
+
+/// Writes meta.json (camera block in the camera-file format, including the optional mask).
+void write_meta(const std::filesystem::path& meta_json, const RecordingMeta& meta);
+
+/// Streams poses.csv rows.
+class PosesCsvWriter {
+ public:
+  explicit PosesCsvWriter(const std::filesystem::path& path);
+  ~PosesCsvWriter();
+  PosesCsvWriter(const PosesCsvWriter&) = delete;
+  PosesCsvWriter& operator=(const PosesCsvWriter&) = delete;
+  void write(const LocalizedPose& pose);
+  void close();
+
+ private:
+  std::filesystem::path path_;
+  std::FILE* file_ = nullptr;
+};
+
+}  // namespace omniloc

@@ -1,0 +1,334 @@
+// omnilocd's main loop: board windows -> localizer -> UDP, camera frames beside them, recording,
+// status line, board reconnects and camera loss. One thread: the localizer is not thread-safe and
+// one loop keeps the order of windows and frames obvious.
+#include "omniloc/daemon.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <utility>
+
+#include "omniloc/board_client.hpp"
+#include "omniloc/protocol.hpp"
+#include "omniloc/recording.hpp"
+#include "omniloc/regmap.hpp"
+
+namespace omniloc::daemon {
+namespace {
+
+// A board that answers but stops streaming for this long is treated as gone (a USB bridge can stay
+// enumerated while the FPGA is reset or unpowered).
+constexpr double kBoardSilentMs = 250.0;
+// While the board is gone, a degraded pose goes out every window period, so consumers see the state.
+constexpr double kDegradedTickMs = 10.0;
+constexpr std::chrono::milliseconds kTelemetryWait{20};
+
+std::uint32_t decode_field(int decoding) {
+  switch (decoding) {
+    case 1: return regmap::kControlDecodeX1;
+    case 2: return regmap::kControlDecodeX2;
+    default: return regmap::kControlDecodeX4;
+  }
+}
+
+}  // namespace
+
+struct Daemon::Impl {
+  DaemonConfig config;
+  const DaemonModels& models;
+  DaemonIo io;
+  UdpPublisher publisher;
+  Localizer localizer;
+  std::unique_ptr<RecordingWriter> recorder;
+  bool record_truth = false;
+
+  // Board connection.
+  std::unique_ptr<Transport> transport;
+  std::unique_ptr<BoardClient> client;
+  std::optional<protocol::TimestampUnwrapper> unwrap;
+  double board_clk_hz = 0.0;
+  double connection_offset_ms = 0.0;
+  double last_window_clock_ms = 0.0;  // clock time a window last arrived
+  double next_attempt_ms = 0.0;
+  bool ever_connected = false;
+  bool board_gone = false;
+  std::string last_open_error;
+
+  // Camera.
+  double last_frame_ms = -1e300;  // daemon time of the newest frame given to the localizer
+  bool camera_fresh = false;
+
+  // Output.
+  double last_window_t_ms = -1e300;
+  std::uint64_t seq = 0;
+  DaemonReport report;
+  PoseMessage last_message;
+  LocalizedPose last_localized;
+
+  // Status line.
+  double next_status_ms = 0.0;
+  std::uint64_t windows_at_status = 0, frames_at_status = 0;
+  double status_from_ms = 0.0;
+
+  Impl(const DaemonConfig& c, const DaemonModels& m, DaemonIo i)
+      : config(c), models(m), io(std::move(i)), publisher(c.udp_address, c.udp_port),
+        localizer(localizer_config(c, m, io), m.robot, m.field, m.camera, m.db, m.initial_pose) {
+    if (!io.clock || !io.open_board || !io.extras)
+      throw std::invalid_argument("Daemon: clock, open_board and extras are required");
+    if (!io.log) io.log = [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); };
+    if (!config.record_dir.empty()) {
+      record_truth = io.extras->has_truth();
+      RecordingMeta meta;
+      meta.field = config.field;
+      meta.camera = models.camera;
+      meta.robot = models.robot;
+      meta.initial_pose = models.initial_pose;
+      recorder = std::make_unique<RecordingWriter>(config.record_dir, meta, record_truth);
+    }
+  }
+
+  static LocalizerConfig localizer_config(const DaemonConfig&, const DaemonModels& m, const DaemonIo& io) {
+    LocalizerConfig lc = m.localizer;
+    // Without a real gyro the heading is only the wheels' own: do not trust it to recover.
+    if (io.extras && !io.extras->gyro_is_absolute()) lc.gyro_yaw_known = false;
+    return lc;
+  }
+
+  void log(const std::string& s) const { io.log(s); }
+
+  DaemonStatus status(double now_ms) const {
+    if (board_gone || !client) return DaemonStatus::kDegraded;
+    if (!localizer.has_fix()) return DaemonStatus::kStarting;
+    if (localizer.lost()) return DaemonStatus::kLost;
+    if (!io.camera || now_ms - last_frame_ms > config.camera_timeout_ms) return DaemonStatus::kOdometryOnly;
+    return DaemonStatus::kOk;
+  }
+
+  void publish(const LocalizedPose& lp, DaemonStatus st, double t_ms, bool from_window) {
+    PoseMessage m;
+    m.seq = ++seq;
+    m.t_ms = t_ms;
+    m.x_cm = lp.pose.x_cm;
+    m.y_cm = lp.pose.y_cm;
+    m.yaw_deg = lp.pose.yaw_deg;
+    m.source = pose_source_name(lp.source);
+    m.match_error = std::isfinite(lp.match_error) ? lp.match_error : -1.0;
+    m.search_range_cm = std::isfinite(lp.match_error) ? lp.search_range_cm : -1.0;
+    m.uncertainty_cm = lp.sigma_xy_cm;
+    m.uncertainty_yaw_deg = lp.sigma_yaw_deg;
+    m.status = st;
+    publisher.send(pose_json(m));
+    last_message = m;
+    report.published = publisher.sent();
+    report.send_failed = publisher.failed();
+    if (io.on_pose) {
+      PoseEvent ev;
+      ev.message = m;
+      ev.localized = lp;
+      ev.truth = io.extras->truth(t_ms);
+      ev.from_window = from_window;
+      io.on_pose(ev);
+    }
+  }
+
+  void try_connect(double now_ms) {
+    if (now_ms < next_attempt_ms) return;
+    next_attempt_ms = now_ms + config.reconnect_period_ms;
+    try {
+      auto t = io.open_board();
+      auto c = std::make_unique<BoardClient>(*t);
+      const std::uint32_t id = c->read_register(regmap::kRegId);
+      if (id != regmap::kIdValue) {
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "register ID reads 0x%08X, not 0x%08X: not an omniloc board", id,
+                      regmap::kIdValue);
+        throw TransportError(TransportErrorKind::kConfig, buf);
+      }
+      // PERIOD counts board cycles per window: with the configured window period it gives the
+      // board's clock, which the timestamps count.
+      const std::uint32_t period = c->read_register(regmap::kRegPeriod);
+      board_clk_hz = period * (1000.0 / models.robot.window_period_ms);
+      std::uint32_t control = 0;
+      control = regmap::kControlEnable.put(control, 1);
+      control = regmap::kControlDecode.put(control, decode_field(models.robot.decoding));
+      control = regmap::kControlStream.put(control, 1);
+      c->write_register(regmap::kRegControl, control);
+      transport = std::move(t);
+      client = std::move(c);
+      unwrap.reset();
+      last_window_clock_ms = io.clock->now_ms();
+      if (ever_connected) {
+        ++report.reconnects;
+        log("omnilocd: board back (" + transport->status().description + "), streaming again");
+      } else {
+        log("omnilocd: board open (" + transport->status().description + "), streaming");
+      }
+      ever_connected = true;
+      board_gone = false;
+      last_open_error.clear();
+    } catch (const std::exception& e) {
+      client.reset();
+      transport.reset();
+      if (e.what() != last_open_error) log(std::string("omnilocd: board not available: ") + e.what());
+      last_open_error = e.what();
+    }
+  }
+
+  void lose_board(const std::string& why) {
+    client.reset();
+    transport.reset();
+    unwrap.reset();
+    if (!board_gone) {
+      ++report.board_losses;
+      log("omnilocd: board lost (" + why + "): status degraded, reconnecting every " +
+          std::to_string(static_cast<int>(config.reconnect_period_ms)) + " ms");
+    }
+    board_gone = true;
+    next_attempt_ms = io.clock->now_ms() + config.reconnect_period_ms;
+  }
+
+  void on_board_window(const protocol::Window& w) {
+    const double now = io.clock->now_ms();
+    last_window_clock_ms = now;
+    if (!unwrap) {
+      // First window of this connection: its board time is "now" in daemon time.
+      unwrap.emplace(board_clk_hz);
+      unwrap->update(w.timestamp_cycles);
+      connection_offset_ms = now;
+    } else {
+      unwrap->update(w.timestamp_cycles);
+    }
+    double t = connection_offset_ms + unwrap->elapsed_ms();
+    if (t <= last_window_t_ms) t = last_window_t_ms + 1e-3;  // the localizer needs increasing times
+    last_window_t_ms = t;
+    EncoderWindow ew;
+    ew.seq = w.seq;
+    ew.t_end_ms = t;
+    for (std::size_t i = 0; i < 4; ++i) ew.counts[i] = w.count[i];
+    ew.gyro_yaw_deg = io.extras->gyro_yaw_deg(ew);
+    const LocalizedPose lp = localizer.on_window(ew);
+    ++report.windows;
+    last_localized = lp;
+    if (recorder) {
+      recorder->add_window(ew);
+      if (record_truth)
+        if (const auto truth = io.extras->truth(t)) recorder->add_truth(t, *truth);
+    }
+    publish(lp, status(now), t, true);
+  }
+
+  void poll_camera(double now_ms) {
+    if (!io.camera) return;
+    // Frames wait while the board is gone: the localizer can only place them between windows.
+    if (!board_gone && client) {
+      if (auto f = io.camera->poll(now_ms)) {
+        (void)localizer.on_image(f->t_ms, f->bgr);
+        if (recorder) recorder->add_frame(f->t_ms, f->bgr);
+        last_frame_ms = f->t_ms;
+        ++report.frames;
+      }
+    }
+    const bool fresh = now_ms - last_frame_ms <= config.camera_timeout_ms;
+    if (camera_fresh && !fresh && !board_gone) {
+      ++report.camera_losses;
+      log("omnilocd: camera stopped delivering (" + io.camera->describe() + "): odometry only");
+    } else if (!camera_fresh && fresh && report.camera_losses > 0) {
+      log("omnilocd: camera delivering again");
+    }
+    camera_fresh = fresh;
+  }
+
+  void status_tick(double now_ms, double start_ms) {
+    if (config.status_period_s <= 0 || now_ms < next_status_ms) return;
+    const double span_s = (now_ms - status_from_ms) / 1000.0;
+    StatusSnapshot s;
+    s.t_s = (now_ms - start_ms) / 1000.0;
+    s.status = status(now_ms);
+    s.x_cm = last_message.x_cm;
+    s.y_cm = last_message.y_cm;
+    s.yaw_deg = last_message.yaw_deg;
+    s.source = last_message.source;
+    s.match_error = last_message.match_error;
+    s.uncertainty_cm = last_message.uncertainty_cm;
+    s.windows_per_s = span_s > 0 ? static_cast<double>(report.windows - windows_at_status) / span_s : 0.0;
+    s.frames_per_s = span_s > 0 ? static_cast<double>(report.frames - frames_at_status) / span_s : 0.0;
+    s.published = publisher.sent();
+    s.send_failed = publisher.failed();
+    s.reconnects = report.reconnects;
+    log(status_line(s));
+    windows_at_status = report.windows;
+    frames_at_status = report.frames;
+    status_from_ms = now_ms;
+    next_status_ms = now_ms + config.status_period_s * 1000.0;
+  }
+
+  DaemonReport run(const volatile std::sig_atomic_t* stop) {
+    DaemonClock& clock = *io.clock;
+    const double start = clock.now_ms();
+    next_status_ms = start + config.status_period_s * 1000.0;
+    status_from_ms = start;
+    next_attempt_ms = start;
+    double next_degraded_ms = start;
+    for (;;) {
+      const double now = clock.now_ms();
+      if (stop && *stop) {
+        report.stop_reason = "signal";
+        break;
+      }
+      if (config.duration_s > 0 && now - start >= config.duration_s * 1000.0) {
+        report.stop_reason = "duration";
+        break;
+      }
+      if (!client) {
+        try_connect(now);
+        if (!client) {
+          if (ever_connected && now >= next_degraded_ms) {
+            publish(last_localized, DaemonStatus::kDegraded, now, false);
+            next_degraded_ms = now + kDegradedTickMs;
+          }
+          status_tick(now, start);
+          clock.wait_ms(kDegradedTickMs);
+          continue;
+        }
+      }
+      try {
+        if (const auto w = client->poll_telemetry(kTelemetryWait)) {
+          on_board_window(*w);
+        } else if (clock.now_ms() - last_window_clock_ms > kBoardSilentMs) {
+          throw TransportError(TransportErrorKind::kIo, "no telemetry for 250 ms");
+        }
+      } catch (const TransportError& e) {
+        lose_board(std::string(to_string(e.kind())) + ": " + e.what());
+        next_degraded_ms = clock.now_ms();
+      } catch (const BoardError& e) {
+        lose_board(e.what());
+        next_degraded_ms = clock.now_ms();
+      }
+      poll_camera(clock.now_ms());
+      status_tick(clock.now_ms(), start);
+    }
+    if (client) {
+      try {
+        client->set_streaming(false);
+      } catch (const std::exception& e) {
+        log(std::string("omnilocd: could not switch streaming off: ") + e.what());
+      }
+    }
+    if (recorder) recorder->close();
+    report.run_ms = clock.now_ms() - start;
+    report.localizer = localizer.stats();
+    report.published = publisher.sent();
+    report.send_failed = publisher.failed();
+    return report;
+  }
+};
+
+Daemon::Daemon(const DaemonConfig& config, const DaemonModels& models, DaemonIo io) {
+  validate_daemon_config(config, "daemon config");
+  impl_ = std::make_unique<Impl>(config, models, std::move(io));
+}
+
+Daemon::~Daemon() = default;
+
+DaemonReport Daemon::run(const volatile std::sig_atomic_t* stop) { return impl_->run(stop); }
+
+}  // namespace omniloc::daemon

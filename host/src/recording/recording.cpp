@@ -1,0 +1,393 @@
+// Recording directories (issue 7 contract): CSV and meta.json reading and writing.
+#include "omniloc/recording.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include <opencv2/core.hpp>
+#include <opencv2/core/persistence.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+namespace omniloc {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+[[noreturn]] void fail_at(const fs::path& file, int line, const std::string& why) {
+  throw RecordingError(file.string() + ":" + std::to_string(line) + ": " + why);
+}
+
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char ch : s) {
+    if (ch == ',') {
+      out.push_back(cur);
+      cur.clear();
+    } else {
+      cur.push_back(ch);
+    }
+  }
+  out.push_back(cur);
+  return out;
+}
+
+double parse_double(const std::string& s, const fs::path& file, int line, const std::string& column) {
+  double v = 0.0;
+  const char* b = s.data();
+  const char* e = s.data() + s.size();
+  if (s == "nan") return std::numeric_limits<double>::quiet_NaN();
+  if (s == "inf") return std::numeric_limits<double>::infinity();
+  auto [p, ec] = std::from_chars(b, e, v);
+  if (s.empty() || ec != std::errc() || p != e)
+    fail_at(file, line, "column '" + column + "': not a number ('" + s + "')");
+  return v;
+}
+
+long long parse_int(const std::string& s, const fs::path& file, int line, const std::string& column) {
+  long long v = 0;
+  const char* b = s.data();
+  const char* e = s.data() + s.size();
+  auto [p, ec] = std::from_chars(b, e, v);
+  if (s.empty() || ec != std::errc() || p != e)
+    fail_at(file, line, "column '" + column + "': not an integer ('" + s + "')");
+  return v;
+}
+
+/// Reads a CSV with exactly the given header; calls row(fields, line) for each data line.
+template <typename RowFn>
+void read_csv(const fs::path& file, const std::vector<std::string>& header, RowFn row) {
+  std::ifstream in(file);
+  if (!in) throw RecordingError(file.string() + ": cannot open (missing file?)");
+  std::string text;
+  int line = 0;
+  bool seen_header = false;
+  while (std::getline(in, text)) {
+    ++line;
+    if (!text.empty() && text.back() == '\r') text.pop_back();
+    if (!seen_header) {
+      std::string want;
+      for (std::size_t i = 0; i < header.size(); ++i) want += (i ? "," : "") + header[i];
+      if (text != want) fail_at(file, line, "header must be '" + want + "' (got '" + text + "')");
+      seen_header = true;
+      continue;
+    }
+    if (text.empty()) continue;
+    const auto f = split(text);
+    if (f.size() != header.size())
+      fail_at(file, line, "expected " + std::to_string(header.size()) + " columns, got " + std::to_string(f.size()));
+    row(f, line);
+  }
+  if (!seen_header) fail_at(file, 1, "empty file (no header)");
+}
+
+void check_time(double t, double prev, bool have_prev, const fs::path& file, int line) {
+  if (!std::isfinite(t)) fail_at(file, line, "column 't_ms': not finite");
+  if (have_prev && !(t > prev)) {
+    std::ostringstream os;
+    os << "column 't_ms': times must increase (" << t << " after " << prev << ")";
+    fail_at(file, line, os.str());
+  }
+}
+
+double finite(double v, const fs::path& file, int line, const std::string& column) {
+  if (!std::isfinite(v)) fail_at(file, line, "column '" + column + "': not finite");
+  return v;
+}
+
+}  // namespace
+
+std::vector<EncoderWindow> read_encoders_csv(const fs::path& path) {
+  std::vector<EncoderWindow> out;
+  read_csv(path, {"t_ms", "seq", "c1", "c2", "c3", "c4", "gyro_yaw_deg"}, [&](const auto& f, int line) {
+    EncoderWindow w;
+    w.t_end_ms = parse_double(f[0], path, line, "t_ms");
+    check_time(w.t_end_ms, out.empty() ? 0.0 : out.back().t_end_ms, !out.empty(), path, line);
+    const long long seq = parse_int(f[1], path, line, "seq");
+    if (seq < 0 || seq > 0xFFFFFFFFLL) fail_at(path, line, "column 'seq': out of range");
+    w.seq = static_cast<std::uint32_t>(seq);
+    for (int i = 0; i < 4; ++i) {
+      const std::string col = "c" + std::to_string(i + 1);
+      const long long c = parse_int(f[2 + i], path, line, col);
+      if (c < std::numeric_limits<std::int32_t>::min() || c > std::numeric_limits<std::int32_t>::max())
+        fail_at(path, line, "column '" + col + "': out of range");
+      w.counts[i] = static_cast<std::int32_t>(c);
+    }
+    w.gyro_yaw_deg = finite(parse_double(f[6], path, line, "gyro_yaw_deg"), path, line, "gyro_yaw_deg");
+    out.push_back(w);
+  });
+  return out;
+}
+
+std::vector<FrameRef> read_camera_csv(const fs::path& path) {
+  std::vector<FrameRef> out;
+  read_csv(path, {"t_ms", "file"}, [&](const auto& f, int line) {
+    FrameRef r;
+    r.t_ms = parse_double(f[0], path, line, "t_ms");
+    check_time(r.t_ms, out.empty() ? 0.0 : out.back().t_ms, !out.empty(), path, line);
+    if (f[1].empty()) fail_at(path, line, "column 'file': empty");
+    r.file = f[1];
+    out.push_back(r);
+  });
+  return out;
+}
+
+std::vector<TruthSample> read_truth_csv(const fs::path& path) {
+  std::vector<TruthSample> out;
+  read_csv(path, {"t_ms", "x_cm", "y_cm", "yaw_deg"}, [&](const auto& f, int line) {
+    TruthSample s;
+    s.t_ms = parse_double(f[0], path, line, "t_ms");
+    check_time(s.t_ms, out.empty() ? 0.0 : out.back().t_ms, !out.empty(), path, line);
+    s.pose.x_cm = finite(parse_double(f[1], path, line, "x_cm"), path, line, "x_cm");
+    s.pose.y_cm = finite(parse_double(f[2], path, line, "y_cm"), path, line, "y_cm");
+    s.pose.yaw_deg = finite(parse_double(f[3], path, line, "yaw_deg"), path, line, "yaw_deg");
+    out.push_back(s);
+  });
+  return out;
+}
+
+std::vector<LocalizedPose> read_poses_csv(const fs::path& path) {
+  std::vector<LocalizedPose> out;
+  read_csv(path, {"t_ms", "x_cm", "y_cm", "yaw_deg", "source", "match_error", "search_range_cm"},
+           [&](const auto& f, int line) {
+             LocalizedPose p;
+             p.t_ms = parse_double(f[0], path, line, "t_ms");
+             p.pose.x_cm = parse_double(f[1], path, line, "x_cm");
+             p.pose.y_cm = parse_double(f[2], path, line, "y_cm");
+             p.pose.yaw_deg = parse_double(f[3], path, line, "yaw_deg");
+             const auto s = parse_pose_source(f[4]);
+             if (!s) fail_at(path, line, "column 'source': unknown source '" + f[4] + "'");
+             p.source = *s;
+             p.match_error = parse_double(f[5], path, line, "match_error");
+             p.search_range_cm = parse_double(f[6], path, line, "search_range_cm");
+             out.push_back(p);
+           });
+  return out;
+}
+
+RecordingMeta read_meta(const fs::path& meta_json) {
+  const std::string src = meta_json.string();
+  if (!fs::exists(meta_json)) throw RecordingError(src + ": missing");
+  cv::FileStorage fs;
+  try {
+    if (!fs.open(src, cv::FileStorage::READ | cv::FileStorage::FORMAT_JSON)) throw RecordingError(src + ": cannot open");
+  } catch (const cv::Exception& e) {
+    throw RecordingError(src + ": not valid JSON (" + e.msg + ")");
+  }
+  const cv::FileNode root = fs.root();
+  if (!root.isMap()) throw RecordingError(src + ": the top level must be a JSON object");
+  for (auto it = root.begin(); it != root.end(); ++it) {
+    const std::string key = (*it).name();
+    if (key != "field" && key != "camera" && key != "robot" && key != "initial_pose")
+      throw RecordingError(src + ": unknown key '" + key + "'");
+  }
+  RecordingMeta m;
+  const cv::FileNode field = root["field"];
+  if (field.empty() || !field.isString() || static_cast<std::string>(field).empty())
+    throw RecordingError(src + ": field 'field': missing or not a string (a geometry name or path)");
+  m.field = static_cast<std::string>(field);
+  const cv::FileNode cam = root["camera"];
+  if (cam.empty() || !cam.isMap()) throw RecordingError(src + ": field 'camera': missing or not an object");
+  try {
+    m.camera = camera_from_json(cam, src + ": camera");
+  } catch (const RecordingError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw RecordingError(e.what());
+  }
+  const cv::FileNode robot = root["robot"];
+  if (robot.empty() || !robot.isMap()) throw RecordingError(src + ": field 'robot': missing or not an object");
+  try {
+    m.robot = parse_robot_config(robot, src + ": robot");
+  } catch (const std::exception& e) {
+    throw RecordingError(e.what());
+  }
+  const cv::FileNode ip = root["initial_pose"];
+  if (!ip.empty() && !ip.isNone()) {
+    if (!ip.isMap()) throw RecordingError(src + ": field 'initial_pose': must be an object {x_cm, y_cm, yaw_deg}");
+    Pose2 p;
+    for (const auto& [key, out] : {std::pair<const char*, double*>{"x_cm", &p.x_cm}, {"y_cm", &p.y_cm},
+                                   {"yaw_deg", &p.yaw_deg}}) {
+      const cv::FileNode n = ip[key];
+      if (n.empty() || (!n.isReal() && !n.isInt()) || !std::isfinite(static_cast<double>(n)))
+        throw RecordingError(src + ": field 'initial_pose." + key + "': missing or not a finite number");
+      *out = static_cast<double>(n);
+    }
+    for (auto it = ip.begin(); it != ip.end(); ++it) {
+      const std::string key = (*it).name();
+      if (key != "x_cm" && key != "y_cm" && key != "yaw_deg")
+        throw RecordingError(src + ": field 'initial_pose." + key + "': unknown key");
+    }
+    m.initial_pose = p;
+  }
+  return m;
+}
+
+Recording load_recording(const fs::path& dir) {
+  if (!fs::is_directory(dir)) throw RecordingError(dir.string() + ": not a recording directory");
+  Recording r;
+  r.dir = dir;
+  r.meta = read_meta(dir / "meta.json");
+  r.windows = read_encoders_csv(dir / "encoders.csv");
+  r.frames = read_camera_csv(dir / "camera.csv");
+  for (std::size_t i = 0; i < r.frames.size(); ++i)
+    if (!fs::exists(dir / r.frames[i].file))
+      fail_at(dir / "camera.csv", static_cast<int>(i) + 2, "image '" + r.frames[i].file + "' does not exist");
+  if (fs::exists(dir / "truth.csv")) r.truth = read_truth_csv(dir / "truth.csv");
+  return r;
+}
+
+cv::Mat load_frame(const Recording& rec, std::size_t i) {
+  const FrameRef& f = rec.frames.at(i);
+  const fs::path p = rec.dir / f.file;
+  const std::string where = (rec.dir / "camera.csv").string() + ":" + std::to_string(i + 2) + ": ";
+  cv::Mat img = cv::imread(p.string(), cv::IMREAD_COLOR);
+  if (img.empty()) throw RecordingError(where + "cannot read image '" + p.string() + "'");
+  if (img.cols != rec.meta.camera.width_px || img.rows != rec.meta.camera.height_px) {
+    std::ostringstream os;
+    os << where << "image '" << p.string() << "' is " << img.cols << " x " << img.rows << ", the camera is "
+       << rec.meta.camera.width_px << " x " << rec.meta.camera.height_px;
+    throw RecordingError(os.str());
+  }
+  return img;
+}
+
+std::optional<Pose2> truth_at(const std::vector<TruthSample>& truth, double t_ms) {
+  if (truth.empty() || t_ms < truth.front().t_ms || t_ms > truth.back().t_ms) return std::nullopt;
+  auto hi = std::lower_bound(truth.begin(), truth.end(), t_ms,
+                             [](const TruthSample& s, double t) { return s.t_ms < t; });
+  if (hi->t_ms == t_ms || hi == truth.begin()) return hi->pose;
+  const auto lo = std::prev(hi);
+  const double f = (t_ms - lo->t_ms) / (hi->t_ms - lo->t_ms);
+  return Pose2{lo->pose.x_cm + f * (hi->pose.x_cm - lo->pose.x_cm), lo->pose.y_cm + f * (hi->pose.y_cm - lo->pose.y_cm),
+               wrap_deg(lo->pose.yaw_deg + f * angle_diff_deg(hi->pose.yaw_deg, lo->pose.yaw_deg))};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writing. JSON is written by hand (it is only read back with cv::FileStorage).
+
+namespace {
+
+std::FILE* open_write(const fs::path& p) {
+  std::FILE* f = std::fopen(p.string().c_str(), "w");
+  if (!f) throw RecordingError(p.string() + ": cannot create");
+  return f;
+}
+
+void close_file(std::FILE*& f, const fs::path& p) {
+  if (!f) return;
+  const bool bad = std::ferror(f) != 0;
+  const int rc = std::fclose(f);
+  f = nullptr;
+  if (bad || rc != 0) throw RecordingError(p.string() + ": write failed");
+}
+
+}  // namespace
+
+void write_meta(const fs::path& meta_json, const RecordingMeta& m) {
+  std::ostringstream os;
+  os.precision(17);
+  os << "{\n  \"field\": \"" << m.field << "\",\n  \"camera\": {\n";
+  const CameraModel& c = m.camera;
+  os << "    \"width\": " << c.width_px << ",\n    \"height\": " << c.height_px << ",\n";
+  os << "    \"center_px\": [" << c.center_px.x() << ", " << c.center_px.y() << "],\n    \"radius_lut\": [";
+  for (std::size_t i = 0; i < c.radius_lut.size(); ++i)
+    os << (i ? ", " : "") << "[" << c.radius_lut[i].radius_px << ", " << c.radius_lut[i].ground_cm << "]";
+  os << "],\n    \"yaw_offset_deg\": " << c.yaw_offset_deg << ",\n    \"mirrored\": " << (c.mirrored ? "true" : "false");
+  if (c.body_radius_px > 0.0 || !c.masts.empty()) {
+    os << ",\n    \"mask\": {\"body_radius_px\": " << c.body_radius_px << ", \"masts\": [";
+    for (std::size_t i = 0; i < c.masts.size(); ++i)
+      os << (i ? ", " : "") << "{\"bearing_deg\": " << c.masts[i].bearing_deg
+         << ", \"half_width_deg\": " << c.masts[i].half_width_deg << "}";
+    os << "]}";
+  }
+  const RobotConfig& r = m.robot;
+  os << "\n  },\n  \"robot\": {\"wheel_radius_cm\": " << r.wheel_radius_cm << ", \"center_to_wheel_cm\": "
+     << r.center_to_wheel_cm << ", \"motor_angle_deg\": " << r.motor_angle_deg << ", \"gear_ratio\": " << r.gear_ratio
+     << ", \"counts_per_rev\": " << r.counts_per_rev << ", \"decoding\": " << r.decoding << "}";
+  if (m.initial_pose)
+    os << ",\n  \"initial_pose\": {\"x_cm\": " << m.initial_pose->x_cm << ", \"y_cm\": " << m.initial_pose->y_cm
+       << ", \"yaw_deg\": " << m.initial_pose->yaw_deg << "}";
+  os << "\n}\n";
+  std::FILE* f = open_write(meta_json);
+  const std::string s = os.str();
+  std::fwrite(s.data(), 1, s.size(), f);
+  close_file(f, meta_json);
+}
+
+RecordingWriter::RecordingWriter(const fs::path& dir, const RecordingMeta& meta, bool with_truth) : dir_(dir) {
+  std::error_code ec;
+  fs::create_directories(dir / "frames", ec);
+  if (ec) throw RecordingError(dir.string() + ": cannot create (" + ec.message() + ")");
+  write_meta(dir / "meta.json", meta);
+  encoders_ = open_write(dir / "encoders.csv");
+  std::fputs("t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n", encoders_);
+  camera_ = open_write(dir / "camera.csv");
+  std::fputs("t_ms,file\n", camera_);
+  if (with_truth) {
+    truth_ = open_write(dir / "truth.csv");
+    std::fputs("t_ms,x_cm,y_cm,yaw_deg\n", truth_);
+  } else {
+    fs::remove(dir / "truth.csv", ec);
+  }
+}
+
+RecordingWriter::~RecordingWriter() {
+  for (std::FILE* f : {encoders_, camera_, truth_})
+    if (f) std::fclose(f);
+}
+
+void RecordingWriter::add_window(const EncoderWindow& w) {
+  std::fprintf(encoders_, "%.6f,%u,%d,%d,%d,%d,%.6f\n", w.t_end_ms, w.seq, w.counts[0], w.counts[1], w.counts[2],
+               w.counts[3], w.gyro_yaw_deg);
+}
+
+void RecordingWriter::add_frame(double t_ms, const cv::Mat& bgr) {
+  char name[32];
+  std::snprintf(name, sizeof name, "frames/%06d.png", frame_count_++);
+  const fs::path p = dir_ / name;
+  if (!cv::imwrite(p.string(), bgr)) throw RecordingError(p.string() + ": cannot write image");
+  std::fprintf(camera_, "%.6f,%s\n", t_ms, name);
+}
+
+void RecordingWriter::add_truth(double t_ms, const Pose2& pose) {
+  if (!truth_) throw RecordingError(dir_.string() + ": recording opened without truth");
+  std::fprintf(truth_, "%.6f,%.6f,%.6f,%.6f\n", t_ms, pose.x_cm, pose.y_cm, pose.yaw_deg);
+}
+
+void RecordingWriter::close() {
+  close_file(encoders_, dir_ / "encoders.csv");
+  close_file(camera_, dir_ / "camera.csv");
+  close_file(truth_, dir_ / "truth.csv");
+}
+
+PosesCsvWriter::PosesCsvWriter(const fs::path& path) : path_(path), file_(open_write(path)) {
+  std::fputs("t_ms,x_cm,y_cm,yaw_deg,source,match_error,search_range_cm\n", file_);
+}
+
+PosesCsvWriter::~PosesCsvWriter() {
+  if (file_) std::fclose(file_);
+}
+
+void PosesCsvWriter::write(const LocalizedPose& p) {
+  // inf/nan are spelled "inf"/"nan" (read_poses_csv accepts them): no image result yet.
+  auto num = [](double v, char* buf, std::size_t n) {
+    if (std::isnan(v)) std::snprintf(buf, n, "nan");
+    else if (std::isinf(v)) std::snprintf(buf, n, "inf");
+    else std::snprintf(buf, n, "%.3f", v);
+  };
+  char e[32], r[32];
+  num(p.match_error, e, sizeof e);
+  num(p.search_range_cm, r, sizeof r);
+  std::fprintf(file_, "%.3f,%.3f,%.3f,%.3f,%s,%s,%s\n", p.t_ms, p.pose.x_cm, p.pose.y_cm, p.pose.yaw_deg,
+               pose_source_name(p.source), e, r);
+}
+
+void PosesCsvWriter::close() { close_file(file_, path_); }
+
+}  // namespace omniloc
