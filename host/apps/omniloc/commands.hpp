@@ -14,5 +14,8 @@ int cmd_version(std::span<const std::string_view> args);
 int cmd_regmap(std::span<const std::string_view> args);
 int cmd_probe(std::span<const std::string_view> args);
 int cmd_builddb(std::span<const std::string_view> args);
+int cmd_replay(std::span<const std::string_view> args);
+int cmd_bench(std::span<const std::string_view> args);
+int cmd_demo(std::span<const std::string_view> args);
 
 }  // namespace omniloc::cli

@@ -19,6 +19,9 @@ constexpr Entry kCommands[] = {
     {"regmap", "print the register map the host was built against", omniloc::cli::cmd_regmap},
     {"probe", "find omniloc boards on USB, print ID/version/status and live counts", omniloc::cli::cmd_probe},
     {"builddb", "build the vision feature database (field x camera x grid) with progress", omniloc::cli::cmd_builddb},
+    {"replay", "run the localizer over a recording directory, write poses.csv, errors vs truth", omniloc::cli::cmd_replay},
+    {"bench", "`bench paper`: the paper's Tables 1-8 reproduced in simulation", omniloc::cli::cmd_bench},
+    {"demo", "the whole system on the simulated robot: 30 s drive, error table, paths.png", omniloc::cli::cmd_demo},
 };
 
 void usage(std::FILE* out) {

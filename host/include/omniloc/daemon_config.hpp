@@ -37,7 +37,7 @@ struct DaemonConfig {
   double status_period_s = 1.0;        ///< status line on stderr; 0 disables it
   double duration_s = 0.0;             ///< stop after this much (daemon) time; 0: until SIGINT/SIGTERM
   // --- simulation (board "sim" / camera "sim") ---
-  std::string sim_trajectory = "boundary_tour";  ///< sim/world trajectory name
+  std::string sim_trajectory = "figure_eight";  ///< sim/world trajectory name
   std::uint64_t sim_seed = 1;
 };
 

@@ -60,7 +60,7 @@ struct LocalizerConfig {
   double history_ms = 1000.0;      ///< odometry history kept for late frames; older frames are dropped
   int scan_rays_per_degree = 4;    ///< on_image(): robot-frame scan step (for re-rotating by yaw)
   // --- kFull only ---
-  Refinement refinement = Refinement::kInterpolate;
+  Refinement refinement = Refinement::kRayCast;  ///< kRayCast: E_TH judged at the refined position
   double min_range_cm = 10.0;      ///< local search at least this wide (0 would pin to one grid point)
   bool refuse_ambiguous = true;    ///< a global result flagged ambiguous is never accepted
   double image_sigma_cm = 2.0;     ///< 1-sigma of a good image position (uncertainty model)

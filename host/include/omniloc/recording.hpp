@@ -12,6 +12,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -20,6 +21,8 @@
 #include <opencv2/core/mat.hpp>
 
 #include "omniloc/camera.hpp"
+#include "omniloc/feature_db.hpp"
+#include "omniloc/field.hpp"
 #include "omniloc/conventions.hpp"
 #include "omniloc/localizer.hpp"
 #include "omniloc/odometry.hpp"
@@ -115,5 +118,39 @@ class PosesCsvWriter {
   std::filesystem::path path_;
   std::FILE* file_ = nullptr;
 };
+
+/// The database for a field and camera from `cache_path` if it holds the right one, else built
+/// (10 cm grid) and saved there (the folder is created). `log` gets one line on what was done.
+[[nodiscard]] FeatureDb load_or_build_feature_db(const FieldGeometry& field, const CameraModel& camera,
+                                                 const std::filesystem::path& cache_path,
+                                                 const std::function<void(const std::string&)>& log = {});
+/// A cache file name for a field and camera: featuredb-<field fingerprint>-<camera fingerprint>.bin.
+[[nodiscard]] std::string feature_db_cache_name(const FieldGeometry& field, const CameraModel& camera);
+
+/// Mean, median, 95th percentile (nearest rank) and maximum of a set of errors.
+struct ErrorSummary {
+  std::size_t count = 0;
+  double mean = 0.0;
+  double median = 0.0;
+  double p95 = 0.0;
+  double max = 0.0;
+};
+/// Throws std::invalid_argument for an empty set.
+[[nodiscard]] ErrorSummary summarize_errors(std::vector<double> errors);
+
+struct ReplayResult {
+  std::vector<LocalizedPose> poses;  ///< one per encoder window
+  LocalizerStats stats;
+  std::size_t poses_without_fix = 0;  ///< source "none" (left out of the error figures)
+  std::optional<ErrorSummary> position_error_cm;  ///< with truth.csv, over poses that have a fix
+  std::optional<ErrorSummary> yaw_error_deg;
+};
+
+/// Runs the localizer over a recording: windows and frames merged by time (a frame before the
+/// window that covers it), one pose per window; errors against truth.csv when present.
+/// `progress(done, total)` is called now and then with events processed.
+[[nodiscard]] ReplayResult replay_recording(const Recording& recording, const LocalizerConfig& config,
+                                            const FieldGeometry& field, const FeatureDb& db,
+                                            const std::function<void(std::size_t, std::size_t)>& progress = {});
 
 }  // namespace omniloc

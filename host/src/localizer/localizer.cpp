@@ -194,6 +194,11 @@ FrameReport Localizer::process(double t_ms, const BearingScan& bearings) {
     if (config_.refinement != Refinement::kNone && m.cell >= 0) interpolate_match(db_, s, m);
     if (config_.refinement == Refinement::kRayCast && m.cell >= 0) refine_match(field_, camera_, s, m, match_options_);
   };
+  // With ray-cast refinement the error is judged at the refined position: the error surface is
+  // so steep that a grid point 5 cm away from the robot often scores above E_TH.
+  auto judged_error = [&](const MatchResult& m) {
+    return config_.refinement == Refinement::kRayCast ? m.refined_error : m.error;
+  };
   auto relocalize = [&](const Eigen::Vector2d& p, double yaw_deg, double error) {
     const Pose2 pose{p.x(), p.y(), yaw_deg};
     reset_origin_at(t_ms, pose, config_.image_sigma_cm, config_.image_sigma_yaw_deg);
@@ -214,10 +219,12 @@ FrameReport Localizer::process(double t_ms, const BearingScan& bearings) {
     if (full && !config_.gyro_yaw_known) {
       PoseMatch pm = global_search_any_yaw(db_, field_, camera_, bearings, 2.0, match_options_);
       *yaw_out = pm.yaw_deg;
+      pm.match.error = judged_error(pm.match);
       return pm.match;
     }
     MatchResult m = global_search(db_, scan, match_options_);
     refine(m, scan);
+    m.error = judged_error(m);
     *yaw_out = yaw;
     return m;
   };
@@ -248,6 +255,7 @@ FrameReport Localizer::process(double t_ms, const BearingScan& bearings) {
   if (full) range = std::max(range, config_.min_range_cm);
   MatchResult m = local_search(db_, scan, xy(predicted), range, match_options_);
   refine(m, scan);
+  m.error = judged_error(m);
   rep.position_cm = m.position_cm;
   rep.yaw_deg = yaw;
   rep.error = m.error;

@@ -112,7 +112,8 @@ std::vector<EncoderWindow> read_encoders_csv(const fs::path& path) {
     if (seq < 0 || seq > 0xFFFFFFFFLL) fail_at(path, line, "column 'seq': out of range");
     w.seq = static_cast<std::uint32_t>(seq);
     for (int i = 0; i < 4; ++i) {
-      const std::string col = "c" + std::to_string(i + 1);
+      static const char* const kColumns[4] = {"c1", "c2", "c3", "c4"};
+      const std::string col = kColumns[i];
       const long long c = parse_int(f[2 + i], path, line, col);
       if (c < std::numeric_limits<std::int32_t>::min() || c > std::numeric_limits<std::int32_t>::max())
         fail_at(path, line, "column '" + col + "': out of range");

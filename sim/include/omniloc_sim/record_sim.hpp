@@ -1,0 +1,56 @@
+// A simulated run as the localizer sees it: encoder windows from the World (100 Hz) and camera
+// frames rendered at the true pose (60 Hz, taken at physics-step ends), delivered in time order;
+// and a writer that stores such a run as a recording directory (recording.hpp) for `omniloc replay`.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core/mat.hpp>
+
+#include "omniloc/conventions.hpp"
+#include "omniloc/localizer.hpp"
+#include "omniloc_sim/renderer.hpp"
+#include "omniloc_sim/world.hpp"
+
+namespace omniloc::sim {
+
+struct SimRunOptions {
+  double frame_period_ms = 1000.0 / 60.0;
+  double first_frame_ms = 5.0;     ///< nominal time of the first frame
+  RenderOptions render;            ///< noise, obstacles...; the seed is advanced per frame
+  double max_duration_s = 0.0;     ///< 0: until the trajectory (and its final wait) is over
+};
+
+struct SimFrame {
+  double t_ms = 0.0;   ///< when the image was taken (the first physics-step end at or after the nominal time)
+  Pose2 truth;         ///< true pose then (yaw wrapped)
+  cv::Mat bgr;
+};
+
+/// Runs `world` to the end, calling on_frame and on_window in time order (a frame at t comes
+/// before the window whose end is >= t). Either callback may be empty (frames are then not rendered).
+void run_simulation(World& world, const OmniRenderer& renderer, const SimRunOptions& options,
+                    const std::function<void(const SimWindow&)>& on_window,
+                    const std::function<void(const SimFrame&)>& on_frame);
+
+/// Writes the run as a recording directory with truth.csv (one truth row per window). meta.json
+/// names `field_name`, the renderer's camera, the world's robot and, if given, initial_pose.
+void record_simulation(const std::filesystem::path& dir, World& world, const OmniRenderer& renderer,
+                       const SimRunOptions& options, const std::string& field_name,
+                       const std::optional<Pose2>& initial_pose);
+
+/// A simulated run fed through a localizer: per window, the truth and the localizer's pose.
+struct LocalizedRun {
+  std::vector<SimWindow> windows;
+  std::vector<LocalizedPose> poses;   ///< poses[i] answers windows[i]
+  std::vector<FrameReport> frames;    ///< every frame's outcome, in processing order
+  std::vector<SimFrame> frame_truth;  ///< time and truth of each frame (images not kept)
+};
+[[nodiscard]] LocalizedRun localize_simulation(World& world, const OmniRenderer& renderer,
+                                               const SimRunOptions& options, Localizer& localizer);
+
+}  // namespace omniloc::sim

@@ -1,0 +1,303 @@
+// omnilocd's core run in-process on a simulated robot: the world simulator drives the C++ reference
+// board (the golden model of the board's protocol, sim/include/omniloc_sim/reference_board.hpp) behind
+// a Transport, the renderer is the camera, and the daemon's clock is the simulation's. One 7-second
+// run checks: poses reach a UDP socket on 127.0.0.1 and match truth; the board unplugged for 0.6 s
+// (the transport throws kDeviceGone) gives degraded poses, then a reconnect and good poses again; a
+// camera that stops gives odometry-only poses, flagged; the recording reads back with the
+// recording reader. (The Verilated board behind the same daemon is what `omnilocd --board sim` and
+// `make demo` run; this test program does not link it.)
+#include <gtest/gtest.h>
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/core/persistence.hpp>
+
+#include "omniloc/daemon.hpp"
+#include "omniloc/daemon_sim.hpp"
+#include "omniloc/recording.hpp"
+#include "omniloc_sim/reference_board.hpp"
+#include "omniloc_sim/trajectory.hpp"
+#include "omniloc_sim/world.hpp"
+
+namespace {
+
+using namespace omniloc;
+using namespace omniloc::daemon;
+
+constexpr double kWindowMs = 10.0;
+
+/// World + reference board + truth log, advanced by the daemon's clock. An "unplug" interval makes
+/// the link throw kDeviceGone (and loses what the board sends meanwhile, as a real unplug does).
+struct Rig {
+  sim::World world;
+  SimTruthLog log;
+  sim::ReferenceBoard board;
+  double now_ms = 0.0;
+  int windows_run = 0;
+  double unplug_from_ms = 1e300, unplug_to_ms = -1.0;
+
+  Rig(const sim::WorldConfig& wc, sim::Trajectory trajectory)
+      : world(wc, std::move(trajectory)),
+        board(sim::ReferenceBoardConfig{}, [this](std::uint32_t) {
+          const sim::SimWindow w = world.next_window();
+          // The window being captured ends at (windows_run) * 10 ms of board time.
+          log.add(windows_run * kWindowMs, w.truth, w.window.gyro_yaw_deg);
+          return w.window.counts;
+        }) {}
+
+  [[nodiscard]] bool unplugged() const { return now_ms >= unplug_from_ms && now_ms < unplug_to_ms; }
+
+  void advance_to(double t_ms) {
+    while ((windows_run + 1) * kWindowMs <= t_ms) {
+      ++windows_run;
+      board.run_windows(1);
+      if (unplugged()) {
+        std::uint8_t sink[512];
+        while (board.from_board(sink) > 0) {
+        }
+      }
+    }
+    now_ms = std::max(now_ms, t_ms);
+  }
+};
+
+class RigClock final : public DaemonClock {
+ public:
+  explicit RigClock(Rig& rig) : rig_(rig) {}
+  double now_ms() override { return rig_.now_ms; }
+  void wait_ms(double ms) override { rig_.advance_to(rig_.now_ms + ms); }
+
+ private:
+  Rig& rig_;
+};
+
+class RigTransport final : public Transport {
+ public:
+  explicit RigTransport(Rig& rig) : rig_(rig) {}
+  void write(std::span<const std::uint8_t> bytes) override {
+    check();
+    rig_.board.to_board(bytes);
+  }
+  std::size_t read(std::span<std::uint8_t> out, std::chrono::milliseconds timeout) override {
+    check();
+    const double deadline = rig_.now_ms + static_cast<double>(timeout.count());
+    for (;;) {
+      const std::size_t n = rig_.board.from_board(out);
+      if (n > 0) return n;
+      if (rig_.now_ms >= deadline) return 0;
+      // Bytes of a window come out when it is captured: jump to the next window edge (or deadline).
+      const double next = (rig_.windows_run + 1) * kWindowMs;
+      rig_.advance_to(std::min(next, deadline));
+      check();
+    }
+  }
+  [[nodiscard]] TransportStatus status() const override { return {true, false, "reference board (C++ model)", {}}; }
+  /// BoardClient's deadlines run on the simulation's clock, like SimTransport's.
+  [[nodiscard]] std::chrono::steady_clock::time_point now() const override {
+    return std::chrono::steady_clock::time_point(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+        std::chrono::duration<double, std::milli>(rig_.now_ms)));
+  }
+
+ private:
+  void check() const {
+    if (rig_.unplugged()) throw TransportError(TransportErrorKind::kDeviceGone, "simulated unplug");
+  }
+  Rig& rig_;
+};
+
+class Receiver {
+ public:
+  Receiver() {
+    fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    int big = 8 << 20;
+    ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &big, sizeof big);
+    if (::bind(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) return;
+    socklen_t len = sizeof a;
+    ::getsockname(fd_, reinterpret_cast<sockaddr*>(&a), &len);
+    port_ = ntohs(a.sin_port);
+  }
+  ~Receiver() { ::close(fd_); }
+  [[nodiscard]] int port() const { return port_; }
+  /// Everything queued now (the daemon has finished sending).
+  std::vector<std::string> drain() {
+    std::vector<std::string> out;
+    char buf[2048];
+    for (;;) {
+      const ssize_t n = ::recv(fd_, buf, sizeof buf, 0);
+      if (n <= 0) break;
+      out.emplace_back(buf, static_cast<std::size_t>(n));
+    }
+    return out;
+  }
+
+ private:
+  int fd_ = -1;
+  int port_ = 0;
+};
+
+struct Models {
+  DaemonModels m;
+  Models() {
+    DaemonConfig c;
+    m = load_models(c);
+  }
+};
+
+const DaemonModels& models() {
+  static const Models instance;  // built once per test program (a few seconds)
+  return instance.m;
+}
+
+sim::RenderOptions render_options(std::uint64_t seed) {
+  sim::RenderOptions o;
+  o.seed = seed;
+  return o;
+}
+
+double position_error(const Pose2& a, const Pose2& b) { return std::hypot(a.x_cm - b.x_cm, a.y_cm - b.y_cm); }
+
+TEST(DaemonSim, PublishesTrackedPosesSurvivesUnplugAndCameraStop) {
+  const std::uint64_t seed = 7;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  const auto& mod = models();
+  Rig rig(sim::WorldConfig::default_noise(mod.robot, seed), sim::make_trajectory("figure_eight", seed));
+  rig.unplug_from_ms = 2500.0;
+  rig.unplug_to_ms = 3100.0;
+  const double camera_stop_ms = 5500.0;
+
+  sim::OmniRenderer renderer(mod.field, mod.camera);
+  SimCamera camera(renderer, rig.log, 60.0, render_options(seed));
+  camera.stop_at(camera_stop_ms);
+  RigClock clock(rig);
+  Receiver rx;
+  ASSERT_GT(rx.port(), 0);
+
+  const auto rec_dir = std::filesystem::temp_directory_path() / ("omniloc_test_daemon_rec_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(rec_dir);
+  DaemonConfig cfg;
+  cfg.board = "sim";
+  cfg.camera = "sim";
+  cfg.udp_address = "127.0.0.1";
+  cfg.udp_port = rx.port();
+  cfg.duration_s = 7.0;
+  cfg.record_dir = rec_dir.string();
+  cfg.reconnect_period_ms = 200;
+
+  std::vector<PoseEvent> events;
+  std::vector<std::string> logs;
+  DaemonIo io;
+  io.clock = &clock;
+  io.open_board = [&rig]() -> std::unique_ptr<Transport> {
+    if (rig.unplugged()) throw TransportError(TransportErrorKind::kNotFound, "no board on the bus");
+    return std::make_unique<RigTransport>(rig);
+  };
+  io.camera = &camera;
+  io.extras = &rig.log;
+  io.on_pose = [&](const PoseEvent& e) { events.push_back(e); };
+  io.log = [&](const std::string& s) {
+    logs.push_back(s);
+    std::printf("%s\n", s.c_str());
+  };
+  Daemon d(cfg, mod, io);
+  volatile std::sig_atomic_t stop = 0;
+  const DaemonReport r = d.run(&stop);
+
+  // --- counts ---
+  EXPECT_EQ(r.stop_reason, "duration");
+  EXPECT_NEAR(r.run_ms, 7000.0, 30.0);
+  EXPECT_EQ(r.board_losses, 1u);
+  EXPECT_EQ(r.reconnects, 1u);
+  EXPECT_EQ(r.camera_losses, 1u);
+  // 7 s of 10 ms windows minus the 0.6 s unplugged (and reconnect latency up to one period).
+  EXPECT_GE(r.windows, 600u);
+  EXPECT_LE(r.windows, 640u);
+  EXPECT_GE(r.frames, 250u);  // 60 Hz until 5.5 s, none while unplugged
+  EXPECT_EQ(r.send_failed, 0u);
+  EXPECT_EQ(r.published, events.size());
+
+  // --- datagrams on loopback equal what was published, in order ---
+  const auto grams = rx.drain();
+  ASSERT_EQ(grams.size(), events.size()) << "datagrams lost on loopback";
+  for (std::size_t i = 0; i < grams.size(); i += 97) {
+    cv::FileStorage fs(grams[i], cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_JSON);
+    EXPECT_EQ(static_cast<std::uint64_t>(fs["seq"].real()), events[i].message.seq);
+    EXPECT_NEAR(fs["x_cm"].real(), events[i].message.x_cm, 5e-4);
+    EXPECT_NEAR(fs["y_cm"].real(), events[i].message.y_cm, 5e-4);
+    EXPECT_EQ(fs["status"].string(), std::string(to_string(events[i].message.status)));
+  }
+
+  // --- phases ---
+  int ok_checked = 0, degraded = 0, odo_only = 0;
+  double max_err_tracking = 0, max_err_odo = 0, max_yaw_err = 0;
+  bool saw_ok_after_reconnect = false;
+  for (const auto& e : events) {
+    const double t = e.message.t_ms;
+    const auto st = e.message.status;
+    if (t >= rig.unplug_from_ms + 20 && t < rig.unplug_to_ms) {
+      EXPECT_EQ(st, DaemonStatus::kDegraded) << "t=" << t;
+      EXPECT_FALSE(e.from_window);
+      ++degraded;
+      continue;
+    }
+    if (t > rig.unplug_to_ms + 1000 && t < camera_stop_ms) {
+      EXPECT_EQ(st, DaemonStatus::kOk) << "t=" << t;
+      saw_ok_after_reconnect = saw_ok_after_reconnect || st == DaemonStatus::kOk;
+    }
+    if (t > camera_stop_ms + 600) {
+      EXPECT_EQ(st, DaemonStatus::kOdometryOnly) << "t=" << t;
+      ++odo_only;
+    }
+    if (!e.truth || !e.from_window) continue;
+    const double err = position_error(e.localized.pose, *e.truth);
+    const double yaw_err = std::abs(angle_diff_deg(e.localized.pose.yaw_deg, e.truth->yaw_deg));
+    if (st == DaemonStatus::kOk && (t > 1500 && t < rig.unplug_from_ms)) {
+      max_err_tracking = std::max(max_err_tracking, err);
+      max_yaw_err = std::max(max_yaw_err, yaw_err);
+      ++ok_checked;
+    }
+    if (st == DaemonStatus::kOk && t > rig.unplug_to_ms + 1000 && t < camera_stop_ms) {
+      max_err_tracking = std::max(max_err_tracking, err);
+      max_yaw_err = std::max(max_yaw_err, yaw_err);
+      ++ok_checked;
+    }
+    if (st == DaemonStatus::kOdometryOnly && t > camera_stop_ms) max_err_odo = std::max(max_err_odo, err);
+    if (std::getenv("DAEMON_SIM_TRACE") && static_cast<long>(t) % 100 < 10)
+      std::printf("t=%.0f %s src=%s err=%.2f true=(%.1f,%.1f,%.1f) est=(%.1f,%.1f,%.1f)\n", t,
+                  std::string(to_string(st)).c_str(), e.message.source.c_str(), err, e.truth->x_cm, e.truth->y_cm,
+                  e.truth->yaw_deg, e.localized.pose.x_cm, e.localized.pose.y_cm, e.localized.pose.yaw_deg);
+  }
+  std::printf("checked %d ok poses: max error %.2f cm, yaw %.2f deg; %d degraded; %d odometry-only, max error %.2f cm\n",
+              ok_checked, max_err_tracking, max_yaw_err, degraded, odo_only, max_err_odo);
+  EXPECT_TRUE(saw_ok_after_reconnect);
+  EXPECT_GE(ok_checked, 200);
+  EXPECT_LT(max_err_tracking, 10.0);
+  EXPECT_LT(max_yaw_err, 3.0);
+  EXPECT_GE(degraded, 50);  // one per 10 ms while unplugged
+  EXPECT_GE(odo_only, 80);
+  EXPECT_LT(max_err_odo, 15.0);  // 1.5 s of dead reckoning from a good fix
+
+  // --- the recording reads back with the recording reader ---
+  const Recording rec = load_recording(rec_dir);
+  EXPECT_EQ(rec.windows.size(), r.windows);
+  EXPECT_EQ(rec.frames.size(), r.frames);
+  EXPECT_EQ(rec.truth.size(), r.windows);
+  EXPECT_EQ(rec.meta.field, "fira-robosot");
+  std::filesystem::remove_all(rec_dir);
+}
+
+}  // namespace

@@ -1,0 +1,229 @@
+// Recording directories (issue 7 contract): write/read round trip, and clear errors naming the
+// file and line for malformed or missing files. Also the error summary used by replay.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "omniloc/recording.hpp"
+
+namespace omniloc {
+namespace {
+
+namespace fs = std::filesystem;
+
+class RecordingFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("omniloc_test_recording_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    meta_.field = "fira-robosot";
+    meta_.camera = load_camera("default");
+    meta_.robot = load_named_robot_config("default");
+    meta_.robot.gear_ratio = 24.0;
+    meta_.initial_pose = Pose2{123.5, 234.25, -45.5};
+    RecordingWriter w(dir_, meta_, true);
+    for (int i = 0; i < 5; ++i) {
+      EncoderWindow e;
+      e.seq = static_cast<std::uint32_t>(100 + i);
+      e.t_end_ms = 10.0 * (i + 1);
+      e.counts = {i, -2 * i, 300 + i, -70000};
+      e.gyro_yaw_deg = -45.5 + 0.25 * i;
+      w.add_window(e);
+      w.add_truth(e.t_end_ms, Pose2{123.5 + i, 234.25, -45.5 + 0.25 * i});
+    }
+    for (int i = 0; i < 2; ++i) {
+      cv::Mat img(meta_.camera.height_px, meta_.camera.width_px, CV_8UC3, cv::Scalar(10 * i, 100, 50));
+      w.add_frame(5.0 + 16.5 * i, img);
+    }
+    w.close();
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  void write(const std::string& name, const std::string& text) {
+    std::ofstream(dir_ / name) << text;
+  }
+  /// The message of the RecordingError that load_recording throws ("" if none).
+  std::string load_error() {
+    try {
+      (void)load_recording(dir_);
+    } catch (const RecordingError& e) {
+      return e.what();
+    }
+    return "";
+  }
+  void expect_error(const std::string& file, int line, const std::string& needle) {
+    const std::string e = load_error();
+    const std::string where = (dir_ / file).string() + (line > 0 ? ":" + std::to_string(line) + ":" : "");
+    EXPECT_NE(e.find(where), std::string::npos) << "want '" << where << "' in: " << e;
+    EXPECT_NE(e.find(needle), std::string::npos) << "want '" << needle << "' in: " << e;
+  }
+
+  fs::path dir_;
+  RecordingMeta meta_;
+};
+
+TEST_F(RecordingFiles, RoundTrip) {
+  const Recording r = load_recording(dir_);
+  EXPECT_EQ(r.meta.field, "fira-robosot");
+  EXPECT_EQ(r.meta.camera.fingerprint(), meta_.camera.fingerprint());
+  EXPECT_EQ(r.meta.robot.gear_ratio, 24.0);
+  EXPECT_EQ(r.meta.robot.counts_per_rev, meta_.robot.counts_per_rev);
+  ASSERT_TRUE(r.meta.initial_pose.has_value());
+  EXPECT_EQ(r.meta.initial_pose->x_cm, 123.5);
+  EXPECT_EQ(r.meta.initial_pose->yaw_deg, -45.5);
+  ASSERT_EQ(r.windows.size(), 5u);
+  EXPECT_EQ(r.windows[3].seq, 103u);
+  EXPECT_EQ(r.windows[3].t_end_ms, 40.0);
+  EXPECT_EQ(r.windows[3].counts[0], 3);
+  EXPECT_EQ(r.windows[3].counts[1], -6);
+  EXPECT_EQ(r.windows[3].counts[2], 303);
+  EXPECT_EQ(r.windows[3].counts[3], -70000);
+  EXPECT_EQ(r.windows[3].gyro_yaw_deg, -44.75);
+  ASSERT_EQ(r.frames.size(), 2u);
+  EXPECT_EQ(r.frames[1].t_ms, 21.5);
+  EXPECT_EQ(r.frames[1].file, "frames/000001.png");
+  const cv::Mat img = load_frame(r, 1);
+  EXPECT_EQ(img.at<cv::Vec3b>(10, 10), cv::Vec3b(10, 100, 50));
+  ASSERT_EQ(r.truth.size(), 5u);
+  EXPECT_EQ(r.truth[4].pose.x_cm, 127.5);
+  // truth_at interpolates linearly, yaw the short way.
+  const auto t = truth_at(r.truth, 25.0);
+  ASSERT_TRUE(t.has_value());
+  EXPECT_DOUBLE_EQ(t->x_cm, 125.0);
+  EXPECT_DOUBLE_EQ(t->yaw_deg, -45.125);
+  EXPECT_FALSE(truth_at(r.truth, 5.0).has_value());
+  const std::vector<TruthSample> wrap{{0.0, {0, 0, 170.0}}, {10.0, {0, 0, -170.0}}};
+  EXPECT_NEAR(truth_at(wrap, 5.0)->yaw_deg, 180.0, 1e-9);
+}
+
+TEST_F(RecordingFiles, WithoutOptionalParts) {
+  fs::remove(dir_ / "truth.csv");
+  write("meta.json", R"({"field": "fira-robosot",
+    "camera": {"width": 640, "height": 480, "center_px": [320, 240], "radius_lut": [[0, 0], [100, 90], [238, 500]],
+               "yaw_offset_deg": 0, "mirrored": false},
+    "robot": {"wheel_radius_cm": 5, "center_to_wheel_cm": 20, "motor_angle_deg": 45, "gear_ratio": 19,
+              "counts_per_rev": 500, "decoding": 4}})");
+  const Recording r = load_recording(dir_);
+  EXPECT_FALSE(r.meta.initial_pose.has_value());
+  EXPECT_TRUE(r.truth.empty());
+  EXPECT_EQ(r.meta.camera.radius_lut.size(), 3u);
+}
+
+TEST_F(RecordingFiles, CsvErrorsNameFileAndLine) {
+  write("encoders.csv", "t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n10,0,1,2,3,4,0.5\n20,1,1,2,x3,4,0.5\n");
+  expect_error("encoders.csv", 3, "column 'c3': not an integer");
+  write("encoders.csv", "t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n10,0,1,2,3,4,0.5\n20,1,1,2,3,4\n");
+  expect_error("encoders.csv", 3, "expected 7 columns, got 6");
+  write("encoders.csv", "t_ms,seq,c1,c2,c3,c4\n");
+  expect_error("encoders.csv", 1, "header must be 't_ms,seq,c1,c2,c3,c4,gyro_yaw_deg'");
+  write("encoders.csv", "t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n10,0,1,2,3,4,0.5\n10,1,1,2,3,4,0.5\n");
+  expect_error("encoders.csv", 3, "times must increase");
+  write("encoders.csv", "t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n10,0,1,2,3,4,nan\n");
+  expect_error("encoders.csv", 2, "column 'gyro_yaw_deg': not finite");
+  write("encoders.csv", "");
+  expect_error("encoders.csv", 1, "empty file");
+  fs::remove(dir_ / "encoders.csv");
+  expect_error("encoders.csv", 0, "cannot open");
+}
+
+TEST_F(RecordingFiles, CameraAndTruthErrors) {
+  write("camera.csv", "t_ms,file\n5,frames/000000.png\n21.5,frames/missing.png\n");
+  expect_error("camera.csv", 3, "image 'frames/missing.png' does not exist");
+  write("camera.csv", "t_ms,file\n5,\n");
+  expect_error("camera.csv", 2, "column 'file': empty");
+  write("camera.csv", "t_ms,file\n5,frames/000000.png\n21.5,frames/000001.png\n");
+  write("truth.csv", "t_ms,x_cm,y_cm,yaw_deg\n10,1,2,3\n20,1,2.5.0,3\n");
+  expect_error("truth.csv", 3, "column 'y_cm': not a number");
+  // A frame whose size is not the camera's.
+  write("truth.csv", "t_ms,x_cm,y_cm,yaw_deg\n10,1,2,3\n");
+  cv::imwrite((dir_ / "frames/000001.png").string(), cv::Mat(10, 20, CV_8UC3, cv::Scalar(0, 0, 0)));
+  const Recording r = load_recording(dir_);
+  try {
+    (void)load_frame(r, 1);
+    FAIL() << "no error";
+  } catch (const RecordingError& e) {
+    const std::string s = e.what();
+    EXPECT_NE(s.find((dir_ / "camera.csv").string() + ":3:"), std::string::npos) << s;
+    EXPECT_NE(s.find("is 20 x 10, the camera is 640 x 480"), std::string::npos) << s;
+  }
+}
+
+TEST_F(RecordingFiles, MetaErrorsNameTheField) {
+  const std::string good_robot =
+      R"("robot": {"wheel_radius_cm": 5, "center_to_wheel_cm": 20, "motor_angle_deg": 45, "gear_ratio": 19, "counts_per_rev": 500, "decoding": 4})";
+  const std::string good_camera =
+      R"("camera": {"width": 640, "height": 480, "center_px": [320, 240], "radius_lut": [[0, 0], [238, 500]], "yaw_offset_deg": 0, "mirrored": false})";
+  write("meta.json", "{\"field\": \"fira-robosot\", " + good_camera + "}");
+  expect_error("meta.json", 0, "'robot': missing");
+  write("meta.json", "{\"field\": \"fira-robosot\", " + good_camera + ", " +
+                         R"("robot": {"wheel_radius_cm": 5, "center_to_wheel_cm": 20, "motor_angle_deg": 45, "gear_ratio": 19, "counts_per_rev": 500, "decoding": 3})" +
+                         "}");
+  expect_error("meta.json", 0, "decoding");
+  write("meta.json", "{\"field\": \"fira-robosot\", " + good_camera + ", " + good_robot +
+                         R"(, "initial_pose": {"x_cm": 1, "y_cm": "a", "yaw_deg": 0}})");
+  expect_error("meta.json", 0, "initial_pose.y_cm");
+  write("meta.json", "{\"field\": \"fira-robosot\", " + good_robot + "}");
+  expect_error("meta.json", 0, "'camera'");
+  write("meta.json", "{\"field\": \"fira-robosot\", " + good_camera + ", " + good_robot + ", \"extra\": 1}");
+  expect_error("meta.json", 0, "unknown key 'extra'");
+  write("meta.json", "{\"field\": ");
+  expect_error("meta.json", 0, "JSON");
+  fs::remove(dir_ / "meta.json");
+  expect_error("meta.json", 0, "missing");
+}
+
+TEST_F(RecordingFiles, PosesCsvRoundTrip) {
+  const fs::path p = dir_ / "poses.csv";
+  PosesCsvWriter w(p);
+  LocalizedPose a;
+  a.t_ms = 10.0;
+  a.pose = {1.5, 2.25, -3.125};
+  a.source = PoseSource::kNone;
+  w.write(a);
+  LocalizedPose b = a;
+  b.t_ms = 20.0;
+  b.source = PoseSource::kIntegrated;
+  b.match_error = 7.5;
+  b.search_range_cm = 20.0;
+  w.write(b);
+  w.close();
+  std::ifstream in(p);
+  std::string header;
+  std::getline(in, header);
+  EXPECT_EQ(header, "t_ms,x_cm,y_cm,yaw_deg,source,match_error,search_range_cm");
+  const auto rows = read_poses_csv(p);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].source, PoseSource::kNone);
+  EXPECT_TRUE(std::isinf(rows[0].match_error));
+  EXPECT_EQ(rows[1].source, PoseSource::kIntegrated);
+  EXPECT_EQ(rows[1].pose.yaw_deg, -3.125);
+  EXPECT_EQ(rows[1].match_error, 7.5);
+  EXPECT_EQ(rows[1].search_range_cm, 20.0);
+}
+
+TEST(ErrorSummary, HandComputed) {
+  // 1..20: mean 10.5, median (10 + 11) / 2, p95 = the 19th value (nearest rank ceil(0.95 * 20)).
+  std::vector<double> v;
+  for (int i = 20; i >= 1; --i) v.push_back(i);
+  const ErrorSummary s = summarize_errors(v);
+  EXPECT_EQ(s.count, 20u);
+  EXPECT_DOUBLE_EQ(s.mean, 10.5);
+  EXPECT_DOUBLE_EQ(s.median, 10.5);
+  EXPECT_DOUBLE_EQ(s.p95, 19.0);
+  EXPECT_DOUBLE_EQ(s.max, 20.0);
+  const ErrorSummary one = summarize_errors({3.0, 1.0, 2.0});
+  EXPECT_DOUBLE_EQ(one.median, 2.0);
+  EXPECT_DOUBLE_EQ(one.p95, 3.0);
+  EXPECT_THROW((void)summarize_errors({}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace omniloc
