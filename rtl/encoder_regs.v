@@ -113,7 +113,12 @@ wire addr_snap_seq = (reg_addr_i == `OMNILOC_REG_SNAP_SEQ);
 wire [1:0] wdecode = reg_wdata_i[DEC_LSB +: 2];
 wire control_ok = (reg_wdata_i[31:4] == 28'd0) && (wdecode != 2'd3);
 wire filter_ok = (reg_wdata_i[31:8] == 24'd0);
-wire period_ok = (reg_wdata_i >= PERIOD_MIN_CYCLES);
+// period >= PERIOD_MIN_CYCLES, split so that no 32-bit carry chain sits in front of the status
+// and write enables (it kept the iCE40 build under 40 MHz): any bit above the minimum's width
+// set, or the low bits compared on their own.
+localparam integer PMIN_W = $clog2(`OMNILOC_PERIOD_MIN_CYCLES + 1);
+wire period_ok = (reg_wdata_i[31:PMIN_W] != {(32 - PMIN_W){1'b0}})
+              || (reg_wdata_i[PMIN_W-1:0] >= PERIOD_MIN_CYCLES[PMIN_W-1:0]);
 
 wire wr_control = wr && addr_control && control_ok;
 wire wr_filter = wr && addr_filter && filter_ok;

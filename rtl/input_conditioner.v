@@ -41,7 +41,17 @@ assign valid_o = prime_q[2];
 
 // run_q counts the cycles the synchronized input has differed from out_q, minus one.
 wire differs = (sync2_q != out_q);
-wire settled = (len_i <= {{(LEN_W-1){1'b0}}, 1'b1}) || (run_q == len_i - {{(LEN_W-1){1'b0}}, 1'b1});
+// The filter length, decoded once a cycle into registers of this conditioner: FILTER fans out to
+// all eight conditioners, and a subtract and compare behind that fan-out kept the iCE40 build
+// under 40 MHz. A new length takes effect one cycle after it is written (the reset value at once).
+reg                 off_q;     // len_i <= 1: the filter is off
+reg [LEN_W-1:0]     last_q;    // len_i - 1: the run length that settles a level
+always @(posedge clk_i) begin
+    off_q <= (len_i <= {{(LEN_W-1){1'b0}}, 1'b1});
+    last_q <= len_i - {{(LEN_W-1){1'b0}}, 1'b1};
+end
+// '>=' (not '==') so that shortening the filter in mid-run never strands a run past its end.
+wire settled = off_q || (run_q >= last_q);
 
 always @(posedge clk_i) begin
     if (rst_i) begin

@@ -2,7 +2,7 @@
 //
 // Requests (from frame_rx): READ_REQ -> one bus read -> READ_RESP or ERROR; WRITE_REQ -> one bus
 // write -> WRITE_ACK or ERROR; SNAPSHOT_REQ -> bus reads of SNAP_SEQ (which latches the snapshot),
-// SNAP_TIMESTAMP, SNAP_COUNT0..3, SNAP_DIR and STATUS -> SNAPSHOT_RESP, one consistent window.
+// SNAP_TIMESTAMP, SNAP_COUNT0..3, SNAP_DIR and SNAP_STATUS -> SNAPSHOT_RESP, one consistent window.
 // Parser errors (bad CRC, malformed) are answered with ERROR frames. A bus error is classified with
 // the generated map: unknown address -> BAD_ADDRESS, write to a read-only register -> READ_ONLY,
 // otherwise the register refused the value -> BAD_VALUE; the detail byte is the address.
@@ -72,7 +72,7 @@ module link_engine #(
             3'd4:    snap_addr = `OMNILOC_REG_SNAP_COUNT2;
             3'd5:    snap_addr = `OMNILOC_REG_SNAP_COUNT3;
             3'd6:    snap_addr = `OMNILOC_REG_SNAP_DIR;
-            default: snap_addr = `OMNILOC_REG_STATUS;
+            default: snap_addr = `OMNILOC_REG_SNAP_STATUS;   // STATUS as it stood at that capture
         endcase
     endfunction
 

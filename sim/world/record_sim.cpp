@@ -26,7 +26,7 @@ void run_simulation(World& world, const OmniRenderer& renderer, const SimRunOpti
         f.truth = world.truth();
         f.truth.yaw_deg = wrap_deg(f.truth.yaw_deg);
         render.seed = seed0 + 7919 * ++frame_index;  // fresh sensor noise per frame
-        f.bgr = renderer.render(f.truth, render);
+        if (options.render_frames) f.bgr = renderer.render(f.truth, render);
         on_frame(f);
       }
       next_frame_ms += options.frame_period_ms;

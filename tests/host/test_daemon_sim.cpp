@@ -300,4 +300,48 @@ TEST(DaemonSim, PublishesTrackedPosesSurvivesUnplugAndCameraStop) {
   std::filesystem::remove_all(rec_dir);
 }
 
+TEST(DaemonSim, StopFlagEndsTheRunAndSwitchesStreamingOff) {
+  // No camera, a known start pose: dead reckoning from the first window, flagged odometry_only; a
+  // "signal" (the flag set from the pose observer after 150 poses) ends the run cleanly.
+  const std::uint64_t seed = 11;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  DaemonModels mod = models();
+  sim::Trajectory trajectory = sim::make_trajectory("circle", seed);
+  mod.initial_pose = trajectory.start();
+  Rig rig(sim::WorldConfig::default_noise(mod.robot, seed), std::move(trajectory));
+  RigClock clock(rig);
+  DaemonConfig cfg;
+  cfg.board = "sim";
+  cfg.camera = "none";
+  cfg.udp_port = 9;  // discard port on loopback: nobody listens, sends must still not fail the run
+  std::vector<PoseEvent> events;
+  volatile std::sig_atomic_t stop = 0;
+  DaemonIo io;
+  io.clock = &clock;
+  io.open_board = [&rig]() -> std::unique_ptr<Transport> { return std::make_unique<RigTransport>(rig); };
+  io.extras = &rig.log;
+  io.on_pose = [&](const PoseEvent& e) {
+    events.push_back(e);
+    if (events.size() == 150) stop = 1;
+  };
+  io.log = [](const std::string& s) { std::printf("%s\n", s.c_str()); };
+  Daemon d(cfg, mod, io);
+  const DaemonReport r = d.run(&stop);
+  EXPECT_EQ(r.stop_reason, "signal");
+  EXPECT_EQ(events.size(), 150u);
+  EXPECT_EQ(r.windows, 150u);
+  EXPECT_EQ(r.frames, 0u);
+  // The board was told to stop streaming on the way out.
+  EXPECT_EQ(omniloc::regmap::kControlStream.get(rig.board.reg(omniloc::regmap::kRegControl)), 0u);
+  EXPECT_EQ(omniloc::regmap::kControlEnable.get(rig.board.reg(omniloc::regmap::kRegControl)), 1u);
+  double max_err = 0;
+  for (const auto& e : events) {
+    EXPECT_EQ(e.message.status, DaemonStatus::kOdometryOnly) << "t=" << e.message.t_ms;
+    ASSERT_TRUE(e.truth.has_value());
+    max_err = std::max(max_err, position_error(e.localized.pose, *e.truth));
+  }
+  std::printf("1.5 s of dead reckoning from the true start: max error %.2f cm\n", max_err);
+  EXPECT_LT(max_err, 5.0);
+}
+
 }  // namespace

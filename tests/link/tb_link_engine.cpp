@@ -182,7 +182,7 @@ TEST(LinkEngine, RequestsSnapshotsAndStreamingMatchGoldenModel) {
                           rm::kRegSnapCount2, rm::kRegSnapCount3})
           omniloc::tb::put_u32(b, regs.values[addr]);
         b.push_back(static_cast<std::uint8_t>(regs.values[rm::kRegSnapDir]));
-        b.push_back(static_cast<std::uint8_t>(regs.values[rm::kRegStatus]));
+        b.push_back(static_cast<std::uint8_t>(regs.values[rm::kRegSnapStatus]));
         expected_responses.push_back({rm::kFrameSnapshotResp, b});
       }
       event_up = false;

@@ -58,7 +58,7 @@ int run(const omniloc::daemon::DaemonConfig& config) {
     io.open_board = robot->transport_factory();
     io.extras = &robot->log;
     say("simulated robot: trajectory " + config.sim_trajectory + ", Verilated board at 12 MHz; the daemon runs at "
-        "the simulator's pace (about 0.4x real time), not the wall clock");
+        "the simulator's pace (slower than real time), not on the wall clock");
     if (config.camera == "sim") {
       renderer = std::make_unique<sim::OmniRenderer>(models.field, models.camera);
       sim::RenderOptions ro;

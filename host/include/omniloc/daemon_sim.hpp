@@ -13,6 +13,7 @@
 #include "omniloc/conventions.hpp"
 #include "omniloc/daemon.hpp"
 #include "omniloc_sim/renderer.hpp"
+#include "omniloc_sim/trajectory.hpp"
 
 namespace omniloc::daemon {
 
@@ -99,5 +100,37 @@ class SimCamera final : public FrameSource {
   double last_k_ = -1.0;
   double stop_ms_ = 1e300;
 };
+
+/// The drive of `omniloc demo`: from the centre to the right goal line, then along all four
+/// boundary lines (5-10 cm inside them), back towards the middle, a kidnapping while
+/// stopped (carried 250 cm and turned 90 degrees), then a last leg driven from where the robot was
+/// put down (the world moves the rest of the reference rigidly with it), padded to duration_s.
+struct DemoDrive {
+  sim::Trajectory trajectory{"demo", {375.0, 275.0, 0.0}};
+  double kidnap_s = 0.0;
+  Pose2 kidnap_to;
+  double slip_s = 8.0;  ///< wheel 2 slips from here for 0.5 s
+};
+
+[[nodiscard]] inline DemoDrive demo_drive(double duration_s = 30.0) {
+  DemoDrive d;
+  const sim::MotionLimits lim{120.0, 240.0, 120.0, 240.0};
+  auto& t = d.trajectory;
+  // The field lines are at x = 75 / 675 and y = 75 / 475: the boundary legs run 5-10 cm inside
+  // them, where the paper's image-only method fails (its Fig. 18 boundary points).
+  t.line_to({665.0, 275.0}, 0.0, lim);    // to the right goal line
+  t.line_to({670.0, 470.0}, 90.0, lim);   // along it to the top-right corner
+  t.line_to({80.0, 470.0}, 180.0, lim);   // along the top line
+  t.line_to({80.0, 80.0}, 270.0, lim);    // along the left goal line
+  t.line_to({670.0, 80.0}, 360.0, lim);   // along the bottom line
+  t.line_to({450.0, 220.0}, 360.0, lim);
+  t.wait(0.6);
+  d.kidnap_s = t.duration_s() - 0.3;
+  d.kidnap_to = Pose2{250.0, 360.0, 90.0};
+  // +x of the old frame becomes +y here: this leg ends near (250, 440).
+  t.line_to({530.0, 220.0}, 360.0, lim);
+  if (t.duration_s() < duration_s) t.wait(duration_s - t.duration_s());
+  return d;
+}
 
 }  // namespace omniloc::daemon

@@ -161,6 +161,11 @@ class Localizer {
   /// Same with a robot-frame scan already made (scan_image_bearings).
   FrameReport on_bearings(double t_ms, BearingScan bearings);
 
+  /// Forgets the window history and waiting frames, for when the board's time base restarts
+  /// (reconnect): the current pose becomes the odometry origin and the next window may have any
+  /// time. The gyro is assumed to have kept its alignment with the field.
+  void resync();
+
   /// The pose at the last window (source kNone before any).
   [[nodiscard]] const LocalizedPose& pose() const { return last_pose_; }
   [[nodiscard]] bool has_fix() const { return state_ != State::kSearching; }
@@ -216,7 +221,7 @@ class Localizer {
   bool last_good_ = false;
   bool applied_this_window_ = false;
   bool trimmed_ = false;       // history has lost its first windows: older frames are dropped
-  bool have_initial_ = false;
+  static constexpr std::size_t kMaxPending = 120;  // 2 s at 60 Hz: windows have stopped coming
   int bad_run_ = 0;
   int disagree_run_ = 0;
   Eigen::Vector2d disagree_position_cm_{0.0, 0.0};

@@ -33,7 +33,6 @@ Localizer::Localizer(const LocalizerConfig& config, const RobotConfig& robot, co
     state_ = State::kTracking;
     anchor_ = {true, 0.0, *initial_pose, *initial_pose, kNoError};
     last_good_ = true;
-    have_initial_ = true;
   }
   last_pose_.pose = initial_pose.value_or(Pose2{});
   last_pose_.source = initial_pose ? PoseSource::kIntegrated : PoseSource::kNone;
@@ -150,6 +149,15 @@ FrameReport Localizer::on_bearings(double t_ms, BearingScan bearings) {
     auto pos = std::upper_bound(pending_.begin(), pending_.end(), t_ms,
                                 [](double t, const PendingFrame& f) { return t < f.t_ms; });
     pending_.insert(pos, PendingFrame{t_ms, std::move(bearings)});
+    if (pending_.size() > kMaxPending) {
+      FrameReport dropped;
+      dropped.t_ms = pending_.front().t_ms;
+      dropped.outcome = FrameOutcome::kDropped;
+      reports_.push_back(dropped);
+      pending_.pop_front();
+      ++stats_.frames;
+      ++stats_.dropped;
+    }
     FrameReport r;
     r.t_ms = t_ms;
     return r;
@@ -157,6 +165,20 @@ FrameReport Localizer::on_bearings(double t_ms, BearingScan bearings) {
   FrameReport r = process(t_ms, bearings);
   reports_.push_back(r);
   return r;
+}
+
+void Localizer::resync() {
+  const Pose2 pose = last_pose_.pose;
+  const double sigma = last_pose_.sigma_xy_cm;
+  odometry_ = Odometry(robot_);
+  odometry_.reset(pose, sigma, last_pose_.sigma_yaw_deg);
+  history_.clear();
+  pending_.clear();
+  trimmed_ = false;
+  anchor_.valid = false;
+  last_reset_ms_ = -1e300;
+  last_check_ms_ = -1e300;
+  disagree_run_ = 0;
 }
 
 std::vector<FrameReport> Localizer::take_frame_reports() {

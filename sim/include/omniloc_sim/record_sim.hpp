@@ -23,6 +23,7 @@ struct SimRunOptions {
   double first_frame_ms = 5.0;     ///< nominal time of the first frame
   RenderOptions render;            ///< noise, obstacles...; the seed is advanced per frame
   double max_duration_s = 0.0;     ///< 0: until the trajectory (and its final wait) is over
+  bool render_frames = true;       ///< false: SimFrame::bgr stays empty (the caller supplies images)
 };
 
 struct SimFrame {

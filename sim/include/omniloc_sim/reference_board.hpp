@@ -300,10 +300,8 @@ class ReferenceBoard final : public UartSide {
         emit(WriteAck{wr->addr});
       }
     } else {  // SNAPSHOT_REQ: the parser lets nothing else through
-      latch();
-      Window w = latched_;
-      w.status = static_cast<std::uint8_t>(status_ & 0xFF);
-      emit(SnapshotResp{w});
+      latch();  // the status byte is SNAP_STATUS: STATUS as it stood at that window's capture
+      emit(SnapshotResp{latched_});
     }
   }
 
