@@ -13,11 +13,22 @@ mapfile -t sources < <(ls rtl/*.v)
 echo "bitstream: synthesising icebreaker_top from ${#sources[@]} RTL files (log: $out/yosys.log)"
 yosys -q -l "$out/yosys.log" -p "read_verilog -Irtl/include ${sources[*]}; synth_ice40 -top icebreaker_top -json $out/omniloc.json"
 
-echo "bitstream: place and route, target 40 MHz (log: $out/nextpnr.log)"
-if ! nextpnr-ice40 --up5k --package sg48 --json "$out/omniloc.json" --pcf constraints/icebreaker.pcf \
-     --asc "$out/omniloc.asc" --freq 40 --report "$out/report.json" --seed 1 -q -l "$out/nextpnr.log"; then
-  echo "bitstream: error: nextpnr failed (timing or placement); see $out/nextpnr.log" >&2
-  grep -E "Max frequency|ERROR" "$out/nextpnr.log" | tail -5 >&2 || true
+# Timing closure at 40 MHz is within a few per cent of the 32-bit counters' carry chains, so the
+# placement seed matters: try a few seeds, in order, and keep the first that meets 40 MHz (the
+# seed is printed; the same sources and seed give the same bitstream).
+seeds=(1 2 3 4 5 6)
+ok=0
+for seed in "${seeds[@]}"; do
+  echo "bitstream: place and route, target 40 MHz, seed $seed (log: $out/nextpnr.log)"
+  if nextpnr-ice40 --up5k --package sg48 --json "$out/omniloc.json" --pcf constraints/icebreaker.pcf \
+       --asc "$out/omniloc.asc" --freq 40 --report "$out/report.json" --seed "$seed" -q -l "$out/nextpnr.log"; then
+    ok=1
+    break
+  fi
+  echo "bitstream: seed $seed: $(grep -E 'Max frequency' "$out/nextpnr.log" | tail -1 | sed 's/^[A-Za-z]*: //')"
+done
+if [ $ok -ne 1 ]; then
+  echo "bitstream: error: no seed of ${seeds[*]} meets 40 MHz; see $out/nextpnr.log" >&2
   exit 1
 fi
 icepack "$out/omniloc.asc" "$out/omniloc.bin"

@@ -117,6 +117,7 @@ TEST(Fuzzy, SnapToRanges) {
   const std::vector<double> r{0, 10, 20, 30};
   EXPECT_EQ(snap_to_ranges(4.99, r), 0.0);
   EXPECT_EQ(snap_to_ranges(5.0, r), 10.0);  // ties go up: search wider when unsure
+  EXPECT_EQ(snap_to_ranges(15.0 - 1e-12, r), 20.0);  // a tie up to rounding is still a tie
   EXPECT_EQ(snap_to_ranges(14.9, r), 10.0);
   EXPECT_EQ(snap_to_ranges(26.0, r), 30.0);
   EXPECT_EQ(snap_to_ranges(-3.0, r), 0.0);

@@ -65,7 +65,7 @@ struct FuzzyResult {
 /// largest snap range (search widely when unsure).
 [[nodiscard]] FuzzyResult fuzzy_search_range(const FuzzyConfig& config, double speed_cm_per_s);
 
-/// Nearest of `ranges_cm` (ties go to the larger).
+/// Nearest of `ranges_cm` (ties, within 1e-9 cm, go to the larger).
 [[nodiscard]] double snap_to_ranges(double value_cm, const std::vector<double>& ranges_cm);
 
 /// Throws ConfigError (robot_config.hpp) naming `source` and the field: unordered or non-finite

@@ -47,7 +47,8 @@ double snap_to_ranges(double value_cm, const std::vector<double>& ranges_cm) {
   double best = ranges_cm.front();
   for (double r : ranges_cm) {
     const double d = std::abs(r - value_cm), db = std::abs(best - value_cm);
-    if (d < db || (d == db && r > best)) best = r;
+    // Ties within 1e-9 cm go up: the centroid of a symmetric set is only exact to rounding.
+    if (d < db - 1e-9 || (std::abs(d - db) <= 1e-9 && r > best)) best = r;
   }
   return best;
 }
