@@ -4,6 +4,8 @@
 // (whole-image HSV scan + naive global search). Ratios printed at the end, measured in this run.
 #include <benchmark/benchmark.h>
 
+#include "ratio_reporter.hpp"
+
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -91,18 +93,6 @@ void BM_FullModeFramePerFrame(benchmark::State& state) {
 }
 BENCHMARK(BM_FullModeFramePerFrame)->Unit(benchmark::kMillisecond);
 
-class RatioReporter : public benchmark::ConsoleReporter {
- public:
-  std::map<std::string, double> ns_per_item;
-  void ReportRuns(const std::vector<Run>& runs) override {
-    for (const Run& r : runs) {
-      if (r.run_type != Run::RT_Iteration) continue;
-      const auto items = r.counters.find("items_per_second");
-      if (items != r.counters.end() && items->second.value > 0) ns_per_item[r.benchmark_name()] = 1e9 / items->second.value;
-    }
-    ConsoleReporter::ReportRuns(runs);
-  }
-};
 
 }  // namespace
 }  // namespace omniloc
@@ -110,7 +100,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   (void)omniloc::setup();
-  omniloc::RatioReporter reporter;
+  omniloc::bench::RatioReporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
   const auto& m = reporter.ns_per_item;
   const auto ratio = [&](const char* name, const char* naive) {

@@ -6,6 +6,8 @@
 // per-cycle evaluation of all four encoder positions (what a testbench would do without the stream).
 #include <benchmark/benchmark.h>
 
+#include "ratio_reporter.hpp"
+
 #include <Eigen/Dense>
 #include <cstdio>
 #include <map>
@@ -145,25 +147,13 @@ void BM_QuadratureStreamPerCycle(benchmark::State& state) {
 }
 BENCHMARK(BM_QuadratureStreamPerCycle)->Unit(benchmark::kMillisecond);
 
-class RatioReporter : public benchmark::ConsoleReporter {
- public:
-  std::map<std::string, double> ns_per_item;
-  void ReportRuns(const std::vector<Run>& runs) override {
-    for (const Run& r : runs) {
-      if (r.run_type != Run::RT_Iteration) continue;
-      const auto items = r.counters.find("items_per_second");
-      if (items != r.counters.end() && items->second.value > 0) ns_per_item[r.benchmark_name()] = 1e9 / items->second.value;
-    }
-    ConsoleReporter::ReportRuns(runs);
-  }
-};
 
 }  // namespace
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   (void)windows();
-  RatioReporter reporter;
+  omniloc::bench::RatioReporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
   const auto& m = reporter.ns_per_item;
   const auto ratio = [&](const char* name, const char* naive, const char* unit) {
