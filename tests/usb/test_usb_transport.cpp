@@ -150,7 +150,10 @@ TEST_F(UsbLink, StreamsASecondOfWindows) {
   EXPECT_GT(s.bulk_in_packets, s.status_only_packets + 4);  // the burst took >= 4 full packets
   const auto ts = t.status();
   EXPECT_EQ(ts.counters.bytes_read, s.bulk_in_bytes);
-  EXPECT_EQ(ts.counters.packets_in, s.bulk_in_packets);
+  // The bridge keeps answering bulk-IN polls with status-only packets; the ones whose completion the
+  // transport's event thread has not handled yet (at most its transfers in flight) are not counted.
+  EXPECT_LE(ts.counters.packets_in, s.bulk_in_packets);
+  EXPECT_LE(s.bulk_in_packets - ts.counters.packets_in, static_cast<std::uint64_t>(UsbTransportOptions{}.in_transfers));
   EXPECT_EQ(ts.counters.line_framing, 0u);
 }
 
