@@ -12,7 +12,9 @@
 #include <optional>
 #include <span>
 
+#include "omniloc/robot_config.hpp"
 #include "omniloc_sim/board_sim.hpp"
+#include "omniloc_sim/world.hpp"
 
 namespace omniloc::tb {
 
@@ -68,5 +70,19 @@ class GoldenQuadrature final : public omniloc::sim::EncoderSource {
   std::array<int, 4> phase_{};
   int illegal_ = 0;
 };
+
+/// A noise-free world whose time base is the simulated board's clock (12 MHz, 10 ms windows), with
+/// the encoders starting at AB = 00 as the board's decoders do after reset.
+inline omniloc::sim::WorldConfig board_world(std::uint64_t seed) {
+  using omniloc::sim::BoardSim;
+  auto robot = omniloc::load_named_robot_config("default");
+  robot.clock_hz = static_cast<double>(BoardSim::kClockHz);
+  auto config = omniloc::sim::WorldConfig::noise_free(robot, seed);
+  config.step_cycles = BoardSim::kClockHz / 1000;
+  config.window_cycles = BoardSim::kClockHz / 100;
+  config.first_window_end_cycles = config.window_cycles;
+  config.random_encoder_phase = false;
+  return config;
+}
 
 }  // namespace omniloc::tb

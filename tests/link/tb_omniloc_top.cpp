@@ -26,20 +26,10 @@ namespace rm = omniloc::regmap;
 using omniloc::sim::BoardSim;
 constexpr std::int64_t kCaptureLag = 4;
 
-omniloc::sim::WorldConfig board_world(std::uint64_t seed) {
-  auto robot = omniloc::load_named_robot_config("default");
-  robot.clock_hz = static_cast<double>(BoardSim::kClockHz);
-  auto config = omniloc::sim::WorldConfig::noise_free(robot, seed);
-  config.step_cycles = BoardSim::kClockHz / 1000;
-  config.window_cycles = BoardSim::kClockHz / 100;
-  config.first_window_end_cycles = config.window_cycles;
-  config.random_encoder_phase = false;  // the board's decoders start from AB = 00 after reset
-  return config;
-}
 
 TEST(OmnilocTop, RegistersErrorsAndStreamedWindowsThroughTheUartPins) {
   const auto seed = omniloc::tb::test_seed(61);
-  omniloc::sim::QuadratureStream stream(board_world(seed), omniloc::sim::make_trajectory("figure_eight", seed));
+  omniloc::sim::QuadratureStream stream(omniloc::tb::board_world(seed), omniloc::sim::make_trajectory("figure_eight", seed));
   omniloc::tb::GoldenQuadrature source(stream, BoardSim::kClockHz / 100);
   BoardSim board(&source);
   omniloc::sim::SimTransport transport(board);
@@ -144,7 +134,7 @@ class FaultyBoardTransport final : public omniloc::Transport {
 
 TEST(OmnilocTop, FaultyLineNeverDeliversACorruptWindowOrRegister) {
   const auto seed = omniloc::tb::test_seed(62);
-  omniloc::sim::QuadratureStream stream(board_world(seed), omniloc::sim::make_trajectory("random_walk", seed));
+  omniloc::sim::QuadratureStream stream(omniloc::tb::board_world(seed), omniloc::sim::make_trajectory("random_walk", seed));
   omniloc::tb::GoldenQuadrature golden(stream, BoardSim::kClockHz / 100);
   BoardSim board(&golden);
   omniloc::sim::FaultRates rates;

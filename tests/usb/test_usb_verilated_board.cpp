@@ -61,20 +61,10 @@ class ClockedBoard final : public sim::UartSide {
   std::thread thread_;
 };
 
-sim::WorldConfig board_world(std::uint64_t seed) {
-  auto robot = load_named_robot_config("default");
-  robot.clock_hz = static_cast<double>(BoardSim::kClockHz);
-  auto config = sim::WorldConfig::noise_free(robot, seed);
-  config.step_cycles = BoardSim::kClockHz / 1000;
-  config.window_cycles = kWindowCycles;
-  config.first_window_end_cycles = kWindowCycles;
-  config.random_encoder_phase = false;
-  return config;
-}
 
 TEST(UsbVerilatedBoard, StreamsGoldenWindowsThenReportsUnplug) {
   const auto seed = tb::test_seed(71);
-  sim::QuadratureStream stream(board_world(seed), sim::make_trajectory("circle", seed));
+  sim::QuadratureStream stream(omniloc::tb::board_world(seed), sim::make_trajectory("circle", seed));
   tb::GoldenQuadrature golden(stream, kWindowCycles);
   sim::EmulatedUsb usb;
   ClockedBoard board(golden);
