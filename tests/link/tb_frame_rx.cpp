@@ -9,7 +9,7 @@
 
 #include "Vframe_rx.h"
 #include "golden_frames.hpp"
-#include "verilator_bench.hpp"
+#include "tb_clocked.hpp"
 
 namespace {
 
@@ -121,8 +121,9 @@ std::vector<Byte> make_stream(std::uint64_t seed, int items) {
 }
 
 std::vector<Event> run(const std::vector<Byte>& stream, std::uint64_t seed, const std::string& vcd = {}) {
-  omniloc::tb::VerilatorBench<Vframe_rx> bench(vcd);
-  auto& dut = bench.dut();
+  const omniloc::rtl_tb::TraceRequest trace{vcd, 0};
+  omniloc::rtl_tb::Clocked<Vframe_rx> bench(vcd.empty() ? nullptr : &trace);
+  auto& dut = bench.io();
   std::mt19937_64 rng(seed ^ 0x5A5A);
   bench.reset();
   std::vector<Event> events;
@@ -150,12 +151,12 @@ std::vector<Event> run(const std::vector<Byte>& stream, std::uint64_t seed, cons
 }
 
 TEST(FrameRx, MixedStreamMatchesGoldenParser) {
-  const auto seed = omniloc::tb::test_seed(41);
+  const auto seed = omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 41);
   const auto stream = make_stream(seed, 3000);
   const auto expected = golden_parse(stream);
   const auto got = run(stream, seed);
   if (got != expected) {
-    const auto vcd = omniloc::tb::trace_path("frame_rx", seed);
+    const auto vcd = omniloc::rtl_tb::trace_path("frame_rx", seed);
     run(stream, seed, vcd);
     ADD_FAILURE() << "trace: " << vcd;
   }

@@ -9,7 +9,7 @@
 
 #include "Vframe_tx.h"
 #include "golden_frames.hpp"
-#include "verilator_bench.hpp"
+#include "tb_clocked.hpp"
 
 namespace {
 
@@ -26,8 +26,9 @@ void set_body(Vframe_tx& dut, const std::vector<std::uint8_t>& body) {
 }
 
 std::vector<std::uint8_t> run(const std::vector<Frame>& frames, std::uint64_t seed, const std::string& vcd = {}) {
-  omniloc::tb::VerilatorBench<Vframe_tx> bench(vcd);
-  auto& dut = bench.dut();
+  const omniloc::rtl_tb::TraceRequest trace{vcd, 0};
+  omniloc::rtl_tb::Clocked<Vframe_tx> bench(vcd.empty() ? nullptr : &trace);
+  auto& dut = bench.io();
   std::mt19937_64 rng(seed);
   bench.reset();
   std::vector<std::uint8_t> out;
@@ -57,7 +58,7 @@ std::vector<std::uint8_t> run(const std::vector<Frame>& frames, std::uint64_t se
 }
 
 TEST(FrameTx, RandomFramesMatchGoldenEncoding) {
-  const auto seed = omniloc::tb::test_seed(31);
+  const auto seed = omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 31);
   std::mt19937_64 rng(seed);
   std::vector<Frame> frames(2000);
   std::vector<std::uint8_t> expected;
@@ -70,7 +71,7 @@ TEST(FrameTx, RandomFramesMatchGoldenEncoding) {
   }
   const auto out = run(frames, seed);
   if (out != expected) {
-    const auto vcd = omniloc::tb::trace_path("frame_tx", seed);
+    const auto vcd = omniloc::rtl_tb::trace_path("frame_tx", seed);
     run(frames, seed, vcd);
     ADD_FAILURE() << "trace: " << vcd;
   }

@@ -11,7 +11,7 @@
 
 #include "Vlink_engine.h"
 #include "golden_frames.hpp"
-#include "verilator_bench.hpp"
+#include "tb_clocked.hpp"
 
 namespace {
 
@@ -79,10 +79,10 @@ struct Window {
 };
 
 TEST(LinkEngine, RequestsSnapshotsAndStreamingMatchGoldenModel) {
-  const auto seed = omniloc::tb::test_seed(51);
+  const auto seed = omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 51);
   std::mt19937_64 rng(seed);
-  omniloc::tb::VerilatorBench<Vlink_engine> bench;
-  auto& dut = bench.dut();
+  omniloc::rtl_tb::Clocked<Vlink_engine> bench;
+  auto& dut = bench.io();
   bench.reset();
   RegisterModel regs(rng);
 

@@ -18,7 +18,7 @@
 #include "omniloc_sim/trajectory.hpp"
 #include "omniloc_sim/world.hpp"
 #include "golden_quadrature.hpp"
-#include "tb_util.hpp"
+#include "tb_support.hpp"
 
 namespace {
 
@@ -28,7 +28,7 @@ constexpr std::int64_t kCaptureLag = 4;
 
 
 TEST(OmnilocTop, RegistersErrorsAndStreamedWindowsThroughTheUartPins) {
-  const auto seed = omniloc::tb::test_seed(61);
+  const auto seed = omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 61);
   omniloc::sim::QuadratureStream stream(omniloc::tb::board_world(seed), omniloc::sim::make_trajectory("figure_eight", seed));
   omniloc::tb::GoldenQuadrature source(stream, BoardSim::kClockHz / 100);
   BoardSim board(&source);
@@ -133,7 +133,7 @@ class FaultyBoardTransport final : public omniloc::Transport {
 };
 
 TEST(OmnilocTop, FaultyLineNeverDeliversACorruptWindowOrRegister) {
-  const auto seed = omniloc::tb::test_seed(62);
+  const auto seed = omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 62);
   omniloc::sim::QuadratureStream stream(omniloc::tb::board_world(seed), omniloc::sim::make_trajectory("random_walk", seed));
   omniloc::tb::GoldenQuadrature golden(stream, BoardSim::kClockHz / 100);
   BoardSim board(&golden);

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "Vuart_rx.h"
-#include "verilator_bench.hpp"
+#include "tb_clocked.hpp"
 
 namespace {
 
@@ -71,8 +71,9 @@ struct Result {
 // Plays the line into the receiver; the consumer takes a byte when `ready(cycle)` says so.
 template <class Ready>
 Result play(const Stimulus& s, Ready ready, const std::string& vcd = {}) {
-  omniloc::tb::VerilatorBench<Vuart_rx> bench(vcd);
-  auto& dut = bench.dut();
+  const omniloc::rtl_tb::TraceRequest trace{vcd, 0};
+  omniloc::rtl_tb::Clocked<Vuart_rx> bench(vcd.empty() ? nullptr : &trace);
+  auto& dut = bench.io();
   dut.rx_i = 1;
   bench.reset();
   Result r;
@@ -91,12 +92,12 @@ Result play(const Stimulus& s, Ready ready, const std::string& vcd = {}) {
 }
 
 TEST(UartRx, BytesAtBaudErrorsWithFramingErrorsAndGlitches) {
-  const auto seed = omniloc::tb::test_seed(21);
+  const auto seed = omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 21);
   const auto s = make_line(seed, 4000, 0.05);
   const auto always = [](std::size_t) { return true; };
   const auto r = play(s, always);
   if (r.bytes != s.good_bytes || r.framing != s.framing_errors || r.overruns != 0) {
-    const auto vcd = omniloc::tb::trace_path("uart_rx", seed);
+    const auto vcd = omniloc::rtl_tb::trace_path("uart_rx", seed);
     play(s, always, vcd);
     ADD_FAILURE() << "trace: " << vcd;
   }
@@ -107,7 +108,7 @@ TEST(UartRx, BytesAtBaudErrorsWithFramingErrorsAndGlitches) {
 }
 
 TEST(UartRx, StalledConsumerKeepsOldestByteAndCountsEveryOverrun) {
-  const auto seed = omniloc::tb::test_seed(22);
+  const auto seed = omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 22);
   const auto s = make_line(seed, 50, 0.0);
   // The consumer never takes anything until the line is quiet: byte 1 is held, 49 are overruns.
   const auto never = [](std::size_t) { return false; };

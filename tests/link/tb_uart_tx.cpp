@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "Vuart_tx.h"
-#include "verilator_bench.hpp"
+#include "tb_clocked.hpp"
 
 namespace {
 
@@ -54,8 +54,9 @@ Decoded decode_line(const std::vector<std::uint8_t>& line) {
 // Sends `bytes` with random idle gaps; returns the recorded line.
 std::vector<std::uint8_t> run(const std::vector<std::uint8_t>& bytes, std::uint64_t seed, bool back_to_back,
                               const std::string& vcd = {}) {
-  omniloc::tb::VerilatorBench<Vuart_tx> bench(vcd);
-  auto& dut = bench.dut();
+  const omniloc::rtl_tb::TraceRequest trace{vcd, 0};
+  omniloc::rtl_tb::Clocked<Vuart_tx> bench(vcd.empty() ? nullptr : &trace);
+  auto& dut = bench.io();
   std::mt19937_64 rng(seed);
   bench.reset();
   std::vector<std::uint8_t> line{dut.tx_o};  // the idle level before the first start bit
@@ -91,7 +92,7 @@ void check(std::uint64_t seed, bool back_to_back) {
   const auto decoded = decode_line(run(bytes, seed, back_to_back));
   const bool ok = decoded.errors.empty() && decoded.bytes == bytes;
   if (!ok) {
-    const auto vcd = omniloc::tb::trace_path(back_to_back ? "uart_tx_b2b" : "uart_tx", seed);
+    const auto vcd = omniloc::rtl_tb::trace_path(back_to_back ? "uart_tx_b2b" : "uart_tx", seed);
     run(bytes, seed, back_to_back, vcd);
     ADD_FAILURE() << "trace: " << vcd;
   }
@@ -100,8 +101,8 @@ void check(std::uint64_t seed, bool back_to_back) {
   EXPECT_EQ(decoded.bytes, bytes);
 }
 
-TEST(UartTx, RandomBytesWithGapsDecodeExactly) { check(omniloc::tb::test_seed(11), false); }
+TEST(UartTx, RandomBytesWithGapsDecodeExactly) { check(omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 11), false); }
 
-TEST(UartTx, BackToBackBytesDecodeExactly) { check(omniloc::tb::test_seed(12), true); }
+TEST(UartTx, BackToBackBytesDecodeExactly) { check(omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 12), true); }
 
 }  // namespace

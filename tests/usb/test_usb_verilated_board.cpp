@@ -10,7 +10,7 @@
 #include <thread>
 
 #include "../link/golden_quadrature.hpp"
-#include "../link/tb_util.hpp"
+#include "tb_support.hpp"
 #include "omniloc/board_client.hpp"
 #include "omniloc/robot_config.hpp"
 #include "omniloc/usb_transport.hpp"
@@ -63,7 +63,7 @@ class ClockedBoard final : public sim::UartSide {
 
 
 TEST(UsbVerilatedBoard, StreamsGoldenWindowsThenReportsUnplug) {
-  const auto seed = tb::test_seed(71);
+  const auto seed = omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 71);
   sim::QuadratureStream stream(omniloc::tb::board_world(seed), sim::make_trajectory("circle", seed));
   tb::GoldenQuadrature golden(stream, kWindowCycles);
   sim::EmulatedUsb usb;
