@@ -37,24 +37,40 @@ class ClockedBoard final : public sim::UartSide {
     thread_.join();
   }
   void to_board(std::span<const std::uint8_t> bytes) override {
-    std::lock_guard lock(mutex_);
+    Turn turn(*this);
     board_.to_board(bytes);
   }
   std::size_t from_board(std::span<std::uint8_t> out) override {
-    std::lock_guard lock(mutex_);
+    Turn turn(*this);
     return board_.from_board(out);
   }
 
  private:
+  // std::mutex is not fair: a clock thread that relocks at once can starve the USB handlers for
+  // seconds on a busy machine (the host then times out while the board runs on). A handler
+  // announces itself first, and the clock thread waits between slices until no handler waits.
+  class Turn {
+   public:
+    explicit Turn(ClockedBoard& b) : b_(b) {
+      ++b_.waiting_;
+      lock_ = std::unique_lock(b_.mutex_);
+      --b_.waiting_;
+    }
+
+   private:
+    ClockedBoard& b_;
+    std::unique_lock<std::mutex> lock_;
+  };
   void run() {
     while (!stop_) {
       {
         std::lock_guard lock(mutex_);
         board_.run_cycles(BoardSim::kClockHz / 1000);
       }
-      std::this_thread::yield();  // std::mutex is not fair: let the USB handlers in
+      while (waiting_.load() > 0 && !stop_) std::this_thread::yield();
     }
   }
+  std::atomic<int> waiting_{0};
   std::mutex mutex_;
   BoardSim board_;
   std::atomic<bool> stop_{false};
