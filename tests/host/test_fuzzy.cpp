@@ -191,5 +191,49 @@ TEST(FuzzyConfig, ClearErrorsNameTheField) {
   expect_error(replaced(kGood, "\"range_max_cm\": 30,", ""), "range_max_cm");
 }
 
+std::string localizer_error_of(const std::string& extra) {
+  cv::FileStorage fs;
+  try {
+    (void)parse_localizer_config(parse(fs, "{" + extra + "\"fuzzy\": " + kGood + "}"), "loc.json");
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(LocalizerConfigFile, ShippedFileEnablesTheImageHeadingAndPaperModeDoesNot) {
+  const LocalizerConfig lc = load_localizer_config("default");
+  EXPECT_TRUE(lc.yaw_correction);
+  EXPECT_EQ(lc.yaw_search_deg, 3.0);
+  EXPECT_EQ(lc.yaw_gain, 0.2);
+  EXPECT_EQ(lc.yaw_rate_gain, 0.02);
+  EXPECT_FALSE(LocalizerConfig::paper().yaw_correction);
+  EXPECT_EQ(localizer_error_of(""), "");
+  cv::FileStorage fs;
+  const LocalizerConfig p = parse_localizer_config(parse(fs, "{\"mode\": \"paper\", \"fuzzy\": " + kGood + "}"), "x");
+  EXPECT_FALSE(p.yaw_correction);
+  const LocalizerConfig q = parse_localizer_config(
+      parse(fs, "{\"yaw_correction\": false, \"yaw_gain\": 0.5, \"fuzzy\": " + kGood + "}"), "x");
+  EXPECT_FALSE(q.yaw_correction);
+  EXPECT_EQ(q.yaw_gain, 0.5);
+}
+
+TEST(LocalizerConfigFile, ClearErrorsNameTheFileAndField) {
+  auto expect_error = [](const std::string& extra, const std::string& field) {
+    const std::string e = localizer_error_of(extra);
+    EXPECT_NE(e.find("loc.json"), std::string::npos) << "got: " << e;
+    EXPECT_NE(e.find("'" + field + "'"), std::string::npos) << "got: " << e;
+  };
+  expect_error("\"yaw_gain\": 0, ", "yaw_gain");
+  expect_error("\"yaw_gain\": 1.5, ", "yaw_gain");
+  expect_error("\"yaw_rate_gain\": 1, ", "yaw_rate_gain");
+  expect_error("\"yaw_search_deg\": 45, ", "yaw_search_deg");
+  expect_error("\"yaw_rate_max_deg_per_s\": -1, ", "yaw_rate_max_deg_per_s");
+  expect_error("\"yaw_correction\": 2, ", "yaw_correction");
+  expect_error("\"e_th\": -3, ", "e_th");
+  expect_error("\"disagree_frames\": 0, ", "disagree_frames");
+  expect_error("\"yaw_corection\": true, ", "yaw_corection");  // a typo is not silently ignored
+}
+
 }  // namespace
 }  // namespace omniloc

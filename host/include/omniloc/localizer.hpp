@@ -72,6 +72,17 @@ struct LocalizerConfig {
   double disagree_error_ratio = 0.7;  ///< ... (global error < ratio * local error) ...
   int disagree_frames = 3;         ///< ... this many frames in a row -> relocalize there
   bool gyro_yaw_known = true;      ///< false: recover with global_search_any_yaw (no trusted heading)
+  // Heading from the image (kFull): a MEMS gyro's bias drifts (tenths of a degree a minute, more
+  // after a bad start-up calibration) and over a match the scan would no longer line up with the
+  // database. At each origin reset the yaw is also estimated from the scan (estimate_yaw within
+  // +- yaw_search_deg of the gyro heading, at the matched position) and an alpha-beta filter
+  // corrects the heading: yaw_gain of the difference now, and a drift rate learnt with
+  // yaw_rate_gain and applied between fixes (bounded by yaw_rate_max_deg_per_s).
+  bool yaw_correction = true;
+  double yaw_search_deg = 3.0;
+  double yaw_gain = 0.2;
+  double yaw_rate_gain = 0.02;
+  double yaw_rate_max_deg_per_s = 2.0;
 
   /// kPaper: refinement kNone, min range 0, no ambiguity refusal, no lost detection.
   [[nodiscard]] static LocalizerConfig paper();
@@ -143,6 +154,7 @@ struct LocalizerStats {
   int relocalizations = 0;
   int origin_resets = 0;
   int lost_events = 0;
+  int yaw_corrections = 0;
 };
 
 class Localizer {
@@ -174,6 +186,8 @@ class Localizer {
   /// Reports of frames processed since the last call (pending ones appear once processed).
   [[nodiscard]] std::vector<FrameReport> take_frame_reports();
   [[nodiscard]] const LocalizerConfig& config() const { return config_; }
+  /// The gyro drift learnt from the images (deg/s added to the gyro heading; 0 until learnt).
+  [[nodiscard]] double yaw_drift_deg_per_s() const { return yaw_rate_deg_per_s_; }
 
  private:
   enum class State { kSearching, kTracking, kLost };
@@ -200,6 +214,10 @@ class Localizer {
   void set_anchor(double t_ms, const Pose2& pose, double error);
   [[nodiscard]] LocalizedPose make_pose(const EncoderWindow& window);
   void trim_history();
+  /// kFull: the heading to reset the odometry with, corrected from the scan (alpha-beta filter);
+  /// nullopt when the scan gives no usable estimate.
+  std::optional<double> corrected_yaw(double t_ms, const BearingScan& bearings, const Eigen::Vector2d& position_cm,
+                                      double gyro_yaw_deg);
 
   LocalizerConfig config_;
   RobotConfig robot_;
@@ -225,6 +243,8 @@ class Localizer {
   int bad_run_ = 0;
   int disagree_run_ = 0;
   Eigen::Vector2d disagree_position_cm_{0.0, 0.0};
+  double yaw_rate_deg_per_s_ = 0.0;   // learnt drift correction (alpha-beta filter's rate)
+  double last_yaw_fix_ms_ = -1e300;
   LocalizedPose last_pose_;
   LocalizerStats stats_;
 };

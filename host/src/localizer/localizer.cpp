@@ -327,9 +327,17 @@ FrameReport Localizer::process(double t_ms, const BearingScan& bearings) {
     last_good_ = true;
     applied_this_window_ = true;
     rep.outcome = FrameOutcome::kAccepted;
-    const Pose2 pose{m.position_cm.x(), m.position_cm.y(), yaw};
-    if (t_ms - last_reset_ms_ >= config_.reset_period_ms - 1e-6)
-      reset_origin_at(t_ms, pose, config_.image_sigma_cm, odometry_.estimate().sigma_yaw_deg);
+    Pose2 pose{m.position_cm.x(), m.position_cm.y(), yaw};
+    if (t_ms - last_reset_ms_ >= config_.reset_period_ms - 1e-6) {
+      double sigma_yaw = odometry_.estimate().sigma_yaw_deg;
+      if (full && config_.yaw_correction) {
+        if (const std::optional<double> y = corrected_yaw(t_ms, bearings, m.position_cm, yaw)) {
+          pose.yaw_deg = *y;
+          sigma_yaw = std::min(sigma_yaw, config_.image_sigma_yaw_deg);
+        }
+      }
+      reset_origin_at(t_ms, pose, config_.image_sigma_cm, sigma_yaw);
+    }
     set_anchor(t_ms, pose, m.error);
   } else {
     ++stats_.rejected;
@@ -345,6 +353,26 @@ FrameReport Localizer::process(double t_ms, const BearingScan& bearings) {
     }
   }
   return rep;
+}
+
+std::optional<double> Localizer::corrected_yaw(double t_ms, const BearingScan& bearings,
+                                               const Eigen::Vector2d& position_cm, double gyro_yaw_deg) {
+  // Alpha-beta filter on the heading error: predict with the learnt drift rate since the last
+  // fix, then move by yaw_gain of the residual and learn the rate with yaw_rate_gain.
+  const double dt_s = (t_ms - last_yaw_fix_ms_) / 1000.0;
+  const bool recent = dt_s > 0.0 && dt_s <= 1.0;  // the rate is only learnt from close fixes
+  const double predicted = gyro_yaw_deg + (recent ? yaw_rate_deg_per_s_ * dt_s : 0.0);
+  const YawEstimate est = estimate_yaw(field_, camera_, bearings, position_cm, predicted, config_.yaw_search_deg);
+  if (!(est.error < config_.e_th)) return std::nullopt;
+  const double residual = angle_diff_deg(est.yaw_deg, predicted);
+  if (recent) {
+    yaw_rate_deg_per_s_ += config_.yaw_rate_gain * residual / dt_s;
+    yaw_rate_deg_per_s_ = std::clamp(yaw_rate_deg_per_s_, -config_.yaw_rate_max_deg_per_s,
+                                     config_.yaw_rate_max_deg_per_s);
+  }
+  last_yaw_fix_ms_ = t_ms;
+  ++stats_.yaw_corrections;
+  return wrap_deg(predicted + config_.yaw_gain * residual);
 }
 
 LocalizedPose Localizer::make_pose(const EncoderWindow& window) {

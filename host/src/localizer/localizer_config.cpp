@@ -17,6 +17,7 @@ LocalizerConfig LocalizerConfig::paper() {
   c.refinement = Refinement::kNone;
   c.min_range_cm = 0.0;
   c.refuse_ambiguous = false;
+  c.yaw_correction = false;  // the paper takes the heading from the gyro alone
   return c;
 }
 
@@ -61,6 +62,10 @@ void validate_localizer_config(const LocalizerConfig& c, const std::string& sour
   if (!(c.disagree_error_ratio > 0.0 && c.disagree_error_ratio <= 1.0))
     fail(source, "disagree_error_ratio", "must be in (0, 1]");
   if (c.disagree_frames < 1) fail(source, "disagree_frames", "must be >= 1");
+  if (!(c.yaw_search_deg > 0.0 && c.yaw_search_deg <= 30.0)) fail(source, "yaw_search_deg", "must be in (0, 30] degrees");
+  if (!(c.yaw_gain > 0.0 && c.yaw_gain <= 1.0)) fail(source, "yaw_gain", "must be in (0, 1]");
+  if (!(c.yaw_rate_gain >= 0.0 && c.yaw_rate_gain < 1.0)) fail(source, "yaw_rate_gain", "must be in [0, 1)");
+  need_non_negative(c.yaw_rate_max_deg_per_s, source, "yaw_rate_max_deg_per_s");
 }
 
 namespace {
@@ -88,7 +93,8 @@ LocalizerConfig parse_localizer_config(const cv::FileNode& node, const std::stri
   static const std::set<std::string> kKeys = {
       "mode", "fuzzy", "e_th", "reset_period_ms", "history_ms", "scan_rays_per_degree", "refinement", "min_range_cm",
       "refuse_ambiguous", "image_sigma_cm", "image_sigma_yaw_deg", "lost_after_bad_frames", "check_period_ms",
-      "disagree_min_cm", "disagree_sigmas", "disagree_error_ratio", "disagree_frames", "gyro_yaw_known"};
+      "disagree_min_cm", "disagree_sigmas", "disagree_error_ratio", "disagree_frames", "gyro_yaw_known",
+      "yaw_correction", "yaw_search_deg", "yaw_gain", "yaw_rate_gain", "yaw_rate_max_deg_per_s"};
   for (auto it = node.begin(); it != node.end(); ++it) {
     const std::string key = (*it).name();
     if (!kKeys.count(key)) fail(source, key, "unknown key (see docs/LOCALIZER.md)");
@@ -135,6 +141,11 @@ LocalizerConfig parse_localizer_config(const cv::FileNode& node, const std::stri
   opt_num("disagree_error_ratio", c.disagree_error_ratio);
   opt_int("disagree_frames", c.disagree_frames);
   opt_bool("gyro_yaw_known", c.gyro_yaw_known);
+  opt_bool("yaw_correction", c.yaw_correction);
+  opt_num("yaw_search_deg", c.yaw_search_deg);
+  opt_num("yaw_gain", c.yaw_gain);
+  opt_num("yaw_rate_gain", c.yaw_rate_gain);
+  opt_num("yaw_rate_max_deg_per_s", c.yaw_rate_max_deg_per_s);
   validate_localizer_config(c, source);
   return c;
 }
