@@ -8,6 +8,7 @@
 #   make formal     yosys + yosys-smtbmc (z3) proofs
 #   make bitstream  iCEBreaker bitstream with the open iCE40 flow
 #   make bench      benchmarks (each against a naive reference, ratio printed)
+#   make soak       long simulated runs of the localizer (SOAK_MINUTES, default 10)
 #   make generate   regenerate headers and docs from common/regmap.json
 #   make clean      remove build/
 
@@ -17,7 +18,7 @@ JOBS       ?= $(shell nproc)
 CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 CTEST      := ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
 
-.PHONY: all deps configure build test demo lint formal bitstream bench generate clean
+.PHONY: all deps configure build test demo lint formal bitstream bench soak generate clean
 
 all: build
 
@@ -49,6 +50,10 @@ bitstream: deps
 
 bench: build
 	@bash scripts/bench.sh $(BUILD)
+
+SOAK_MINUTES ?= 10
+soak: build
+	$(BUILD)/soak/soak_localizer --minutes $(SOAK_MINUTES)
 
 generate:
 	python3 common/gen_regmap.py

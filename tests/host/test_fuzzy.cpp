@@ -205,8 +205,8 @@ TEST(LocalizerConfigFile, ShippedFileEnablesTheImageHeadingAndPaperModeDoesNot) 
   const LocalizerConfig lc = load_localizer_config("default");
   EXPECT_TRUE(lc.yaw_correction);
   EXPECT_EQ(lc.yaw_search_deg, 3.0);
-  EXPECT_EQ(lc.yaw_gain, 0.2);
-  EXPECT_EQ(lc.yaw_rate_gain, 0.02);
+  EXPECT_EQ(lc.yaw_gain, 0.05);
+  EXPECT_EQ(lc.yaw_rate_gain, 0.005);
   EXPECT_FALSE(LocalizerConfig::paper().yaw_correction);
   EXPECT_EQ(localizer_error_of(""), "");
   cv::FileStorage fs;

@@ -141,8 +141,8 @@ TEST_F(LocalizerSim, RecoversFromAKidnappingWithinOneSecond) {
   EXPECT_LT(std::abs(angle_diff_deg(run.poses.back().pose.yaw_deg, truth.yaw_deg)), 1.0);
 }
 
-/// A gyro left with a bad start-up calibration (0.8 deg/s of bias on top of the default noise):
-/// over 14 s the gyro heading drifts by ~11 degrees. The image heading must hold the yaw error
+/// A gyro left with a bad start-up calibration (0.4 deg/s of bias on top of the default noise):
+/// over the 12 s drive the gyro heading drifts by ~5 degrees. The image heading must hold the yaw error
 /// below 1 degree once learnt, keep the position on target and learn the drift rate; with the
 /// correction off the same run ends far off (the scenario really is a drifting gyro).
 TEST_F(LocalizerSim, ImageHeadingCorrectsADriftingGyro) {
@@ -156,7 +156,7 @@ TEST_F(LocalizerSim, ImageHeadingCorrectsADriftingGyro) {
     tr.line_to({500, 200}, 60, limits).line_to({500, 350}, 150, limits).arc({375, 275}, 180, true, limits);
     tr.line_to({250, 200}, -30, limits).rotate_by(90, limits).line_to({375, 275}, 45, limits).wait(0.5);
     sim::WorldConfig wc = sim::WorldConfig::default_noise(robot_, seed);
-    wc.gyro.bias_offset_deg_per_s = 0.8;
+    wc.gyro.bias_offset_deg_per_s = 0.4;
     sim::World world(wc, tr);
     LocalizerConfig config;
     config.yaw_correction = correct;
@@ -199,7 +199,7 @@ TEST_F(LocalizerSim, ImageHeadingCorrectsADriftingGyro) {
   const sim::LocalizedRun off = run_once(false, &bias_off, &learnt_off);
   const double final_yaw_off = std::abs(angle_diff_deg(off.poses.back().pose.yaw_deg, off.windows.back().truth.yaw_deg));
   std::printf("uncorrected: final yaw error %.2f deg\n", final_yaw_off);
-  EXPECT_GT(final_yaw_off, 5.0);
+  EXPECT_GT(final_yaw_off, 3.0);
   EXPECT_EQ(learnt_off, 0.0);
 }
 

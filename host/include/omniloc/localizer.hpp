@@ -80,8 +80,8 @@ struct LocalizerConfig {
   // yaw_rate_gain and applied between fixes (bounded by yaw_rate_max_deg_per_s).
   bool yaw_correction = true;
   double yaw_search_deg = 3.0;
-  double yaw_gain = 0.2;
-  double yaw_rate_gain = 0.02;
+  double yaw_gain = 0.05;
+  double yaw_rate_gain = 0.005;
   double yaw_rate_max_deg_per_s = 2.0;
 
   /// kPaper: refinement kNone, min range 0, no ambiguity refusal, no lost detection.

@@ -88,8 +88,10 @@ void interpolate_match(const FeatureDb& db, const Scan& scan, MatchResult& resul
 void refine_match(const FieldGeometry& field, const CameraModel& camera, const Scan& scan, MatchResult& result,
                   const MatchOptions& options = {});
 
-/// Yaw from the scan itself: the heading within yaw_hint_deg +- range_deg (step 1 / rays_per_degree)
-/// whose field-frame rotation of `bearings` best matches the expected scan at position_cm.
+/// Yaw from the scan itself: the heading within yaw_hint_deg +- range_deg whose field-frame
+/// rotation of `bearings` best matches the expected scan at position_cm, searched in steps of
+/// 1 / rays_per_degree, then below the step by an equiangular fit through the best step and its
+/// two neighbours. `error` is the normalised error at the best step.
 struct YawEstimate {
   double yaw_deg = 0.0;
   double error = kNoError;

@@ -122,6 +122,19 @@ double error_at(const FieldGeometry& field, const CameraModel& camera, const Pre
   return static_cast<double>(sad_fast(expected.data(), p)) / p.rays_used;
 }
 
+namespace {
+
+/// Equiangular fit (the shape of a sum of absolute differences): E(x) = a |x - x0| + b through
+/// (-1, em), (0, e0), (1, ep) with e0 the smallest; returns x0 in [-0.5, 0.5].
+double equiangular_offset(double em, double e0, double ep) {
+  double x0 = 0.0;
+  if (em >= ep && em > e0) x0 = 0.5 * (em - ep) / (em - e0);
+  if (ep > em && ep > e0) x0 = -0.5 * (ep - em) / (ep - e0);
+  return std::clamp(x0, -0.5, 0.5);
+}
+
+}  // namespace
+
 void interpolate_match(const FeatureDb& db, const Scan& scan, MatchResult& r) {
   if (r.cell < 0 || r.rays_used == 0) return;
   const PreparedScan p = prepare_scan(scan);
@@ -132,13 +145,9 @@ void interpolate_match(const FeatureDb& db, const Scan& scan, MatchResult& r) {
     if (ii < 0 || jj < 0 || ii >= g.nx || jj >= g.ny) return -1.0;
     return sad_fast(db.cell_features(jj * g.nx + ii), p);
   };
-  // Equiangular fit: E(x) = a |x - x0| + b through (-1, em), (0, e0), (1, ep), x0 in [-0.5, 0.5].
   auto offset = [&](double em, double ep) {
     if (em < 0.0 || ep < 0.0) return 0.0;  // at the grid's edge: stay on the grid point
-    double x0 = 0.0;
-    if (em >= ep && em > e0) x0 = 0.5 * (em - ep) / (em - e0);
-    if (ep > em && ep > e0) x0 = -0.5 * (ep - em) / (ep - e0);
-    return std::clamp(x0, -0.5, 0.5);
+    return equiangular_offset(em, e0, ep);
   };
   r.position_cm = r.grid_position_cm + g.step_cm * Eigen::Vector2d(offset(err(i - 1, j), err(i + 1, j)),
                                                                    offset(err(i, j - 1), err(i, j + 1)));
@@ -181,12 +190,26 @@ YawEstimate estimate_yaw(const FieldGeometry& field, const CameraModel& camera, 
   expected_features(field, camera, position_cm, expected.data(), scratch);
   YawEstimate best;
   const int steps = static_cast<int>(std::floor(range_deg * bearings.rays_per_degree + 1e-9));
+  std::vector<double> errors(static_cast<std::size_t>(2 * steps + 1), kNoError);
+  int best_s = 0;
   for (int s = -steps; s <= steps; ++s) {
     const double yaw = yaw_hint_deg + static_cast<double>(s) / bearings.rays_per_degree;
     const PreparedScan p = prepare_scan(rotate_to_field(bearings, yaw));
     if (p.rays_used == 0) continue;
     const double e = static_cast<double>(sad_fast(expected.data(), p)) / p.rays_used;
-    if (e < best.error) best = {yaw, e};
+    errors[static_cast<std::size_t>(s + steps)] = e;
+    if (e < best.error) {
+      best = {yaw, e};
+      best_s = s;
+    }
+  }
+  // Below the step: the equiangular fit through the best step and its two neighbours (not at
+  // either end of the searched range, where the minimum may lie outside).
+  if (best.error < kNoError && best_s > -steps && best_s < steps) {
+    const double em = errors[static_cast<std::size_t>(best_s - 1 + steps)];
+    const double ep = errors[static_cast<std::size_t>(best_s + 1 + steps)];
+    if (em < kNoError && ep < kNoError)
+      best.yaw_deg += equiangular_offset(em, best.error, ep) / bearings.rays_per_degree;
   }
   return best;
 }
