@@ -3,10 +3,15 @@
 // simulation (PNG is lossless), and the error figures must agree with the truth file.
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
-#include <unistd.h>
+#include <fstream>
+#include <sstream>
 
 #include "omniloc/recording.hpp"
 #include "omniloc_sim/record_sim.hpp"
@@ -94,6 +99,85 @@ TEST(Replay, RecordedSimulationReplaysLikeTheLiveRun) {
   const auto back = read_poses_csv(dir / "poses.csv");
   ASSERT_EQ(back.size(), r.poses.size());
   EXPECT_NEAR(back.back().pose.x_cm, r.poses.back().pose.x_cm, 1e-3);
+  fs::remove_all(dir);
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  std::ostringstream os;
+  os << in.rdbuf();
+  return os.str();
+}
+
+/// Runs `omniloc replay ARGS` as a child process (the program users run), stdout and stderr to files.
+int run_replay_command(const std::string& args, const fs::path& out, const fs::path& err) {
+  const std::string cmd = std::string(OMNILOC_CLI_PATH) + " replay " + args + " >" + out.string() + " 2>" + err.string();
+  const int status = std::system(cmd.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// The `omniloc replay` program itself: the poses it writes equal the library's replay of the same
+// recording, its summary prints the library's error figures, and a malformed encoders.csv line is
+// refused with the file and line named and a non-zero exit.
+TEST(ReplayCommand, WritesTheLibrarysPosesAndNamesABadLine) {
+  const std::uint64_t seed = 22;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  const fs::path dir = fs::temp_directory_path() / ("omniloc_test_replay_cmd_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const FieldGeometry field = load_field("fira-robosot");
+  const CameraModel camera = load_camera("default");
+  const RobotConfig robot = load_named_robot_config("default");
+  sim::OmniRenderer renderer(field, camera);
+  sim::SimRunOptions opt;
+  opt.render.seed = seed;
+  {
+    sim::Trajectory tr("replay command", Pose2{420, 300, -20});
+    tr.line_to({480, 250}, 30, sim::MotionLimits{}).wait(0.1);
+    sim::World world(sim::WorldConfig::default_noise(robot, seed), tr);
+    sim::record_simulation(dir / "rec", world, renderer, opt, "fira-robosot", std::nullopt);
+  }
+  const fs::path db_file = dir / "features.db";
+  const FeatureDb db = load_or_build_feature_db(field, camera, db_file, [](const std::string&) {});
+  const Recording rec = load_recording(dir / "rec");
+  const ReplayResult lib = replay_recording(rec, LocalizerConfig{}, field, db);
+  ASSERT_TRUE(lib.position_error_cm.has_value());
+
+  const std::string common = " --db " + db_file.string();
+  ASSERT_EQ(run_replay_command((dir / "rec").string() + " --out " + (dir / "poses.csv").string() + common,
+                               dir / "stdout.txt", dir / "stderr.txt"),
+            0)
+      << read_text(dir / "stderr.txt");
+  const auto poses = read_poses_csv(dir / "poses.csv");
+  ASSERT_EQ(poses.size(), lib.poses.size());
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    ASSERT_EQ(poses[k].source, lib.poses[k].source) << k;
+    ASSERT_NEAR(poses[k].pose.x_cm, lib.poses[k].pose.x_cm, 1e-3) << k;
+    ASSERT_NEAR(poses[k].pose.y_cm, lib.poses[k].pose.y_cm, 1e-3) << k;
+    ASSERT_NEAR(poses[k].t_ms, lib.poses[k].t_ms, 1e-3) << k;
+  }
+  const std::string out = read_text(dir / "stdout.txt");
+  char expected[64];
+  std::snprintf(expected, sizeof expected, "mean %7.2f  median %7.2f", lib.position_error_cm->mean,
+                lib.position_error_cm->median);
+  EXPECT_NE(out.find(std::string("position error   ") + expected), std::string::npos) << out;
+  std::printf("omniloc replay: %zu poses equal the library's; summary: %s\n", poses.size(), expected);
+
+  // Line 5 of encoders.csv (the header is line 1) made unreadable.
+  const fs::path enc = dir / "rec" / "encoders.csv";
+  std::ifstream in(enc);
+  std::vector<std::string> lines;
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
+  in.close();
+  ASSERT_GT(lines.size(), 5u);
+  lines[4] = "40.000,4,12,x13,14,15,0.0";
+  {
+    std::ofstream o(enc);
+    for (const auto& l : lines) o << l << "\n";
+  }
+  EXPECT_EQ(run_replay_command((dir / "rec").string() + common, dir / "stdout.txt", dir / "stderr.txt"), 1);
+  const std::string err = read_text(dir / "stderr.txt");
+  EXPECT_NE(err.find(enc.string() + ":5:"), std::string::npos) << err;
+  std::printf("malformed line refused: %s", err.c_str());
   fs::remove_all(dir);
 }
 
