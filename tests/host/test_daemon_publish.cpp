@@ -137,13 +137,14 @@ TEST(DaemonPublish, StatusLineShowsEveryFigure) {
   s.source = "odometry";
   s.match_error = -1;
   s.uncertainty_cm = 3.25;
+  s.gyro_drift_deg_per_s = -0.0124;
   s.windows_per_s = 100;
   s.frames_per_s = 0;
   s.published = 1200;
   s.send_failed = 2;
   s.reconnects = 1;
   EXPECT_EQ(omniloc::daemon::status_line(s),
-            "omnilocd t=12.0s odometry_only pose=(375.2,275.1,-90.0) src=odometry err=- sigma=3.2cm win=100/s cam=0/s "
+            "omnilocd t=12.0s odometry_only pose=(375.2,275.1,-90.0) src=odometry err=- sigma=3.2cm drift=-0.012deg/s win=100/s cam=0/s "
             "sent=1200 dropped=2 reconnects=1");
 }
 

@@ -67,6 +67,7 @@ struct StatusSnapshot {
   std::string source;
   double match_error = -1.0;
   double uncertainty_cm = 0.0;
+  double gyro_drift_deg_per_s = 0.0;  ///< drift correction the localizer learnt from the images
   double windows_per_s = 0.0;   ///< encoder windows received over the last period
   double frames_per_s = 0.0;    ///< camera frames used over the last period
   std::uint64_t published = 0;
@@ -75,7 +76,7 @@ struct StatusSnapshot {
 };
 
 /// One line, no newline, e.g.
-/// "omnilocd t=12.0s ok pose=(375.2,275.1,90.0) src=integrated err=3.1 sigma=1.2cm win=100/s cam=60/s sent=1200".
+/// "omnilocd t=12.0s ok pose=(375.2,275.1,90.0) src=integrated err=3.1 sigma=1.2cm drift=+0.004deg/s win=100/s cam=60/s sent=1200".
 [[nodiscard]] std::string status_line(const StatusSnapshot& s);
 
 }  // namespace omniloc::daemon

@@ -249,6 +249,7 @@ struct Daemon::Impl {
     s.source = last_message.source;
     s.match_error = last_message.match_error;
     s.uncertainty_cm = last_message.uncertainty_cm;
+    s.gyro_drift_deg_per_s = localizer.yaw_drift_deg_per_s();
     s.windows_per_s = span_s > 0 ? static_cast<double>(report.windows - windows_at_status) / span_s : 0.0;
     s.frames_per_s = span_s > 0 ? static_cast<double>(report.frames - frames_at_status) / span_s : 0.0;
     s.published = publisher.sent();
