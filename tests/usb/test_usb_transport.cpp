@@ -11,6 +11,7 @@
 
 #include "omniloc/board_client.hpp"
 #include "omniloc/usb_transport.hpp"
+#include "omniloc_sim/ft2232h_eeprom.hpp"
 #include "omniloc_sim/ft2232h_model.hpp"
 #include "omniloc_sim/reference_board.hpp"
 
@@ -34,7 +35,18 @@ struct Mute final : sim::UartSide {
 class UsbLink : public ::testing::Test {
  protected:
   UsbLink()
-      : board({}, script), device(usb, board), other(usb, mute, other_config()) {}
+      : board({}, script), device(usb, board, board_config()), other(usb, mute, other_config()) {}
+  /// The omniloc board as its EEPROM (firmware/ft2232h_eeprom.conf, the source of the identity)
+  /// makes it: the host, with its defaults, must find this one.
+  static sim::EepromIdentity eeprom() { return sim::read_eeprom_identity(OMNILOC_EEPROM_CONF); }
+  static sim::Ft2232hConfig board_config() {
+    const sim::EepromIdentity id = eeprom();
+    sim::Ft2232hConfig c;
+    c.manufacturer = id.manufacturer;
+    c.product = id.product;
+    c.serial = id.serial;
+    return c;
+  }
   static sim::Ft2232hConfig other_config() {
     sim::Ft2232hConfig c;
     c.address = 3;
@@ -64,8 +76,8 @@ TEST_F(UsbLink, FindsTheBoardAmongOtherFtdiDevices) {
     EXPECT_TRUE(b.error.empty()) << b.error;
     if (b.is_omniloc) {
       ++omniloc;
-      EXPECT_EQ(b.serial, "OL000001");
-      EXPECT_EQ(b.manufacturer, "omniloc");
+      EXPECT_EQ(b.serial, eeprom().serial);
+      EXPECT_EQ(b.manufacturer, eeprom().manufacturer);
       EXPECT_EQ(b.address, 2);
     } else {
       EXPECT_EQ(b.product, "Dual RS232-HS");
@@ -97,7 +109,7 @@ TEST_F(UsbLink, ConfiguresChannelBAndReadsTheId) {
   EXPECT_TRUE(s.unhandled_ioctls.empty()) << "first unhandled ioctl 0x" << std::hex << s.unhandled_ioctls.front();
   EXPECT_FALSE(other.state().interface_claimed);
   EXPECT_EQ(t.actual_baud(), 1'000'000u);
-  EXPECT_EQ(t.board().serial, "OL000001");
+  EXPECT_EQ(t.board().serial, eeprom().serial);
 
   BoardClient client(t, client_options());
   EXPECT_EQ(client.read_register(r::kRegId), r::kIdValue);
