@@ -32,29 +32,26 @@ struct Mute final : sim::UartSide {
   std::size_t from_board(std::span<std::uint8_t>) override { return 0; }
 };
 
+/// The other FTDI device on the bus: a stock FT2232H breakout.
+sim::Ft2232hConfig stock_ftdi_config() {
+  sim::Ft2232hConfig c;
+  c.address = 3;
+  c.manufacturer = "FTDI";
+  c.product = "Dual RS232-HS";
+  c.serial = "FT123456";
+  return c;
+}
+
+/// The identity the omniloc board's EEPROM gives it (firmware/ft2232h_eeprom.conf, its one source).
+sim::EepromIdentity eeprom() { return sim::read_eeprom_identity(OMNILOC_EEPROM_CONF); }
+
 class UsbLink : public ::testing::Test {
  protected:
+  // The omniloc board as its EEPROM makes it: the host, with its defaults, must find this one.
   UsbLink()
-      : board({}, script), device(usb, board, board_config()), other(usb, mute, other_config()) {}
-  /// The omniloc board as its EEPROM (firmware/ft2232h_eeprom.conf, the source of the identity)
-  /// makes it: the host, with its defaults, must find this one.
-  static sim::EepromIdentity eeprom() { return sim::read_eeprom_identity(OMNILOC_EEPROM_CONF); }
-  static sim::Ft2232hConfig board_config() {
-    const sim::EepromIdentity id = eeprom();
-    sim::Ft2232hConfig c;
-    c.manufacturer = id.manufacturer;
-    c.product = id.product;
-    c.serial = id.serial;
-    return c;
-  }
-  static sim::Ft2232hConfig other_config() {
-    sim::Ft2232hConfig c;
-    c.address = 3;
-    c.manufacturer = "FTDI";
-    c.product = "Dual RS232-HS";
-    c.serial = "FT123456";
-    return c;
-  }
+      : board({}, script),
+        device(usb, board, sim::Ft2232hConfig::programmed_with(eeprom())),
+        other(usb, mute, stock_ftdi_config()) {}
   static BoardClientOptions client_options() {
     BoardClientOptions o;
     o.response_timeout = 200ms;  // each emulated USB transfer costs ~1 ms
@@ -293,9 +290,7 @@ TEST_F(UsbLink, ProbeStreamsALiveTableAndRestoresControl) {
 TEST(UsbProbe, SaysSoWhenNoBoardIsAttached) {
   sim::EmulatedUsb usb;
   Mute mute;
-  sim::Ft2232hConfig c;
-  c.product = "Dual RS232-HS";
-  sim::Ft2232hModel other(usb, mute, c);
+  sim::Ft2232hModel other(usb, mute, stock_ftdi_config());
   const auto [rc, out] = run_cli("probe --once");
   EXPECT_EQ(rc, 1) << out;
   EXPECT_NE(out.find("no omniloc board found"), std::string::npos) << out;

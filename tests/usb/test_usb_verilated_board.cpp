@@ -84,7 +84,7 @@ TEST(UsbVerilatedBoard, StreamsGoldenWindowsThenReportsUnplug) {
   tb::GoldenQuadrature golden(stream, kWindowCycles);
   sim::EmulatedUsb usb;
   ClockedBoard board(golden);
-  sim::Ft2232hModel device(usb, board);
+  sim::Ft2232hModel device(usb, board, sim::Ft2232hConfig::programmed_with(sim::read_eeprom_identity(OMNILOC_EEPROM_CONF)));
 
   UsbTransport transport;
   BoardClientOptions options;

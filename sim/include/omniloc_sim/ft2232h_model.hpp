@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "omniloc_sim/ft2232h_eeprom.hpp"
 #include "omniloc_sim/uart_side.hpp"
 
 namespace omniloc::sim {
@@ -35,11 +36,22 @@ class EmulatedUsb {
 struct Ft2232hConfig {
   int bus = 1;
   int address = 2;
-  std::string manufacturer = "omniloc";
-  std::string product = "omniloc encoder board";
-  std::string serial = "OL000001";
+  // The strings of the chip's EEPROM. No defaults: an omniloc board gets them from
+  // firmware/ft2232h_eeprom.conf (programmed_with), any other device from its test.
+  std::string manufacturer;
+  std::string product;
+  std::string serial;
   bool kernel_driver_bound = true;  ///< ftdi_sio holds interface 1 until the host detaches it
   std::uint8_t modem_status = 0x31;  ///< first byte of every IN packet (CTS, DSR, low nibble 1)
+
+  /// A chip whose EEPROM was written with this identity (read_eeprom_identity of the firmware file).
+  [[nodiscard]] static Ft2232hConfig programmed_with(const EepromIdentity& eeprom) {
+    Ft2232hConfig c;
+    c.manufacturer = eeprom.manufacturer;
+    c.product = eeprom.product;
+    c.serial = eeprom.serial;
+    return c;
+  }
 };
 
 /// A vendor or standard control request the device received.
