@@ -4,8 +4,10 @@
 // run checks: poses reach a UDP socket on 127.0.0.1 and match truth; the board unplugged for 0.6 s
 // (the transport throws kDeviceGone) gives degraded poses, then a reconnect and good poses again; a
 // camera that stops gives odometry-only poses, flagged; the recording reads back with the
-// recording reader. (The Verilated board behind the same daemon is what `omnilocd --board sim` and
-// `make demo` run; this test program does not link it.)
+// recording reader. Truth never passes through the daemon: the test looks it up in the simulator's
+// truth log for each published pose, and writes truth.csv from a window observer, as omnilocd-sim
+// does. (The Verilated board behind the same daemon is what `omnilocd-sim` and `make demo` run;
+// test_sim_programs runs those.)
 #include <gtest/gtest.h>
 
 #include <arpa/inet.h>
@@ -25,8 +27,8 @@
 #include <opencv2/core/persistence.hpp>
 
 #include "omniloc/daemon.hpp"
-#include "omniloc/daemon_sim.hpp"
 #include "omniloc/recording.hpp"
+#include "omniloc_sim/sim_robot.hpp"
 #include "omniloc_sim/reference_board.hpp"
 #include "omniloc_sim/trajectory.hpp"
 #include "omniloc_sim/world.hpp"
@@ -35,6 +37,8 @@ namespace {
 
 using namespace omniloc;
 using namespace omniloc::daemon;
+using omniloc::sim::SimCamera;
+using omniloc::sim::SimTruthLog;
 
 constexpr double kWindowMs = 10.0;
 
@@ -190,8 +194,6 @@ TEST(DaemonSim, PublishesTrackedPosesSurvivesUnplugAndCameraStop) {
   const auto rec_dir = std::filesystem::temp_directory_path() / ("omniloc_test_daemon_rec_" + std::to_string(::getpid()));
   std::filesystem::remove_all(rec_dir);
   DaemonConfig cfg;
-  cfg.board = "sim";
-  cfg.camera = "sim";
   cfg.udp_address = "127.0.0.1";
   cfg.udp_port = rx.port();
   cfg.duration_s = 7.0;
@@ -207,15 +209,26 @@ TEST(DaemonSim, PublishesTrackedPosesSurvivesUnplugAndCameraStop) {
     return std::make_unique<RigTransport>(rig);
   };
   io.camera = &camera;
-  io.extras = &rig.log;
-  io.on_pose = [&](const PoseEvent& e) { events.push_back(e); };
+  io.heading = &rig.log;
+  std::vector<std::optional<Pose2>> truths;  // at each published pose's time
+  io.observer.on_pose = [&](const PoseEvent& e) {
+    events.push_back(e);
+    truths.push_back(rig.log.truth(e.message.t_ms));
+  };
   io.log = [&](const std::string& s) {
     logs.push_back(s);
     std::printf("%s\n", s.c_str());
   };
   Daemon d(cfg, mod, io);
+  // After the daemon has made the recording directory, as omnilocd-sim does.
+  TruthCsvWriter truth_csv(rec_dir / "truth.csv");
+  d.set_observer(DaemonObserver{[&](const EncoderWindow& w) {
+                                  if (const auto t = rig.log.truth(w.t_end_ms)) truth_csv.add(w.t_end_ms, *t);
+                                },
+                                {}, io.observer.on_pose});
   volatile std::sig_atomic_t stop = 0;
   const DaemonReport r = d.run(&stop);
+  truth_csv.close();
 
   // --- counts ---
   EXPECT_EQ(r.stop_reason, "duration");
@@ -245,7 +258,9 @@ TEST(DaemonSim, PublishesTrackedPosesSurvivesUnplugAndCameraStop) {
   int ok_checked = 0, degraded = 0, odo_only = 0;
   double max_err_tracking = 0, max_err_odo = 0, max_yaw_err = 0;
   bool saw_ok_after_reconnect = false;
-  for (const auto& e : events) {
+  for (std::size_t i = 0; i < events.size(); ++i) {
+    const PoseEvent& e = events[i];
+    const std::optional<Pose2>& truth = truths[i];
     const double t = e.message.t_ms;
     const auto st = e.message.status;
     if (t >= rig.unplug_from_ms + 20 && t < rig.unplug_to_ms) {
@@ -262,9 +277,9 @@ TEST(DaemonSim, PublishesTrackedPosesSurvivesUnplugAndCameraStop) {
       EXPECT_EQ(st, DaemonStatus::kOdometryOnly) << "t=" << t;
       ++odo_only;
     }
-    if (!e.truth || !e.from_window) continue;
-    const double err = position_error(e.localized.pose, *e.truth);
-    const double yaw_err = std::abs(angle_diff_deg(e.localized.pose.yaw_deg, e.truth->yaw_deg));
+    if (!truth || !e.from_window) continue;
+    const double err = position_error(e.localized.pose, *truth);
+    const double yaw_err = std::abs(angle_diff_deg(e.localized.pose.yaw_deg, truth->yaw_deg));
     if (st == DaemonStatus::kOk && (t > 1500 && t < rig.unplug_from_ms)) {
       max_err_tracking = std::max(max_err_tracking, err);
       max_yaw_err = std::max(max_yaw_err, yaw_err);
@@ -278,8 +293,8 @@ TEST(DaemonSim, PublishesTrackedPosesSurvivesUnplugAndCameraStop) {
     if (st == DaemonStatus::kOdometryOnly && t > camera_stop_ms) max_err_odo = std::max(max_err_odo, err);
     if (std::getenv("DAEMON_SIM_TRACE") && static_cast<long>(t) % 100 < 10)
       std::printf("t=%.0f %s src=%s err=%.2f true=(%.1f,%.1f,%.1f) est=(%.1f,%.1f,%.1f)\n", t,
-                  std::string(to_string(st)).c_str(), e.message.source.c_str(), err, e.truth->x_cm, e.truth->y_cm,
-                  e.truth->yaw_deg, e.localized.pose.x_cm, e.localized.pose.y_cm, e.localized.pose.yaw_deg);
+                  std::string(to_string(st)).c_str(), e.message.source.c_str(), err, truth->x_cm, truth->y_cm,
+                  truth->yaw_deg, e.localized.pose.x_cm, e.localized.pose.y_cm, e.localized.pose.yaw_deg);
   }
   std::printf("checked %d ok poses: max error %.2f cm, yaw %.2f deg; %d degraded; %d odometry-only, max error %.2f cm\n",
               ok_checked, max_err_tracking, max_yaw_err, degraded, odo_only, max_err_odo);
@@ -311,7 +326,6 @@ TEST(DaemonSim, StopFlagEndsTheRunAndSwitchesStreamingOff) {
   Rig rig(sim::WorldConfig::default_noise(mod.robot, seed), std::move(trajectory));
   RigClock clock(rig);
   DaemonConfig cfg;
-  cfg.board = "sim";
   cfg.camera = "none";
   cfg.udp_port = 9;  // discard port on loopback: nobody listens, sends must still not fail the run
   std::vector<PoseEvent> events;
@@ -319,9 +333,11 @@ TEST(DaemonSim, StopFlagEndsTheRunAndSwitchesStreamingOff) {
   DaemonIo io;
   io.clock = &clock;
   io.open_board = [&rig]() -> std::unique_ptr<Transport> { return std::make_unique<RigTransport>(rig); };
-  io.extras = &rig.log;
-  io.on_pose = [&](const PoseEvent& e) {
+  io.heading = &rig.log;
+  std::vector<std::optional<Pose2>> truths;
+  io.observer.on_pose = [&](const PoseEvent& e) {
     events.push_back(e);
+    truths.push_back(rig.log.truth(e.message.t_ms));
     if (events.size() == 150) stop = 1;
   };
   io.log = [](const std::string& s) { std::printf("%s\n", s.c_str()); };
@@ -335,10 +351,10 @@ TEST(DaemonSim, StopFlagEndsTheRunAndSwitchesStreamingOff) {
   EXPECT_EQ(omniloc::regmap::kControlStream.get(rig.board.reg(omniloc::regmap::kRegControl)), 0u);
   EXPECT_EQ(omniloc::regmap::kControlEnable.get(rig.board.reg(omniloc::regmap::kRegControl)), 1u);
   double max_err = 0;
-  for (const auto& e : events) {
-    EXPECT_EQ(e.message.status, DaemonStatus::kOdometryOnly) << "t=" << e.message.t_ms;
-    ASSERT_TRUE(e.truth.has_value());
-    max_err = std::max(max_err, position_error(e.localized.pose, *e.truth));
+  for (std::size_t i = 0; i < events.size(); ++i) {
+    EXPECT_EQ(events[i].message.status, DaemonStatus::kOdometryOnly) << "t=" << events[i].message.t_ms;
+    ASSERT_TRUE(truths[i].has_value());
+    max_err = std::max(max_err, position_error(events[i].localized.pose, *truths[i]));
   }
   std::printf("1.5 s of dead reckoning from the true start: max error %.2f cm\n", max_err);
   EXPECT_LT(max_err, 5.0);

@@ -1,4 +1,4 @@
-// The drive `omniloc demo` runs (daemon_sim.hpp demo_drive) through the world simulator with the
+// The drive `omniloc-sim demo` runs (sim/include/omniloc_sim/demo_drive.hpp) through the world simulator with the
 // demo's events: 30 s long, the robot on the carpet all the time with its centre at most 10 cm
 // outside the field lines (the world moves the reference rigidly after the kidnapping; keeping it on
 // the field is the drive's job), within 10 cm of each of the four boundary lines at some point, one kidnapping at the stated time and
@@ -9,8 +9,8 @@
 #include <cmath>
 #include <cstdio>
 
-#include "omniloc/daemon_sim.hpp"
 #include "omniloc/robot_config.hpp"
+#include "omniloc_sim/demo_drive.hpp"
 #include "omniloc_sim/playing_area.hpp"
 #include "omniloc_sim/world.hpp"
 
@@ -19,7 +19,7 @@ namespace {
 TEST(DemoDrive, ThirtySecondsOnTheFieldPastEveryBoundaryWithOneKidnapAndTheSlip) {
   const std::uint64_t seed = 1;  // the demo's default seed
   std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
-  const auto drive = omniloc::daemon::demo_drive(30.0);
+  const auto drive = omniloc::sim::demo_drive(30.0);
   EXPECT_NEAR(drive.trajectory.duration_s(), 30.0, 1e-9);
   EXPECT_LT(drive.kidnap_s, 25.0) << "leave the demo at least 5 s to show the recovery";
   EXPECT_GT(drive.kidnap_s, drive.slip_s + 1.0);

@@ -8,7 +8,7 @@
 #include <string>
 
 #include "commands.hpp"
-#include "omniloc/board_client.hpp"
+#include "omniloc/board_session.hpp"
 #include "omniloc/usb_transport.hpp"
 
 namespace omniloc::cli {
@@ -115,19 +115,18 @@ int cmd_probe(std::span<const std::string_view> args) {
     return 1;
   }
 
-  UsbTransport usb(opt);
-  BoardClient client(usb);
   namespace r = regmap;
-  const std::uint32_t id = client.read_register(r::kRegId);
-  if (id != r::kIdValue) {
-    std::fprintf(stderr, "omniloc probe: %s answers ID 0x%08X, not 0x%08X: not an omniloc core\n",
-                 usb.status().description.c_str(), id, r::kIdValue);
-    return 1;
-  }
-  const std::uint32_t version = client.read_register(r::kRegVersion);
-  const std::uint32_t control = client.read_register(r::kRegControl);
+  BoardSessionOptions so;
+  so.configure = false;  // look, do not touch: CONTROL changes only with --enable, and is restored
+  BoardSession session(std::make_unique<UsbTransport>(opt), so);
+  BoardClient& client = session.client();
+  Transport& usb = session.transport();
+  const BoardIdentity& ident = session.identity();
+  const std::uint32_t id = ident.id;
+  const std::uint32_t version = ident.version;
+  const std::uint32_t control = ident.control;
+  const std::uint32_t period = ident.period_cycles;
   const std::uint32_t status = client.read_register(r::kRegStatus);
-  const std::uint32_t period = client.read_register(r::kRegPeriod);
   const std::uint32_t link = client.read_register(r::kRegLinkErrors);
   std::printf("%s\n", usb.status().description.c_str());
   std::printf("ID 0x%08X  register map %u.%u.%u (host speaks %u.%u.%u)\n", id, r::kVersionMajor.get(version),
@@ -144,7 +143,7 @@ int cmd_probe(std::span<const std::string_view> args) {
     std::printf(" %u", client.read_register(static_cast<std::uint8_t>(r::kRegErrorCount0 + ch)));
   }
   std::printf("\n");
-  if (version != r::kVersionValue) {
+  if (version_differs(ident)) {
     std::fprintf(stderr, "warning: the board's register map differs from the host's\n");
   }
 
@@ -163,7 +162,7 @@ int cmd_probe(std::span<const std::string_view> args) {
     client.write_register(r::kRegControl, r::kControlEnable.put(control, 1));
   }
   std::signal(SIGINT, on_sigint);
-  client.set_streaming(true);
+  client.set_streaming(true);  // streaming on here, not in BoardSession: probe keeps the board's DECODE
   print_header();
   const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(seconds);
   try {

@@ -1,6 +1,6 @@
 // The core of the robot daemon `omnilocd`, free of processes and signals so that tests drive it
-// in-process: it opens the board through a factory (USB on the robot, the Verilated board in
-// simulation), streams encoder windows into the Localizer together with camera frames, publishes
+// in-process: it opens the board through a factory (USB on the robot; the simulated robot in sim/
+// passes its Verilated board), talks to it through one BoardSession, streams encoder windows into the Localizer together with camera frames, publishes
 // one pose per window over UDP, records the session (REC_DIR contract, recording.hpp), prints a
 // status line once a second, and keeps going when the board is unplugged (reconnect loop) or the
 // camera stops (odometry only, flagged). Behaviour and formats: docs/DAEMON.md.
@@ -64,26 +64,23 @@ class FrameSource {
   [[nodiscard]] virtual std::string describe() const = 0;
 };
 
-/// What the board's windows lack: a heading reference (the board has no gyro) and, in simulation,
-/// the ground truth (recorded to truth.csv and reported to observers).
-class WindowExtras {
+/// What the board's windows lack: a heading reference (the board has no gyro yet).
+class HeadingSource {
  public:
-  virtual ~WindowExtras() = default;
+  virtual ~HeadingSource() = default;
   /// The gyro's integrated field-frame yaw at the end of `window` (its counts are filled in).
   [[nodiscard]] virtual double gyro_yaw_deg(const EncoderWindow& window) = 0;
   /// True if gyro_yaw_deg is an absolute heading (a gyro aligned at kick-off), false if it only
   /// follows the wheels (the localizer then recovers without trusting it).
-  [[nodiscard]] virtual bool gyro_is_absolute() const = 0;
-  [[nodiscard]] virtual bool has_truth() const { return false; }
-  [[nodiscard]] virtual std::optional<Pose2> truth(double /*t_ms*/) { return std::nullopt; }
+  [[nodiscard]] virtual bool is_absolute() const = 0;
 };
 
 /// Without a gyro: the heading integrated from the wheels (eq. (9) least squares), starting at 0.
-class WheelYawExtras final : public WindowExtras {
+class WheelYawHeading final : public HeadingSource {
  public:
-  explicit WheelYawExtras(const RobotConfig& robot);
+  explicit WheelYawHeading(const RobotConfig& robot);
   double gyro_yaw_deg(const EncoderWindow& window) override;
-  [[nodiscard]] bool gyro_is_absolute() const override { return false; }
+  [[nodiscard]] bool is_absolute() const override { return false; }
 
  private:
   RobotConfig robot_;
@@ -111,12 +108,19 @@ struct DaemonModels {
 [[nodiscard]] DaemonModels load_models(const DaemonConfig& config,
                                        const std::function<void(const std::string&)>& progress = {});
 
-/// What happened in one window, for observers (tests, the demo, the simulator front end).
+/// What happened in one window, for observers (tests, the demo, the simulated robot's truth log).
 struct PoseEvent {
   PoseMessage message;              ///< as published
   LocalizedPose localized;          ///< the localizer's full answer (source kNone while degraded)
-  std::optional<Pose2> truth;       ///< simulation only
   bool from_window = true;          ///< false: a degraded pose published while the board is gone
+};
+
+/// Watches the daemon without steering it: each callback is optional and runs on the daemon's
+/// thread, after the localizer has taken the window or frame.
+struct DaemonObserver {
+  std::function<void(const EncoderWindow&)> on_window;  ///< every window, with its heading
+  std::function<void(const CameraFrame&)> on_frame;     ///< every frame given to the localizer
+  std::function<void(const PoseEvent&)> on_pose;        ///< every datagram published
 };
 
 struct DaemonReport {
@@ -127,18 +131,23 @@ struct DaemonReport {
   std::uint64_t board_losses = 0;    ///< times the board went away
   std::uint64_t reconnects = 0;      ///< times it came back
   std::uint64_t camera_losses = 0;   ///< times the camera stopped delivering
+  std::uint64_t bad_crc = 0;         ///< frames from the board with a bad CRC (all sessions)
+  std::uint64_t telemetry_gaps = 0;  ///< gaps in the telemetry sequence (all sessions)
   double run_ms = 0.0;               ///< daemon time from start to stop
   std::string stop_reason;           ///< "signal", "duration"
   LocalizerStats localizer;
 };
+
+/// "stopped (signal) after 7.0 s: 600 windows, ..." for the end of a run.
+[[nodiscard]] std::string report_line(const DaemonReport& report);
 
 /// Everything the daemon talks to.
 struct DaemonIo {
   DaemonClock* clock = nullptr;        ///< required
   TransportFactory open_board;         ///< required
   FrameSource* camera = nullptr;       ///< null: no camera (odometry only)
-  WindowExtras* extras = nullptr;      ///< required (WheelYawExtras when there is no gyro)
-  std::function<void(const PoseEvent&)> on_pose;   ///< optional observer, called per publish
+  HeadingSource* heading = nullptr;    ///< required (WheelYawHeading when there is no gyro)
+  DaemonObserver observer;             ///< optional
   std::function<void(const std::string&)> log;     ///< status lines and events (default: stderr)
 };
 
@@ -154,6 +163,8 @@ class Daemon {
   /// Runs until *stop becomes non-zero (a signal handler sets it) or config.duration_s of daemon
   /// time has passed. Switches streaming off and closes the recording on the way out.
   DaemonReport run(const volatile std::sig_atomic_t* stop);
+  /// Replaces the observer given in DaemonIo (before run()).
+  void set_observer(DaemonObserver observer);
 
  private:
   struct Impl;

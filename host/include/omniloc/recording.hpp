@@ -12,6 +12,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <functional>
 #include <optional>
 #include <stdexcept>
@@ -78,6 +79,23 @@ struct Recording {
 /// Truth pose at t_ms, linear between samples (yaw the short way); nullopt outside the samples.
 [[nodiscard]] std::optional<Pose2> truth_at(const std::vector<TruthSample>& truth, double t_ms);
 
+/// Streams truth.csv rows (t_ms,x_cm,y_cm,yaw_deg): the ground truth of a simulated run, written by
+/// the simulator beside the daemon's recording (the robot never knows its truth).
+class TruthCsvWriter {
+ public:
+  explicit TruthCsvWriter(const std::filesystem::path& path);
+  ~TruthCsvWriter();
+  TruthCsvWriter(const TruthCsvWriter&) = delete;
+  TruthCsvWriter& operator=(const TruthCsvWriter&) = delete;
+  void add(double t_ms, const Pose2& pose);
+  /// Flushes and closes; throws RecordingError if the data did not reach the file.
+  void close();
+
+ private:
+  std::filesystem::path path_;
+  std::FILE* file_ = nullptr;
+};
+
 /// Writes a recording directory (created if needed; existing files are overwritten).
 class RecordingWriter {
  public:
@@ -97,7 +115,7 @@ class RecordingWriter {
   std::filesystem::path dir_;
   std::FILE* encoders_ = nullptr;
   std::FILE* camera_ = nullptr;
-  std::FILE* truth_ = nullptr;
+  std::unique_ptr<TruthCsvWriter> truth_;
   int frame_count_ = 0;
 };
 

@@ -7,10 +7,8 @@
 #include <cstdio>
 #include <utility>
 
-#include "omniloc/board_client.hpp"
-#include "omniloc/protocol.hpp"
+#include "omniloc/board_session.hpp"
 #include "omniloc/recording.hpp"
-#include "omniloc/regmap.hpp"
 
 namespace omniloc::daemon {
 namespace {
@@ -22,14 +20,6 @@ constexpr double kBoardSilentMs = 250.0;
 constexpr double kDegradedTickMs = 10.0;
 constexpr std::chrono::milliseconds kTelemetryWait{20};
 
-std::uint32_t decode_field(int decoding) {
-  switch (decoding) {
-    case 1: return regmap::kControlDecodeX1;
-    case 2: return regmap::kControlDecodeX2;
-    default: return regmap::kControlDecodeX4;
-  }
-}
-
 }  // namespace
 
 struct Daemon::Impl {
@@ -39,14 +29,10 @@ struct Daemon::Impl {
   UdpPublisher publisher;
   Localizer localizer;
   std::unique_ptr<RecordingWriter> recorder;
-  bool record_truth = false;
 
   // Board connection.
-  std::unique_ptr<Transport> transport;
-  std::unique_ptr<BoardClient> client;
-  std::optional<protocol::TimestampUnwrapper> unwrap;
-  double board_clk_hz = 0.0;
-  double connection_offset_ms = 0.0;
+  std::unique_ptr<BoardSession> client;
+  std::optional<double> connection_offset_ms;  // daemon time of board time 0 of this session
   double last_window_clock_ms = 0.0;  // clock time a window last arrived
   double next_attempt_ms = 0.0;
   bool ever_connected = false;
@@ -72,24 +58,23 @@ struct Daemon::Impl {
   Impl(const DaemonConfig& c, const DaemonModels& m, DaemonIo i)
       : config(c), models(m), io(std::move(i)), publisher(c.udp_address, c.udp_port),
         localizer(localizer_config(c, m, io), m.robot, m.field, m.camera, m.db, m.initial_pose) {
-    if (!io.clock || !io.open_board || !io.extras)
-      throw std::invalid_argument("Daemon: clock, open_board and extras are required");
+    if (!io.clock || !io.open_board || !io.heading)
+      throw std::invalid_argument("Daemon: clock, open_board and heading are required");
     if (!io.log) io.log = [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); };
     if (!config.record_dir.empty()) {
-      record_truth = io.extras->has_truth();
       RecordingMeta meta;
       meta.field = config.field;
       meta.camera = models.camera;
       meta.robot = models.robot;
       meta.initial_pose = models.initial_pose;
-      recorder = std::make_unique<RecordingWriter>(config.record_dir, meta, record_truth);
+      recorder = std::make_unique<RecordingWriter>(config.record_dir, meta, false);
     }
   }
 
   static LocalizerConfig localizer_config(const DaemonConfig&, const DaemonModels& m, const DaemonIo& io) {
     LocalizerConfig lc = m.localizer;
     // Without a real gyro the heading is only the wheels' own: do not trust it to recover.
-    if (io.extras && !io.extras->gyro_is_absolute()) lc.gyro_yaw_known = false;
+    if (io.heading && !io.heading->is_absolute()) lc.gyro_yaw_known = false;
     return lc;
   }
 
@@ -120,63 +105,46 @@ struct Daemon::Impl {
     last_message = m;
     report.published = publisher.sent();
     report.send_failed = publisher.failed();
-    if (io.on_pose) {
-      PoseEvent ev;
-      ev.message = m;
-      ev.localized = lp;
-      ev.truth = io.extras->truth(t_ms);
-      ev.from_window = from_window;
-      io.on_pose(ev);
-    }
+    if (io.observer.on_pose) io.observer.on_pose(PoseEvent{m, lp, from_window});
   }
 
   void try_connect(double now_ms) {
     if (now_ms < next_attempt_ms) return;
     next_attempt_ms = now_ms + config.reconnect_period_ms;
     try {
-      auto t = io.open_board();
-      auto c = std::make_unique<BoardClient>(*t);
-      const std::uint32_t id = c->read_register(regmap::kRegId);
-      if (id != regmap::kIdValue) {
-        char buf[96];
-        std::snprintf(buf, sizeof buf, "register ID reads 0x%08X, not 0x%08X: not an omniloc board", id,
-                      regmap::kIdValue);
-        throw TransportError(TransportErrorKind::kConfig, buf);
-      }
-      // PERIOD counts board cycles per window: with the configured window period it gives the
-      // board's clock, which the timestamps count.
-      const std::uint32_t period = c->read_register(regmap::kRegPeriod);
-      board_clk_hz = period * (1000.0 / models.robot.window_period_ms);
-      std::uint32_t control = 0;
-      control = regmap::kControlEnable.put(control, 1);
-      control = regmap::kControlDecode.put(control, decode_field(models.robot.decoding));
-      control = regmap::kControlStream.put(control, 1);
-      c->write_register(regmap::kRegControl, control);
-      transport = std::move(t);
-      client = std::move(c);
-      unwrap.reset();
+      BoardSessionOptions o;
+      o.decoding = models.robot.decoding;
+      o.window_period_ms = models.robot.window_period_ms;
+      client = std::make_unique<BoardSession>(io.open_board(), o);
+      if (version_differs(client->identity()))
+        log("omnilocd: warning: board register map " + client->identity().version_text() + " differs from the host's");
+      connection_offset_ms.reset();
       last_window_clock_ms = io.clock->now_ms();
       if (ever_connected) {
         ++report.reconnects;
-        log("omnilocd: board back (" + transport->status().description + "), streaming again");
+        log("omnilocd: board back (" + client->describe() + "), streaming again");
       } else {
-        log("omnilocd: board open (" + transport->status().description + "), streaming");
+        log("omnilocd: board open (" + client->describe() + "), streaming");
       }
       ever_connected = true;
       board_gone = false;
       last_open_error.clear();
     } catch (const std::exception& e) {
       client.reset();
-      transport.reset();
       if (e.what() != last_open_error) log(std::string("omnilocd: board not available: ") + e.what());
       last_open_error = e.what();
     }
   }
 
+  void count_link_errors() {
+    if (!client) return;
+    report.bad_crc += client->client().decoder_counters().bad_crc;
+    report.telemetry_gaps += client->client().decoder_counters().telemetry_gaps;
+  }
+
   void lose_board(const std::string& why) {
+    count_link_errors();
     client.reset();
-    transport.reset();
-    unwrap.reset();
     if (!board_gone) {
       ++report.board_losses;
       log("omnilocd: board lost (" + why + "): status degraded, reconnecting every " +
@@ -186,34 +154,21 @@ struct Daemon::Impl {
     next_attempt_ms = io.clock->now_ms() + config.reconnect_period_ms;
   }
 
-  void on_board_window(const protocol::Window& w) {
+  void on_board_window(const SessionWindow& w) {
     const double now = io.clock->now_ms();
     last_window_clock_ms = now;
-    if (!unwrap) {
-      // First window of this connection: its board time is "now" in daemon time.
-      unwrap.emplace(board_clk_hz);
-      unwrap->update(w.timestamp_cycles);
-      connection_offset_ms = now;
-    } else {
-      unwrap->update(w.timestamp_cycles);
-    }
-    double t = connection_offset_ms + unwrap->elapsed_ms();
-    if (t <= last_window_t_ms) t = last_window_t_ms + 1e-3;  // the localizer needs increasing times
-    last_window_t_ms = t;
-    EncoderWindow ew;
-    ew.seq = w.seq;
-    ew.t_end_ms = t;
-    for (std::size_t i = 0; i < 4; ++i) ew.counts[i] = w.count[i];
-    ew.gyro_yaw_deg = io.extras->gyro_yaw_deg(ew);
+    // First window of this session: its board time is "now" in daemon time.
+    if (!connection_offset_ms) connection_offset_ms = now - w.board_ms;
+    EncoderWindow ew = w.to_encoder_window(*connection_offset_ms);
+    if (ew.t_end_ms <= last_window_t_ms) ew.t_end_ms = last_window_t_ms + 1e-3;  // the localizer needs increasing times
+    last_window_t_ms = ew.t_end_ms;
+    ew.gyro_yaw_deg = io.heading->gyro_yaw_deg(ew);
     const LocalizedPose lp = localizer.on_window(ew);
     ++report.windows;
     last_localized = lp;
-    if (recorder) {
-      recorder->add_window(ew);
-      if (record_truth)
-        if (const auto truth = io.extras->truth(t)) recorder->add_truth(t, *truth);
-    }
-    publish(lp, status(now), t, true);
+    if (recorder) recorder->add_window(ew);
+    if (io.observer.on_window) io.observer.on_window(ew);
+    publish(lp, status(now), ew.t_end_ms, true);
   }
 
   void poll_camera(double now_ms) {
@@ -223,6 +178,7 @@ struct Daemon::Impl {
       if (auto f = io.camera->poll(now_ms)) {
         (void)localizer.on_image(f->t_ms, f->bgr);
         if (recorder) recorder->add_frame(f->t_ms, f->bgr);
+        if (io.observer.on_frame) io.observer.on_frame(*f);
         last_frame_ms = f->t_ms;
         ++report.frames;
       }
@@ -292,7 +248,7 @@ struct Daemon::Impl {
         }
       }
       try {
-        if (const auto w = client->poll_telemetry(kTelemetryWait)) {
+        if (const auto w = client->next_window(kTelemetryWait)) {
           on_board_window(*w);
         } else if (clock.now_ms() - last_window_clock_ms > kBoardSilentMs) {
           throw TransportError(TransportErrorKind::kIo, "no telemetry for 250 ms");
@@ -308,11 +264,8 @@ struct Daemon::Impl {
       status_tick(clock.now_ms(), start);
     }
     if (client) {
-      try {
-        client->set_streaming(false);
-      } catch (const std::exception& e) {
-        log(std::string("omnilocd: could not switch streaming off: ") + e.what());
-      }
+      if (const auto err = client->stop_streaming()) log("omnilocd: could not switch streaming off: " + *err);
+      count_link_errors();
     }
     if (recorder) recorder->close();
     report.run_ms = clock.now_ms() - start;
@@ -323,6 +276,19 @@ struct Daemon::Impl {
   }
 };
 
+std::string report_line(const DaemonReport& r) {
+  char buf[320];
+  std::snprintf(buf, sizeof buf,
+                "stopped (%s) after %.1f s: %llu windows, %llu frames, %llu poses sent (%llu failed), "
+                "board lost %llu x / back %llu x, camera lost %llu x, %llu bad CRC, %llu telemetry gaps",
+                r.stop_reason.c_str(), r.run_ms / 1000.0, static_cast<unsigned long long>(r.windows),
+                static_cast<unsigned long long>(r.frames), static_cast<unsigned long long>(r.published),
+                static_cast<unsigned long long>(r.send_failed), static_cast<unsigned long long>(r.board_losses),
+                static_cast<unsigned long long>(r.reconnects), static_cast<unsigned long long>(r.camera_losses),
+                static_cast<unsigned long long>(r.bad_crc), static_cast<unsigned long long>(r.telemetry_gaps));
+  return buf;
+}
+
 Daemon::Daemon(const DaemonConfig& config, const DaemonModels& models, DaemonIo io) {
   validate_daemon_config(config, "daemon config");
   impl_ = std::make_unique<Impl>(config, models, std::move(io));
@@ -331,5 +297,7 @@ Daemon::Daemon(const DaemonConfig& config, const DaemonModels& models, DaemonIo 
 Daemon::~Daemon() = default;
 
 DaemonReport Daemon::run(const volatile std::sig_atomic_t* stop) { return impl_->run(stop); }
+
+void Daemon::set_observer(DaemonObserver observer) { impl_->io.observer = std::move(observer); }
 
 }  // namespace omniloc::daemon

@@ -21,9 +21,9 @@ void SteadyClock::wait_ms(double ms) {
   if (ms > 0) std::this_thread::sleep_for(std::chrono::microseconds(static_cast<std::int64_t>(ms * 1000.0)));
 }
 
-WheelYawExtras::WheelYawExtras(const RobotConfig& robot) : robot_(robot), pinv_(wheel_pseudo_inverse(robot)) {}
+WheelYawHeading::WheelYawHeading(const RobotConfig& robot) : robot_(robot), pinv_(wheel_pseudo_inverse(robot)) {}
 
-double WheelYawExtras::gyro_yaw_deg(const EncoderWindow& window) {
+double WheelYawHeading::gyro_yaw_deg(const EncoderWindow& window) {
   // The rotation row of eq. (9)'s least-squares inverse: what a gyro would have measured, with the
   // wheels' slip in it (the reason a real gyro is better).
   const Eigen::Vector3d motion = least_squares_motion(pinv_, wheel_travel_cm(robot_, window.counts));

@@ -331,15 +331,14 @@ RecordingWriter::RecordingWriter(const fs::path& dir, const RecordingMeta& meta,
   camera_ = open_write(dir / "camera.csv");
   std::fputs("t_ms,file\n", camera_);
   if (with_truth) {
-    truth_ = open_write(dir / "truth.csv");
-    std::fputs("t_ms,x_cm,y_cm,yaw_deg\n", truth_);
+    truth_ = std::make_unique<TruthCsvWriter>(dir / "truth.csv");
   } else {
     fs::remove(dir / "truth.csv", ec);
   }
 }
 
 RecordingWriter::~RecordingWriter() {
-  for (std::FILE* f : {encoders_, camera_, truth_})
+  for (std::FILE* f : {encoders_, camera_})
     if (f) std::fclose(f);
 }
 
@@ -358,14 +357,28 @@ void RecordingWriter::add_frame(double t_ms, const cv::Mat& bgr) {
 
 void RecordingWriter::add_truth(double t_ms, const Pose2& pose) {
   if (!truth_) throw RecordingError(dir_.string() + ": recording opened without truth");
-  std::fprintf(truth_, "%.6f,%.6f,%.6f,%.6f\n", t_ms, pose.x_cm, pose.y_cm, pose.yaw_deg);
+  truth_->add(t_ms, pose);
 }
 
 void RecordingWriter::close() {
   close_file(encoders_, dir_ / "encoders.csv");
   close_file(camera_, dir_ / "camera.csv");
-  close_file(truth_, dir_ / "truth.csv");
+  if (truth_) truth_->close();
 }
+
+TruthCsvWriter::TruthCsvWriter(const fs::path& path) : path_(path), file_(open_write(path)) {
+  std::fputs("t_ms,x_cm,y_cm,yaw_deg\n", file_);
+}
+
+TruthCsvWriter::~TruthCsvWriter() {
+  if (file_) std::fclose(file_);
+}
+
+void TruthCsvWriter::add(double t_ms, const Pose2& pose) {
+  std::fprintf(file_, "%.6f,%.6f,%.6f,%.6f\n", t_ms, pose.x_cm, pose.y_cm, pose.yaw_deg);
+}
+
+void TruthCsvWriter::close() { close_file(file_, path_); }
 
 PosesCsvWriter::PosesCsvWriter(const fs::path& path) : path_(path), file_(open_write(path)) {
   std::fputs("t_ms,x_cm,y_cm,yaw_deg,source,match_error,search_range_cm\n", file_);

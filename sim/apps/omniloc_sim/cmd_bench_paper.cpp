@@ -1,4 +1,4 @@
-// `omniloc bench paper`: the paper's Tables 1-8 reproduced in simulation (section 3). For each of
+// `omniloc-sim bench paper`: the paper's Tables 1-8 reproduced in simulation (section 3). For each of
 // the 19 test points: image-only localisation (one rendered frame, global search), odometry only
 // (driven from the field centre, origin reset there, section 3.2) and the integrated localizer
 // (driven from the field centre, global search at start), beside the published values.
@@ -182,14 +182,14 @@ std::string paper_mean(const PaperRow* rows, int n, double published) {
 int cmd_bench(std::span<const std::string_view> args) {
   if (args.empty() || args[0] == "-h" || args[0] == "--help") {
     std::fprintf(args.empty() ? stderr : stdout,
-                 "usage: omniloc bench paper [--seed N] [--no-paper-mode]\n"
+                 "usage: omniloc-sim bench paper [--seed N] [--no-paper-mode]\n"
                  "  Tables 1-8 of the paper reproduced in simulation at its 19 test points (default noise).\n"
                  "  --seed N         simulation seed (default 1)\n"
                  "  --no-paper-mode  skip the integrated run with the paper's exact algorithm (faster)\n");
     return args.empty() ? 2 : 0;
   }
   if (args[0] != "paper") {
-    std::fprintf(stderr, "omniloc bench: unknown benchmark '%.*s' (known: paper)\n", static_cast<int>(args[0].size()),
+    std::fprintf(stderr, "omniloc-sim bench: unknown benchmark '%.*s' (known: paper)\n", static_cast<int>(args[0].size()),
                  args[0].data());
     return 2;
   }
@@ -201,7 +201,7 @@ int cmd_bench(std::span<const std::string_view> args) {
     } else if (args[i] == "--no-paper-mode") {
       paper_mode = false;
     } else {
-      std::fprintf(stderr, "omniloc bench paper: unknown option '%.*s'\n", static_cast<int>(args[i].size()),
+      std::fprintf(stderr, "omniloc-sim bench paper: unknown option '%.*s'\n", static_cast<int>(args[i].size()),
                    args[i].data());
       return 2;
     }
@@ -217,7 +217,7 @@ int cmd_bench(std::span<const std::string_view> args) {
   Bench b{sim::OmniRenderer(field, camera),
           load_or_build_feature_db(field, camera, cache, [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); }),
           load_named_robot_config("default"), seed, {}, {}};
-  std::printf("omniloc bench paper: seed %llu, FIRA field, default camera and robot, WorldConfig::default_noise,\n"
+  std::printf("omniloc-sim bench paper: seed %llu, FIRA field, default camera and robot, WorldConfig::default_noise,\n"
               "rendered frames with sensor noise, blur and a lighting gradient. Errors in cm.\n",
               static_cast<unsigned long long>(seed));
 

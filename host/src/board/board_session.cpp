@@ -1,0 +1,93 @@
+// The board conversation of one session: identify, configure, stream (board_session.hpp).
+#include "omniloc/board_session.hpp"
+
+#include <cstdio>
+#include <utility>
+
+#include "omniloc/regmap.hpp"
+
+namespace omniloc {
+
+std::string BoardIdentity::version_text() const {
+  return std::to_string(regmap::kVersionMajor.get(version)) + "." + std::to_string(regmap::kVersionMinor.get(version)) +
+         "." + std::to_string(regmap::kVersionPatch.get(version));
+}
+
+bool version_differs(const BoardIdentity& identity) { return identity.version != regmap::kVersionValue; }
+
+std::uint32_t control_decode_for(int decoding) {
+  switch (decoding) {
+    case 1: return regmap::kControlDecodeX1;
+    case 2: return regmap::kControlDecodeX2;
+    case 4: return regmap::kControlDecodeX4;
+    default: throw std::invalid_argument("quadrature decoding must be 1, 2 or 4 (got " + std::to_string(decoding) + ")");
+  }
+}
+
+BoardIdentity identify_board(BoardClient& client, double window_period_ms, const std::string& where) {
+  BoardIdentity b;
+  b.id = client.read_register(regmap::kRegId);
+  if (b.id != regmap::kIdValue) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "%s: register ID reads 0x%08X, not 0x%08X: not an omniloc board", where.c_str(),
+                  b.id, regmap::kIdValue);
+    throw BoardIdentityError(buf);
+  }
+  b.version = client.read_register(regmap::kRegVersion);
+  if (regmap::kVersionMajor.get(b.version) != regmap::kVersionMajor.get(regmap::kVersionValue)) {
+    BoardIdentity host;
+    host.version = regmap::kVersionValue;
+    throw BoardIdentityError(where + ": the board's register map is version " + b.version_text() +
+                             ", this host speaks " + host.version_text() +
+                             " (major versions differ): update the bitstream or the host");
+  }
+  b.control = client.read_register(regmap::kRegControl);
+  // PERIOD counts board cycles per window: with the robot's window period it gives the board's
+  // clock, which the timestamps count.
+  b.period_cycles = client.read_register(regmap::kRegPeriod);
+  b.clock_hz = b.period_cycles * (1000.0 / window_period_ms);
+  return b;
+}
+
+EncoderWindow SessionWindow::to_encoder_window(double offset_ms) const {
+  EncoderWindow w;
+  w.seq = raw.seq;
+  w.t_end_ms = offset_ms + board_ms;
+  for (std::size_t i = 0; i < w.counts.size() && i < raw.count.size(); ++i) w.counts[i] = raw.count[i];
+  return w;
+}
+
+BoardSession::BoardSession(std::unique_ptr<Transport> transport, const BoardSessionOptions& options)
+    : transport_(std::move(transport)) {
+  if (!transport_) throw std::invalid_argument("BoardSession: no transport");
+  client_ = std::make_unique<BoardClient>(*transport_, options.client);
+  identity_ = identify_board(*client_, options.window_period_ms, describe());
+  if (options.configure) {
+    std::uint32_t control = 0;
+    control = regmap::kControlEnable.put(control, 1);
+    control = regmap::kControlDecode.put(control, control_decode_for(options.decoding));
+    control = regmap::kControlStream.put(control, 1);
+    client_->write_register(regmap::kRegControl, control);
+  }
+}
+
+BoardSession::~BoardSession() = default;
+
+std::optional<SessionWindow> BoardSession::next_window(std::chrono::milliseconds timeout) {
+  const auto w = client_->poll_telemetry(timeout);
+  if (!w) return std::nullopt;
+  if (!unwrap_) unwrap_.emplace(identity_.clock_hz);
+  unwrap_->update(w->timestamp_cycles);
+  return SessionWindow{*w, unwrap_->elapsed_ms()};
+}
+
+std::optional<std::string> BoardSession::stop_streaming() noexcept {
+  try {
+    client_->set_streaming(false);
+    return std::nullopt;
+  } catch (const std::exception& e) {
+    return std::string(e.what());
+  }
+}
+
+}  // namespace omniloc

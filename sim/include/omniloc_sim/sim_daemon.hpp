@@ -1,0 +1,56 @@
+// The simulated robot behind the robot's own Daemon: world -> quadrature waveforms -> Verilated
+// board (rtl/omniloc_top.v) -> SimTransport, the simulated gyro as heading, a camera rendering the
+// field at the true pose, and the board's simulated time as the daemon's clock. `omnilocd-sim`,
+// `omniloc-sim demo` and the tests build their runs from it; truth reaches them through the truth
+// log and the daemon's observer, never through the daemon.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "omniloc/daemon.hpp"
+#include "omniloc/recording.hpp"
+#include "omniloc_sim/renderer.hpp"
+#include "omniloc_sim/sim_robot.hpp"
+#include "omniloc_sim/trajectory.hpp"
+#include "omniloc_sim/verilated_robot.hpp"
+#include "omniloc_sim/world.hpp"
+
+namespace omniloc::sim {
+
+struct SimRobotOptions {
+  std::uint64_t seed = 1;            ///< world noise, and the first frame's sensor noise
+  bool camera = true;                ///< false: no camera (the daemon runs odometry only)
+  double camera_fps = 60.0;          ///< frames per second of simulated time
+  std::vector<SlipEvent> slips;      ///< wheel slips the world injects
+  std::vector<KidnapEvent> kidnaps;  ///< kidnappings the world injects
+};
+
+class SimulatedRobot {
+ public:
+  /// `models` must outlive the robot (the renderer keeps the field and camera).
+  SimulatedRobot(const daemon::DaemonModels& models, Trajectory trajectory, const SimRobotOptions& options);
+
+  /// Clock, board factory, heading and camera for the Daemon (observer and log are the caller's).
+  [[nodiscard]] daemon::DaemonIo io();
+  [[nodiscard]] const SimTruthLog& truth() const { return robot_.log; }
+  [[nodiscard]] BoardSim& board() { return robot_.board; }
+  [[nodiscard]] std::int64_t board_cycles() const { return robot_.board.cycle(); }
+  [[nodiscard]] std::string describe() const;
+
+ private:
+  VerilatedRobot robot_;
+  OmniRenderer renderer_;
+  std::unique_ptr<SimCamera> camera_;
+};
+
+/// Writes the true pose at every window's time into `writer` (truth.csv beside a recording).
+/// The writer and the truth log must outlive the daemon run.
+[[nodiscard]] std::function<void(const EncoderWindow&)> truth_recorder(const SimTruthLog& truth, TruthCsvWriter& writer);
+
+/// Trajectory names make_trajectory knows, for --help texts.
+[[nodiscard]] std::string trajectory_names();
+
+}  // namespace omniloc::sim
