@@ -5,7 +5,7 @@ namespace omniloc::sim {
 namespace {
 
 WorldConfig world_config(const daemon::DaemonModels& models, const SimRobotOptions& options) {
-  WorldConfig wc = board_world_config(models.robot, options.seed);
+  WorldConfig wc = board_world_config(models.robot, options.seed, playing_area(models.field));
   wc.slips = options.slips;
   wc.kidnaps = options.kidnaps;
   return wc;

@@ -196,8 +196,7 @@ std::vector<std::string> standard_trajectory_names() {
 
 namespace {
 
-Trajectory boundary_tour() {
-  const PlayingArea& f = kFiraRoboSot;
+Trajectory boundary_tour(const PlayingArea& f) {
   const double in = 25.0;   // centre this far inside a line while driving along it
   const double out = 40.0;  // and this far outside it at each excursion across it
   const double x0 = f.x_min_cm + in, x1 = f.x_max_cm - in, y0 = f.y_min_cm + in, y1 = f.y_max_cm - in;
@@ -215,8 +214,7 @@ Trajectory boundary_tour() {
   return t;
 }
 
-Trajectory random_walk(std::uint64_t seed) {
-  const PlayingArea& f = kFiraRoboSot;
+Trajectory random_walk(std::uint64_t seed, const PlayingArea& f) {
   const double margin = f.robot_half_size_cm + 20.0;
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> ux(f.x_min_cm + margin, f.x_max_cm - margin);
@@ -242,26 +240,29 @@ Trajectory random_walk(std::uint64_t seed) {
 
 }  // namespace
 
-Trajectory make_trajectory(std::string_view name, std::uint64_t seed) {
+Trajectory make_trajectory(std::string_view name, std::uint64_t seed, const PlayingArea& area) {
+  // Placed on the area's centre and lines: on the FIRA field the centre is (375, 275) and the
+  // straight run goes from 45 cm inside one goal line to 45 cm inside the other.
+  const double cx = area.centre_x_cm(), cy = area.centre_y_cm();
   if (name == "straight") {
-    Trajectory t("straight", {120.0, 275.0, 0.0});
-    return t.line_to({630.0, 275.0}, 0.0, {100.0, 200.0, 90.0, 180.0}).wait(0.3);
+    Trajectory t("straight", {area.x_min_cm + 45.0, cy, 0.0});
+    return t.line_to({area.x_max_cm - 45.0, cy}, 0.0, {100.0, 200.0, 90.0, 180.0}).wait(0.3);
   }
   if (name == "rotate_in_place") {
-    Trajectory t("rotate_in_place", {375.0, 275.0, 0.0});
+    Trajectory t("rotate_in_place", {cx, cy, 0.0});
     const MotionLimits lim{0.0 + 1.0, 1.0, 180.0, 360.0};
     return t.rotate_by(720.0, lim).wait(0.3).rotate_by(-450.0, lim).wait(0.3);
   }
   if (name == "circle") {
-    Trajectory t("circle", {375.0, 175.0, 0.0});
-    return t.arc({375.0, 275.0}, 720.0, true, {80.0, 150.0, 90.0, 180.0}).wait(0.3);
+    Trajectory t("circle", {cx, cy - 100.0, 0.0});
+    return t.arc({cx, cy}, 720.0, true, {80.0, 150.0, 90.0, 180.0}).wait(0.3);
   }
   if (name == "figure_eight") {
-    Trajectory t("figure_eight", {375.0, 275.0, 30.0});
+    Trajectory t("figure_eight", {cx, cy, 30.0});
     return t.figure_eight(80.0, {80.0, 150.0, 90.0, 180.0}).wait(0.3);
   }
-  if (name == "boundary_tour") return boundary_tour();
-  if (name == "random_walk") return random_walk(seed);
+  if (name == "boundary_tour") return boundary_tour(area);
+  if (name == "random_walk") return random_walk(seed, area);
   std::string known;
   for (const auto& n : standard_trajectory_names()) known += (known.empty() ? "" : ", ") + n;
   throw std::invalid_argument("make_trajectory: unknown trajectory '" + std::string(name) +

@@ -39,10 +39,9 @@ WorldConfig WorldConfig::noise_free(const RobotConfig& robot, std::uint64_t seed
   return c;
 }
 
-WorldConfig WorldConfig::default_noise(const RobotConfig& robot, std::uint64_t seed) {
+WorldConfig WorldConfig::default_noise(const RobotConfig& robot, std::uint64_t seed, const PlayingArea& f) {
   WorldConfig c = timed(robot, seed);
   std::mt19937_64 rng(seed ^ 0xB0B5ULL);
-  const PlayingArea& f = kFiraRoboSot;
   std::uniform_real_distribution<double> ux(f.x_min_cm, f.x_max_cm), uy(f.y_min_cm, f.y_max_cm);
   for (int i = 0; i < 8; ++i) c.bumps.push_back({{ux(rng), uy(rng)}, 15.0, 0.8});
   return c;

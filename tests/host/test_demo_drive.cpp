@@ -29,7 +29,7 @@ TEST(DemoDrive, ThirtySecondsOnTheFieldPastEveryBoundaryWithOneKidnapAndTheSlip)
   wc.slips.push_back(omniloc::sim::SlipEvent{2, drive.slip_s, 0.5, 40.0});
   wc.kidnaps.push_back(omniloc::sim::KidnapEvent{drive.kidnap_s, drive.kidnap_to});
   omniloc::sim::World world(wc, drive.trajectory);
-  const auto& f = omniloc::sim::kFiraRoboSot;
+  const auto& f = omniloc::sim::fira_robosot_area();
 
   double min_left = 1e9, min_right = 1e9, min_bottom = 1e9, min_top = 1e9;
   int kidnapped_windows = 0, slip_windows = 0;

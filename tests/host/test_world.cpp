@@ -53,50 +53,97 @@ TEST(SimTrajectory, UnknownNameListsKnownOnes) {
 
 // Velocity is the derivative of position, accelerations stay bounded, the robot stays on the
 // world (the border included) and the random walk inside the playing field.
+// The playing areas come from the field files; the numbers here are the rules' (FIRA RoboSot
+// 600 x 400 cm in a 75 cm border, RoboCup MSL 22 x 14 m in a 1 m border), written out by hand.
+TEST(PlayingArea, FromTheFieldFiles) {
+  const PlayingArea fira = playing_area(load_field("fira-robosot"));
+  EXPECT_DOUBLE_EQ(fira.world_x_cm, 750.0);
+  EXPECT_DOUBLE_EQ(fira.world_y_cm, 550.0);
+  EXPECT_DOUBLE_EQ(fira.x_min_cm, 75.0);
+  EXPECT_DOUBLE_EQ(fira.x_max_cm, 675.0);
+  EXPECT_DOUBLE_EQ(fira.y_min_cm, 75.0);
+  EXPECT_DOUBLE_EQ(fira.y_max_cm, 475.0);
+  EXPECT_DOUBLE_EQ(fira_robosot_area().x_max_cm, 675.0);
+  const PlayingArea msl = playing_area(load_field("robocup-msl"));
+  EXPECT_DOUBLE_EQ(msl.world_x_cm, 2400.0);
+  EXPECT_DOUBLE_EQ(msl.world_y_cm, 1600.0);
+  EXPECT_DOUBLE_EQ(msl.x_min_cm, 100.0);
+  EXPECT_DOUBLE_EQ(msl.x_max_cm, 2300.0);
+  EXPECT_DOUBLE_EQ(msl.y_min_cm, 100.0);
+  EXPECT_DOUBLE_EQ(msl.y_max_cm, 1500.0);
+  EXPECT_DOUBLE_EQ(msl.centre_x_cm(), 1200.0);
+}
+
+// Every trajectory, on both fields: smooth (finite differences agree with the analytic
+// velocities), bounded in acceleration, inside the world (the border included) and the random walk
+// inside the playing field.
 TEST(SimTrajectory, EveryStandardTrajectoryIsSmoothBoundedAndOnTheField) {
   const double dt = 1e-3;
-  for (const std::string& name : standard_trajectory_names()) {
-    SCOPED_TRACE(name);
-    const Trajectory t = make_trajectory(name, 7);
-    EXPECT_GT(t.duration_s(), 3.0);
-    double max_acc = 0.0, max_dv_err = 0.0;
-    TrajectorySample prev = t.sample(0.0);
-    for (double s = dt; s <= t.duration_s() + 0.1; s += dt) {
-      const TrajectorySample cur = t.sample(s);
-      const Eigen::Vector2d fd((cur.pose.x_cm - prev.pose.x_cm) / dt, (cur.pose.y_cm - prev.pose.y_cm) / dt);
-      const Eigen::Vector2d mean_v = 0.5 * (cur.velocity_cm_per_s + prev.velocity_cm_per_s);
-      max_dv_err = std::max(max_dv_err, (fd - mean_v).norm());
-      EXPECT_NEAR((cur.pose.yaw_deg - prev.pose.yaw_deg) / dt,
-                  0.5 * (cur.yaw_rate_deg_per_s + prev.yaw_rate_deg_per_s), 1.0);
-      max_acc = std::max(max_acc, (cur.velocity_cm_per_s - prev.velocity_cm_per_s).norm() / dt);
-      const double h = kFiraRoboSot.robot_half_size_cm;
-      EXPECT_GE(cur.pose.x_cm, h);
-      EXPECT_LE(cur.pose.x_cm, kFiraRoboSot.world_x_cm - h);
-      EXPECT_GE(cur.pose.y_cm, h);
-      EXPECT_LE(cur.pose.y_cm, kFiraRoboSot.world_y_cm - h);
-      if (name == "random_walk") {
-        EXPECT_GE(cur.pose.x_cm, kFiraRoboSot.x_min_cm + h);
-        EXPECT_LE(cur.pose.y_cm, kFiraRoboSot.y_max_cm - h);
+  for (const std::string field : {"fira-robosot", "robocup-msl"}) {
+    const PlayingArea area = playing_area(load_field(field));
+    for (const std::string& name : standard_trajectory_names()) {
+      SCOPED_TRACE(field + " " + name);
+      const Trajectory t = make_trajectory(name, 7, area);
+      EXPECT_GT(t.duration_s(), 3.0);
+      double max_acc = 0.0, max_dv_err = 0.0;
+      TrajectorySample prev = t.sample(0.0);
+      for (double s = dt; s <= t.duration_s() + 0.1; s += dt) {
+        const TrajectorySample cur = t.sample(s);
+        const Eigen::Vector2d fd((cur.pose.x_cm - prev.pose.x_cm) / dt, (cur.pose.y_cm - prev.pose.y_cm) / dt);
+        const Eigen::Vector2d mean_v = 0.5 * (cur.velocity_cm_per_s + prev.velocity_cm_per_s);
+        max_dv_err = std::max(max_dv_err, (fd - mean_v).norm());
+        EXPECT_NEAR((cur.pose.yaw_deg - prev.pose.yaw_deg) / dt,
+                    0.5 * (cur.yaw_rate_deg_per_s + prev.yaw_rate_deg_per_s), 1.0);
+        max_acc = std::max(max_acc, (cur.velocity_cm_per_s - prev.velocity_cm_per_s).norm() / dt);
+        const double h = area.robot_half_size_cm;
+        EXPECT_GE(cur.pose.x_cm, h);
+        EXPECT_LE(cur.pose.x_cm, area.world_x_cm - h);
+        EXPECT_GE(cur.pose.y_cm, h);
+        EXPECT_LE(cur.pose.y_cm, area.world_y_cm - h);
+        if (name == "random_walk") {
+          EXPECT_GE(cur.pose.x_cm, area.x_min_cm + h);
+          EXPECT_LE(cur.pose.y_cm, area.y_max_cm - h);
+        }
+        prev = cur;
       }
-      prev = cur;
+      EXPECT_LT(max_dv_err, 0.5);   // cm/s: finite difference vs analytic (second-order at 1 ms)
+      EXPECT_LT(max_acc, 400.0);    // cm/s^2 incl. centripetal; the profiles use <= 350 tangential
+      EXPECT_EQ(t.sample(t.duration_s() + 1.0).velocity_cm_per_s.norm(), 0.0);
     }
-    EXPECT_LT(max_dv_err, 0.5);   // cm/s: finite difference vs analytic (second-order at 1 ms)
-    EXPECT_LT(max_acc, 400.0);    // cm/s^2 incl. centripetal; the profiles use <= 350 tangential
-    EXPECT_EQ(t.sample(t.duration_s() + 1.0).velocity_cm_per_s.norm(), 0.0);
   }
 }
 
 TEST(SimTrajectory, BoundaryTourCrossesEveryLine) {
-  const Trajectory t = make_trajectory("boundary_tour");
-  bool left = false, right = false, bottom = false, top = false;
-  for (double s = 0.0; s <= t.duration_s(); s += 0.01) {
-    const Pose2 p = t.sample(s).pose;
-    left = left || p.x_cm < kFiraRoboSot.x_min_cm;
-    right = right || p.x_cm > kFiraRoboSot.x_max_cm;
-    bottom = bottom || p.y_cm < kFiraRoboSot.y_min_cm;
-    top = top || p.y_cm > kFiraRoboSot.y_max_cm;
+  for (const std::string field : {"fira-robosot", "robocup-msl"}) {
+    SCOPED_TRACE(field);
+    const PlayingArea area = playing_area(load_field(field));
+    const Trajectory t = make_trajectory("boundary_tour", 1, area);
+    bool left = false, right = false, bottom = false, top = false;
+    for (double s = 0.0; s <= t.duration_s(); s += 0.01) {
+      const Pose2 p = t.sample(s).pose;
+      left = left || p.x_cm < area.x_min_cm;
+      right = right || p.x_cm > area.x_max_cm;
+      bottom = bottom || p.y_cm < area.y_min_cm;
+      top = top || p.y_cm > area.y_max_cm;
+    }
+    EXPECT_TRUE(left && right && bottom && top);
   }
-  EXPECT_TRUE(left && right && bottom && top);
+}
+
+// The world's truth follows a drive on the MSL field far outside the FIRA area (the simulator used
+// to know only the FIRA bounds).
+TEST(SimWorld, DrivesOnTheMslField) {
+  const PlayingArea msl = playing_area(load_field("robocup-msl"));
+  World w(WorldConfig::default_noise(robot(), 5, msl), make_trajectory("boundary_tour", 5, msl));
+  double max_x = 0.0, max_y = 0.0;
+  while (!w.finished()) {
+    const SimWindow sw = w.next_window();
+    max_x = std::max(max_x, sw.truth.x_cm);
+    max_y = std::max(max_y, sw.truth.y_cm);
+  }
+  EXPECT_GT(max_x, 2300.0) << "past the MSL field's right line";
+  EXPECT_GT(max_y, 1500.0);
+  EXPECT_LT(max_x, msl.world_x_cm);
 }
 
 // Noise-free straight drive forward by 510 cm at yaw 0: eq. (9) gives wheel travels

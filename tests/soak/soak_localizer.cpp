@@ -59,7 +59,7 @@ Options parse(int argc, char** argv) {
 /// Random legs over the whole playing field (up to 40 cm from its lines), turns on the spot and
 /// pauses, for the requested time: the random walk of issue 5, made as long as a match half.
 sim::Trajectory long_random_walk(double seconds, std::uint64_t seed) {
-  const sim::PlayingArea& f = sim::kFiraRoboSot;
+  const sim::PlayingArea& f = sim::fira_robosot_area();
   const double margin = f.robot_half_size_cm + 20.0;
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> ux(f.x_min_cm + margin, f.x_max_cm - margin);

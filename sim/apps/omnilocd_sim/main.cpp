@@ -14,6 +14,7 @@
 #include "omniloc/daemon.hpp"
 #include "omniloc/daemon_config.hpp"
 #include "omniloc/recording.hpp"
+#include "omniloc_sim/playing_area.hpp"
 #include "omniloc_sim/sim_daemon.hpp"
 #include "stop_signal.hpp"
 
@@ -74,7 +75,7 @@ int run(const omniloc::daemon::DaemonConfig& config, const SimArgs& sim_args) {
   o.seed = sim_args.seed;
   o.camera = config.camera != "none";
   o.camera_fps = config.camera_fps;
-  sim::SimulatedRobot robot(models, sim::make_trajectory(sim_args.trajectory, sim_args.seed), o);
+  sim::SimulatedRobot robot(models, sim::make_trajectory(sim_args.trajectory, sim_args.seed, sim::playing_area(models.field)), o);
   say(robot.describe() + "; trajectory " + sim_args.trajectory + ", seed " + std::to_string(sim_args.seed));
   daemon::DaemonIo io = robot.io();
   say("publishing poses to udp://" + config.udp_address + ":" + std::to_string(config.udp_port) +

@@ -1,21 +1,30 @@
-// The only field geometry the world simulator needs: where the robot may drive. The full line
-// geometry (for the camera) lives in host/include/omniloc/field.hpp; these bounds are the single
-// place in sim/world that knows the field's size.
+// The only field geometry the world simulator needs: where the robot may drive, taken from a field
+// file (common/fields/*.json, the one source of the field's size) so the simulator drives on any
+// field the localizer knows: FIRA RoboSot, RoboCup MSL, a team's own.
 #pragma once
+
+#include "omniloc/field.hpp"
 
 namespace omniloc::sim {
 
-/// FIRA RoboSot: a 600 x 400 cm playing field inside a 75 cm border, in field coordinates (cm).
+/// A playing field inside its border, in field coordinates (cm).
 struct PlayingArea {
-  double world_x_cm = 750.0;
-  double world_y_cm = 550.0;
-  double x_min_cm = 75.0;
-  double x_max_cm = 675.0;
-  double y_min_cm = 75.0;
-  double y_max_cm = 475.0;
+  double world_x_cm = 0.0;  ///< carpet, border included
+  double world_y_cm = 0.0;
+  double x_min_cm = 0.0;    ///< the outer field lines
+  double x_max_cm = 0.0;
+  double y_min_cm = 0.0;
+  double y_max_cm = 0.0;
   double robot_half_size_cm = 20.0;  ///< the paper's robot is 40 x 40 cm
+
+  [[nodiscard]] double centre_x_cm() const { return 0.5 * (x_min_cm + x_max_cm); }
+  [[nodiscard]] double centre_y_cm() const { return 0.5 * (y_min_cm + y_max_cm); }
 };
 
-inline constexpr PlayingArea kFiraRoboSot{};
+/// The playing area of `field`.
+[[nodiscard]] PlayingArea playing_area(const FieldGeometry& field, double robot_half_size_cm = 20.0);
+
+/// The FIRA RoboSot area, from common/fields/fira-robosot.json (loaded once): the simulator's default.
+[[nodiscard]] const PlayingArea& fira_robosot_area();
 
 }  // namespace omniloc::sim

@@ -3,6 +3,8 @@
 // A trajectory is a pure function of time: the world simulator tracks it and integrates the truth.
 #pragma once
 
+#include "omniloc_sim/playing_area.hpp"
+
 #include <Eigen/Core>
 #include <cstdint>
 #include <string>
@@ -94,7 +96,9 @@ class Trajectory {
 /// "straight", "rotate_in_place", "circle", "figure_eight", "boundary_tour", "random_walk".
 [[nodiscard]] std::vector<std::string> standard_trajectory_names();
 /// Throws std::invalid_argument for an unknown name (listing the known ones). `seed` only
-/// matters for "random_walk".
-[[nodiscard]] Trajectory make_trajectory(std::string_view name, std::uint64_t seed = 1);
+/// matters for "random_walk". Each is placed on `area` (its centre, lines and size): on the FIRA
+/// field by default, on any field with playing_area(field).
+[[nodiscard]] Trajectory make_trajectory(std::string_view name, std::uint64_t seed = 1,
+                                         const PlayingArea& area = fira_robosot_area());
 
 }  // namespace omniloc::sim

@@ -21,9 +21,10 @@ namespace omniloc::sim {
 
 /// The world at the Verilated board's clock: 1 ms physics steps and 10 ms windows at 12 MHz, the
 /// encoders starting at AB = 00 as the board's decoders do after reset.
-[[nodiscard]] inline WorldConfig board_world_config(RobotConfig robot, std::uint64_t seed) {
+[[nodiscard]] inline WorldConfig board_world_config(RobotConfig robot, std::uint64_t seed,
+                                                    const PlayingArea& area = fira_robosot_area()) {
   robot.clock_hz = static_cast<double>(BoardSim::kClockHz);
-  auto wc = WorldConfig::default_noise(robot, seed);
+  auto wc = WorldConfig::default_noise(robot, seed, area);
   wc.step_cycles = BoardSim::kClockHz / 1000;
   wc.window_cycles = BoardSim::kClockHz / 100;
   wc.first_window_end_cycles = wc.window_cycles;

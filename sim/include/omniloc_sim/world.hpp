@@ -8,6 +8,8 @@
 // the cycle-level A/B waveform (QuadratureStream, encoder_waveform.hpp), so they agree exactly.
 #pragma once
 
+#include "omniloc_sim/playing_area.hpp"
+
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
@@ -68,8 +70,10 @@ struct WorldConfig {
 
   /// Quantisation only: no encoder noise, gyro only quantised, no faults. Timing from `robot`.
   [[nodiscard]] static WorldConfig noise_free(const RobotConfig& robot, std::uint64_t seed = 1);
-  /// The default noise of issue 5: encoder scale and rolling noise, a realistic gyro, a few bumps.
-  [[nodiscard]] static WorldConfig default_noise(const RobotConfig& robot, std::uint64_t seed = 1);
+  /// The default noise of issue 5: encoder scale and rolling noise, a realistic gyro, a few bumps
+  /// on `area`'s playing field.
+  [[nodiscard]] static WorldConfig default_noise(const RobotConfig& robot, std::uint64_t seed = 1,
+                                                 const PlayingArea& area = fira_robosot_area());
 };
 
 /// One board window as the host sees it, with the simulator's truth beside it.
