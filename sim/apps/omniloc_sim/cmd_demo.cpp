@@ -424,7 +424,7 @@ int cmd_demo(std::span<const std::string_view> args) {
   std::printf("  board: %.0f M cycles (%.1f s simulated) in %.1f s wall, %.2f M cycles/s; %d frames rendered\n",
               static_cast<double>(robot.board_cycles()) / 1e6, board_s, elapsed(),
               static_cast<double>(robot.board_cycles()) / 1e6 / std::max(1e-9, elapsed()), observer.frames());
-  std::printf("  CPU time of the run: %.1f s (one thread: board, rendering, daemon and observer)\n", cpu_s);
+  std::printf("  CPU time of the run: %.1f s (board, daemon and observer on one thread, rendering on the camera's worker)\n", cpu_s);
   const std::string png = o.out_dir + "/paths.png";
   write_plot(png, m.field, observer.path_truth, observer.path_int, observer.path_odo, observer.path_img, drive);
   std::printf("  wrote %s and %s; total wall time %.1f s\n", png.c_str(), csv_path.c_str(), elapsed());

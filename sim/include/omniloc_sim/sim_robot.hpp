@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -32,7 +34,10 @@ class SimTruthLog final : public HeadingSource {
     if (!samples_.empty() && t_ms <= samples_.back().t_ms) return;
     samples_.push_back({t_ms, truth, gyro_yaw_deg});
     while (samples_.size() > 2 && samples_.front().t_ms < t_ms - keep_ms_) samples_.pop_front();
+    if (on_added_) on_added_(t_ms);
   }
+  /// Called on the simulating thread after each new sample (the camera starts renders from it).
+  void set_on_added(std::function<void(double t_ms)> f) { on_added_ = std::move(f); }
 
   double gyro_yaw_deg(const EncoderWindow& window) override { return gyro_yaw_at(window.t_end_ms); }
   /// What the gyro reported at t_ms (the newest sample when t_ms is beyond the log).
@@ -74,38 +79,38 @@ class SimTruthLog final : public HeadingSource {
   }
   double keep_ms_;
   std::deque<Sample> samples_;
+  std::function<void(double)> on_added_;
 };
 
 /// A camera rendering the field at the logged true pose, `fps` frames per second of daemon time.
+/// Frame k is taken at k / fps; poll() hands out the newest frame due (older undelivered ones are
+/// dropped, as a live camera would). Rendering runs on a worker thread, started as soon as the truth
+/// log has passed a frame's time, so the simulation and the renderer use two cores; poll() waits
+/// for the frame it returns, so what is delivered does not depend on thread timing.
 class SimCamera final : public FrameSource {
  public:
-  SimCamera(const OmniRenderer& renderer, SimTruthLog& truth, double fps, RenderOptions options = {})
-      : renderer_(renderer), truth_(truth), period_ms_(1000.0 / fps), options_(std::move(options)) {}
+  SimCamera(const OmniRenderer& renderer, SimTruthLog& truth, double fps, RenderOptions options = {});
+  ~SimCamera() override;
+  SimCamera(const SimCamera&) = delete;
+  SimCamera& operator=(const SimCamera&) = delete;
 
   /// Frames taken at or after t_ms are not delivered (a camera that stops): for tests and demos.
   void stop_at(double t_ms) { stop_ms_ = t_ms; }
 
-  std::optional<CameraFrame> poll(double now_ms) override {
-    const double k = std::floor(std::min(now_ms, truth_.latest_ms()) / period_ms_);
-    if (k <= last_k_ || k < 0) return std::nullopt;
-    const double t = k * period_ms_;
-    if (t >= stop_ms_) return std::nullopt;
-    const auto pose = truth_.truth(t);
-    if (!pose) return std::nullopt;
-    last_k_ = k;
-    RenderOptions o = options_;
-    o.seed = options_.seed + static_cast<std::uint64_t>(k);  // fresh sensor noise per frame
-    return CameraFrame{t, renderer_.render(*pose, o)};
-  }
+  std::optional<CameraFrame> poll(double now_ms) override;
   [[nodiscard]] std::string describe() const override { return "simulated omni camera"; }
 
  private:
+  struct Worker;
+  void on_truth(double t_ms);
   const OmniRenderer& renderer_;
   SimTruthLog& truth_;
   double period_ms_;
   RenderOptions options_;
-  double last_k_ = -1.0;
+  std::int64_t last_k_ = -1;       // last frame handed out
+  std::int64_t next_job_k_ = 0;    // next frame to start rendering
   double stop_ms_ = 1e300;
+  std::unique_ptr<Worker> worker_;
 };
 
 }  // namespace omniloc::sim
