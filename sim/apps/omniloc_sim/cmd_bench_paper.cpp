@@ -3,6 +3,7 @@
 // (driven from the field centre, origin reset there, section 3.2) and the integrated localizer
 // (driven from the field centre, global search at start), beside the published values.
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -197,7 +198,13 @@ int cmd_bench(std::span<const std::string_view> args) {
   bool paper_mode = true;
   for (std::size_t i = 1; i < args.size(); ++i) {
     if (args[i] == "--seed" && i + 1 < args.size()) {
-      seed = std::stoull(std::string(args[++i]));
+      const std::string_view v = args[++i];
+      const auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), seed);
+      if (v.empty() || ec != std::errc() || p != v.data() + v.size()) {
+        std::fprintf(stderr, "omniloc-sim bench paper: --seed must be an integer 0 .. 2^64-1 (got '%.*s')\n",
+                     static_cast<int>(v.size()), v.data());
+        return 2;
+      }
     } else if (args[i] == "--no-paper-mode") {
       paper_mode = false;
     } else {
