@@ -10,10 +10,6 @@
 // test_sim_programs runs those.)
 #include <gtest/gtest.h>
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <poll.h>
-#include <sys/socket.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -32,6 +28,7 @@
 #include "omniloc_sim/reference_board.hpp"
 #include "omniloc_sim/trajectory.hpp"
 #include "omniloc_sim/world.hpp"
+#include "udp_receiver.hpp"
 
 namespace {
 
@@ -121,39 +118,6 @@ class RigTransport final : public Transport {
   Rig& rig_;
 };
 
-class Receiver {
- public:
-  Receiver() {
-    fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    int big = 8 << 20;
-    ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &big, sizeof big);
-    if (::bind(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) return;
-    socklen_t len = sizeof a;
-    ::getsockname(fd_, reinterpret_cast<sockaddr*>(&a), &len);
-    port_ = ntohs(a.sin_port);
-  }
-  ~Receiver() { ::close(fd_); }
-  [[nodiscard]] int port() const { return port_; }
-  /// Everything queued now (the daemon has finished sending).
-  std::vector<std::string> drain() {
-    std::vector<std::string> out;
-    char buf[2048];
-    for (;;) {
-      const ssize_t n = ::recv(fd_, buf, sizeof buf, 0);
-      if (n <= 0) break;
-      out.emplace_back(buf, static_cast<std::size_t>(n));
-    }
-    return out;
-  }
-
- private:
-  int fd_ = -1;
-  int port_ = 0;
-};
-
 struct Models {
   DaemonModels m;
   Models() {
@@ -188,7 +152,7 @@ TEST(DaemonSim, PublishesTrackedPosesSurvivesUnplugAndCameraStop) {
   SimCamera camera(renderer, rig.log, 60.0, render_options(seed));
   camera.stop_at(camera_stop_ms);
   RigClock clock(rig);
-  Receiver rx;
+  omniloc::test::UdpReceiver rx;
   ASSERT_GT(rx.port(), 0);
 
   const auto rec_dir = std::filesystem::temp_directory_path() / ("omniloc_test_daemon_rec_" + std::to_string(::getpid()));

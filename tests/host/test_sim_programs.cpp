@@ -5,9 +5,6 @@
 // the simulator's truth.csv, not from the daemon.
 #include <gtest/gtest.h>
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -22,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "omniloc/recording.hpp"
+#include "udp_receiver.hpp"
 
 namespace {
 
@@ -48,37 +46,11 @@ int run(const std::string& cmd, const fs::path& log, std::string& output) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-class UdpReceiver {
- public:
-  UdpReceiver() {
-    fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    int big = 8 << 20;
-    ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &big, sizeof big);
-    if (::bind(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) return;
-    socklen_t len = sizeof a;
-    ::getsockname(fd_, reinterpret_cast<sockaddr*>(&a), &len);
-    port_ = ntohs(a.sin_port);
-  }
-  ~UdpReceiver() { ::close(fd_); }
-  [[nodiscard]] int port() const { return port_; }
-  std::vector<nlohmann::json> drain() {
-    std::vector<nlohmann::json> out;
-    char buf[2048];
-    for (;;) {
-      const ssize_t n = ::recv(fd_, buf, sizeof buf, 0);
-      if (n <= 0) break;
-      out.push_back(nlohmann::json::parse(std::string(buf, static_cast<std::size_t>(n))));
-    }
-    return out;
-  }
-
- private:
-  int fd_ = -1;
-  int port_ = 0;
-};
+std::vector<nlohmann::json> parse_all(const std::vector<std::string>& grams) {
+  std::vector<nlohmann::json> out;
+  for (const auto& g : grams) out.push_back(nlohmann::json::parse(g));
+  return out;
+}
 
 std::vector<std::vector<std::string>> read_csv(const fs::path& p) {
   std::ifstream in(p);
@@ -99,7 +71,7 @@ TEST(OmnilocdSim, PublishesPosesThatMatchTruthAndRecordsARunThatReplays) {
   const int seed = 3;
   std::printf("seed %d\n", seed);
   TempDir dir("omnilocd_sim");
-  UdpReceiver rx;
+  omniloc::test::UdpReceiver rx;
   ASSERT_GT(rx.port(), 0);
   const fs::path rec = dir.path / "rec";
   std::string out;
@@ -110,7 +82,7 @@ TEST(OmnilocdSim, PublishesPosesThatMatchTruthAndRecordsARunThatReplays) {
   ASSERT_EQ(rc, 0) << out;
   EXPECT_NE(out.find("stopped (duration)"), std::string::npos) << out;
 
-  const auto grams = rx.drain();
+  const auto grams = parse_all(rx.drain());
   ASSERT_GE(grams.size(), 190u) << "2 s of 10 ms windows";
   ASSERT_LE(grams.size(), 201u);
   const Recording recording = load_recording(rec);
