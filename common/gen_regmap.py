@@ -313,7 +313,10 @@ def cpp_bodies(spec):
         out.append("  return v;")
         out.append("}")
         out.append("")
-    out += ["}  // namespace omniloc::regmap", ""]
+    out.append("// The layout of each frame TYPE's body.")
+    for frame in spec["frames"]["types"]:
+        out.append(f"using {pascal('FRAME_' + frame['name'])}Body = {pascal(frame['layout'])}Body;")
+    out += ["", "}  // namespace omniloc::regmap", ""]
     return "\n".join(out)
 
 

@@ -125,4 +125,14 @@ constexpr void pack(const ErrorBody& v, std::span<std::uint8_t, kBodyErrorBytes>
   return v;
 }
 
+// The layout of each frame TYPE's body.
+using FrameReadReqBody = RegAddrBody;
+using FrameWriteReqBody = RegValueBody;
+using FrameSnapshotReqBody = EmptyBody;
+using FrameReadRespBody = RegValueBody;
+using FrameWriteAckBody = RegAddrBody;
+using FrameSnapshotRespBody = WindowBody;
+using FrameTelemetryBody = WindowBody;
+using FrameErrorBody = ErrorBody;
+
 }  // namespace omniloc::regmap
