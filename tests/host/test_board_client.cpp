@@ -180,44 +180,5 @@ TEST(BoardClient, BoardAnswersMalformedRequests) {
   EXPECT_EQ(board.rx_counters().malformed, 1u);
 }
 
-TEST(BoardClient, BoardParserMirrorsFrameRx) {
-  sim::ReferenceBoard board;
-  std::vector<std::uint8_t> out(256);
-  auto answers = [&] {
-    out.resize(256);
-    out.resize(board.from_board(out));
-    protocol::FrameDecoder d;
-    d.feed(out);
-    std::vector<protocol::Frame> f;
-    while (auto x = d.next()) f.push_back(*x);
-    return f;
-  };
-  // LEN above 1 + WRITE_REQ body: refused at once with the LEN as detail; the hunt resumes after it.
-  std::vector<std::uint8_t> bytes{0xA5, 0x1B};
-  const auto read = protocol::encode(protocol::ReadReq{r::kRegId});
-  bytes.insert(bytes.end(), read.begin(), read.end());
-  board.to_board(bytes);
-  auto f = answers();
-  ASSERT_EQ(f.size(), 2u);
-  EXPECT_EQ(std::get<protocol::ErrorResp>(f[0]), (protocol::ErrorResp{r::kErrMalformed, 0x1B}));
-  EXPECT_EQ(std::get<protocol::ReadResp>(f[1]), (protocol::ReadResp{r::kRegId, r::kIdValue}));
-  // A request cut short, then silence (a new chunk): aborted with detail 0xFF, then the next one served.
-  board.to_board(std::span(read).first(4));
-  board.to_board(read);
-  f = answers();
-  ASSERT_EQ(f.size(), 2u);
-  EXPECT_EQ(std::get<protocol::ErrorResp>(f[0]), (protocol::ErrorResp{r::kErrMalformed, 0xFF}));
-  EXPECT_EQ(std::get<protocol::ReadResp>(f[1]).data, r::kIdValue);
-  // Values the register map refuses: CONTROL bits 31:4, FILTER above 255.
-  board.to_board(protocol::encode(protocol::WriteReq{r::kRegControl, 0x10}));
-  board.to_board(protocol::encode(protocol::WriteReq{r::kRegFilter, 256}));
-  f = answers();
-  ASSERT_EQ(f.size(), 2u);
-  EXPECT_EQ(std::get<protocol::ErrorResp>(f[0]), (protocol::ErrorResp{r::kErrBadValue, r::kRegControl}));
-  EXPECT_EQ(std::get<protocol::ErrorResp>(f[1]), (protocol::ErrorResp{r::kErrBadValue, r::kRegFilter}));
-  EXPECT_EQ(board.reg(r::kRegControl), 0u);
-  EXPECT_EQ(board.reg(r::kRegFilter), 0u);
-}
-
 }  // namespace
 }  // namespace omniloc

@@ -4,7 +4,8 @@
 // (run_windows), so every run is deterministic. Thread-safe: the emulated USB bridge calls it from
 // umockdev's worker thread while the test thread advances time.
 //
-// The request parser mirrors rtl/frame_rx.v byte for byte: hunt for SYNC; a LEN of 0 or above
+// The request parser follows rtl/frame_rx.v byte for byte (tests/link/tb_reference_board_vs_rtl.cpp
+// feeds both the same byte streams and compares the answers): hunt for SYNC; a LEN of 0 or above
 // 1 + WRITE_REQ body is answered ERROR MALFORMED (detail = LEN) at once; otherwise LEN bytes and the
 // CRC are collected, and a wrong CRC is answered BAD_CRC (detail = TYPE), a right CRC on anything but
 // a well-formed request MALFORMED (detail = TYPE). The parser does not rescan the bytes of a rejected
