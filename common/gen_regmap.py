@@ -360,7 +360,7 @@ def markdown(spec, regs):
         out.append(f"| `{frame['name']}` | `{frame['code']}` | `{frame['layout']}` | {frame_body_bytes(spec, frame)} |")
     out += ["", "### Body layouts", "", "Little-endian fields, at byte offsets from the first body byte (after TYPE).", ""]
     for name, layout in check_layouts(spec).items():
-        out.append(f"#### `{name}` ({layout['bytes']} bytes)")
+        out.append(f"#### `{name}` ({layout['bytes']} byte{'' if layout['bytes'] == 1 else 's'})")
         out.append("")
         out.append(layout["description"])
         out.append("")
