@@ -24,3 +24,31 @@ function(omniloc_add_benchmark name)
   target_link_libraries(${name} PRIVATE ${ARG_LIBS} benchmark::benchmark omniloc_warnings)
   set_property(GLOBAL APPEND PROPERTY OMNILOC_BENCHMARKS ${name})
 endfunction()
+
+# omniloc_verilate(TARGET TOP_MODULE top [SOURCES files...] [PREFIX name] [VERILATOR_ARGS args...])
+# Verilates an RTL module into TARGET with the flags every omniloc model shares, so that no model is
+# built slower or with fewer warnings than another: -Wall (lint-clean RTL), -O3 with --x-assign fast
+# and --x-initial fast (the model's own optimisation), OPT_FAST -O2 for the generated C++ (an
+# unoptimised model is ~15x slower, see sim/verilator/CMakeLists.txt), the generated register map's
+# include dir, rtl/ as the module library (-y) and VCD tracing (TRACE: every testbench can re-run a
+# failing seed with a trace). SOURCES defaults to rtl/<top>.v and PREFIX to V<top>; VERILATOR_ARGS
+# adds per-model flags, e.g. parameters (-GTIMEOUT_CYCLES=200).
+function(omniloc_verilate target)
+  cmake_parse_arguments(ARG "" "TOP_MODULE;PREFIX" "SOURCES;VERILATOR_ARGS" ${ARGN})
+  if(NOT ARG_TOP_MODULE)
+    message(FATAL_ERROR "omniloc_verilate(${target}): TOP_MODULE is required")
+  endif()
+  if(NOT ARG_SOURCES)
+    set(ARG_SOURCES ${OMNILOC_RTL_DIR}/${ARG_TOP_MODULE}.v)
+  endif()
+  if(NOT ARG_PREFIX)
+    set(ARG_PREFIX V${ARG_TOP_MODULE})
+  endif()
+  verilate(${target} TRACE
+    SOURCES ${ARG_SOURCES}
+    TOP_MODULE ${ARG_TOP_MODULE}
+    PREFIX ${ARG_PREFIX}
+    INCLUDE_DIRS ${OMNILOC_RTL_INCLUDE_DIR} ${OMNILOC_RTL_DIR}
+    OPT_FAST -O2
+    VERILATOR_ARGS -Wall -O3 --x-assign fast --x-initial fast -y ${OMNILOC_RTL_DIR} ${ARG_VERILATOR_ARGS})
+endfunction()

@@ -11,24 +11,28 @@
 `timescale 1ns / 1ps
 `default_nettype none
 
+`include "omniloc_regs.vh"
+
 module encoder_channel (
-    input  wire        clk_i,
-    input  wire        rst_i,
-    input  wire        a_i,
-    input  wire        b_i,
-    input  wire [7:0]  filter_len_i,
-    input  wire        en_i,
-    input  wire [1:0]  mode_i,
-    input  wire        capture_i,
-    output wire [31:0] win_count_o,
-    output wire [31:0] win_position_o,
-    output wire        win_dir_o,
-    output wire [31:0] position_o,
-    output wire        dir_o,
+    input  wire                                 clk_i,
+    input  wire                                 rst_i,
+    input  wire                                 a_i,
+    input  wire                                 b_i,
+    input  wire [`OMNILOC_FILTER_LENGTH_W-1:0]  filter_len_i,
+    input  wire                                 en_i,
+    input  wire [`OMNILOC_CONTROL_DECODE_W-1:0] mode_i,
+    input  wire                                 capture_i,
+    output wire [`OMNILOC_DATA_W-1:0]           win_count_o,
+    output wire [`OMNILOC_DATA_W-1:0]           win_position_o,
+    output wire                                 win_dir_o,
+    output wire [`OMNILOC_DATA_W-1:0]           position_o,
+    output wire                                 dir_o,
     // One-cycle pulse per illegal transition, and their saturating count.
-    output wire        err_o,
-    output wire [31:0] err_count_o
+    output wire                                 err_o,
+    output wire [`OMNILOC_DATA_W-1:0]           err_count_o
 );
+
+localparam integer DATA_W = `OMNILOC_DATA_W;
 
 wire a_clean;
 wire b_clean;
@@ -37,12 +41,12 @@ wire b_valid;
 wire up;
 wire down;
 
-input_conditioner #(.LEN_W(8)) u_cond_a (
+input_conditioner #(.LEN_W(`OMNILOC_FILTER_LENGTH_W)) u_cond_a (
     .clk_i(clk_i), .rst_i(rst_i), .in_i(a_i), .len_i(filter_len_i),
     .out_o(a_clean), .valid_o(a_valid)
 );
 
-input_conditioner #(.LEN_W(8)) u_cond_b (
+input_conditioner #(.LEN_W(`OMNILOC_FILTER_LENGTH_W)) u_cond_b (
     .clk_i(clk_i), .rst_i(rst_i), .in_i(b_i), .len_i(filter_len_i),
     .out_o(b_clean), .valid_o(b_valid)
 );
@@ -53,20 +57,20 @@ quadrature_decoder u_dec (
     .up_o(up), .down_o(down), .dir_o(dir_o), .err_o(err_o)
 );
 
-window_counter #(.W(32)) u_win (
+window_counter #(.W(DATA_W)) u_win (
     .clk_i(clk_i), .rst_i(rst_i), .up_i(up), .down_i(down), .dir_i(dir_o),
     .capture_i(capture_i), .win_count_o(win_count_o), .win_position_o(win_position_o),
     .win_dir_o(win_dir_o), .position_o(position_o)
 );
 
-reg [31:0] err_count_q;
+reg [DATA_W-1:0] err_count_q;
 assign err_count_o = err_count_q;
 
 always @(posedge clk_i) begin
     if (rst_i) begin
-        err_count_q <= 32'd0;
-    end else if (err_o && err_count_q != 32'hFFFF_FFFF) begin
-        err_count_q <= err_count_q + 32'd1;
+        err_count_q <= {DATA_W{1'b0}};
+    end else if (err_o && err_count_q != {DATA_W{1'b1}}) begin
+        err_count_q <= err_count_q + 1'b1;
     end
 end
 

@@ -10,48 +10,54 @@
 // win_consumed_i (one-cycle strobe) marks the window as taken, for STATUS.OVERRUN.
 //
 // Assumptions: enc_a_i/enc_b_i asynchronous; a single clock; rst_i synchronous, active high,
-// and held for at least one cycle. CLK_HZ / TICK_HZ >= PERIOD_MIN_CYCLES.
+// and held for at least one cycle. CLK_HZ / TICK_HZ >= PERIOD_MIN_CYCLES. Defaults: the paper's
+// 40 MHz and 100 Hz (common/regmap.json "link"); widths from the generated map.
 `resetall
 `timescale 1ns / 1ps
 `default_nettype none
 
+`include "omniloc_regs.vh"
+
 module encoder_core #(
-    parameter CLK_HZ = 40000000,
-    parameter TICK_HZ = 100
+    parameter CLK_HZ = `OMNILOC_PAPER_CLOCK_HZ,
+    parameter TICK_HZ = `OMNILOC_TICK_HZ
 ) (
-    input  wire         clk_i,
-    input  wire         rst_i,
-    input  wire [3:0]   enc_a_i,
-    input  wire [3:0]   enc_b_i,
+    input  wire                                         clk_i,
+    input  wire                                         rst_i,
+    input  wire [`OMNILOC_CHANNELS-1:0]                 enc_a_i,
+    input  wire [`OMNILOC_CHANNELS-1:0]                 enc_b_i,
     // register bus
-    input  wire [7:0]   reg_addr_i,
-    input  wire         reg_rd_i,
-    input  wire         reg_wr_i,
-    input  wire [31:0]  reg_wdata_i,
-    output wire [31:0]  reg_rdata_o,
-    output wire         reg_ack_o,
-    output wire         reg_err_o,
+    input  wire [`OMNILOC_ADDR_W-1:0]                   reg_addr_i,
+    input  wire                                         reg_rd_i,
+    input  wire                                         reg_wr_i,
+    input  wire [`OMNILOC_DATA_W-1:0]                   reg_wdata_i,
+    output wire [`OMNILOC_DATA_W-1:0]                   reg_rdata_o,
+    output wire                                         reg_ack_o,
+    output wire                                         reg_err_o,
     // windows for streaming
-    output wire         win_valid_o,
-    output wire [31:0]  win_seq_o,
-    output wire [31:0]  win_timestamp_o,
-    output wire [127:0] win_count_o,
-    output wire [127:0] win_position_o,
-    output wire [3:0]   win_dir_o,
-    output wire [7:0]   status_o,
+    output wire                                         win_valid_o,
+    output wire [`OMNILOC_DATA_W-1:0]                   win_seq_o,
+    output wire [`OMNILOC_DATA_W-1:0]                   win_timestamp_o,
+    output wire [`OMNILOC_CHANNELS*`OMNILOC_DATA_W-1:0] win_count_o,
+    output wire [`OMNILOC_CHANNELS*`OMNILOC_DATA_W-1:0] win_position_o,
+    output wire [`OMNILOC_CHANNELS-1:0]                 win_dir_o,
+    output wire [`OMNILOC_BODY_WINDOW_STATUS_W-1:0]     status_o,
     input  wire         win_consumed_i,
     output wire         stream_en_o,
     output wire         tick_o
 );
 
-wire        enable;
-wire [1:0]  decode;
-wire [7:0]  filter_len;
-wire [31:0] period;
-wire [31:0] timestamp;
-wire        tick;
-wire [3:0]  illegal;
-wire [127:0] err_count;
+localparam integer DATA_W = `OMNILOC_DATA_W;
+localparam integer CH = `OMNILOC_CHANNELS;
+
+wire                                    enable;
+wire [`OMNILOC_CONTROL_DECODE_W-1:0]    decode;
+wire [`OMNILOC_FILTER_LENGTH_W-1:0]     filter_len;
+wire [`OMNILOC_PERIOD_CYCLES_W-1:0]     period;
+wire [DATA_W-1:0]                       timestamp;
+wire                                    tick;
+wire [CH-1:0]                           illegal;
+wire [CH*DATA_W-1:0]                    err_count;
 wire        capture = tick & enable;
 
 assign tick_o = tick;
@@ -66,16 +72,16 @@ tick_generator #(.CLK_HZ(CLK_HZ), .TICK_HZ(TICK_HZ)) u_tick (
 
 genvar ch;
 generate
-    for (ch = 0; ch < 4; ch = ch + 1) begin : g_ch
+    for (ch = 0; ch < CH; ch = ch + 1) begin : g_ch
         encoder_channel u_ch (
             .clk_i(clk_i), .rst_i(rst_i), .a_i(enc_a_i[ch]), .b_i(enc_b_i[ch]),
             .filter_len_i(filter_len), .en_i(enable), .mode_i(decode), .capture_i(capture),
-            .win_count_o(win_count_o[32*ch +: 32]), .win_position_o(win_position_o[32*ch +: 32]),
+            .win_count_o(win_count_o[DATA_W*ch +: DATA_W]), .win_position_o(win_position_o[DATA_W*ch +: DATA_W]),
             .win_dir_o(win_dir_o[ch]),
             /* verilator lint_off PINCONNECTEMPTY */
             .position_o(), .dir_o(),
             /* verilator lint_on PINCONNECTEMPTY */
-            .err_o(illegal[ch]), .err_count_o(err_count[32*ch +: 32])
+            .err_o(illegal[ch]), .err_count_o(err_count[DATA_W*ch +: DATA_W])
         );
     end
 endgenerate

@@ -3,8 +3,9 @@
 // Bus: a request (reg_rd_i or reg_wr_i, one cycle, with reg_addr_i/reg_wdata_i) is answered
 // in the next cycle by reg_ack_o with reg_rdata_o; reg_err_o comes with the ack when the address
 // is unknown, the register is read-only, the value is refused, or rd and wr are both high.
-// A refused write changes nothing but STATUS.BAD_WRITE. Addresses and fields come from the
-// generated omniloc_regs.vh (single source of truth: common/regmap.json).
+// A refused write changes nothing but STATUS.BAD_WRITE. Addresses, fields and their widths come from
+// the generated omniloc_regs.vh (single source of truth: common/regmap.json); the CLK_HZ/TICK_HZ
+// defaults are the paper's 40 MHz and 100 Hz.
 //
 // Window bank: at capture_i (tick while enabled) the sequence number increments and the capture
 // timestamp and STATUS are recorded; the channels' window registers update in the same edge.
@@ -22,76 +23,85 @@
 `include "omniloc_regs.vh"
 
 module encoder_regs #(
-    parameter CLK_HZ = 40000000,
-    parameter TICK_HZ = 100
+    parameter CLK_HZ = `OMNILOC_PAPER_CLOCK_HZ,
+    parameter TICK_HZ = `OMNILOC_TICK_HZ
 ) (
-    input  wire         clk_i,
-    input  wire         rst_i,
+    input  wire                                         clk_i,
+    input  wire                                         rst_i,
     // register bus
-    input  wire [7:0]   reg_addr_i,
-    input  wire         reg_rd_i,
-    input  wire         reg_wr_i,
-    input  wire [31:0]  reg_wdata_i,
-    output wire [31:0]  reg_rdata_o,
-    output wire         reg_ack_o,
-    output wire         reg_err_o,
+    input  wire [`OMNILOC_ADDR_W-1:0]                   reg_addr_i,
+    input  wire                                         reg_rd_i,
+    input  wire                                         reg_wr_i,
+    input  wire [`OMNILOC_DATA_W-1:0]                   reg_wdata_i,
+    output wire [`OMNILOC_DATA_W-1:0]                   reg_rdata_o,
+    output wire                                         reg_ack_o,
+    output wire                                         reg_err_o,
     // control to the datapath
-    output wire         enable_o,
-    output wire [1:0]   decode_o,
-    output wire         stream_o,
-    output wire [7:0]   filter_len_o,
-    output wire [31:0]  period_o,
+    output wire                                         enable_o,
+    output wire [`OMNILOC_CONTROL_DECODE_W-1:0]         decode_o,
+    output wire                                         stream_o,
+    output wire [`OMNILOC_FILTER_LENGTH_W-1:0]          filter_len_o,
+    output wire [`OMNILOC_PERIOD_CYCLES_W-1:0]          period_o,
     // events and live values from the datapath
-    input  wire         capture_i,
-    input  wire [3:0]   illegal_i,
-    input  wire         win_consumed_i,
-    input  wire [31:0]  timestamp_i,
-    input  wire [127:0] win_count_i,
-    input  wire [127:0] win_position_i,
-    input  wire [3:0]   win_dir_i,
-    input  wire [127:0] err_count_i,
+    input  wire                                         capture_i,
+    input  wire [`OMNILOC_STATUS_ILLEGAL_W-1:0]         illegal_i,
+    input  wire                                         win_consumed_i,
+    input  wire [`OMNILOC_DATA_W-1:0]                   timestamp_i,
+    input  wire [`OMNILOC_CHANNELS*`OMNILOC_DATA_W-1:0] win_count_i,
+    input  wire [`OMNILOC_CHANNELS*`OMNILOC_DATA_W-1:0] win_position_i,
+    input  wire [`OMNILOC_SNAP_DIR_DIR_W-1:0]           win_dir_i,
+    input  wire [`OMNILOC_CHANNELS*`OMNILOC_DATA_W-1:0] err_count_i,
     // window bank, valid from the cycle after the capture until the next one
-    output wire         win_valid_o,
-    output wire [31:0]  win_seq_o,
-    output wire [31:0]  win_timestamp_o,
-    output wire [7:0]   win_status_o,
-    output wire [7:0]   status_o
+    output wire                                         win_valid_o,
+    output wire [`OMNILOC_DATA_W-1:0]                   win_seq_o,
+    output wire [`OMNILOC_DATA_W-1:0]                   win_timestamp_o,
+    output wire [`OMNILOC_BODY_WINDOW_STATUS_W-1:0]     win_status_o,
+    output wire [`OMNILOC_BODY_WINDOW_STATUS_W-1:0]     status_o
 );
 
-localparam [31:0] DEFAULT_PERIOD_CYCLES = CLK_HZ / TICK_HZ;
-localparam [31:0] PERIOD_MIN_CYCLES = `OMNILOC_PERIOD_MIN_CYCLES;
+localparam integer DATA_W = `OMNILOC_DATA_W;
+localparam integer CH = `OMNILOC_CHANNELS;
+// STATUS as a window carries it: the low byte (WINDOW.status of the frame layouts).
+localparam integer BYTE_W = `OMNILOC_BODY_WINDOW_STATUS_W;
+localparam integer ST_W = `OMNILOC_STATUS_BITS;
+localparam [DATA_W-1:0] DEFAULT_PERIOD_CYCLES = CLK_HZ / TICK_HZ;
+localparam [DATA_W-1:0] PERIOD_MIN_CYCLES = `OMNILOC_PERIOD_MIN_CYCLES;
 localparam ILL_LSB = `OMNILOC_STATUS_ILLEGAL_LSB;
+localparam ILL_W = `OMNILOC_STATUS_ILLEGAL_W;
 localparam OVR_BIT = `OMNILOC_STATUS_OVERRUN_LSB;
 localparam BAD_BIT = `OMNILOC_STATUS_BAD_WRITE_LSB;
 localparam DEC_LSB = `OMNILOC_CONTROL_DECODE_LSB;
+localparam DEC_W = `OMNILOC_CONTROL_DECODE_W;
+localparam FLT_W = `OMNILOC_FILTER_LENGTH_W;
+localparam DIR_W = `OMNILOC_SNAP_DIR_DIR_W;
 
 // ---- control registers ----
-reg         enable_q;
-reg [1:0]   decode_q;
-reg         stream_q;
-reg [7:0]   filter_q;
-reg [31:0]  period_q;
-reg [5:0]   status_q;
+reg              enable_q;
+reg [DEC_W-1:0]  decode_q;
+reg              stream_q;
+reg [FLT_W-1:0]  filter_q;
+reg [DATA_W-1:0] period_q;
+reg [ST_W-1:0]   status_q;
 
 assign enable_o = enable_q;
 assign decode_o = decode_q;
 assign stream_o = stream_q;
 assign filter_len_o = filter_q;
 assign period_o = period_q;
-assign status_o = {2'b00, status_q};
+assign status_o = {{(BYTE_W - ST_W){1'b0}}, status_q};
 
 // ---- window bank and snapshot ----
-reg         win_valid_q;
-reg [31:0]  seq_q;
-reg [31:0]  win_ts_q;
-reg [7:0]   win_status_q;
-reg         pending_q;
+reg                 win_valid_q;
+reg [DATA_W-1:0]    seq_q;
+reg [DATA_W-1:0]    win_ts_q;
+reg [BYTE_W-1:0]    win_status_q;
+reg                 pending_q;
 
-reg [31:0]  snap_ts_q;
-reg [7:0]   snap_status_q;
-reg [3:0]   snap_dir_q;
-reg [127:0] snap_count_q;
-reg [127:0] snap_pos_q;
+reg [DATA_W-1:0]    snap_ts_q;
+reg [BYTE_W-1:0]    snap_status_q;
+reg [DIR_W-1:0]     snap_dir_q;
+reg [CH*DATA_W-1:0] snap_count_q;
+reg [CH*DATA_W-1:0] snap_pos_q;
 
 assign win_valid_o = win_valid_q;
 assign win_seq_o = seq_q;
@@ -109,15 +119,17 @@ wire addr_period = (reg_addr_i == `OMNILOC_REG_PERIOD);
 wire addr_status = (reg_addr_i == `OMNILOC_REG_STATUS);
 wire addr_snap_seq = (reg_addr_i == `OMNILOC_REG_SNAP_SEQ);
 
-// Value checks of the writable registers.
-wire [1:0] wdecode = reg_wdata_i[DEC_LSB +: 2];
-wire control_ok = (reg_wdata_i[31:4] == 28'd0) && (wdecode != 2'd3);
-wire filter_ok = (reg_wdata_i[31:8] == 24'd0);
+// Value checks of the writable registers: no bit above the register's fields, DECODE one of its values.
+wire [DEC_W-1:0] wdecode = reg_wdata_i[DEC_LSB +: DEC_W];
+wire decode_ok = (wdecode == `OMNILOC_CONTROL_DECODE_X4) || (wdecode == `OMNILOC_CONTROL_DECODE_X2)
+              || (wdecode == `OMNILOC_CONTROL_DECODE_X1);
+wire control_ok = (reg_wdata_i[DATA_W-1:`OMNILOC_CONTROL_BITS] == {(DATA_W - `OMNILOC_CONTROL_BITS){1'b0}}) && decode_ok;
+wire filter_ok = (reg_wdata_i[DATA_W-1:`OMNILOC_FILTER_BITS] == {(DATA_W - `OMNILOC_FILTER_BITS){1'b0}});
 // period >= PERIOD_MIN_CYCLES, split so that no 32-bit carry chain sits in front of the status
 // and write enables (it kept the iCE40 build under 40 MHz): any bit above the minimum's width
 // set, or the low bits compared on their own.
 localparam integer PMIN_W = $clog2(`OMNILOC_PERIOD_MIN_CYCLES + 1);
-wire period_ok = (reg_wdata_i[31:PMIN_W] != {(32 - PMIN_W){1'b0}})
+wire period_ok = (reg_wdata_i[DATA_W-1:PMIN_W] != {(DATA_W - PMIN_W){1'b0}})
               || (reg_wdata_i[PMIN_W-1:0] >= PERIOD_MIN_CYCLES[PMIN_W-1:0]);
 
 wire wr_control = wr && addr_control && control_ok;
@@ -127,23 +139,25 @@ wire wr_status = wr && addr_status;
 wire refused = wr && ((addr_control && !control_ok) || (addr_filter && !filter_ok)
                       || (addr_period && !period_ok));
 
-// Read mux (combinational on the request; registered into reg_rdata_q).
-reg [31:0] rdata;
-reg        known;
-reg        writable;
+// Read mux (combinational on the request; registered into reg_rdata_q). Fields at their LSBs.
+reg [DATA_W-1:0] rdata;
+reg              known;
+reg              writable;
 always @(*) begin
-    rdata = 32'd0;
+    rdata = {DATA_W{1'b0}};
     known = 1'b1;
     writable = 1'b0;
     case (reg_addr_i)
         `OMNILOC_REG_ID: rdata = `OMNILOC_ID;
         `OMNILOC_REG_VERSION: rdata = `OMNILOC_VERSION;
         `OMNILOC_REG_CONTROL: begin
-            rdata = {28'd0, stream_q, decode_q, enable_q};
+            rdata[`OMNILOC_CONTROL_ENABLE_LSB] = enable_q;
+            rdata[DEC_LSB +: DEC_W] = decode_q;
+            rdata[`OMNILOC_CONTROL_STREAM_LSB] = stream_q;
             writable = 1'b1;
         end
         `OMNILOC_REG_FILTER: begin
-            rdata = {24'd0, filter_q};
+            rdata[`OMNILOC_FILTER_LENGTH_LSB +: FLT_W] = filter_q;
             writable = 1'b1;
         end
         `OMNILOC_REG_PERIOD: begin
@@ -151,26 +165,26 @@ always @(*) begin
             writable = 1'b1;
         end
         `OMNILOC_REG_STATUS: begin
-            rdata = {26'd0, status_q};
+            rdata[ST_W-1:0] = status_q;
             writable = 1'b1;
         end
         `OMNILOC_REG_TIMESTAMP: rdata = timestamp_i;
         `OMNILOC_REG_SNAP_SEQ: rdata = seq_q;
         `OMNILOC_REG_SNAP_TIMESTAMP: rdata = snap_ts_q;
-        `OMNILOC_REG_SNAP_DIR: rdata = {28'd0, snap_dir_q};
-        `OMNILOC_REG_SNAP_STATUS: rdata = {24'd0, snap_status_q};
-        `OMNILOC_REG_SNAP_COUNT0: rdata = snap_count_q[31:0];
-        `OMNILOC_REG_SNAP_COUNT1: rdata = snap_count_q[63:32];
-        `OMNILOC_REG_SNAP_COUNT2: rdata = snap_count_q[95:64];
-        `OMNILOC_REG_SNAP_COUNT3: rdata = snap_count_q[127:96];
-        `OMNILOC_REG_SNAP_POSITION0: rdata = snap_pos_q[31:0];
-        `OMNILOC_REG_SNAP_POSITION1: rdata = snap_pos_q[63:32];
-        `OMNILOC_REG_SNAP_POSITION2: rdata = snap_pos_q[95:64];
-        `OMNILOC_REG_SNAP_POSITION3: rdata = snap_pos_q[127:96];
-        `OMNILOC_REG_ERROR_COUNT0: rdata = err_count_i[31:0];
-        `OMNILOC_REG_ERROR_COUNT1: rdata = err_count_i[63:32];
-        `OMNILOC_REG_ERROR_COUNT2: rdata = err_count_i[95:64];
-        `OMNILOC_REG_ERROR_COUNT3: rdata = err_count_i[127:96];
+        `OMNILOC_REG_SNAP_DIR: rdata[`OMNILOC_SNAP_DIR_DIR_LSB +: DIR_W] = snap_dir_q;
+        `OMNILOC_REG_SNAP_STATUS: rdata[BYTE_W-1:0] = snap_status_q;
+        `OMNILOC_REG_SNAP_COUNT0: rdata = snap_count_q[0*DATA_W +: DATA_W];
+        `OMNILOC_REG_SNAP_COUNT1: rdata = snap_count_q[1*DATA_W +: DATA_W];
+        `OMNILOC_REG_SNAP_COUNT2: rdata = snap_count_q[2*DATA_W +: DATA_W];
+        `OMNILOC_REG_SNAP_COUNT3: rdata = snap_count_q[3*DATA_W +: DATA_W];
+        `OMNILOC_REG_SNAP_POSITION0: rdata = snap_pos_q[0*DATA_W +: DATA_W];
+        `OMNILOC_REG_SNAP_POSITION1: rdata = snap_pos_q[1*DATA_W +: DATA_W];
+        `OMNILOC_REG_SNAP_POSITION2: rdata = snap_pos_q[2*DATA_W +: DATA_W];
+        `OMNILOC_REG_SNAP_POSITION3: rdata = snap_pos_q[3*DATA_W +: DATA_W];
+        `OMNILOC_REG_ERROR_COUNT0: rdata = err_count_i[0*DATA_W +: DATA_W];
+        `OMNILOC_REG_ERROR_COUNT1: rdata = err_count_i[1*DATA_W +: DATA_W];
+        `OMNILOC_REG_ERROR_COUNT2: rdata = err_count_i[2*DATA_W +: DATA_W];
+        `OMNILOC_REG_ERROR_COUNT3: rdata = err_count_i[3*DATA_W +: DATA_W];
         default: known = 1'b0;
     endcase
 end
@@ -180,17 +194,17 @@ wire consumed = latch_snapshot || win_consumed_i;
 wire overrun = capture_i && pending_q && !consumed;
 
 // STATUS after this cycle's events: set wins over a simultaneous write-one-to-clear.
-reg [5:0] status_set;
+reg [ST_W-1:0] status_set;
 always @(*) begin
-    status_set = 6'd0;
-    status_set[ILL_LSB +: 4] = illegal_i;
+    status_set = {ST_W{1'b0}};
+    status_set[ILL_LSB +: ILL_W] = illegal_i;
     status_set[OVR_BIT] = overrun;
     status_set[BAD_BIT] = refused;
 end
-wire [5:0] status_clr = wr_status ? reg_wdata_i[5:0] : 6'd0;
-wire [5:0] status_next = (status_q & ~status_clr) | status_set;
+wire [ST_W-1:0] status_clr = wr_status ? reg_wdata_i[ST_W-1:0] : {ST_W{1'b0}};
+wire [ST_W-1:0] status_next = (status_q & ~status_clr) | status_set;
 
-reg [31:0] reg_rdata_q;
+reg [DATA_W-1:0] reg_rdata_q;
 reg        reg_ack_q;
 reg        reg_err_q;
 assign reg_rdata_o = reg_rdata_q;
@@ -202,20 +216,20 @@ always @(posedge clk_i) begin
         enable_q <= 1'b0;
         decode_q <= `OMNILOC_CONTROL_DECODE_X4;
         stream_q <= 1'b0;
-        filter_q <= 8'd0;
+        filter_q <= {FLT_W{1'b0}};
         period_q <= DEFAULT_PERIOD_CYCLES;
-        status_q <= 6'd0;
+        status_q <= {ST_W{1'b0}};
         win_valid_q <= 1'b0;
-        seq_q <= 32'd0;
-        win_ts_q <= 32'd0;
-        win_status_q <= 8'd0;
+        seq_q <= {DATA_W{1'b0}};
+        win_ts_q <= {DATA_W{1'b0}};
+        win_status_q <= {BYTE_W{1'b0}};
         pending_q <= 1'b0;
-        snap_ts_q <= 32'd0;
-        snap_status_q <= 8'd0;
-        snap_dir_q <= 4'd0;
-        snap_count_q <= 128'd0;
-        snap_pos_q <= 128'd0;
-        reg_rdata_q <= 32'd0;
+        snap_ts_q <= {DATA_W{1'b0}};
+        snap_status_q <= {BYTE_W{1'b0}};
+        snap_dir_q <= {DIR_W{1'b0}};
+        snap_count_q <= {CH*DATA_W{1'b0}};
+        snap_pos_q <= {CH*DATA_W{1'b0}};
+        reg_rdata_q <= {DATA_W{1'b0}};
         reg_ack_q <= 1'b0;
         reg_err_q <= 1'b0;
     end else begin
@@ -224,15 +238,15 @@ always @(posedge clk_i) begin
             decode_q <= wdecode;
             stream_q <= reg_wdata_i[`OMNILOC_CONTROL_STREAM_LSB];
         end
-        if (wr_filter) filter_q <= reg_wdata_i[7:0];
+        if (wr_filter) filter_q <= reg_wdata_i[`OMNILOC_FILTER_LENGTH_LSB +: FLT_W];
         if (wr_period) period_q <= reg_wdata_i;
         status_q <= status_next;
 
         win_valid_q <= capture_i;
         if (capture_i) begin
-            seq_q <= seq_q + 32'd1;
+            seq_q <= seq_q + 1'b1;
             win_ts_q <= timestamp_i;
-            win_status_q <= {2'b00, status_next};
+            win_status_q <= {{(BYTE_W - ST_W){1'b0}}, status_next};
             pending_q <= 1'b1;
         end else if (consumed) begin
             pending_q <= 1'b0;
@@ -250,7 +264,7 @@ always @(posedge clk_i) begin
 
         reg_ack_q <= reg_rd_i || reg_wr_i;
         reg_err_q <= both || (rd && !known) || (wr && (!known || !writable)) || refused;
-        reg_rdata_q <= rd ? rdata : 32'd0;
+        reg_rdata_q <= rd ? rdata : {DATA_W{1'b0}};
     end
 end
 
@@ -264,7 +278,7 @@ always @(*) begin
         // A refused value never gets into the datapath.
         assert (decode_q != 2'd3);
         assert (period_q >= PERIOD_MIN_CYCLES);
-        assert (win_status_q[7:6] == 2'b00);
+        assert (win_status_q[BYTE_W-1:ST_W] == {(BYTE_W - ST_W){1'b0}});
     end
 end
 

@@ -15,25 +15,32 @@
 `include "omniloc_regs.vh"
 
 module frame_rx #(
-    parameter integer TIMEOUT_CYCLES = 12_000   // 1 ms at 12 MHz: 100 byte times at 1 Mbaud
+    // The inter-byte gap that ends a frame (FRAME_GAP_TIMEOUT_US, 1 ms) at the board clock: 12000 cycles.
+    parameter integer TIMEOUT_CYCLES = `OMNILOC_BOARD_CLOCK_HZ / 1000 * `OMNILOC_FRAME_GAP_TIMEOUT_US / 1000
 ) (
-    input  wire        clk_i,
-    input  wire        rst_i,
+    input  wire                       clk_i,
+    input  wire                       rst_i,
     // bytes from the UART receiver
-    input  wire [7:0]  byte_i,
-    input  wire        byte_valid_i,
-    output wire        byte_ready_o,
+    input  wire [7:0]                 byte_i,
+    input  wire                       byte_valid_i,
+    output wire                       byte_ready_o,
     // one event: a request (ev_error_o = 0, ev_code_o = frame TYPE) or an error to report
     // (ev_error_o = 1, ev_code_o = error code, ev_addr_o = detail)
-    output reg         ev_valid_o,
-    input  wire        ev_ready_i,
-    output reg         ev_error_o,
-    output reg  [7:0]  ev_code_o,
-    output reg  [7:0]  ev_addr_o,
-    output reg  [31:0] ev_data_o
+    output reg                        ev_valid_o,
+    input  wire                       ev_ready_i,
+    output reg                        ev_error_o,
+    output reg  [7:0]                 ev_code_o,
+    output reg  [`OMNILOC_ADDR_W-1:0] ev_addr_o,
+    output reg  [`OMNILOC_DATA_W-1:0] ev_data_o
 );
 
-    localparam integer MAX_LEN = 1 + `OMNILOC_FRAME_WRITE_REQ_BODY_BYTES;
+    localparam integer ADDR_W = `OMNILOC_ADDR_W;
+    localparam integer DATA_W = `OMNILOC_DATA_W;
+    // The longest request is WRITE_REQ; its body fills body_q exactly.
+    localparam integer MAX_BODY = `OMNILOC_FRAME_WRITE_REQ_BODY_BYTES;
+    localparam integer MAX_LEN = 1 + MAX_BODY;
+    // body_q is shifted in from the top, so a READ_REQ body (REG_ADDR layout) ends up in its top bytes.
+    localparam integer READ_BASE = 8 * (MAX_BODY - `OMNILOC_FRAME_READ_REQ_BODY_BYTES);
     localparam integer TIMER_W = $clog2(TIMEOUT_CYCLES + 1);
     localparam integer TIMEOUT_I = TIMEOUT_CYCLES;
     localparam [TIMER_W-1:0] TIMEOUT = TIMEOUT_I[TIMER_W-1:0];
@@ -45,7 +52,7 @@ module frame_rx #(
     reg [7:0]         len_q;
     reg [7:0]         left_q;      // body bytes still to come
     reg [7:0]         type_q;
-    reg [39:0]        body_q;      // body bytes, first byte in [7:0]
+    reg [8*MAX_BODY-1:0] body_q;   // body bytes as they came, shifted in from the top
     reg [15:0]        crc_q;
     reg [7:0]         crc_hi_q;
     reg [TIMER_W-1:0] timer_q;
@@ -67,7 +74,7 @@ module frame_rx #(
             ev_error_o <= 1'b1;
             ev_code_o  <= code;
             ev_addr_o  <= detail;
-            ev_data_o  <= 32'd0;
+            ev_data_o  <= {DATA_W{1'b0}};
             ev_valid_o <= 1'b1;
             state_q    <= S_EVENT;
         end
@@ -79,15 +86,15 @@ module frame_rx #(
             len_q      <= 8'd0;
             left_q     <= 8'd0;
             type_q     <= 8'd0;
-            body_q     <= 40'd0;
+            body_q     <= {8*MAX_BODY{1'b0}};
             crc_q      <= `OMNILOC_CRC_INIT;
             crc_hi_q   <= 8'd0;
             timer_q    <= {TIMER_W{1'b0}};
             ev_valid_o <= 1'b0;
             ev_error_o <= 1'b0;
             ev_code_o  <= 8'd0;
-            ev_addr_o  <= 8'd0;
-            ev_data_o  <= 32'd0;
+            ev_addr_o  <= {ADDR_W{1'b0}};
+            ev_data_o  <= {DATA_W{1'b0}};
         end else begin
             // Inter-byte timeout inside a frame.
             if (state_q != S_HUNT && state_q != S_EVENT) begin
@@ -118,11 +125,11 @@ module frame_rx #(
                     S_TYPE: if (take) begin
                         type_q  <= byte_i;
                         crc_q   <= crc_next;
-                        body_q  <= 40'd0;
+                        body_q  <= {8*MAX_BODY{1'b0}};
                         state_q <= (left_q == 8'd0) ? S_CRC_HI : S_BODY;
                     end
                     S_BODY: if (take) begin
-                        body_q  <= {byte_i, body_q[39:8]};
+                        body_q  <= {byte_i, body_q[8*MAX_BODY-1:8]};
                         crc_q   <= crc_next;
                         left_q  <= left_q - 8'd1;
                         if (left_q == 8'd1) state_q <= S_CRC_HI;
@@ -137,11 +144,14 @@ module frame_rx #(
                         end else if (!(known_read || known_write || known_snap)) begin
                             raise_error(`OMNILOC_ERR_MALFORMED, type_q);
                         end else begin
-                            // The body was shifted in from the top: realign it to byte 0.
+                            // The fields at their layout's offsets (a WRITE_REQ fills body_q, a
+                            // READ_REQ sits in its top bytes).
                             ev_error_o <= 1'b0;
                             ev_code_o  <= type_q;
-                            ev_addr_o  <= known_write ? body_q[7:0]  : body_q[39:32];
-                            ev_data_o  <= known_write ? body_q[39:8] : 32'd0;
+                            ev_addr_o  <= known_write ? body_q[`OMNILOC_BODY_REG_VALUE_ADDR_LSB +: `OMNILOC_BODY_REG_VALUE_ADDR_W]
+                                                      : body_q[READ_BASE + `OMNILOC_BODY_REG_ADDR_ADDR_LSB +: `OMNILOC_BODY_REG_ADDR_ADDR_W];
+                            ev_data_o  <= known_write ? body_q[`OMNILOC_BODY_REG_VALUE_DATA_LSB +: `OMNILOC_BODY_REG_VALUE_DATA_W]
+                                                      : {DATA_W{1'b0}};
                             ev_valid_o <= 1'b1;
                             state_q    <= S_EVENT;
                         end

@@ -1,11 +1,12 @@
 // icebreaker_top: omniloc on the iCEBreaker (iCE40UP5K-SG48) board.
 //
-// Clock: the board's 12 MHz oscillator drives the design directly (CLK_HZ = 12 MHz). Why not the
-// PLL's 39.75 MHz: 40 MHz cannot be made exactly from 12 MHz, so neither the 100 Hz window nor
-// 1 Mbaud would divide exactly; at 12 MHz both do (120000 cycles a window, 12 cycles a bit), the
-// encoder inputs are still sampled at 30x the fastest edge rate of the paper's motors, and no
-// PLL lock has to be waited for. The bitstream is still timed against 40 MHz (the paper's myRIO
-// clock), so the same RTL is shown to close at that frequency.
+// Clock: the board's 12 MHz oscillator drives the design directly (CLK_HZ = OMNILOC_BOARD_CLOCK_HZ;
+// rates and clocks come from common/regmap.json "link"). Why not the PLL: 40 MHz cannot be made
+// exactly from 12 MHz (the nearest PLL output is 39.75 MHz), so neither the 100 Hz window nor 1 Mbaud
+// would divide exactly; at 12 MHz both do (120000 cycles a window, 12 cycles a bit), the encoder
+// inputs are still sampled at 30x the fastest edge rate of the paper's motors, and no PLL lock has to
+// be waited for. The bitstream is still timed against OMNILOC_PAPER_CLOCK_HZ (40 MHz, the paper's
+// myRIO clock), so the same RTL is shown to close at that frequency.
 // Pins (constraints/icebreaker.pcf): encoders on PMOD1A (A0..A3 on the top row, B0..B3 on the
 // bottom row), FT2232H channel B UART (FPGA receives on 6, transmits on 9), the user button as
 // reset, the green LED for link activity and the red LED for errors (both active low).
@@ -13,19 +14,18 @@
 `resetall
 `timescale 1ns / 1ps
 `default_nettype none
+`include "omniloc_regs.vh"
 
 module icebreaker_top (
     input  wire       CLK,
     input  wire       BTN_N,
-    input  wire [3:0] ENC_A,
-    input  wire [3:0] ENC_B,
+    input  wire [`OMNILOC_CHANNELS-1:0] ENC_A,
+    input  wire [`OMNILOC_CHANNELS-1:0] ENC_B,
     input  wire       RX,
     output wire       TX,
     output wire       LEDG_N,
     output wire       LEDR_N
 );
-
-    localparam integer CLK_HZ = 12_000_000;
 
     // Power-on and button reset, synchronous to CLK.
     reg [1:0] btn_sync_q = 2'b00;
@@ -38,7 +38,7 @@ module icebreaker_top (
     wire rst = !por_q[4];
 
     wire activity, error;
-    omniloc_top #(.CLK_HZ(CLK_HZ), .TICK_HZ(100), .BAUD(1_000_000)) u_omniloc (
+    omniloc_top #(.CLK_HZ(`OMNILOC_BOARD_CLOCK_HZ), .TICK_HZ(`OMNILOC_TICK_HZ), .BAUD(`OMNILOC_UART_BAUD)) u_omniloc (
         .clk_i(CLK), .rst_i(rst), .enc_a_i(ENC_A), .enc_b_i(ENC_B),
         .uart_rx_i(RX), .uart_tx_o(TX), .activity_o(activity), .error_o(error));
 

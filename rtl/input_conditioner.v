@@ -19,8 +19,10 @@
 `timescale 1ns / 1ps
 `default_nettype none
 
+`include "omniloc_regs.vh"
+
 module input_conditioner #(
-    parameter LEN_W = 8
+    parameter LEN_W = `OMNILOC_FILTER_LENGTH_W   // width of FILTER.LENGTH
 ) (
     input  wire             clk_i,
     input  wire             rst_i,

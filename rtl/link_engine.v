@@ -8,6 +8,8 @@
 // otherwise the register refused the value -> BAD_VALUE; the detail byte is the address.
 // Streaming: with stream_en_i, each captured window (win_valid_i) is sent as one TELEMETRY frame
 // as soon as the transmitter is free, between responses, and acknowledged with win_consumed_o.
+// Every body field is placed at its offset in the generated layout (OMNILOC_BODY_*_LSB / _W of
+// common/regmap.json "frames.layouts"); frame_tx sends body byte k from bits [8k+7:8k].
 // Assumptions: the register bus acks every access within a bounded time (encoder_regs: 1 cycle).
 `resetall
 `timescale 1ns / 1ps
@@ -24,8 +26,8 @@ module link_engine #(
     output wire                    ev_ready_o,
     input  wire                    ev_error_i,
     input  wire [7:0]              ev_code_i,
-    input  wire [7:0]              ev_addr_i,
-    input  wire [31:0]             ev_data_i,
+    input  wire [`OMNILOC_ADDR_W-1:0] ev_addr_i,
+    input  wire [`OMNILOC_DATA_W-1:0] ev_data_i,
     // frames to frame_tx
     output reg                     tx_start_o,
     input  wire                    tx_ready_i,
@@ -33,37 +35,64 @@ module link_engine #(
     output reg  [7:0]              tx_body_len_o,
     output reg  [8*BODY_BYTES-1:0] tx_body_o,
     // register bus master
-    output reg  [7:0]              reg_addr_o,
+    output reg  [`OMNILOC_ADDR_W-1:0] reg_addr_o,
     output reg                     reg_rd_o,
     output reg                     reg_wr_o,
-    output reg  [31:0]             reg_wdata_o,
-    input  wire [31:0]             reg_rdata_i,
+    output reg  [`OMNILOC_DATA_W-1:0] reg_wdata_o,
+    input  wire [`OMNILOC_DATA_W-1:0] reg_rdata_i,
     input  wire                    reg_ack_i,
     input  wire                    reg_err_i,
     // window stream from the core
     input  wire                    stream_en_i,
     input  wire                    win_valid_i,
-    input  wire [31:0]             win_seq_i,
-    input  wire [31:0]             win_timestamp_i,
-    input  wire [127:0]            win_count_i,
-    input  wire [3:0]              win_dir_i,
-    input  wire [7:0]              status_i,
+    input  wire [`OMNILOC_DATA_W-1:0] win_seq_i,
+    input  wire [`OMNILOC_DATA_W-1:0] win_timestamp_i,
+    input  wire [`OMNILOC_CHANNELS*`OMNILOC_DATA_W-1:0] win_count_i,
+    input  wire [`OMNILOC_CHANNELS-1:0] win_dir_i,
+    input  wire [`OMNILOC_BODY_WINDOW_STATUS_W-1:0] status_i,
     output reg                     win_consumed_o
 );
+
+    localparam integer ADDR_W   = `OMNILOC_ADDR_W;
+    localparam integer DATA_W   = `OMNILOC_DATA_W;
+    localparam integer CH       = `OMNILOC_CHANNELS;
+    localparam integer STATUS_W = `OMNILOC_BODY_WINDOW_STATUS_W;   // the status byte of a window
 
     localparam [2:0] S_IDLE = 3'd0, S_BUS = 3'd1, S_SEND = 3'd2, S_SNAP = 3'd3;
 
     reg [2:0]  state_q;
     reg        tele_pending_q;
-    reg [7:0]  req_code_q;
-    reg [7:0]  req_addr_q;
-    reg [2:0]  snap_step_q;
+    reg [7:0]        req_code_q;
+    reg [ADDR_W-1:0] req_addr_q;
+    reg [2:0]        snap_step_q;
+
+    // Field slots of the body layouts.
+    localparam integer W_SEQ   = `OMNILOC_BODY_WINDOW_SEQ_LSB;
+    localparam integer W_TS    = `OMNILOC_BODY_WINDOW_TIMESTAMP_CYCLES_LSB;
+    localparam integer W_COUNT = `OMNILOC_BODY_WINDOW_COUNT_LSB;
+    localparam integer W_DIR   = `OMNILOC_BODY_WINDOW_DIR_LSB;
+    localparam integer W_STAT  = `OMNILOC_BODY_WINDOW_STATUS_LSB;
+    localparam integer DIR_W   = `OMNILOC_BODY_WINDOW_DIR_W;
+
+    // A TELEMETRY body from the window bank (dir zero-extended to its byte).
+    function [8*BODY_BYTES-1:0] window_body(input [DATA_W-1:0] seq, input [DATA_W-1:0] ts,
+                                            input [CH*DATA_W-1:0] count, input [CH-1:0] dir,
+                                            input [STATUS_W-1:0] stat);
+        begin
+            window_body = {8*BODY_BYTES{1'b0}};
+            window_body[W_SEQ +: `OMNILOC_BODY_WINDOW_SEQ_W] = seq;
+            window_body[W_TS +: `OMNILOC_BODY_WINDOW_TIMESTAMP_CYCLES_W] = ts;
+            window_body[W_COUNT +: `OMNILOC_BODY_WINDOW_COUNT_N * `OMNILOC_BODY_WINDOW_COUNT_W] = count;
+            window_body[W_DIR +: DIR_W] = {{(DIR_W - CH){1'b0}}, dir};
+            window_body[W_STAT +: `OMNILOC_BODY_WINDOW_STATUS_W] = stat;
+        end
+    endfunction
 
     // tx_start_o is a valid held until frame_tx takes the frame (tx_ready_i); the body stays stable.
     assign ev_ready_o = (state_q == S_IDLE) && !tx_start_o && !tele_pending_q;
 
     // Snapshot read order; the body slot of each read follows the SNAPSHOT_RESP layout.
-    function [7:0] snap_addr(input [2:0] step);
+    function [ADDR_W-1:0] snap_addr(input [2:0] step);
         case (step)
             3'd0:    snap_addr = `OMNILOC_REG_SNAP_SEQ;
             3'd1:    snap_addr = `OMNILOC_REG_SNAP_TIMESTAMP;
@@ -93,16 +122,16 @@ module link_engine #(
             state_q        <= S_IDLE;
             tele_pending_q <= 1'b0;
             req_code_q     <= 8'd0;
-            req_addr_q     <= 8'd0;
+            req_addr_q     <= {ADDR_W{1'b0}};
             snap_step_q    <= 3'd0;
             tx_start_o     <= 1'b0;
             tx_type_o      <= 8'd0;
             tx_body_len_o  <= 8'd0;
             tx_body_o      <= {8*BODY_BYTES{1'b0}};
-            reg_addr_o     <= 8'd0;
+            reg_addr_o     <= {ADDR_W{1'b0}};
             reg_rd_o       <= 1'b0;
             reg_wr_o       <= 1'b0;
-            reg_wdata_o    <= 32'd0;
+            reg_wdata_o    <= {DATA_W{1'b0}};
             win_consumed_o <= 1'b0;
         end else begin
             if (tx_start_o && tx_ready_i) tx_start_o <= 1'b0;
@@ -121,14 +150,15 @@ module link_engine #(
                         win_consumed_o <= 1'b1;
                         tx_type_o      <= `OMNILOC_FRAME_TELEMETRY;
                         tx_body_len_o  <= `OMNILOC_FRAME_TELEMETRY_BODY_BYTES;
-                        tx_body_o      <= {status_i, 4'd0, win_dir_i, win_count_i, win_timestamp_i, win_seq_i};
+                        tx_body_o      <= window_body(win_seq_i, win_timestamp_i, win_count_i, win_dir_i, status_i);
                         tx_start_o     <= 1'b1;
                     end else if (ev_valid_i) begin
                         req_code_q <= ev_code_i;
                         req_addr_q <= ev_addr_i;
                         tx_body_o  <= {8*BODY_BYTES{1'b0}};
                         if (ev_error_i) begin
-                            tx_body_o[15:0] <= {ev_addr_i, ev_code_i};
+                            tx_body_o[`OMNILOC_BODY_ERROR_CODE_LSB +: `OMNILOC_BODY_ERROR_CODE_W] <= ev_code_i;
+                            tx_body_o[`OMNILOC_BODY_ERROR_DETAIL_LSB +: `OMNILOC_BODY_ERROR_DETAIL_W] <= ev_addr_i;
                             send(`OMNILOC_FRAME_ERROR, `OMNILOC_FRAME_ERROR_BODY_BYTES);
                         end else if (ev_code_i == `OMNILOC_FRAME_SNAPSHOT_REQ) begin
                             snap_step_q <= 3'd0;
@@ -146,26 +176,29 @@ module link_engine #(
                 end
                 S_BUS: if (reg_ack_i) begin
                     if (reg_err_i) begin
-                        tx_body_o[15:0] <= {req_addr_q, bus_err_code};
+                        tx_body_o[`OMNILOC_BODY_ERROR_CODE_LSB +: `OMNILOC_BODY_ERROR_CODE_W] <= bus_err_code;
+                        tx_body_o[`OMNILOC_BODY_ERROR_DETAIL_LSB +: `OMNILOC_BODY_ERROR_DETAIL_W] <= req_addr_q;
                         send(`OMNILOC_FRAME_ERROR, `OMNILOC_FRAME_ERROR_BODY_BYTES);
                     end else if (req_code_q == `OMNILOC_FRAME_READ_REQ) begin
-                        tx_body_o[39:0] <= {reg_rdata_i, req_addr_q};
+                        tx_body_o[`OMNILOC_BODY_REG_VALUE_ADDR_LSB +: `OMNILOC_BODY_REG_VALUE_ADDR_W] <= req_addr_q;
+                        tx_body_o[`OMNILOC_BODY_REG_VALUE_DATA_LSB +: `OMNILOC_BODY_REG_VALUE_DATA_W] <= reg_rdata_i;
                         send(`OMNILOC_FRAME_READ_RESP, `OMNILOC_FRAME_READ_RESP_BODY_BYTES);
                     end else begin
-                        tx_body_o[7:0] <= req_addr_q;
+                        tx_body_o[`OMNILOC_BODY_REG_ADDR_ADDR_LSB +: `OMNILOC_BODY_REG_ADDR_ADDR_W] <= req_addr_q;
                         send(`OMNILOC_FRAME_WRITE_ACK, `OMNILOC_FRAME_WRITE_ACK_BODY_BYTES);
                     end
                 end
                 S_SNAP: if (reg_ack_i) begin
+                    // Each read goes to its field of the WINDOW layout (same order as snap_addr).
                     case (snap_step_q)
-                        3'd0:    tx_body_o[31:0]    <= reg_rdata_i;
-                        3'd1:    tx_body_o[63:32]   <= reg_rdata_i;
-                        3'd2:    tx_body_o[95:64]   <= reg_rdata_i;
-                        3'd3:    tx_body_o[127:96]  <= reg_rdata_i;
-                        3'd4:    tx_body_o[159:128] <= reg_rdata_i;
-                        3'd5:    tx_body_o[191:160] <= reg_rdata_i;
-                        3'd6:    tx_body_o[199:192] <= reg_rdata_i[7:0];
-                        default: tx_body_o[207:200] <= reg_rdata_i[7:0];
+                        3'd0:    tx_body_o[W_SEQ +: `OMNILOC_BODY_WINDOW_SEQ_W] <= reg_rdata_i;
+                        3'd1:    tx_body_o[W_TS +: `OMNILOC_BODY_WINDOW_TIMESTAMP_CYCLES_W] <= reg_rdata_i;
+                        3'd2:    tx_body_o[W_COUNT + 0 * `OMNILOC_BODY_WINDOW_COUNT_W +: `OMNILOC_BODY_WINDOW_COUNT_W] <= reg_rdata_i;
+                        3'd3:    tx_body_o[W_COUNT + 1 * `OMNILOC_BODY_WINDOW_COUNT_W +: `OMNILOC_BODY_WINDOW_COUNT_W] <= reg_rdata_i;
+                        3'd4:    tx_body_o[W_COUNT + 2 * `OMNILOC_BODY_WINDOW_COUNT_W +: `OMNILOC_BODY_WINDOW_COUNT_W] <= reg_rdata_i;
+                        3'd5:    tx_body_o[W_COUNT + 3 * `OMNILOC_BODY_WINDOW_COUNT_W +: `OMNILOC_BODY_WINDOW_COUNT_W] <= reg_rdata_i;
+                        3'd6:    tx_body_o[W_DIR +: DIR_W] <= reg_rdata_i[DIR_W-1:0];
+                        default: tx_body_o[W_STAT +: `OMNILOC_BODY_WINDOW_STATUS_W] <= reg_rdata_i[`OMNILOC_BODY_WINDOW_STATUS_W-1:0];
                     endcase
                     if (snap_step_q == 3'd7) begin
                         send(`OMNILOC_FRAME_SNAPSHOT_RESP, `OMNILOC_FRAME_SNAPSHOT_RESP_BODY_BYTES);

@@ -5,31 +5,37 @@
 // answered here; every other address goes to the core.
 // Assumptions: one clock of CLK_HZ; rst_i synchronous, active high; uart_rx_i and the encoder
 // pins asynchronous (synchronised inside). CLK_HZ / BAUD >= 4 and should divide exactly
-// (docs/RTL.md lists the rates).
+// (docs/RTL.md lists the rates). The defaults are the board's (common/regmap.json "link": 12 MHz,
+// 100 Hz windows, 1 Mbaud); every width comes from the generated map.
 `resetall
 `timescale 1ns / 1ps
 `default_nettype none
 `include "omniloc_regs.vh"
 
 module omniloc_top #(
-    parameter integer CLK_HZ  = 12_000_000,
-    parameter integer TICK_HZ = 100,
-    parameter integer BAUD    = 1_000_000
+    parameter integer CLK_HZ  = `OMNILOC_BOARD_CLOCK_HZ,
+    parameter integer TICK_HZ = `OMNILOC_TICK_HZ,
+    parameter integer BAUD    = `OMNILOC_UART_BAUD
 ) (
     input  wire       clk_i,
     input  wire       rst_i,
-    input  wire [3:0] enc_a_i,
-    input  wire [3:0] enc_b_i,
+    input  wire [`OMNILOC_CHANNELS-1:0] enc_a_i,
+    input  wire [`OMNILOC_CHANNELS-1:0] enc_b_i,
     input  wire       uart_rx_i,
     output wire       uart_tx_o,
     output wire       activity_o,   // a byte went either way in the last ~50 ms
     output wire       error_o       // a sticky error: illegal transition, refused write or UART error
 );
 
+    localparam integer ADDR_W = `OMNILOC_ADDR_W;
+    localparam integer DATA_W = `OMNILOC_DATA_W;
+    localparam integer CH     = `OMNILOC_CHANNELS;
+
     // ---- UART ----
     wire [7:0]  rx_byte;
     wire        rx_valid, rx_ready;
-    wire [15:0] rx_framing, rx_overruns;
+    wire [`OMNILOC_LINK_ERRORS_FRAMING_W-1:0] rx_framing;
+    wire [`OMNILOC_LINK_ERRORS_OVERRUN_W-1:0] rx_overruns;
     uart_rx #(.CLK_HZ(CLK_HZ), .BAUD(BAUD)) u_uart_rx (
         .clk_i(clk_i), .rst_i(rst_i), .rx_i(uart_rx_i),
         .data_o(rx_byte), .valid_o(rx_valid), .ready_i(rx_ready),
@@ -42,10 +48,11 @@ module omniloc_top #(
         .tx_o(uart_tx_o));
 
     // ---- frames ----
-    wire        ev_valid, ev_ready, ev_error;
-    wire [7:0]  ev_code, ev_addr;
-    wire [31:0] ev_data;
-    frame_rx #(.TIMEOUT_CYCLES(CLK_HZ / 1000)) u_frame_rx (
+    wire              ev_valid, ev_ready, ev_error;
+    wire [7:0]        ev_code;
+    wire [ADDR_W-1:0] ev_addr;
+    wire [DATA_W-1:0] ev_data;
+    frame_rx #(.TIMEOUT_CYCLES(CLK_HZ / 1000 * `OMNILOC_FRAME_GAP_TIMEOUT_US / 1000)) u_frame_rx (
         .clk_i(clk_i), .rst_i(rst_i),
         .byte_i(rx_byte), .byte_valid_i(rx_valid), .byte_ready_o(rx_ready),
         .ev_valid_o(ev_valid), .ev_ready_i(ev_ready), .ev_error_o(ev_error),
@@ -61,35 +68,42 @@ module omniloc_top #(
         .byte_o(tx_byte), .byte_valid_o(tx_valid), .byte_ready_i(tx_ready));
 
     // ---- register bus: LINK_ERRORS here, the rest in the core ----
-    wire [7:0]  bus_addr;
-    wire        bus_rd, bus_wr;
-    wire [31:0] bus_wdata;
-    wire        to_link = (bus_addr == `OMNILOC_REG_LINK_ERRORS);
+    wire [ADDR_W-1:0] bus_addr;
+    wire              bus_rd, bus_wr;
+    wire [DATA_W-1:0] bus_wdata;
+    wire              to_link = (bus_addr == `OMNILOC_REG_LINK_ERRORS);
 
-    wire [31:0] core_rdata;
-    wire        core_ack, core_err;
-    reg         link_ack_q, link_err_q;
-    reg  [31:0] link_rdata_q;
+    wire [DATA_W-1:0] core_rdata;
+    wire              core_ack, core_err;
+    reg               link_ack_q, link_err_q;
+    reg  [DATA_W-1:0] link_rdata_q;
+    // LINK_ERRORS: the receiver's counters at their fields.
+    reg  [DATA_W-1:0] link_errors;
+    always @(*) begin
+        link_errors = {DATA_W{1'b0}};
+        link_errors[`OMNILOC_LINK_ERRORS_FRAMING_LSB +: `OMNILOC_LINK_ERRORS_FRAMING_W] = rx_framing;
+        link_errors[`OMNILOC_LINK_ERRORS_OVERRUN_LSB +: `OMNILOC_LINK_ERRORS_OVERRUN_W] = rx_overruns;
+    end
     always @(posedge clk_i) begin
         if (rst_i) begin
             link_ack_q   <= 1'b0;
             link_err_q   <= 1'b0;
-            link_rdata_q <= 32'd0;
+            link_rdata_q <= {DATA_W{1'b0}};
         end else begin
             link_ack_q   <= to_link && (bus_rd || bus_wr);
             link_err_q   <= bus_wr;                    // read-only
-            link_rdata_q <= {rx_overruns, rx_framing};
+            link_rdata_q <= link_errors;
         end
     end
-    wire [31:0] bus_rdata = link_ack_q ? link_rdata_q : core_rdata;
+    wire [DATA_W-1:0] bus_rdata = link_ack_q ? link_rdata_q : core_rdata;
     wire        bus_ack   = link_ack_q | core_ack;
     wire        bus_err   = link_ack_q ? link_err_q : core_err;
 
-    wire         win_valid, win_consumed, stream_en, tick;
-    wire [31:0]  win_seq, win_ts;
-    wire [127:0] win_count, win_position;
-    wire [3:0]   win_dir;
-    wire [7:0]   status;
+    wire                 win_valid, win_consumed, stream_en, tick;
+    wire [DATA_W-1:0]    win_seq, win_ts;
+    wire [CH*DATA_W-1:0] win_count, win_position;
+    wire [CH-1:0]        win_dir;
+    wire [`OMNILOC_BODY_WINDOW_STATUS_W-1:0] status;   // STATUS at capture, as the window's status byte
     encoder_core #(.CLK_HZ(CLK_HZ), .TICK_HZ(TICK_HZ)) u_core (
         .clk_i(clk_i), .rst_i(rst_i), .enc_a_i(enc_a_i), .enc_b_i(enc_b_i),
         .reg_addr_i(bus_addr), .reg_rd_i(bus_rd && !to_link), .reg_wr_i(bus_wr && !to_link),
@@ -118,9 +132,9 @@ module omniloc_top #(
         else if (tick && activity_q != 3'd0) activity_q <= activity_q - 3'd1;
     end
     assign activity_o = (activity_q != 3'd0);
-    assign error_o = (status[`OMNILOC_STATUS_ILLEGAL_LSB +: `OMNILOC_STATUS_ILLEGAL_W] != 4'd0)
+    assign error_o = (|status[`OMNILOC_STATUS_ILLEGAL_LSB +: `OMNILOC_STATUS_ILLEGAL_W])
                    || status[`OMNILOC_STATUS_BAD_WRITE_LSB]
-                   || (rx_framing != 16'd0) || (rx_overruns != 16'd0);
+                   || (|rx_framing) || (|rx_overruns);
 
     // win_position is for other tops (e.g. a position display); unused here.
     wire unused_ok = &{1'b0, win_position};

@@ -27,7 +27,7 @@ module quadrature_decoder (
     input  wire       b_i,
     input  wire       valid_i,
     input  wire       en_i,
-    input  wire [1:0] mode_i,
+    input  wire [`OMNILOC_CONTROL_DECODE_W-1:0] mode_i,
     output wire       up_o,
     output wire       down_o,
     output wire       dir_o,

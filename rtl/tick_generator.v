@@ -1,4 +1,6 @@
 // tick_generator: the window clock of the encoder core (paper section 2.2: 40 MHz -> 100 Hz).
+// The defaults are the paper's clock and the window rate (OMNILOC_PAPER_CLOCK_HZ, OMNILOC_TICK_HZ of
+// common/regmap.json); the board top sets its own 12 MHz.
 //
 // Emits a one-cycle tick_o exactly every period cycles and a free-running timestamp.
 // The period is sampled at each tick (at reset it is CLK_HZ / TICK_HZ), so a new value written
@@ -15,28 +17,33 @@
 `timescale 1ns / 1ps
 `default_nettype none
 
+`include "omniloc_regs.vh"
+
 module tick_generator #(
-    parameter CLK_HZ = 40000000,
-    parameter TICK_HZ = 100
+    parameter CLK_HZ = `OMNILOC_PAPER_CLOCK_HZ,
+    parameter TICK_HZ = `OMNILOC_TICK_HZ
 ) (
     input  wire        clk_i,
     input  wire        rst_i,
     // Period of the next window in clock cycles; sampled at each tick.
-    input  wire [31:0] period_i,
+    input  wire [`OMNILOC_PERIOD_CYCLES_W-1:0] period_i,
     output wire        tick_o,
     // Period in force for the current window.
-    output wire [31:0] period_o,
+    output wire [`OMNILOC_PERIOD_CYCLES_W-1:0] period_o,
     // Free-running clock-cycle counter, wraps at 2^32.
-    output wire [31:0] timestamp_o
+    output wire [`OMNILOC_DATA_W-1:0] timestamp_o
 );
 
-localparam [31:0] DEFAULT_PERIOD_CYCLES = CLK_HZ / TICK_HZ;
+localparam integer P_W = `OMNILOC_PERIOD_CYCLES_W;   // PERIOD.CYCLES
+localparam integer TS_W = `OMNILOC_DATA_W;           // TIMESTAMP
+localparam [P_W-1:0] DEFAULT_PERIOD_CYCLES = CLK_HZ / TICK_HZ;
+localparam [P_W-1:0] ONE = {{(P_W-1){1'b0}}, 1'b1};
 
 // Counts down to zero; the cycle after it reads zero is the tick, so tick_o is a plain flop.
-reg [31:0] remain_q;
-reg [31:0] period_q;
-reg        tick_q;
-reg [31:0] timestamp_q;
+reg [P_W-1:0]  remain_q;
+reg [P_W-1:0]  period_q;
+reg            tick_q;
+reg [TS_W-1:0] timestamp_q;
 
 assign tick_o = tick_q;
 assign period_o = period_q;
@@ -44,18 +51,18 @@ assign timestamp_o = timestamp_q;
 
 always @(posedge clk_i) begin
     if (rst_i) begin
-        remain_q <= DEFAULT_PERIOD_CYCLES - 32'd1;
+        remain_q <= DEFAULT_PERIOD_CYCLES - ONE;
         period_q <= DEFAULT_PERIOD_CYCLES;
         tick_q <= 1'b0;
-        timestamp_q <= 32'd0;
+        timestamp_q <= {TS_W{1'b0}};
     end else begin
-        timestamp_q <= timestamp_q + 32'd1;
-        tick_q <= (remain_q == 32'd0);
-        if (remain_q == 32'd0) begin
-            remain_q <= period_i - 32'd1;
+        timestamp_q <= timestamp_q + 1'b1;
+        tick_q <= (remain_q == {P_W{1'b0}});
+        if (remain_q == {P_W{1'b0}}) begin
+            remain_q <= period_i - ONE;
             period_q <= period_i;
         end else begin
-            remain_q <= remain_q - 32'd1;
+            remain_q <= remain_q - ONE;
         end
     end
 end

@@ -4,24 +4,30 @@
 // the sender's rate is within +-2 % of BAUD.
 // Guarantees: a byte is offered on data_o/valid_o until taken with ready_i; a byte whose stop bit
 // is low is dropped and counted in framing_errors_o; a byte that arrives while the previous one is
-// still not taken is dropped and counted in overruns_o (the older byte is kept). Counters saturate.
+// still not taken is dropped and counted in overruns_o (the older byte is kept). Counters saturate; their
+// widths are those of the LINK_ERRORS fields, the defaults the board's clock and UART rate (both from
+// common/regmap.json).
 `resetall
 `timescale 1ns / 1ps
 `default_nettype none
+`include "omniloc_regs.vh"
 
 module uart_rx #(
-    parameter integer CLK_HZ = 12_000_000,
-    parameter integer BAUD   = 1_000_000
+    parameter integer CLK_HZ = `OMNILOC_BOARD_CLOCK_HZ,
+    parameter integer BAUD   = `OMNILOC_UART_BAUD
 ) (
-    input  wire        clk_i,
-    input  wire        rst_i,
-    input  wire        rx_i,
-    output wire [7:0]  data_o,
-    output wire        valid_o,
-    input  wire        ready_i,
-    output wire [15:0] framing_errors_o,
-    output wire [15:0] overruns_o
+    input  wire                                   clk_i,
+    input  wire                                   rst_i,
+    input  wire                                   rx_i,
+    output wire [7:0]                             data_o,
+    output wire                                   valid_o,
+    input  wire                                   ready_i,
+    output wire [`OMNILOC_LINK_ERRORS_FRAMING_W-1:0] framing_errors_o,
+    output wire [`OMNILOC_LINK_ERRORS_OVERRUN_W-1:0] overruns_o
 );
+
+    localparam integer FE_W = `OMNILOC_LINK_ERRORS_FRAMING_W;
+    localparam integer OE_W = `OMNILOC_LINK_ERRORS_OVERRUN_W;
 
     localparam integer CLKS_PER_BIT = (CLK_HZ + BAUD / 2) / BAUD;
     localparam integer DIV_W = $clog2(CLKS_PER_BIT + 1);
@@ -40,8 +46,8 @@ module uart_rx #(
     reg [7:0]       shift_q;
     reg [7:0]       data_q;
     reg             valid_q;
-    reg [15:0]      framing_q;
-    reg [15:0]      overrun_q;
+    reg [FE_W-1:0]  framing_q;
+    reg [OE_W-1:0]  overrun_q;
 
     wire rx_s = sync_q[1];
 
@@ -60,8 +66,8 @@ module uart_rx #(
             shift_q   <= 8'd0;
             data_q    <= 8'd0;
             valid_q   <= 1'b0;
-            framing_q <= 16'd0;
-            overrun_q <= 16'd0;
+            framing_q <= {FE_W{1'b0}};
+            overrun_q <= {OE_W{1'b0}};
         end else begin
             sync_q <= {sync_q[0], rx_i};
             prev_q <= rx_s;
@@ -94,9 +100,9 @@ module uart_rx #(
                 end else begin
                     state_q <= S_IDLE;
                     if (!rx_s) begin
-                        if (framing_q != 16'hFFFF) framing_q <= framing_q + 1'b1;
+                        if (framing_q != {FE_W{1'b1}}) framing_q <= framing_q + 1'b1;
                     end else if (valid_q && !ready_i) begin
-                        if (overrun_q != 16'hFFFF) overrun_q <= overrun_q + 1'b1;
+                        if (overrun_q != {OE_W{1'b1}}) overrun_q <= overrun_q + 1'b1;
                     end else begin
                         data_q  <= shift_q;
                         valid_q <= 1'b1;

@@ -2,16 +2,18 @@
 //
 // Assumptions: CLK_HZ / BAUD >= 4 (checked at elaboration in simulation and by FORMAL); the bit
 // time is the rounded divisor, so rates that divide CLK_HZ exactly (12 MHz: 1 Mbaud = 12, 3 Mbaud = 4
-// cycles a bit) have no error, others an error below 1 / (2 * divisor).
+// cycles a bit) have no error, others an error below 1 / (2 * divisor). The defaults are the board's
+// clock and UART rate (common/regmap.json "link").
 // Guarantees: tx_o idles high; each accepted byte leaves as start bit, eight data bits LSB first,
 // one stop bit, every bit exactly CLKS_PER_BIT cycles; ready_o is high only when idle.
 `resetall
 `timescale 1ns / 1ps
 `default_nettype none
+`include "omniloc_regs.vh"
 
 module uart_tx #(
-    parameter integer CLK_HZ = 12_000_000,
-    parameter integer BAUD   = 1_000_000
+    parameter integer CLK_HZ = `OMNILOC_BOARD_CLOCK_HZ,
+    parameter integer BAUD   = `OMNILOC_UART_BAUD
 ) (
     input  wire       clk_i,
     input  wire       rst_i,

@@ -16,8 +16,10 @@
 `timescale 1ns / 1ps
 `default_nettype none
 
+`include "omniloc_regs.vh"
+
 module window_counter #(
-    parameter W = 32
+    parameter W = `OMNILOC_DATA_W   // the register width: counts and positions wrap at 2^W
 ) (
     input  wire         clk_i,
     input  wire         rst_i,

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Portability check: the same RTL through yosys synth_xilinx for a Zynq-7010 (xc7z010, the FPGA of
-# the paper's NI myRIO) at the paper's 40 MHz, with the utilisation against the device.
+# the paper's NI myRIO) at the paper's clock (PAPER_CLOCK_HZ of common/regmap.json, 40 MHz), with the
+# utilisation against the device.
 # Usage: scripts/synth_xilinx.sh [BUILD_DIR]
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -8,8 +9,10 @@ build=$(realpath -m "${1:-build}")
 out="$build/zynq7010"
 mkdir -p "$out"
 cd "$root"
+target_hz=$(sed -n 's/^`define OMNILOC_PAPER_CLOCK_HZ \([0-9]*\)$/\1/p' rtl/include/omniloc_regs.vh)
+[ -n "$target_hz" ] || { echo "synth_xilinx: error: no OMNILOC_PAPER_CLOCK_HZ in rtl/include/omniloc_regs.vh" >&2; exit 1; }
 mapfile -t sources < <(ls rtl/*.v | grep -v '_top\.v$' ; echo rtl/omniloc_top.v)
-yosys -q -l "$out/yosys.log" -p "read_verilog -Irtl/include ${sources[*]}; chparam -set CLK_HZ 40000000 omniloc_top; synth_xilinx -family xc7 -top omniloc_top; tee -o $out/stat.txt stat"
+yosys -q -l "$out/yosys.log" -p "read_verilog -Irtl/include ${sources[*]}; chparam -set CLK_HZ $target_hz omniloc_top; synth_xilinx -family xc7 -top omniloc_top; tee -o $out/stat.txt stat"
 python3 - "$out/stat.txt" <<'PY'
 import re, sys
 text = open(sys.argv[1]).read()

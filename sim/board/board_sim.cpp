@@ -5,6 +5,7 @@
 
 #include <array>
 #include <deque>
+#include <string>
 #include <vector>
 
 #include "Vomniloc_top.h"
@@ -202,7 +203,9 @@ std::size_t SimTransport::read(std::span<std::uint8_t> out, std::chrono::millise
 }
 
 TransportStatus SimTransport::status() const {
-  return TransportStatus{true, false, "Verilated omniloc_top (12 MHz, 1 Mbaud) in-process", counters_};
+  static const std::string description = "Verilated omniloc_top (" + std::to_string(BoardSim::kClockHz / 1'000'000) +
+                                          " MHz, " + std::to_string(BoardSim::kBaud) + " baud) in-process";
+  return TransportStatus{true, false, description, counters_};
 }
 
 }  // namespace omniloc::sim

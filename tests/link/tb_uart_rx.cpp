@@ -9,11 +9,13 @@
 #include <vector>
 
 #include "Vuart_rx.h"
+#include "omniloc/regmap.hpp"
 #include "tb_clocked.hpp"
 
 namespace {
 
-constexpr double kClksPerBit = 12.0;
+// The module's defaults are the board's clock and baud (common/regmap.json "link"): 12 cycles a bit.
+constexpr double kClksPerBit = static_cast<double>(omniloc::regmap::kBoardClockHz) / omniloc::regmap::kUartBaud;
 
 struct LineEvent {
   std::uint64_t cycle;

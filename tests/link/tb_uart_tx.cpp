@@ -7,11 +7,13 @@
 #include <vector>
 
 #include "Vuart_tx.h"
+#include "omniloc/regmap.hpp"
 #include "tb_clocked.hpp"
 
 namespace {
 
-constexpr int kClksPerBit = 12;
+// The module's defaults are the board's clock and baud (common/regmap.json "link"): 12 cycles a bit.
+constexpr int kClksPerBit = static_cast<int>(omniloc::regmap::kBoardClockHz / omniloc::regmap::kUartBaud);
 
 struct Decoded {
   std::vector<std::uint8_t> bytes;

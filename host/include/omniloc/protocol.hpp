@@ -13,9 +13,11 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <variant>
 #include <vector>
 
+#include "omniloc/frame_bodies.hpp"
 #include "omniloc/regmap.hpp"
 
 namespace omniloc::protocol {
@@ -25,36 +27,28 @@ namespace omniloc::protocol {
                                         std::uint16_t crc = regmap::kCrcInit);
 
 // ---- Frame bodies (one struct per TYPE of regmap.json) ----
-struct ReadReq {
-  std::uint8_t addr = 0;
+// Each is the generated layout of its TYPE's body (frame_bodies.hpp: fields, offsets, pack and unpack),
+// as its own type so that the variant below tells the frames apart: READ_REQ and WRITE_ACK share the
+// REG_ADDR layout, READ_RESP and WRITE_REQ REG_VALUE, SNAPSHOT_RESP and TELEMETRY WINDOW.
+struct ReadReq : regmap::FrameReadReqBody {
   friend bool operator==(const ReadReq&, const ReadReq&) = default;
 };
-struct WriteReq {
-  std::uint8_t addr = 0;
-  std::uint32_t data = 0;
+struct WriteReq : regmap::FrameWriteReqBody {
   friend bool operator==(const WriteReq&, const WriteReq&) = default;
 };
-struct SnapshotReq {
+struct SnapshotReq : regmap::FrameSnapshotReqBody {
   friend bool operator==(const SnapshotReq&, const SnapshotReq&) = default;
 };
-struct ReadResp {
-  std::uint8_t addr = 0;
-  std::uint32_t data = 0;
+struct ReadResp : regmap::FrameReadRespBody {
   friend bool operator==(const ReadResp&, const ReadResp&) = default;
 };
-struct WriteAck {
-  std::uint8_t addr = 0;
+struct WriteAck : regmap::FrameWriteAckBody {
   friend bool operator==(const WriteAck&, const WriteAck&) = default;
 };
-/// One captured window: the body of SNAPSHOT_RESP and TELEMETRY.
-struct Window {
-  std::uint32_t seq = 0;
-  std::uint32_t timestamp_cycles = 0;
-  std::array<std::int32_t, regmap::kChannels> count{};
-  std::uint8_t dir = 0;     ///< bit n: channel n counting down at the end of the window
-  std::uint8_t status = 0;  ///< low byte of STATUS at capture
-  friend bool operator==(const Window&, const Window&) = default;
-};
+/// One captured window: the body of SNAPSHOT_RESP and TELEMETRY (seq, timestamp_cycles, count[],
+/// dir: bit n = channel n counting down at the end of the window, status: low byte of STATUS at capture).
+using Window = regmap::FrameTelemetryBody;
+static_assert(std::is_same_v<regmap::FrameSnapshotRespBody, Window>, "SNAPSHOT_RESP and TELEMETRY carry one window");
 struct SnapshotResp {
   Window window;
   friend bool operator==(const SnapshotResp&, const SnapshotResp&) = default;
@@ -63,9 +57,9 @@ struct Telemetry {
   Window window;
   friend bool operator==(const Telemetry&, const Telemetry&) = default;
 };
-struct ErrorResp {
-  std::uint8_t code = 0;    ///< regmap::kErr*
-  std::uint8_t detail = 0;  ///< the offending address (BAD_ADDRESS, READ_ONLY, BAD_VALUE) or TYPE (MALFORMED)
+/// code: regmap::kErr*; detail: the offending address (BAD_ADDRESS, READ_ONLY, BAD_VALUE), TYPE
+/// (BAD_CRC, MALFORMED), LEN (MALFORMED) or 0xFF (a request cut short).
+struct ErrorResp : regmap::FrameErrorBody {
   friend bool operator==(const ErrorResp&, const ErrorResp&) = default;
 };
 
@@ -169,7 +163,8 @@ class PositionUnwrapper {
 };
 
 /// Reconstructs a 64-bit clock-cycle count from the board's 32-bit free-running TIMESTAMP (wraps every
-/// 108 s at 39.75 MHz). Correct as long as observations are less than 2^32 cycles apart.
+/// 358 s at the board's 12 MHz, regmap::kBoardClockHz). Correct as long as observations are less than
+/// 2^32 cycles apart.
 class TimestampUnwrapper {
  public:
   explicit TimestampUnwrapper(double clk_hz);

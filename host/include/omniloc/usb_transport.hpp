@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "omniloc/regmap.hpp"
 #include "omniloc/transport.hpp"
 
 namespace omniloc {
@@ -71,7 +72,7 @@ struct UsbBoardInfo {
 struct UsbTransportOptions {
   std::string product = "omniloc encoder board";
   std::string serial;  ///< empty: the first board found
-  std::uint32_t baud = 1'000'000;
+  std::uint32_t baud = regmap::kUartBaud;  ///< the board's UART rate (common/regmap.json "link")
   std::uint8_t latency_ms = 1;
   std::chrono::milliseconds io_timeout{500};  ///< control and bulk-OUT transfers
   int in_transfers = 4;                        ///< bulk-IN transfers kept in flight

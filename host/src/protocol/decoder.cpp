@@ -7,35 +7,25 @@ namespace omniloc::protocol {
 
 namespace {
 
-std::uint32_t get_u32(std::span<const std::uint8_t> b, std::size_t at) {
-  return static_cast<std::uint32_t>(b[at]) | (static_cast<std::uint32_t>(b[at + 1]) << 8) |
-         (static_cast<std::uint32_t>(b[at + 2]) << 16) | (static_cast<std::uint32_t>(b[at + 3]) << 24);
-}
-
-Window get_window(std::span<const std::uint8_t> b) {
-  Window w;
-  w.seq = get_u32(b, 0);
-  w.timestamp_cycles = get_u32(b, 4);
-  for (int ch = 0; ch < regmap::kChannels; ++ch) {
-    w.count[static_cast<std::size_t>(ch)] = static_cast<std::int32_t>(get_u32(b, 8 + 4 * static_cast<std::size_t>(ch)));
-  }
-  w.dir = b[24];
-  w.status = b[25];
-  return w;
+/// The first N bytes of a body whose length the caller has checked, as the layout's fixed-size span.
+template <std::size_t N>
+std::span<const std::uint8_t, N> as_layout(std::span<const std::uint8_t> b) {
+  return b.first<N>();
 }
 
 }  // namespace
 
 Frame decode_body(std::uint8_t type, std::span<const std::uint8_t> b) {
+  namespace r = regmap;
   switch (type) {
-    case regmap::kFrameReadReq: return ReadReq{b[0]};
-    case regmap::kFrameWriteReq: return WriteReq{b[0], get_u32(b, 1)};
-    case regmap::kFrameSnapshotReq: return SnapshotReq{};
-    case regmap::kFrameReadResp: return ReadResp{b[0], get_u32(b, 1)};
-    case regmap::kFrameWriteAck: return WriteAck{b[0]};
-    case regmap::kFrameSnapshotResp: return SnapshotResp{get_window(b)};
-    case regmap::kFrameTelemetry: return Telemetry{get_window(b)};
-    default: return ErrorResp{b[0], b[1]};  // the caller has checked type is one of the eight
+    case r::kFrameReadReq: return ReadReq{r::unpack_reg_addr(as_layout<r::kFrameReadReqBodyBytes>(b))};
+    case r::kFrameWriteReq: return WriteReq{r::unpack_reg_value(as_layout<r::kFrameWriteReqBodyBytes>(b))};
+    case r::kFrameSnapshotReq: return SnapshotReq{};
+    case r::kFrameReadResp: return ReadResp{r::unpack_reg_value(as_layout<r::kFrameReadRespBodyBytes>(b))};
+    case r::kFrameWriteAck: return WriteAck{r::unpack_reg_addr(as_layout<r::kFrameWriteAckBodyBytes>(b))};
+    case r::kFrameSnapshotResp: return SnapshotResp{r::unpack_window(as_layout<r::kFrameSnapshotRespBodyBytes>(b))};
+    case r::kFrameTelemetry: return Telemetry{r::unpack_window(as_layout<r::kFrameTelemetryBodyBytes>(b))};
+    default: return ErrorResp{r::unpack_error(as_layout<r::kFrameErrorBodyBytes>(b))};  // the caller has checked type is one of the eight
   }
 }
 

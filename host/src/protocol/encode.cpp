@@ -1,54 +1,49 @@
-// Frame encoders: one body writer per TYPE, framing and CRC in one place.
+// Frame encoders: the body of each TYPE is packed by its generated layout (frame_bodies.hpp); framing
+// and CRC in one place.
 #include "omniloc/protocol.hpp"
 
 namespace omniloc::protocol {
 
 namespace {
 
-void put_u32(std::vector<std::uint8_t>& out, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) out.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
-}
-
-void put_window(std::vector<std::uint8_t>& out, const Window& w) {
-  put_u32(out, w.seq);
-  put_u32(out, w.timestamp_cycles);
-  for (const std::int32_t c : w.count) put_u32(out, static_cast<std::uint32_t>(c));
-  out.push_back(w.dir);
-  out.push_back(w.status);
+/// Appends the N body bytes of a frame TYPE and packs the body into them with its layout's pack();
+/// a body whose layout is not N bytes long matches no pack() and does not compile.
+template <std::size_t N, class Body>
+void put_body(std::vector<std::uint8_t>& out, const Body& body) {
+  const std::size_t at = out.size();
+  out.resize(at + N);
+  regmap::pack(body, std::span<std::uint8_t, N>(out.data() + at, N));
 }
 
 struct BodyWriter {
   std::vector<std::uint8_t>& out;
   std::uint8_t operator()(const ReadReq& f) const {
-    out.push_back(f.addr);
+    put_body<regmap::kFrameReadReqBodyBytes>(out, f);
     return regmap::kFrameReadReq;
   }
   std::uint8_t operator()(const WriteReq& f) const {
-    out.push_back(f.addr);
-    put_u32(out, f.data);
+    put_body<regmap::kFrameWriteReqBodyBytes>(out, f);
     return regmap::kFrameWriteReq;
   }
   std::uint8_t operator()(const SnapshotReq&) const { return regmap::kFrameSnapshotReq; }
   std::uint8_t operator()(const ReadResp& f) const {
-    out.push_back(f.addr);
-    put_u32(out, f.data);
+    put_body<regmap::kFrameReadRespBodyBytes>(out, f);
     return regmap::kFrameReadResp;
   }
   std::uint8_t operator()(const WriteAck& f) const {
-    out.push_back(f.addr);
+    put_body<regmap::kFrameWriteAckBodyBytes>(out, f);
     return regmap::kFrameWriteAck;
   }
   std::uint8_t operator()(const SnapshotResp& f) const {
-    put_window(out, f.window);
+    put_body<regmap::kFrameSnapshotRespBodyBytes>(out, f.window);
     return regmap::kFrameSnapshotResp;
   }
   std::uint8_t operator()(const Telemetry& f) const {
-    put_window(out, f.window);
+    put_body<regmap::kFrameTelemetryBodyBytes>(out, f.window);
     return regmap::kFrameTelemetry;
   }
   std::uint8_t operator()(const ErrorResp& f) const {
-    out.push_back(f.code);
-    out.push_back(f.detail);
+    put_body<regmap::kFrameErrorBodyBytes>(out, f);
     return regmap::kFrameError;
   }
 };

@@ -1,6 +1,7 @@
 // The simulated encoder board: the Verilated rtl/omniloc_top.v (encoder core + UART link, as on the
-// iCEBreaker at 12 MHz and 1 Mbaud) with models of what its pins are wired to: the FT2232H's UART
-// side (a bit-exact 1 Mbaud serializer into the FPGA's RX pin and a decoder of its TX pin) and the
+// iCEBreaker at its board clock and UART rate, regmap::kBoardClockHz and regmap::kUartBaud: 12 MHz and
+// 1 Mbaud) with models of what its pins are wired to: the FT2232H's UART side (a bit-exact serializer
+// into the FPGA's RX pin and a decoder of its TX pin) and the
 // four encoders (an EncoderSource that gives the A/B levels of every clock cycle).
 //
 // BoardSim is a UartSide, so it plugs into the FT2232H model under umockdev; SimTransport puts it
@@ -13,6 +14,7 @@
 #include <span>
 #include <string>
 
+#include "omniloc/regmap.hpp"
 #include "omniloc/transport.hpp"
 #include "omniloc_sim/encoder_waveform.hpp"
 #include "omniloc_sim/uart_side.hpp"
@@ -48,8 +50,9 @@ struct BoardSimCounters {
 
 class BoardSim final : public UartSide {
  public:
-  static constexpr std::int64_t kClockHz = 12'000'000;  // omniloc_top's defaults, as on the iCEBreaker
-  static constexpr std::int64_t kBaud = 1'000'000;
+  // omniloc_top's defaults, as on the iCEBreaker (common/regmap.json "link").
+  static constexpr std::int64_t kClockHz = regmap::kBoardClockHz;
+  static constexpr std::int64_t kBaud = regmap::kUartBaud;
 
   /// Builds the model and holds reset for 4 cycles; `source` may be null (all pins low).
   explicit BoardSim(EncoderSource* source = nullptr);

@@ -4,7 +4,8 @@
 // (run_windows), so every run is deterministic. Thread-safe: the emulated USB bridge calls it from
 // umockdev's worker thread while the test thread advances time.
 //
-// The request parser mirrors rtl/frame_rx.v byte for byte: hunt for SYNC; a LEN of 0 or above
+// The request parser follows rtl/frame_rx.v byte for byte (tests/link/tb_reference_board_vs_rtl.cpp
+// feeds both the same byte streams and compares the answers): hunt for SYNC; a LEN of 0 or above
 // 1 + WRITE_REQ body is answered ERROR MALFORMED (detail = LEN) at once; otherwise LEN bytes and the
 // CRC are collected, and a wrong CRC is answered BAD_CRC (detail = TYPE), a right CRC on anything but
 // a well-formed request MALFORMED (detail = TYPE). The parser does not rescan the bytes of a rejected
@@ -31,8 +32,8 @@
 namespace omniloc::sim {
 
 struct ReferenceBoardConfig {
-  std::uint32_t clk_hz = 39'750'000;  ///< iCEBreaker PLL output
-  std::uint32_t tick_hz = 100;
+  std::uint32_t clk_hz = regmap::kBoardClockHz;  ///< the iCEBreaker's clock, as the Verilated board (sim::BoardSim)
+  std::uint32_t tick_hz = regmap::kTickHz;
   std::uint32_t initial_timestamp_cycles = 0;
   std::array<std::uint32_t, regmap::kChannels> initial_position{};  ///< to exercise wrap-around
 };
