@@ -60,7 +60,8 @@ struct Recording {
   std::vector<TruthSample> truth;  ///< empty without truth.csv
 };
 
-/// Reads meta.json (cv::FileStorage; camera via camera_from_json, robot via parse_robot_config).
+/// Reads meta.json (config layer: camera via camera_from_json, robot via parse_robot_config);
+/// errors are RecordingError "<meta.json>:<field path>: <why> (got <value>)".
 [[nodiscard]] RecordingMeta read_meta(const std::filesystem::path& meta_json);
 [[nodiscard]] std::vector<EncoderWindow> read_encoders_csv(const std::filesystem::path& path);
 [[nodiscard]] std::vector<FrameRef> read_camera_csv(const std::filesystem::path& path);
@@ -101,7 +102,8 @@ class RecordingWriter {
   int frame_count_ = 0;
 };
 
-/// Writes meta.json (camera block in the camera-file format, including the optional mask).
+/// Writes meta.json with nlohmann-json (strings escaped, doubles exact): the camera block in the
+/// camera-file format including the mask, the robot block's six contract keys, initial_pose if set.
 void write_meta(const std::filesystem::path& meta_json, const RecordingMeta& meta);
 
 /// Streams poses.csv rows.
