@@ -26,7 +26,10 @@ std::string show(double value) {
   if (std::isnan(value)) return "nan";
   if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
   char buf[32];
-  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, value);
+  // Whole numbers in full (40000000, not 4e+07: clock rates and counts read as written).
+  const bool whole = value == std::floor(value) && std::abs(value) < 1e15;
+  const auto [end, ec] = whole ? std::to_chars(buf, buf + sizeof buf, value, std::chars_format::fixed)
+                               : std::to_chars(buf, buf + sizeof buf, value);
   return ec == std::errc() ? std::string(buf, end) : std::string("?");
 }
 

@@ -36,7 +36,10 @@ class PathTracker {
       case E::object_start: stack_.push_back({false, 0, {}, {}, child(true)}); break;
       case E::array_start: stack_.push_back({true, 0, {}, {}, child(true)}); break;
       case E::object_end:
-      case E::array_end: stack_.pop_back(); break;
+      case E::array_end:
+        stack_.pop_back();
+        done_with_member();
+        break;
       case E::key: {
         Frame& f = stack_.back();
         std::string k = parsed.get<std::string>();
@@ -45,7 +48,10 @@ class PathTracker {
         f.key = std::move(k);
         break;
       }
-      case E::value: (void)child(true); break;
+      case E::value:
+        (void)child(true);
+        done_with_member();
+        break;
     }
     return true;
   }
@@ -61,11 +67,17 @@ class PathTracker {
     std::string key;
     Origin at;
   };
+  // The element being read: the current key of an object (the object itself between two
+  // members), the next index of an array.
   Origin child(bool consume) {
     if (stack_.empty()) return root_;
     Frame& f = stack_.back();
     if (f.array) return f.at[consume ? f.next++ : f.next];
-    return f.at / f.key;
+    return f.key.empty() ? f.at : f.at / f.key;
+  }
+  // After a member's value an error (a missing comma) is the object's, not that member's.
+  void done_with_member() {
+    if (!stack_.empty() && !stack_.back().array) stack_.back().key.clear();
   }
   Origin root_;
   std::vector<Frame> stack_;
