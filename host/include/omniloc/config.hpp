@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <initializer_list>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -57,6 +58,8 @@ class Origin {
 [[nodiscard]] std::string show(double value);
 /// A string as the error messages show it: in double quotes.
 [[nodiscard]] std::string show(std::string_view text);
+/// Numbers as a JSON array: "[1, 2.5]".
+[[nodiscard]] std::string show(std::initializer_list<double> values);
 
 /// validate() helpers: throw ConfigError "<at>: <why> (got <value>)" unless `ok`.
 void require(bool ok, const Origin& at, std::string_view why, double got);

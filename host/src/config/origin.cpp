@@ -33,7 +33,23 @@ std::string show(double value) {
   return ec == std::errc() ? std::string(buf, end) : std::string("?");
 }
 
-std::string show(std::string_view text) { return "\"" + std::string(text) + "\""; }
+std::string show(std::string_view text) {
+  // Appended piece by piece: GCC 12 warns (-Wrestrict, a false positive) on "literal" + string.
+  std::string s(1, '"');
+  s.append(text);
+  s.push_back('"');
+  return s;
+}
+
+std::string show(std::initializer_list<double> values) {
+  std::string s(1, '[');
+  for (const double v : values) {
+    if (s.size() > 1) s.append(", ");
+    s.append(show(v));
+  }
+  s.push_back(']');
+  return s;
+}
 
 void require(bool ok, const Origin& at, std::string_view why, double got) {
   if (!ok) at.fail(why, show(got));

@@ -77,7 +77,7 @@ namespace {
 using config::Origin;
 
 std::string show_term(const Trapezoid& t) {
-  return "[" + config::show(t.a) + ", " + config::show(t.b) + ", " + config::show(t.c) + ", " + config::show(t.d) + "]";
+  return config::show({t.a, t.b, t.c, t.d});
 }
 
 void check_terms(const std::array<Trapezoid, kFuzzyTerms>& terms, double max, const Origin& at, bool must_cover) {

@@ -96,13 +96,13 @@ void CameraModel::validate(const config::Origin& at) const {
                              center_px.y() <= height_px - 1.0;
   require(centre_inside, at / "center_px",
           "lies outside the " + std::to_string(width_px) + " x " + std::to_string(height_px) + " image",
-          "[" + config::show(center_px.x()) + ", " + config::show(center_px.y()) + "]");
+          config::show({center_px.x(), center_px.y()}));
   if (radius_lut.size() < 2)
     (at / "radius_lut").fail("must be a list of at least two [r_px, d_cm] pairs",
                              std::to_string(radius_lut.size()) + " row(s)");
   for (std::size_t i = 0; i < radius_lut.size(); ++i) {
     const RadiusMark& m = radius_lut[i];
-    const std::string row = "[" + config::show(m.radius_px) + ", " + config::show(m.ground_cm) + "]";
+    const std::string row = config::show({m.radius_px, m.ground_cm});
     require(m.radius_px >= 0 && m.ground_cm >= 0, (at / "radius_lut")[i], "values must be >= 0", row);
     if (i > 0)
       require(m.radius_px > radius_lut[i - 1].radius_px && m.ground_cm > radius_lut[i - 1].ground_cm,

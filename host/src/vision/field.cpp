@@ -43,7 +43,7 @@ void FieldSpec::validate(const config::Origin& at) const {
     const Eigen::Vector2d& d = marks_from_centre_cm[i];
     require(std::abs(d.x()) + mark_radius_cm < L / 2.0 + 1e-9 && std::abs(d.y()) + mark_radius_cm < W / 2.0,
             (at / "marks" / "from_centre_cm")[i], "lies outside the playing area",
-            "[" + config::show(d.x()) + ", " + config::show(d.y()) + "]");
+            config::show({d.x(), d.y()}));
   }
 }
 
