@@ -40,6 +40,10 @@ struct RecordingMeta {
   CameraModel camera;
   RobotConfig robot;
   std::optional<Pose2> initial_pose;
+
+  /// Throws ConfigError "<at>.<field>: <why> (got <value>)": an empty field name, a bad camera or
+  /// robot block, a non-finite initial pose.
+  void validate(const config::Origin& at) const;
 };
 
 struct FrameRef {

@@ -214,13 +214,24 @@ const config::KeyTable<RecordingMeta>& meta_keys() {
 
 }  // namespace
 
+void RecordingMeta::validate(const config::Origin& at) const {
+  config::require(!field.empty(), at / "field", "must name a geometry (a name or a path)", config::show(field));
+  camera.validate(at / "camera");
+  robot.validate(at / "robot");
+  if (initial_pose) {
+    config::require(std::isfinite(initial_pose->x_cm), at / "initial_pose" / "x_cm", "must be finite", initial_pose->x_cm);
+    config::require(std::isfinite(initial_pose->y_cm), at / "initial_pose" / "y_cm", "must be finite", initial_pose->y_cm);
+    config::require(std::isfinite(initial_pose->yaw_deg), at / "initial_pose" / "yaw_deg", "must be finite",
+                    initial_pose->yaw_deg);
+  }
+}
+
 RecordingMeta read_meta(const fs::path& meta_json) {
   try {
     const config::Document doc = config::parse_json_file(meta_json);
     RecordingMeta m;
     config::read_keys(doc.root(), meta_keys(), m);
-    config::require(!m.field.empty(), config::Origin(doc.source) / "field", "must name a geometry (a name or a path)",
-                    config::show(m.field));
+    m.validate(doc.source);
     return m;
   } catch (const ConfigError& e) {
     throw RecordingError(e.what());
