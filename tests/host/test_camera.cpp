@@ -5,9 +5,9 @@
 #include <filesystem>
 #include <fstream>
 
-#include <opencv2/core/persistence.hpp>
-
+#include "config_test_util.hpp"
 #include "omniloc/camera.hpp"
+#include "omniloc/config_reader.hpp"
 
 namespace omniloc {
 namespace {
@@ -68,50 +68,105 @@ TEST(Camera, RoundTripPixelToFloorAndBack) {
   }
 }
 
-class CameraJson : public ::testing::Test {
- protected:
-  CameraModel parse(const std::string& body) {
-    path_ = (std::filesystem::temp_directory_path() / ("omniloc_cam_" + std::to_string(::getpid()) + ".json")).string();
-    std::ofstream(path_) << body;
-    cv::FileStorage fs(path_, cv::FileStorage::READ | cv::FileStorage::FORMAT_JSON);
-    return camera_from_json(fs["camera"], "meta.json: camera");
-  }
-  void TearDown() override { std::filesystem::remove(path_); }
-  std::string path_;
-};
+// --- camera files ---------------------------------------------------------------------------------
 
-TEST_F(CameraJson, ReadsTheMetaJsonCameraBlock) {
-  const CameraModel cam = parse(R"({"camera": {"width": 640, "height": 480, "center_px": [321.5, 238],
+using test::error_of;
+
+const std::vector<std::string> kEveryKey = {"description", "width", "height", "center_px", "radius_lut",
+                                            "yaw_offset_deg", "mirrored", "mask"};
+
+CameraModel parse_block(const std::string& json) {
+  return camera_from_json(config::parse_json_text(json, "meta.json").root() / "camera");
+}
+
+TEST(CameraFile, ShippedDefaultFileHasEveryKey) {
+  const auto json = test::read_json(resolve_data_file("cameras", "default"));
+  EXPECT_EQ(test::keys_of(json), kEveryKey);
+  EXPECT_EQ(test::keys_of(json["mask"]), (std::vector<std::string>{"body_radius_px", "masts"}));
+  // The values, by hand from the file.
+  const CameraModel cam = load_camera("default");
+  EXPECT_EQ(cam.center_px, Eigen::Vector2d(320, 240));
+  EXPECT_EQ(cam.radius_lut.size(), 26u);
+  EXPECT_TRUE(cam.radius_lut[1] == (RadiusMark{24.7, 20.0}));
+  EXPECT_TRUE(cam.radius_lut[25] == (RadiusMark{238.7, 500.0}));
+  EXPECT_EQ(cam.yaw_offset_deg, 0.0);
+  EXPECT_FALSE(cam.mirrored);
+  EXPECT_EQ(cam.body_radius_px, 31.0);
+  ASSERT_EQ(cam.masts.size(), 1u);
+  EXPECT_TRUE(cam.masts[0] == (MastSector{180.0, 4.0}));
+}
+
+TEST(CameraFile, EveryKeyReachesItsMember) {
+  const std::string file = test::write_file("cam.json", R"({"description": "a test camera",
+      "width": 800, "height": 600, "center_px": [401.5, 298.25],
+      "radius_lut": [[0, 0], [100, 90], [250, 450]], "yaw_offset_deg": -2.5, "mirrored": true,
+      "mask": {"body_radius_px": 12.5, "masts": [{"bearing_deg": 90, "half_width_deg": 3}, {"bearing_deg": -45.5, "half_width_deg": 0}]}})")
+                               .string();
+  const CameraModel cam = load_camera(file);
+  EXPECT_EQ(cam.width_px, 800);
+  EXPECT_EQ(cam.height_px, 600);
+  EXPECT_EQ(cam.center_px, Eigen::Vector2d(401.5, 298.25));
+  ASSERT_EQ(cam.radius_lut.size(), 3u);
+  EXPECT_TRUE(cam.radius_lut[0] == (RadiusMark{0, 0}));
+  EXPECT_TRUE(cam.radius_lut[1] == (RadiusMark{100, 90}));
+  EXPECT_TRUE(cam.radius_lut[2] == (RadiusMark{250, 450}));
+  EXPECT_EQ(cam.yaw_offset_deg, -2.5);
+  EXPECT_TRUE(cam.mirrored);
+  EXPECT_EQ(cam.body_radius_px, 12.5);
+  ASSERT_EQ(cam.masts.size(), 2u);
+  EXPECT_EQ(cam.masts[0].bearing_deg, 90.0);
+  EXPECT_EQ(cam.masts[0].half_width_deg, 3.0);
+  EXPECT_EQ(cam.masts[1].bearing_deg, -45.5);
+  EXPECT_EQ(cam.masts[1].half_width_deg, 0.0);
+}
+
+TEST(CameraFile, ReadsTheMetaJsonCameraBlockWithoutAMask) {
+  const CameraModel cam = parse_block(R"({"camera": {"width": 640, "height": 480, "center_px": [321.5, 238],
       "radius_lut": [[0, 0], [100, 100], [230, 500]], "yaw_offset_deg": -2.5, "mirrored": true}})");
   EXPECT_DOUBLE_EQ(cam.center_px.x(), 321.5);
   EXPECT_DOUBLE_EQ(cam.yaw_offset_deg, -2.5);
   EXPECT_TRUE(cam.mirrored);
   EXPECT_TRUE(cam.masts.empty());
+  EXPECT_EQ(cam.body_radius_px, 0.0);
   EXPECT_DOUBLE_EQ(cam.ground_cm_at_radius(165.0), 300.0);
   EXPECT_DOUBLE_EQ(cam.view_radius_px(), 230.0);
 }
 
-TEST_F(CameraJson, RejectsBadInputWithContext) {
-  auto expect_error = [&](const std::string& body, const std::string& what) {
-    try {
-      (void)parse(body);
-      FAIL() << "no error for " << what;
-    } catch (const std::runtime_error& e) {
-      EXPECT_NE(std::string(e.what()).find("meta.json: camera"), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
-    }
-  };
-  expect_error(R"({"camera": {"width": 640, "height": 480, "center_px": [320, 240],
-      "radius_lut": [[0, 0], [100, 100], [90, 200]], "yaw_offset_deg": 0, "mirrored": false}})", "row 2");
-  expect_error(R"({"camera": {"width": 640, "height": 480, "center_px": [700, 240],
-      "radius_lut": [[0, 0], [100, 100]], "yaw_offset_deg": 0, "mirrored": false}})", "center_px");
-  expect_error(R"({"camera": {"width": 640, "height": 480, "center_px": [320, 240],
-      "radius_lut": [[0, 0], [100, 100]], "yaw_offset_deg": 0}})", "mirrored");
-  expect_error(R"({"camera": {"width": 640, "height": 480, "center_px": [320, 240],
-      "radius_lut": [[0, 0]], "yaw_offset_deg": 0, "mirrored": false}})", "radius_lut");
-  expect_error(R"({"camera": {"width": 640, "height": 480, "center_px": [320, 240],
-      "radius_lut": [[0, 0], [100, 100]], "yaw_offset_deg": 0, "mirrored": false,
-      "mask": {"body_radius_px": 120}}})", "no visible floor");
+TEST(CameraFile, RejectsBadInputWithFileAndFieldPath) {
+  const std::string v = R"({"width": 640, "height": 480, "center_px": [320, 240],
+      "radius_lut": [[0, 0], [100, 100], [200, 200]], "yaw_offset_deg": 0, "mirrored": false,
+      "mask": {"body_radius_px": 10, "masts": [{"bearing_deg": 180, "half_width_deg": 4}]}})";
+  using test::replaced;
+  test::expect_errors(
+      [](const std::string& f) { (void)load_camera(f); },
+      {
+          {replaced(v, "[200, 200]", "[90, 200]"), "radius_lut[2]", "strictly increasing in both radius and distance"},
+          {replaced(v, "[200, 200]", "[200]"), "radius_lut[2]", "must be an array of 2 elements"},
+          {replaced(v, "[320, 240]", "[700, 240]"), "center_px", "outside the 640 x 480 image (got [700, 240])"},
+          {replaced(v, ", \"mirrored\": false", ""), "mirrored", "missing (required)"},
+          {replaced(v, "\"mirrored\": false", "\"mirrored\": 0"), "mirrored", "must be true or false, not a number"},
+          {replaced(v, "\"width\": 640", "\"width\": 640.0"), "width", "must be an integer"},
+          {replaced(v, "\"width\": 640", "\"width\": 20000"), "width", "1..16384 (got 20000)"},
+          {replaced(v, "\"width\": 640", "\"width\": \"640\""), "width", "must be an integer, not a string"},
+          {replaced(v, "\"yaw_offset_deg\": 0", "\"yaw_offset_deg\": true"), "yaw_offset_deg", "not a boolean"},
+          {replaced(v, "\"yaw_offset_deg\": 0", "\"yaw_offset_deg\": NaN"), "yaw_offset_deg", "not valid JSON"},
+          {replaced(v, "\"yaw_offset_deg\": 0", "\"yaw_offset_deg\": -1e400"), "yaw_offset_deg",
+           "number out of range"},
+          {replaced(v, "[[0, 0], [100, 100], [200, 200]]", "[[0, 0]]"), "radius_lut", "at least two"},
+          {replaced(v, "\"body_radius_px\": 10", "\"body_radius_px\": 199"), "", "no visible floor ring"},
+          {replaced(v, "\"half_width_deg\": 4", "\"half_width_deg\": 90"), "mask.masts[0].half_width_deg",
+           "must be in [0, 90) (got 90)"},
+          {replaced(v, "\"half_width_deg\": 4", "\"half_width\": 4"), "mask.masts[0].half_width", "unknown key"},
+          {replaced(v, "\"body_radius_px\": 10", "\"body_radius_px\": 10, \"body_radius_px\": 11"),
+           "mask.body_radius_px", "duplicate key"},
+          {replaced(v, "\"mirrored\": false", "\"mirrored\": false, \"mirror\": true"), "mirror", "unknown key"},
+      });
+}
+
+TEST(CameraFile, MissingFileAndDirectoryAreNamed) {
+  EXPECT_EQ(error_of([] { (void)load_camera("/nonexistent/cam.json"); }), "/nonexistent/cam.json: no such file");
+  const std::string dir = test::temp_dir().string();
+  EXPECT_EQ(error_of([&] { (void)load_camera(dir); }), dir + ": is a directory, not a JSON file");
 }
 
 }  // namespace

@@ -1,143 +1,188 @@
-// omnilocd's config file and flags: the shipped default file, every kind of bad input named by file
-// and field, flags over the file, and the help text listing every key.
+// omnilocd's config file and flags: the shipped default file is the struct's defaults (every key),
+// a file setting every key to a non-default value lands in every member (expected values by hand),
+// every kind of bad input is named by file and field, flags override the file, and --help lists
+// every key.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
-#include <filesystem>
-#include <functional>
-#include <fstream>
 #include <string>
 #include <vector>
 
+#include "config_test_util.hpp"
+#include "omniloc/config.hpp"
 #include "omniloc/daemon_config.hpp"
-#include "omniloc/data_files.hpp"
 
+namespace omniloc::daemon {
 namespace {
 
-using omniloc::ConfigError;
-using omniloc::daemon::DaemonConfig;
-using omniloc::daemon::load_daemon_config;
-using omniloc::daemon::parse_daemon_args;
+using test::error_of;
 
-std::filesystem::path write_file(const std::string& name, const std::string& text) {
-  const auto dir = std::filesystem::temp_directory_path() / ("omniloc_test_daemon_config_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const auto p = dir / name;
-  std::ofstream(p) << text;
-  return p;
+// Every key of DaemonConfig, written down here by hand (not taken from the reader's table).
+const std::vector<std::string> kEveryKey = {
+    "board_serial", "reconnect_period_ms", "camera",     "camera_fps",  "camera_timeout_ms", "field",
+    "camera_model", "robot",               "localizer",  "database",    "grid_step_cm",      "udp_address",
+    "udp_port",     "publish_hz",          "record_dir", "status_period_s", "duration_s"};
+
+// Every key set to a value that differs from its default (publish_hz has only one valid value).
+const std::string kEveryKeyJson = R"({
+  "board_serial": "OL-0042",
+  "reconnect_period_ms": 750,
+  "camera": "/dev/video2",
+  "camera_fps": 30.5,
+  "camera_timeout_ms": 250,
+  "field": "robocup-msl",
+  "camera_model": "cams/c.json",
+  "robot": "robots/r.json",
+  "localizer": "loc/l.json",
+  "database": "/var/db.bin",
+  "grid_step_cm": 20,
+  "udp_address": "192.168.1.20",
+  "udp_port": 6001,
+  "publish_hz": 100,
+  "record_dir": "/data/run1",
+  "status_period_s": 2.5,
+  "duration_s": 12
+})";
+
+TEST(DaemonConfig, ShippedDefaultFileIsTheStructDefaultsEveryKey) {
+  const auto path = resolve_data_file("omnilocd", "default");
+  // The file names every key (so none of them falls back to a C++ default) ...
+  EXPECT_EQ(test::keys_of(test::read_json(path)), kEveryKey);
+  // ... and loading it gives exactly the struct's defaults: one set of defaults, not two.
+  const DaemonConfig loaded = load_daemon_config(path.string());
+  EXPECT_TRUE(loaded == DaemonConfig{});
+  EXPECT_EQ(loaded.camera, "0");
+  EXPECT_EQ(loaded.udp_port, 5600);
+  // omnilocd with no arguments: the defaults are valid on their own.
+  EXPECT_NO_THROW((void)parse_daemon_args(std::span<const std::string_view>{}));
 }
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
-
-TEST(DaemonConfig, ShippedDefaultFileLoadsWithItsValues) {
-  const std::string path = omniloc::resolve_data_file("omnilocd", "default").string();
-  const DaemonConfig c = load_daemon_config(path);
-  EXPECT_EQ(c.board, "usb");
-  EXPECT_EQ(c.camera, "0");
-  EXPECT_EQ(c.udp_address, "127.0.0.1");
-  EXPECT_EQ(c.udp_port, 5600);
-  EXPECT_EQ(c.publish_hz, 100.0);
-  EXPECT_EQ(c.camera_timeout_ms, 500.0);
-  EXPECT_EQ(c.reconnect_period_ms, 500.0);
-  EXPECT_EQ(c.database, "");
-  EXPECT_EQ(c.sim_seed, 1u);
-}
-
-TEST(DaemonConfig, FileValuesOverrideDefaultsAndOthersKeepThem) {
-  const auto p = write_file("partial.json", R"({"board": "sim", "udp_port": 6001, "camera_fps": 30.5})");
+TEST(DaemonConfig, EveryKeyReachesItsMember) {
+  const auto p = test::write_file("every.json", kEveryKeyJson);
+  EXPECT_EQ(test::keys_of(test::read_json(p)), kEveryKey);
   const DaemonConfig c = load_daemon_config(p.string());
-  EXPECT_EQ(c.board, "sim");
+  EXPECT_EQ(c.board_serial, "OL-0042");
+  EXPECT_EQ(c.reconnect_period_ms, 750.0);
+  EXPECT_EQ(c.camera, "/dev/video2");
+  EXPECT_EQ(c.camera_fps, 30.5);
+  EXPECT_EQ(c.camera_timeout_ms, 250.0);
+  EXPECT_EQ(c.field, "robocup-msl");
+  EXPECT_EQ(c.camera_model, "cams/c.json");
+  EXPECT_EQ(c.robot, "robots/r.json");
+  EXPECT_EQ(c.localizer, "loc/l.json");
+  EXPECT_EQ(c.database, "/var/db.bin");
+  EXPECT_EQ(c.grid_step_cm, 20.0);
+  EXPECT_EQ(c.udp_address, "192.168.1.20");
+  EXPECT_EQ(c.udp_port, 6001);
+  EXPECT_EQ(c.publish_hz, 100.0);
+  EXPECT_EQ(c.record_dir, "/data/run1");
+  EXPECT_EQ(c.status_period_s, 2.5);
+  EXPECT_EQ(c.duration_s, 12.0);
+}
+
+TEST(DaemonConfig, EachKeyOfTheFullFileMatters) {
+  // Dropping any one key from the full file changes the result: each key is read into a member of
+  // its own (a table entry pointing at the wrong member, or at none, fails here).
+  const DaemonConfig full = load_daemon_config(test::write_file("every.json", kEveryKeyJson).string());
+  const auto json = test::read_json(test::write_file("every.json", kEveryKeyJson));
+  for (const std::string& k : kEveryKey) {
+    if (k == "publish_hz") continue;  // its only valid value is the default
+    auto without = json;
+    without.erase(k);
+    const DaemonConfig c = load_daemon_config(test::write_file("without.json", without.dump()).string());
+    EXPECT_FALSE(c == full) << k << " made no difference";
+  }
+}
+
+TEST(DaemonConfig, FileValuesOverrideTheBaseAndOthersKeepIt) {
+  const auto p = test::write_file("partial.json", R"({"udp_port": 6001, "camera_fps": 30.5})");
+  DaemonConfig base;
+  base.camera = "none";
+  const DaemonConfig c = load_daemon_config(p.string(), base);
   EXPECT_EQ(c.udp_port, 6001);
   EXPECT_EQ(c.camera_fps, 30.5);
-  EXPECT_EQ(c.camera, DaemonConfig{}.camera);
+  EXPECT_EQ(c.camera, "none");
   EXPECT_EQ(c.status_period_s, DaemonConfig{}.status_period_s);
 }
 
-TEST(DaemonConfig, ErrorsNameTheFileAndTheField) {
-  struct Case {
-    std::string json;
-    std::string field;
-    std::string why;
-  };
-  const std::vector<Case> cases = {
-      {R"({"udp_prot": 5600})", "udp_prot", "unknown key"},
-      {R"({"udp_port": "5600"})", "udp_port", "must be a number"},
-      {R"({"udp_port": 70000})", "udp_port", "(got 70000)"},
-      {R"({"udp_port": 56.5})", "udp_port", "integer"},
-      {R"({"board": "serial"})", "board", "\"usb\" or \"sim\""},
-      {R"({"board": 3})", "board", "must be a string"},
-      {R"({"udp_address": "localhost"})", "udp_address", "dotted IPv4"},
-      {R"({"publish_hz": 50})", "publish_hz", "must be 100"},
-      {R"({"camera_timeout_ms": 0})", "camera_timeout_ms", "[10, 60000]"},
-      {R"({"duration_s": -1})", "duration_s", ">= 0"},
-      {R"({"grid_step_cm": 1})", "grid_step_cm", "[2, 50]"},
-  };
-  int i = 0;
-  for (const auto& c : cases) {
-    const auto p = write_file("bad" + std::to_string(i++) + ".json", c.json);
-    const std::string msg = error_of([&] { (void)load_daemon_config(p.string()); });
-    EXPECT_NE(msg.find(p.string()), std::string::npos) << c.json << " -> " << msg;
-    EXPECT_NE(msg.find("field '" + c.field + "'"), std::string::npos) << c.json << " -> " << msg;
-    EXPECT_NE(msg.find(c.why), std::string::npos) << c.json << " -> " << msg;
-  }
+TEST(DaemonConfig, BadFilesNameTheFileAndTheField) {
+  test::expect_errors([](const std::string& f) { (void)load_daemon_config(f); },
+                      {
+                          {R"({"udp_prot": 5600})", "udp_prot", "unknown key (known keys: board_serial, "},
+                          {R"({"board": "usb"})", "board", "unknown key"},  // the simulator keys are gone
+                          {R"({"sim_seed": 1})", "sim_seed", "unknown key"},
+                          {R"({"udp_port": 5600, "udp_port": 5601})", "udp_port", "duplicate key"},
+                          {R"({"udp_port": "5600"})", "udp_port", "must be an integer, not a string (got \"5600\")"},
+                          {R"({"udp_port": 56.5})", "udp_port", "must be an integer"},
+                          {R"({"udp_port": 5600.0})", "udp_port", "must be an integer"},
+                          {R"({"camera_fps": true})", "camera_fps", "must be a number, not a boolean (got true)"},
+                          {R"({"camera": 7})", "camera", "must be a string, not a number (got 7)"},
+                          {R"({"camera_fps": NaN})", "camera_fps", "not valid JSON"},
+                          {R"({"duration_s": Infinity})", "duration_s", "not valid JSON"},
+                          {R"({"duration_s": 1e400})", "duration_s", "number out of range: beyond a double (got 1e400)"},
+                          {R"({"udp_port": 70000})", "udp_port", "must be in [1, 65535] (got 70000)"},
+                          {R"({"udp_port": 1e10})", "udp_port", "must be an integer"},
+                          {R"({"udp_port": 99999999999})", "udp_port", "out of range"},
+                          {R"({"udp_address": "localhost"})", "udp_address", "dotted IPv4 address (got \"localhost\")"},
+                          {R"({"publish_hz": 50})", "publish_hz", "must be 100"},
+                          {R"({"camera_timeout_ms": 0})", "camera_timeout_ms", "[10, 60000] (got 0)"},
+                          {R"({"duration_s": -1})", "duration_s", ">= 0 (got -1)"},
+                          {R"({"grid_step_cm": 1})", "grid_step_cm", "[2, 50] (got 1)"},
+                          {R"({"camera": ""})", "camera", "must not be empty"},
+                          {"{\"udp_port\" 5600}", "udp_port", "not valid JSON: parse error at line 1"},
+                          {"{\"udp_port\": 5600 \"camera\": \"0\"}", "", "not valid JSON: parse error at line 1"},
+                          {"[1, 2]", "", "must be an object"},
+                      });
 }
 
-TEST(DaemonConfig, MissingAndMalformedFilesAreNamed) {
-  const std::string missing = "/nonexistent/omnilocd.json";
-  std::string msg = error_of([&] { (void)load_daemon_config(missing); });
-  EXPECT_NE(msg.find(missing), std::string::npos) << msg;
-  const auto bad = write_file("malformed.json", "{\"board\" \"sim\"}");
-  msg = error_of([&] { (void)load_daemon_config(bad.string()); });
-  EXPECT_NE(msg.find(bad.string()), std::string::npos) << msg;
-  EXPECT_NE(msg.find("JSON"), std::string::npos) << msg;
-  const auto arr = write_file("array.json", "[1, 2]");
-  msg = error_of([&] { (void)load_daemon_config(arr.string()); });
-  EXPECT_NE(msg.find(arr.string()), std::string::npos) << msg;
+TEST(DaemonConfig, MissingFileAndDirectoryAreNamed) {
+  EXPECT_EQ(error_of([] { (void)load_daemon_config("/nonexistent/omnilocd.json"); }),
+            "/nonexistent/omnilocd.json: no such file");
+  const std::string dir = test::temp_dir().string();
+  EXPECT_EQ(error_of([&] { (void)load_daemon_config(dir); }), dir + ": is a directory, not a JSON file");
+  EXPECT_THROW((void)load_daemon_config(dir), ConfigError);
 }
 
 TEST(DaemonConfig, FlagsOverrideTheFileWhateverTheirOrder) {
-  const auto p = write_file("flags.json", R"({"udp_port": 6001, "board": "sim", "duration_s": 3})");
+  const auto p = test::write_file("flags.json", R"({"udp_port": 6001, "camera": "none", "duration_s": 3})");
   const std::string ps = p.string();
   const std::vector<std::string_view> args = {"--udp-port", "6002", "--config", ps, "--camera_fps", "15"};
   const auto a = parse_daemon_args(args);
   EXPECT_FALSE(a.help);
   EXPECT_EQ(a.config_path, ps);
-  EXPECT_EQ(a.config.udp_port, 6002);       // flag beats file
-  EXPECT_EQ(a.config.board, "sim");         // file beats default
+  EXPECT_EQ(a.config.udp_port, 6002);  // flag beats file
+  EXPECT_EQ(a.config.camera, "none");  // file beats default
   EXPECT_EQ(a.config.duration_s, 3.0);
   EXPECT_EQ(a.config.camera_fps, 15.0);
+  // A text key takes the flag's text as it is (a camera index is the string "1").
+  EXPECT_EQ(parse_daemon_args(std::vector<std::string_view>{"--camera", "1"}).config.camera, "1");
 }
 
 TEST(DaemonConfig, BadFlagsAreRefusedWithTheFlagNamed) {
-  auto err = [](std::vector<std::string_view> args) {
-    return error_of([&] { (void)parse_daemon_args(args); });
-  };
-  EXPECT_NE(err({"--udp-port", "abc"}).find("field 'udp_port': must be a number (got \"abc\")"), std::string::npos)
-      << err({"--udp-port", "abc"});
-  EXPECT_NE(err({"--no-such-key", "1"}).find("field 'no_such_key': unknown key"), std::string::npos);
-  EXPECT_NE(err({"--udp-port"}).find("--udp-port needs a value"), std::string::npos);
-  EXPECT_NE(err({"stray"}).find("unexpected argument 'stray'"), std::string::npos);
-  EXPECT_NE(err({"--udp-port", "0"}).find("command line: field 'udp_port'"), std::string::npos);
+  auto err = [](std::vector<std::string_view> args) { return error_of([&] { (void)parse_daemon_args(args); }); };
+  EXPECT_EQ(err({"--udp-port", "abc"}), "command line:udp_port: must be a number (got \"abc\")");
+  EXPECT_EQ(err({"--udp-port", "5600.5"}).rfind("command line:udp_port: must be an integer", 0), 0u);
+  EXPECT_EQ(err({"--camera-fps", "nan"}), "command line:camera_fps: must be a number (got \"nan\")");
+  EXPECT_EQ(err({"--no-such-key", "1"}), "command line:no_such_key: unknown key (see --help)");
+  EXPECT_EQ(err({"--board", "sim"}), "command line:board: unknown key (see --help)");
+  EXPECT_EQ(err({"--udp-port"}), "command line: --udp-port needs a value");
+  EXPECT_EQ(err({"stray"}), "command line: unexpected argument 'stray'");
+  EXPECT_EQ(err({"--udp-port", "0"}), "command line:udp_port: must be in [1, 65535] (got 0)");
   EXPECT_TRUE(parse_daemon_args(std::vector<std::string_view>{"--help"}).help);
 }
 
 TEST(DaemonConfig, HelpListsEveryKeyAsAFlagWithItsDefault) {
-  const std::string help = omniloc::daemon::daemon_usage();
-  for (const char* flag : {"--board ", "--board-serial", "--reconnect-period-ms", "--camera ", "--camera-fps",
-                           "--camera-timeout-ms", "--field", "--camera-model", "--robot", "--localizer", "--database",
-                           "--grid-step-cm", "--udp-address", "--udp-port", "--publish-hz", "--record-dir",
-                           "--status-period-s", "--duration-s", "--sim-trajectory", "--sim-seed"}) {
-    EXPECT_NE(help.find(flag), std::string::npos) << flag;
+  const std::string help = daemon_usage();
+  for (std::string flag : kEveryKey) {
+    for (char& ch : flag)
+      if (ch == '_') ch = '-';
+    EXPECT_NE(help.find("--" + flag + " "), std::string::npos) << flag;
   }
   EXPECT_NE(help.find("(5600)"), std::string::npos);
+  EXPECT_NE(help.find("UDP port the poses are sent to (5600)"), std::string::npos);
+  EXPECT_NE(help.find("(fira-robosot)"), std::string::npos);
+  EXPECT_NE(help.find("(\"\")"), std::string::npos);  // an empty default is shown as ""
+  for (const char* gone : {"--board ", "--sim-", "sim |"}) EXPECT_EQ(help.find(gone), std::string::npos) << gone;
 }
 
 }  // namespace
+}  // namespace omniloc::daemon

@@ -5,6 +5,8 @@
 #include <fstream>
 #include <string>
 
+#include "config_test_util.hpp"
+#include "omniloc/config_reader.hpp"
 #include "omniloc/field.hpp"
 
 namespace omniloc {
@@ -122,53 +124,108 @@ TEST(Field, RoboCupMslIsASecondGeometry) {
   EXPECT_NE(m.fingerprint(), load_field("fira-robosot").fingerprint());
 }
 
-class BadFieldFile : public ::testing::Test {
- protected:
-  std::string write(const std::string& body) {
-    path_ = (std::filesystem::temp_directory_path() / ("omniloc_field_" + std::to_string(::getpid()) + ".json")).string();
-    std::ofstream(path_) << body;
-    return path_;
-  }
-  void TearDown() override { std::filesystem::remove(path_); }
-  std::string path_;
-};
+// --- geometry files ---------------------------------------------------------------------------------
 
-std::string fira_with(const std::string& replace, const std::string& with) {
-  std::ifstream in("../common/fields/fira-robosot.json");
-  std::string s;
-  if (!in) {
-    // Located the way load_field does.
-    in.open(std::filesystem::path(load_field("fira-robosot").source));
-  }
-  s.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  const auto at = s.find(replace);
-  if (at == std::string::npos) return s;
-  return s.replace(at, replace.size(), with);
+using test::error_of;
+using test::replaced;
+
+const std::vector<std::string> kEveryKey = {"name",
+                                            "description",
+                                            "units",
+                                            "field_length_cm",
+                                            "field_width_cm",
+                                            "border_cm",
+                                            "line_width_cm",
+                                            "centre_circle_radius_cm",
+                                            "goal_area",
+                                            "penalty_area",
+                                            "penalty_arc",
+                                            "corner_arc_radius_cm",
+                                            "marks"};
+
+std::string fira_text() {
+  std::ifstream in(resolve_data_file("fields", "fira-robosot"));
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
-TEST_F(BadFieldFile, ErrorsNameFileAndField) {
-  auto expect_error = [&](const std::string& body, const std::string& what) {
-    const std::string p = write(body);
-    try {
-      (void)load_field(p);
-      FAIL() << "no error for " << what;
-    } catch (const std::runtime_error& e) {
-      EXPECT_NE(std::string(e.what()).find(p), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
-    }
-  };
-  expect_error(fira_with("\"line_width_cm\": 5", "\"line_width_cm\": -5"), "line_width_cm");
-  expect_error(fira_with("\"field_length_cm\": 600,", ""), "field_length_cm");
-  expect_error(fira_with("\"centre_circle_radius_cm\": 60", "\"centre_circle_radius_cm\": \"big\""), "centre_circle_radius_cm");
-  expect_error(fira_with("\"depth_cm\": 75", "\"depth_cm\": 400"), "penalty_area");
-  expect_error(fira_with("[75, 100]", "[75]"), "from_centre_cm[0]");
-  expect_error("{ \"name\": \"x\", ", "malformed JSON");
-  EXPECT_THROW((void)load_field("no-such-field"), std::runtime_error);
-  try {
-    (void)load_field("no-such-field");
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("no-such-field"), std::string::npos);
+TEST(FieldFile, ShippedFilesHaveEveryKey) {
+  for (const char* name : {"fira-robosot", "robocup-msl"}) {
+    const auto json = test::read_json(resolve_data_file("fields", name));
+    EXPECT_EQ(test::keys_of(json), kEveryKey) << name;
   }
+}
+
+TEST(FieldFile, EveryKeyReachesItsMember) {
+  const std::string file = test::write_file("f.json", R"({"name": "test-field", "description": "d", "units": "cm",
+      "field_length_cm": 900, "field_width_cm": 600, "border_cm": 50, "line_width_cm": 8,
+      "centre_circle_radius_cm": 75, "goal_area": {"depth_cm": 50, "width_cm": 250},
+      "penalty_area": {"depth_cm": 150, "width_cm": 400}, "penalty_arc": {"radius_cm": 40, "centre_from_goal_line_cm": 120},
+      "corner_arc_radius_cm": 30, "marks": {"radius_cm": 6, "from_centre_cm": [[200, 50], [-200, -50]]}})")
+                               .string();
+  const FieldSpec s = parse_field_spec(config::parse_json_file(file).root());
+  EXPECT_EQ(s.name, "test-field");
+  EXPECT_EQ(s.field_length_cm, 900.0);
+  EXPECT_EQ(s.field_width_cm, 600.0);
+  EXPECT_EQ(s.border_cm, 50.0);
+  EXPECT_EQ(s.line_width_cm, 8.0);
+  EXPECT_EQ(s.centre_circle_radius_cm, 75.0);
+  EXPECT_EQ(s.goal_area.depth_cm, 50.0);
+  EXPECT_EQ(s.goal_area.width_cm, 250.0);
+  EXPECT_EQ(s.penalty_area.depth_cm, 150.0);
+  EXPECT_EQ(s.penalty_area.width_cm, 400.0);
+  EXPECT_EQ(s.penalty_arc.radius_cm, 40.0);
+  EXPECT_EQ(s.penalty_arc.centre_from_goal_line_cm, 120.0);
+  EXPECT_EQ(s.corner_arc_radius_cm, 30.0);
+  EXPECT_EQ(s.mark_radius_cm, 6.0);
+  ASSERT_EQ(s.marks_from_centre_cm.size(), 2u);
+  EXPECT_EQ(s.marks_from_centre_cm[0], Eigen::Vector2d(200, 50));
+  EXPECT_EQ(s.marks_from_centre_cm[1], Eigen::Vector2d(-200, -50));
+  // And the lines built from them, by hand: centre (50 + 450, 50 + 300); marks at +-(200, 50).
+  const FieldGeometry f = load_field(file);
+  EXPECT_EQ(f.name, "test-field");
+  EXPECT_EQ(f.source, file);
+  EXPECT_DOUBLE_EQ(f.total_x_cm(), 1000.0);
+  EXPECT_DOUBLE_EQ(f.total_y_cm(), 700.0);
+  EXPECT_EQ(f.segments.size(), 17u);
+  EXPECT_EQ(f.arcs.size(), 7u);
+  ASSERT_EQ(f.discs.size(), 2u);
+  EXPECT_EQ(f.discs[0].centre_cm, Eigen::Vector2d(700, 400));
+  EXPECT_EQ(f.discs[1].radius_cm, 6.0);
+  EXPECT_TRUE(is_white(f, {500 + 75, 350}));   // centre circle r 75
+  EXPECT_TRUE(is_white(f, {50 + 50, 350}));    // left goal area front at x 50 + 50
+  EXPECT_TRUE(is_white(f, {50 + 160, 350}));   // left penalty arc: centre 50 + 120, r 40
+}
+
+TEST(FieldFile, ErrorsNameFileAndFieldPath) {
+  const std::string v = fira_text();
+  test::expect_errors(
+      [](const std::string& f) { (void)load_field(f); },
+      {
+          {replaced(v, "\"line_width_cm\": 5", "\"line_width_cm\": -5"), "line_width_cm", "must be > 0 (got -5)"},
+          {replaced(v, "\"field_length_cm\": 600,", ""), "field_length_cm", "missing (required)"},
+          {replaced(v, "\"centre_circle_radius_cm\": 60", "\"centre_circle_radius_cm\": \"big\""),
+           "centre_circle_radius_cm", "must be a number, not a string (got \"big\")"},
+          {replaced(v, "\"depth_cm\": 75", "\"depth_cm\": 400"), "penalty_area.depth_cm",
+           "must be < field_length_cm / 2 (got 400)"},
+          {replaced(v, "\"depth_cm\": 75", "\"depth_cm\": 75, \"depth\": 1"), "penalty_area.depth", "unknown key"},
+          {replaced(v, "[75, 100]", "[75]"), "marks.from_centre_cm[0]", "must be an array of 2 elements"},
+          {replaced(v, "[75, 100]", "[375, 100]"), "marks.from_centre_cm[0]", "outside the playing area (got [375, 100])"},
+          {replaced(v, "\"units\": \"cm\"", "\"units\": \"mm\""), "units", "the only unit is \"cm\""},
+          {replaced(v, "\"border_cm\": 75", "\"border_cm\": true"), "border_cm", "not a boolean"},
+          {replaced(v, "\"border_cm\": 75", "\"border_cm\": NaN"), "border_cm", "not valid JSON"},
+          {replaced(v, "\"border_cm\": 75", "\"border_cm\": 1e400"), "border_cm", "number out of range"},
+          {replaced(v, "\"border_cm\": 75", "\"border_cm\": 75, \"border_cm\": 76"), "border_cm", "duplicate key"},
+          {replaced(v, "\"border_cm\": 75", "\"border_cm\": 75, \"border\": 76"), "border", "unknown key"},
+          {"{ \"name\": \"x\", ", "", "not valid JSON"},
+      });
+  EXPECT_THROW((void)load_field("no-such-field"), ConfigError);
+  EXPECT_NE(error_of([] { (void)load_field("no-such-field"); }).find("no-such-field"), std::string::npos);
+}
+
+TEST(FieldFile, MissingFileAndDirectoryAreNamed) {
+  EXPECT_EQ(error_of([] { (void)load_field("/nonexistent/f.json"); }), "/nonexistent/f.json: no such file");
+  const std::string dir = test::temp_dir().string();
+  EXPECT_EQ(error_of([&] { (void)load_field(dir); }), dir + ": is a directory, not a JSON file");
 }
 
 }  // namespace

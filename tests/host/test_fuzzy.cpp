@@ -10,9 +10,8 @@
 #include <utility>
 #include <vector>
 
-#include <opencv2/core.hpp>
-#include <opencv2/core/persistence.hpp>
-
+#include "config_test_util.hpp"
+#include "omniloc/config_reader.hpp"
 #include "omniloc/fuzzy.hpp"
 #include "omniloc/localizer.hpp"
 #include "omniloc/robot_config.hpp"
@@ -124,10 +123,9 @@ TEST(Fuzzy, SnapToRanges) {
   EXPECT_EQ(snap_to_ranges(99.0, r), 30.0);
 }
 
-cv::FileNode parse(cv::FileStorage& fs, const std::string& json) {
-  fs.open(json, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_JSON);
-  return fs.root();
-}
+// --- config files: the fuzzy block and the localizer file around it --------------------------------
+
+using test::error_of;
 
 const std::string kGood =
     R"({"speed_max_cm_per_s": 300,
@@ -137,102 +135,212 @@ const std::string kGood =
         "rules": {"VL": "VL", "L": "L", "H": "H", "VH": "VH"},
         "resolution_cm": 0.01, "snap_ranges_cm": [0, 10, 20, 30]})";
 
-std::string error_of(const std::string& json) {
-  cv::FileStorage fs;
-  try {
-    (void)parse_fuzzy_config(parse(fs, json), "cfg.json: fuzzy");
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  return "";
+FuzzyConfig parse_fuzzy(const std::string& json) {
+  return parse_fuzzy_config(config::parse_json_text(json, "cfg.json").root());
 }
 
-std::string replaced(std::string s, const std::string& from, const std::string& to) {
-  const auto p = s.find(from);
-  EXPECT_NE(p, std::string::npos) << from;
-  return s.replace(p, from.size(), to);
+std::string fuzzy_error_of(const std::string& json) {
+  return error_of([&] { (void)parse_fuzzy(json); });
 }
 
-TEST(FuzzyConfig, ParsesTheDefaultsAndTheShippedFile) {
-  cv::FileStorage fs;
-  const FuzzyConfig c = parse_fuzzy_config(parse(fs, kGood), "x");
-  const FuzzyConfig d = FuzzyConfig::defaults();
-  for (int i = 0; i < kFuzzyTerms; ++i) {
-    EXPECT_EQ(c.speed_terms[i].b, d.speed_terms[i].b);
-    EXPECT_EQ(c.range_terms[i].d, d.range_terms[i].d);
-    EXPECT_EQ(c.rules[i], d.rules[i]);
-  }
-  const LocalizerConfig lc = load_localizer_config("default");
-  EXPECT_EQ(lc.e_th, 20.0);
-  EXPECT_EQ(lc.reset_period_ms, 125.0);
-  for (int i = 0; i < kFuzzyTerms; ++i) {
-    EXPECT_EQ(lc.fuzzy.speed_terms[i].a, d.speed_terms[i].a);
-    EXPECT_EQ(lc.fuzzy.speed_terms[i].c, d.speed_terms[i].c);
-    EXPECT_EQ(lc.fuzzy.range_terms[i].b, d.range_terms[i].b);
-  }
+using test::replaced;
+
+TEST(FuzzyConfig, TheInitialisersAreTheDocumentedDefaults) {
+  const FuzzyConfig c = parse_fuzzy(kGood);
+  EXPECT_TRUE(c == FuzzyConfig{});
+  EXPECT_TRUE(FuzzyConfig::defaults() == FuzzyConfig{});
 }
 
-TEST(FuzzyConfig, ClearErrorsNameTheField) {
-  EXPECT_EQ(error_of(kGood), "");
-  auto expect_error = [](const std::string& json, const std::string& needle) {
-    const std::string e = error_of(json);
-    EXPECT_NE(e.find(needle), std::string::npos) << "got: " << e;
-    EXPECT_NE(e.find("cfg.json: fuzzy"), std::string::npos) << "got: " << e;
+TEST(FuzzyConfig, EveryKeyReachesItsMember) {
+  // Every value differs from the defaults; the expected values are written out by hand.
+  const FuzzyConfig c = parse_fuzzy(R"({"speed_max_cm_per_s": 400,
+      "speed_terms": {"VL": [0, 0, 25, 60], "L": [25, 60, 90, 130], "H": [90, 130, 160, 220], "VH": [160, 220, 400, 400]},
+      "range_max_cm": 40,
+      "range_terms": {"VL": [0, 0, 4, 9], "L": [4, 9, 13, 18], "H": [13, 18, 23, 28], "VH": [23, 28, 40, 40]},
+      "rules": {"VL": "L", "L": "H", "H": "VH", "VH": "VL"},
+      "resolution_cm": 0.02, "snap_ranges_cm": [0, 15, 40]})");
+  EXPECT_EQ(c.speed_max_cm_per_s, 400.0);
+  EXPECT_TRUE(c.speed_terms[0] == (Trapezoid{0, 0, 25, 60}));
+  EXPECT_TRUE(c.speed_terms[1] == (Trapezoid{25, 60, 90, 130}));
+  EXPECT_TRUE(c.speed_terms[2] == (Trapezoid{90, 130, 160, 220}));
+  EXPECT_TRUE(c.speed_terms[3] == (Trapezoid{160, 220, 400, 400}));
+  EXPECT_EQ(c.range_max_cm, 40.0);
+  EXPECT_TRUE(c.range_terms[0] == (Trapezoid{0, 0, 4, 9}));
+  EXPECT_TRUE(c.range_terms[1] == (Trapezoid{4, 9, 13, 18}));
+  EXPECT_TRUE(c.range_terms[2] == (Trapezoid{13, 18, 23, 28}));
+  EXPECT_TRUE(c.range_terms[3] == (Trapezoid{23, 28, 40, 40}));
+  EXPECT_EQ(c.rules[0], FuzzyTerm::kLow);
+  EXPECT_EQ(c.rules[1], FuzzyTerm::kHigh);
+  EXPECT_EQ(c.rules[2], FuzzyTerm::kVeryHigh);
+  EXPECT_EQ(c.rules[3], FuzzyTerm::kVeryLow);
+  EXPECT_EQ(c.resolution_cm, 0.02);
+  EXPECT_EQ(c.snap_ranges_cm, (std::vector<double>{0, 15, 40}));
+}
+
+TEST(FuzzyConfig, ClearErrorsNameTheFieldPath) {
+  EXPECT_EQ(fuzzy_error_of(kGood), "(no error)");
+  auto expect_error = [](const std::string& json, const std::string& path, const std::string& why) {
+    const std::string e = fuzzy_error_of(json);
+    EXPECT_EQ(e.rfind("cfg.json:" + path + ": ", 0), 0u) << "want cfg.json:" << path << " in: " << e;
+    EXPECT_NE(e.find(why), std::string::npos) << "want '" << why << "' in: " << e;
   };
-  expect_error(replaced(kGood, "\"L\": [20, 50, 80, 120]", "\"L\": [20, 90, 80, 120]"), "speed_terms.L");
-  expect_error(replaced(kGood, "\"VH\": [150, 200, 300, 300]", "\"VH\": [150, 200, 300, 400]"), "speed_terms.VH");
+  expect_error(replaced(kGood, "\"L\": [20, 50, 80, 120]", "\"L\": [20, 90, 80, 120]"), "speed_terms.L",
+               "a <= b <= c <= d (got [20, 90, 80, 120])");
+  expect_error(replaced(kGood, "\"VH\": [150, 200, 300, 300]", "\"VH\": [150, 200, 300, 400]"), "speed_terms.VH",
+               "must lie in [0, 300]");
   // A gap between L and H: speeds 121..129 would fire no rule.
-  expect_error(replaced(kGood, "\"H\": [80, 120, 150, 200]", "\"H\": [130, 140, 150, 200]"), "uncovered");
-  expect_error(replaced(kGood, "\"H\": \"H\"", "\"H\": \"XX\""), "rules.H");
-  expect_error(replaced(kGood, "\"L\": [3, 8, 12, 17]", "\"L\": [3, 8, 12]"), "range_terms.L");
-  expect_error(replaced(kGood, "\"resolution_cm\": 0.01", "\"resolution_cm\": 0"), "resolution_cm");
-  expect_error(replaced(kGood, "[0, 10, 20, 30]", "[0, 20, 10, 30]"), "snap_ranges_cm");
-  expect_error(replaced(kGood, "\"range_max_cm\": 30", "\"range_max_cm\": 30, \"speed_maximum\": 1"), "speed_maximum");
-  expect_error(replaced(kGood, "\"range_max_cm\": 30,", ""), "range_max_cm");
+  expect_error(replaced(kGood, "\"H\": [80, 120, 150, 200]", "\"H\": [130, 140, 150, 200]"), "speed_terms",
+               "uncovered");
+  expect_error(replaced(kGood, "\"H\": \"H\"", "\"H\": \"XX\""), "rules.H", "must be one of \"VL\", \"L\", \"H\", \"VH\"");
+  expect_error(replaced(kGood, "\"H\": \"H\"", "\"HH\": \"H\""), "rules.HH", "unknown term");
+  expect_error(replaced(kGood, "\"L\": [3, 8, 12, 17]", "\"L\": [3, 8, 12]"), "range_terms.L", "array of 4");
+  expect_error(replaced(kGood, "\"L\": [3, 8, 12, 17]", "\"L\": [3, 8, true, 17]"), "range_terms.L[2]",
+               "must be a number, not a boolean");
+  expect_error(replaced(kGood, "\"L\": [3, 8, 12, 17]", "\"L\": [3, 8, 12, 17], \"L\": [3, 8, 12, 17]"),
+               "range_terms.L", "duplicate key");
+  expect_error(replaced(kGood, "\"resolution_cm\": 0.01", "\"resolution_cm\": 0"), "resolution_cm",
+               "at most a tenth of range_max_cm (got 0)");
+  expect_error(replaced(kGood, "[0, 10, 20, 30]", "[0, 20, 10, 30]"), "snap_ranges_cm[2]",
+               "strictly increasing (after 20) (got 10)");
+  expect_error(replaced(kGood, "[0, 10, 20, 30]", "[0, 10, NaN, 30]"), "snap_ranges_cm[2]", "not valid JSON");
+  expect_error(replaced(kGood, "[0, 10, 20, 30]", "[0, 10, 1e400, 30]"), "snap_ranges_cm[2]",
+               "number out of range: beyond a double (got 1e400)");
+  expect_error(replaced(kGood, "\"range_max_cm\": 30", "\"range_max_cm\": 30, \"speed_maximum\": 1"), "speed_maximum",
+               "unknown key");
+  expect_error(replaced(kGood, "\"range_max_cm\": 30,", ""), "range_max_cm", "missing (required)");
+}
+
+// --- the localizer file ---------------------------------------------------------------------------
+
+// Every key of LocalizerConfig, by hand, in the shipped file's order.
+const std::vector<std::string> kEveryLocalizerKey = {
+    "mode", "e_th", "reset_period_ms", "history_ms", "scan_rays_per_degree", "refinement", "min_range_cm",
+    "refuse_ambiguous", "image_sigma_cm", "image_sigma_yaw_deg", "lost_after_bad_frames", "check_period_ms",
+    "disagree_min_cm", "disagree_sigmas", "disagree_error_ratio", "disagree_frames", "gyro_yaw_known",
+    "yaw_correction", "yaw_search_deg", "yaw_gain", "yaw_rate_gain", "yaw_rate_max_deg_per_s", "fuzzy"};
+const std::vector<std::string> kEveryFuzzyKey = {"speed_max_cm_per_s", "speed_terms", "range_max_cm", "range_terms",
+                                                 "rules", "resolution_cm", "snap_ranges_cm"};
+
+LocalizerConfig parse_localizer(const std::string& json) {
+  return parse_localizer_config(config::parse_json_text(json, "loc.json").root());
 }
 
 std::string localizer_error_of(const std::string& extra) {
-  cv::FileStorage fs;
-  try {
-    (void)parse_localizer_config(parse(fs, "{" + extra + "\"fuzzy\": " + kGood + "}"), "loc.json");
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  return "";
+  return error_of([&] { (void)parse_localizer("{" + extra + "\"fuzzy\": " + kGood + "}"); });
 }
 
-TEST(LocalizerConfigFile, ShippedFileEnablesTheImageHeadingAndPaperModeDoesNot) {
+TEST(LocalizerConfigFile, ShippedFileIsTheStructDefaultsEveryKey) {
+  const auto path = resolve_data_file("localizer", "default");
+  const auto json = test::read_json(path);
+  EXPECT_EQ(test::keys_of(json), kEveryLocalizerKey);
+  EXPECT_EQ(test::keys_of(json["fuzzy"]), kEveryFuzzyKey);
   const LocalizerConfig lc = load_localizer_config("default");
+  EXPECT_TRUE(lc == LocalizerConfig{});
+  EXPECT_TRUE(lc.fuzzy == FuzzyConfig{});
+  // Spot values as documented in docs/LOCALIZER.md.
+  EXPECT_EQ(lc.e_th, 20.0);
+  EXPECT_EQ(lc.reset_period_ms, 125.0);
   EXPECT_TRUE(lc.yaw_correction);
-  EXPECT_EQ(lc.yaw_search_deg, 3.0);
-  EXPECT_EQ(lc.yaw_gain, 0.05);
-  EXPECT_EQ(lc.yaw_rate_gain, 0.005);
   EXPECT_FALSE(LocalizerConfig::paper().yaw_correction);
-  EXPECT_EQ(localizer_error_of(""), "");
-  cv::FileStorage fs;
-  const LocalizerConfig p = parse_localizer_config(parse(fs, "{\"mode\": \"paper\", \"fuzzy\": " + kGood + "}"), "x");
-  EXPECT_FALSE(p.yaw_correction);
-  const LocalizerConfig q = parse_localizer_config(
-      parse(fs, "{\"yaw_correction\": false, \"yaw_gain\": 0.5, \"fuzzy\": " + kGood + "}"), "x");
-  EXPECT_FALSE(q.yaw_correction);
-  EXPECT_EQ(q.yaw_gain, 0.5);
+}
+
+TEST(LocalizerConfigFile, EveryKeyReachesItsMember) {
+  const LocalizerConfig c = parse_localizer(R"({
+    "mode": "full", "e_th": 15, "reset_period_ms": 150, "history_ms": 800, "scan_rays_per_degree": 2,
+    "refinement": "interpolate", "min_range_cm": 5, "refuse_ambiguous": false, "image_sigma_cm": 3.5,
+    "image_sigma_yaw_deg": 0.75, "lost_after_bad_frames": 20, "check_period_ms": 200, "disagree_min_cm": 40,
+    "disagree_sigmas": 3, "disagree_error_ratio": 0.6, "disagree_frames": 5, "gyro_yaw_known": false,
+    "yaw_correction": false, "yaw_search_deg": 4, "yaw_gain": 0.1, "yaw_rate_gain": 0.01,
+    "yaw_rate_max_deg_per_s": 1.5,
+    "fuzzy": )" + replaced(kGood, "\"resolution_cm\": 0.01", "\"resolution_cm\": 0.05") + "}");
+  EXPECT_EQ(c.mode, LocalizerMode::kFull);
+  EXPECT_EQ(c.e_th, 15.0);
+  EXPECT_EQ(c.reset_period_ms, 150.0);
+  EXPECT_EQ(c.history_ms, 800.0);
+  EXPECT_EQ(c.scan_rays_per_degree, 2);
+  EXPECT_EQ(c.refinement, Refinement::kInterpolate);
+  EXPECT_EQ(c.min_range_cm, 5.0);
+  EXPECT_FALSE(c.refuse_ambiguous);
+  EXPECT_EQ(c.image_sigma_cm, 3.5);
+  EXPECT_EQ(c.image_sigma_yaw_deg, 0.75);
+  EXPECT_EQ(c.lost_after_bad_frames, 20);
+  EXPECT_EQ(c.check_period_ms, 200.0);
+  EXPECT_EQ(c.disagree_min_cm, 40.0);
+  EXPECT_EQ(c.disagree_sigmas, 3.0);
+  EXPECT_EQ(c.disagree_error_ratio, 0.6);
+  EXPECT_EQ(c.disagree_frames, 5);
+  EXPECT_FALSE(c.gyro_yaw_known);
+  EXPECT_FALSE(c.yaw_correction);
+  EXPECT_EQ(c.yaw_search_deg, 4.0);
+  EXPECT_EQ(c.yaw_gain, 0.1);
+  EXPECT_EQ(c.yaw_rate_gain, 0.01);
+  EXPECT_EQ(c.yaw_rate_max_deg_per_s, 1.5);
+  EXPECT_EQ(c.fuzzy.resolution_cm, 0.05);
+  // "mode": "paper" starts from LocalizerConfig::paper(); the other keys still override it.
+  const LocalizerConfig p = parse_localizer("{\"mode\": \"paper\", \"fuzzy\": " + kGood + "}");
+  EXPECT_TRUE(p == LocalizerConfig::paper());
+  EXPECT_EQ(p.mode, LocalizerMode::kPaper);
+  EXPECT_EQ(p.refinement, Refinement::kNone);
+  const LocalizerConfig q = parse_localizer("{\"mode\": \"paper\", \"refinement\": \"raycast\", \"fuzzy\": " + kGood + "}");
+  EXPECT_EQ(q.mode, LocalizerMode::kPaper);
+  EXPECT_EQ(q.refinement, Refinement::kRayCast);
+}
+
+TEST(LocalizerConfigFile, EachKeyOfTheShippedFileMattersWhenChanged) {
+  // Changing one key of the shipped file at a time changes the struct in that key's member only:
+  // the table maps each key to its own member (a swapped or missing entry fails here).
+  const auto shipped = test::read_json(resolve_data_file("localizer", "default"));
+  const LocalizerConfig base = parse_localizer(shipped.dump());
+  for (const std::string& k : kEveryLocalizerKey) {
+    if (k == "fuzzy") continue;
+    auto changed = shipped;
+    auto& v = changed[k];
+    if (v.is_boolean()) v = !v.get<bool>();
+    else if (v.is_number_integer()) v = v.get<int>() + 1;
+    else if (v.is_number()) v = v.get<double>() * 0.9;
+    else if (k == "mode") v = "paper";
+    else if (k == "refinement") v = "interpolate";
+    const LocalizerConfig c = parse_localizer(changed.dump());
+    EXPECT_FALSE(c == base) << k << " made no difference";
+  }
 }
 
 TEST(LocalizerConfigFile, ClearErrorsNameTheFileAndField) {
-  auto expect_error = [](const std::string& extra, const std::string& field) {
+  EXPECT_EQ(localizer_error_of(""), "(no error)");
+  auto expect_error = [](const std::string& extra, const std::string& path, const std::string& why) {
     const std::string e = localizer_error_of(extra);
-    EXPECT_NE(e.find("loc.json"), std::string::npos) << "got: " << e;
-    EXPECT_NE(e.find("'" + field + "'"), std::string::npos) << "got: " << e;
+    EXPECT_EQ(e.rfind("loc.json:" + path + ": ", 0), 0u) << "got: " << e;
+    EXPECT_NE(e.find(why), std::string::npos) << "want '" << why << "' in: " << e;
   };
-  expect_error("\"yaw_gain\": 0, ", "yaw_gain");
-  expect_error("\"yaw_gain\": 1.5, ", "yaw_gain");
-  expect_error("\"yaw_rate_gain\": 1, ", "yaw_rate_gain");
-  expect_error("\"yaw_search_deg\": 45, ", "yaw_search_deg");
-  expect_error("\"yaw_rate_max_deg_per_s\": -1, ", "yaw_rate_max_deg_per_s");
-  expect_error("\"yaw_correction\": 2, ", "yaw_correction");
-  expect_error("\"e_th\": -3, ", "e_th");
-  expect_error("\"disagree_frames\": 0, ", "disagree_frames");
-  expect_error("\"yaw_corection\": true, ", "yaw_corection");  // a typo is not silently ignored
+  expect_error("\"yaw_gain\": 0, ", "yaw_gain", "must be in (0, 1] (got 0)");
+  expect_error("\"yaw_gain\": 1.5, ", "yaw_gain", "(got 1.5)");
+  expect_error("\"yaw_rate_gain\": 1, ", "yaw_rate_gain", "[0, 1)");
+  expect_error("\"yaw_search_deg\": 45, ", "yaw_search_deg", "(0, 30]");
+  expect_error("\"yaw_rate_max_deg_per_s\": -1, ", "yaw_rate_max_deg_per_s", ">= 0 (got -1)");
+  expect_error("\"yaw_correction\": 2, ", "yaw_correction", "must be true or false, not a number (got 2)");
+  expect_error("\"yaw_correction\": 1, ", "yaw_correction", "must be true or false");
+  expect_error("\"e_th\": -3, ", "e_th", "positive");
+  expect_error("\"e_th\": \"20\", ", "e_th", "must be a number, not a string");
+  expect_error("\"e_th\": NaN, ", "e_th", "not valid JSON");
+  expect_error("\"e_th\": 1e400, ", "e_th", "number out of range");
+  expect_error("\"e_th\": 20, \"e_th\": 21, ", "e_th", "duplicate key");
+  expect_error("\"disagree_frames\": 0, ", "disagree_frames", ">= 1 (got 0)");
+  expect_error("\"disagree_frames\": 2.5, ", "disagree_frames", "must be an integer");
+  expect_error("\"mode\": \"fast\", ", "mode", "must be one of \"full\", \"paper\" (got \"fast\")");
+  expect_error("\"refinement\": 1, ", "refinement", "must be a string");
+  expect_error("\"yaw_corection\": true, ", "yaw_corection", "unknown key");  // a typo is not silently ignored
+  EXPECT_EQ(error_of([] { (void)parse_localizer("{}"); }), "loc.json:fuzzy: missing (required)");
+  // The fuzzy block's errors carry the path through the localizer file.
+  const std::string e = error_of([] {
+    (void)parse_localizer("{\"fuzzy\": " + replaced(kGood, "[0, 10, 20, 30]", "[0, 10, -20, 30]") + "}");
+  });
+  EXPECT_EQ(e, "loc.json:fuzzy.snap_ranges_cm[2]: ranges must be finite and >= 0 (got -20)");
+}
+
+TEST(LocalizerConfigFile, MissingFileAndDirectoryAreNamed) {
+  EXPECT_EQ(error_of([] { (void)load_localizer_config("/nonexistent/loc.json"); }), "/nonexistent/loc.json: no such file");
+  const std::string dir = test::temp_dir().string();
+  EXPECT_EQ(error_of([&] { (void)load_localizer_config(dir); }), dir + ": is a directory, not a JSON file");
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "config_test_util.hpp"
 #include "omniloc/recording.hpp"
 
 namespace omniloc {
@@ -74,9 +75,9 @@ class RecordingFiles : public ::testing::Test {
 TEST_F(RecordingFiles, RoundTrip) {
   const Recording r = load_recording(dir_);
   EXPECT_EQ(r.meta.field, "fira-robosot");
-  EXPECT_EQ(r.meta.camera.fingerprint(), meta_.camera.fingerprint());
+  EXPECT_TRUE(r.meta.camera == meta_.camera);
+  EXPECT_TRUE(r.meta.robot == meta_.robot);
   EXPECT_EQ(r.meta.robot.gear_ratio, 24.0);
-  EXPECT_EQ(r.meta.robot.counts_per_rev, meta_.robot.counts_per_rev);
   ASSERT_TRUE(r.meta.initial_pose.has_value());
   EXPECT_EQ(r.meta.initial_pose->x_cm, 123.5);
   EXPECT_EQ(r.meta.initial_pose->yaw_deg, -45.5);
@@ -157,28 +158,93 @@ TEST_F(RecordingFiles, CameraAndTruthErrors) {
   }
 }
 
-TEST_F(RecordingFiles, MetaErrorsNameTheField) {
-  const std::string good_robot =
+TEST_F(RecordingFiles, MetaErrorsNameTheFileAndFieldPath) {
+  const std::string meta = (dir_ / "meta.json").string();
+  const std::string robot =
       R"("robot": {"wheel_radius_cm": 5, "center_to_wheel_cm": 20, "motor_angle_deg": 45, "gear_ratio": 19, "counts_per_rev": 500, "decoding": 4})";
-  const std::string good_camera =
+  const std::string camera =
       R"("camera": {"width": 640, "height": 480, "center_px": [320, 240], "radius_lut": [[0, 0], [238, 500]], "yaw_offset_deg": 0, "mirrored": false})";
-  write("meta.json", "{\"field\": \"fira-robosot\", " + good_camera + "}");
-  expect_error("meta.json", 0, "'robot': missing");
-  write("meta.json", "{\"field\": \"fira-robosot\", " + good_camera + ", " +
-                         R"("robot": {"wheel_radius_cm": 5, "center_to_wheel_cm": 20, "motor_angle_deg": 45, "gear_ratio": 19, "counts_per_rev": 500, "decoding": 3})" +
-                         "}");
-  expect_error("meta.json", 0, "decoding");
-  write("meta.json", "{\"field\": \"fira-robosot\", " + good_camera + ", " + good_robot +
-                         R"(, "initial_pose": {"x_cm": 1, "y_cm": "a", "yaw_deg": 0}})");
-  expect_error("meta.json", 0, "initial_pose.y_cm");
-  write("meta.json", "{\"field\": \"fira-robosot\", " + good_robot + "}");
-  expect_error("meta.json", 0, "'camera'");
-  write("meta.json", "{\"field\": \"fira-robosot\", " + good_camera + ", " + good_robot + ", \"extra\": 1}");
-  expect_error("meta.json", 0, "unknown key 'extra'");
-  write("meta.json", "{\"field\": ");
-  expect_error("meta.json", 0, "JSON");
+  const std::string pose = R"("initial_pose": {"x_cm": 1, "y_cm": 2, "yaw_deg": 0})";
+  const std::string good = "{\"field\": \"fira-robosot\", " + camera + ", " + robot + ", " + pose + "}";
+  write("meta.json", good);
+  EXPECT_EQ(load_error(), "");
+  struct Case {
+    std::string json;
+    std::string path;
+    std::string why;
+  };
+  using test::replaced;
+  const Case cases[] = {
+      {"{\"field\": \"fira-robosot\", " + camera + "}", "robot", "missing (required)"},
+      {replaced(good, "\"decoding\": 4", "\"decoding\": 3"), "robot.decoding", "must be 1, 2 or 4 (got 3)"},
+      {replaced(good, "\"y_cm\": 2", "\"y_cm\": \"a\""), "initial_pose.y_cm", "must be a number, not a string"},
+      {replaced(good, "\"y_cm\": 2", "\"y_cm\": 2, \"z_cm\": 0"), "initial_pose.z_cm", "unknown key"},
+      {replaced(good, "\"y_cm\": 2", "\"y_cm\": NaN"), "initial_pose.y_cm", "not valid JSON"},
+      {replaced(good, "\"y_cm\": 2", "\"y_cm\": 1e400"), "initial_pose.y_cm", "number out of range"},
+      {replaced(good, "[238, 500]", "[238, 500], [230, 600]"), "camera.radius_lut[2]", "strictly increasing"},
+      {replaced(good, "\"width\": 640", "\"width\": 640.5"), "camera.width", "must be an integer"},
+      {replaced(good, "\"mirrored\": false", "\"mirrored\": 0"), "camera.mirrored", "must be true or false"},
+      {replaced(good, "\"counts_per_rev\": 500", "\"counts_per_rev\": -500"), "robot.counts_per_rev", "(got -500)"},
+      {"{\"field\": \"fira-robosot\", " + robot + "}", "camera", "missing (required)"},
+      {replaced(good, "\"field\": \"fira-robosot\"", "\"field\": \"\""), "field", "must name a geometry"},
+      {replaced(good, "\"field\": \"fira-robosot\"", "\"field\": 3"), "field", "must be a string"},
+      {replaced(good, "\"field\": \"fira-robosot\"", "\"field\": \"a\", \"field\": \"b\""), "field", "duplicate key"},
+      {good.substr(0, good.size() - 1) + ", \"extra\": 1}", "extra", "unknown key"},
+      {"{\"field\": ", "field", "not valid JSON"},
+  };
+  for (const Case& c : cases) {
+    write("meta.json", c.json);
+    const std::string e = load_error();
+    EXPECT_EQ(e.rfind(meta + ":" + c.path + ": ", 0), 0u) << "json: " << c.json << "\n got: " << e;
+    EXPECT_NE(e.find(c.why), std::string::npos) << "want '" << c.why << "'\n json: " << c.json << "\n got: " << e;
+  }
   fs::remove(dir_ / "meta.json");
-  expect_error("meta.json", 0, "missing");
+  EXPECT_EQ(load_error(), meta + ": no such file");
+  fs::create_directories(dir_ / "meta.json");
+  EXPECT_EQ(load_error(), meta + ": is a directory, not a JSON file");
+}
+
+TEST_F(RecordingFiles, MetaWriteReadsBackEveryKeyAndEscapesStrings) {
+  RecordingMeta m;
+  m.field = "C:\\fields\\my \"special\" field.json";  // a path with '\' and '"'
+  m.camera.width_px = 800;
+  m.camera.height_px = 600;
+  m.camera.center_px = {401.5, 298.1};  // 298.1 has no exact binary value: written with enough digits
+  m.camera.radius_lut = {{0.0, 0.0}, {100.0 / 3.0, 90.0}, {250.0, 450.0}};
+  m.camera.yaw_offset_deg = -2.5;
+  m.camera.mirrored = true;
+  m.camera.body_radius_px = 12.5;
+  m.camera.masts = {{90.0, 3.0}, {-45.5, 0.5}};
+  m.robot.wheel_radius_cm = 4.5;
+  m.robot.center_to_wheel_cm = 18.25;
+  m.robot.motor_angle_deg = 30.0;
+  m.robot.gear_ratio = 14.0;
+  m.robot.counts_per_rev = 512;
+  m.robot.decoding = 2;
+  m.initial_pose = Pose2{1.0 / 3.0, -7.25, 179.5};
+  const fs::path p = dir_ / "meta2.json";
+  write_meta(p, m);
+  // The text is valid JSON whose field string is the path itself (read with nlohmann directly).
+  const auto json = test::read_json(p);
+  EXPECT_EQ(json["field"].get<std::string>(), m.field);
+  EXPECT_EQ(test::keys_of(json), (std::vector<std::string>{"field", "camera", "robot", "initial_pose"}));
+  // The robot block holds the recording contract's six keys, as it always did.
+  EXPECT_EQ(test::keys_of(json["robot"]), (std::vector<std::string>{"wheel_radius_cm", "center_to_wheel_cm",
+                                                                     "motor_angle_deg", "gear_ratio", "counts_per_rev",
+                                                                     "decoding"}));
+  const RecordingMeta r = read_meta(p);
+  EXPECT_EQ(r.field, m.field);
+  EXPECT_TRUE(r.camera == m.camera);
+  EXPECT_TRUE(r.robot == m.robot);
+  ASSERT_TRUE(r.initial_pose.has_value());
+  EXPECT_EQ(r.initial_pose->x_cm, 1.0 / 3.0);
+  EXPECT_EQ(r.initial_pose->y_cm, -7.25);
+  EXPECT_EQ(r.initial_pose->yaw_deg, 179.5);
+  // Without an initial pose the key is left out.
+  m.initial_pose.reset();
+  write_meta(p, m);
+  EXPECT_FALSE(test::read_json(p).contains("initial_pose"));
+  EXPECT_FALSE(read_meta(p).initial_pose.has_value());
 }
 
 TEST_F(RecordingFiles, PosesCsvRoundTrip) {

@@ -14,9 +14,7 @@
 
 #include <Eigen/Core>
 
-namespace cv {
-class FileNode;
-}
+#include "omniloc/config.hpp"
 
 namespace omniloc {
 
@@ -24,14 +22,19 @@ namespace omniloc {
 struct RadiusMark {
   double radius_px;
   double ground_cm;
+  bool operator==(const RadiusMark&) const = default;
 };
 
 /// A sector of bearings (robot frame) hidden by the mast or another part of the robot.
 struct MastSector {
   double bearing_deg = 180.0;
   double half_width_deg = 0.0;
+  bool operator==(const MastSector&) const = default;
 };
 
+/// A camera file (common/cameras/) or meta.json's "camera" block. Every key but "mask" is required,
+/// so the files are the only source of these values (the initialisers only make CameraModel{} a
+/// well-formed value).
 struct CameraModel {
   int width_px = 640;
   int height_px = 480;
@@ -61,13 +64,22 @@ struct CameraModel {
   [[nodiscard]] bool bearing_hidden(double bearing_deg) const;
   /// Hash of everything that changes where the floor appears (for database headers).
   [[nodiscard]] std::uint64_t fingerprint() const;
+
+  /// Throws ConfigError "<at>.<field>: <why> (got <value>)": size not in 1..16384, centre outside
+  /// the image, fewer than two table rows, a table not strictly increasing in both columns or with
+  /// negative values, a mast half width outside [0, 90), no visible floor ring.
+  void validate(const config::Origin& at) const;
+  bool operator==(const CameraModel&) const = default;
 };
 
-/// Reads a camera from a JSON object node (a camera file's root or meta.json's "camera" block).
-/// `context` names the file/field for errors. Validates: positive size, centre inside the image,
-/// at least two table rows, strictly increasing, finite; optional "mask" {body_radius_px, masts:
-/// [{bearing_deg, half_width_deg}]}.
-[[nodiscard]] CameraModel camera_from_json(const cv::FileNode& node, const std::string& context);
+/// Reads and validates a camera from a parsed JSON object (a camera file's root or meta.json's
+/// "camera" block): width, height, center_px [u, v], radius_lut [[r_px, d_cm], ...],
+/// yaw_offset_deg, mirrored, optional "mask" {body_radius_px, masts: [{bearing_deg,
+/// half_width_deg}]}, optional "description" (a note, not kept).
+[[nodiscard]] CameraModel camera_from_json(const config::Node& node);
+
+/// The key table (config_reader.hpp) of a camera block.
+[[nodiscard]] const std::vector<config::Key<CameraModel>>& camera_keys();
 
 /// Loads a camera file by name ("default" -> common/cameras/default.json) or path.
 [[nodiscard]] CameraModel load_camera(const std::string& name_or_path);

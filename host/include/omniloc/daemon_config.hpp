@@ -1,26 +1,28 @@
-// Configuration of the robot daemon `omnilocd`: a JSON file (common/omnilocd/default.json, read with
-// cv::FileStorage) whose values command-line flags override. Every key is optional, unknown keys are
-// refused (a misspelt key must not fall back to its default silently), and every value is checked;
-// errors name the file (or "command line") and the field. Keys, defaults and units: docs/DAEMON.md.
+// Configuration of the robot daemon `omnilocd`: a JSON file (common/omnilocd/default.json, read by
+// the config layer, config_reader.hpp) whose values command-line flags override. Every key is
+// optional, unknown and duplicate keys are refused (a misspelt key must not fall back to its
+// default silently), and every value is checked; errors name the file (or "command line") and the
+// field. Keys, defaults and units: docs/DAEMON.md.
 #pragma once
 
-#include <cstdint>
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
-#include "omniloc/robot_config.hpp"  // ConfigError
+#include "omniloc/config.hpp"  // ConfigError
 
 namespace omniloc::daemon {
 
+/// The member initialisers are the shipped defaults: a test checks they equal every key of
+/// common/omnilocd/default.json.
 struct DaemonConfig {
-  // --- board ---
-  std::string board = "usb";         ///< "usb" (FT2232H over libusb) or "sim" (Verilated board, simulated robot)
-  std::string board_serial;          ///< usb: the board's serial, empty for the first one found
+  // --- board (FT2232H over libusb) ---
+  std::string board_serial;          ///< the board's serial, empty for the first one found
   double reconnect_period_ms = 500;  ///< time between reopen attempts after an unplug
   // --- camera ---
-  std::string camera = "sim";        ///< "sim", "none", a V4L2 index ("0"), a device path or a video file
-  double camera_fps = 60.0;          ///< sim: frames per second of simulated time; real: requested rate
+  std::string camera = "0";          ///< "none", a V4L2 index ("0"), a device path or a video file
+  double camera_fps = 60.0;          ///< requested rate (a video file: its pacing)
   double camera_timeout_ms = 500;    ///< no frame for this long: odometry only, flagged
   // --- models ---
   std::string field = "fira-robosot";  ///< common/fields/<name>.json or a path
@@ -36,17 +38,21 @@ struct DaemonConfig {
   std::string record_dir;              ///< empty: no recording
   double status_period_s = 1.0;        ///< status line on stderr; 0 disables it
   double duration_s = 0.0;             ///< stop after this much (daemon) time; 0: until SIGINT/SIGTERM
-  // --- simulation (board "sim" / camera "sim") ---
-  std::string sim_trajectory = "figure_eight";  ///< sim/world trajectory name
-  std::uint64_t sim_seed = 1;
+
+  /// Checks ranges; throws ConfigError "<at>.<key>: <why> (got <value>)".
+  void validate(const config::Origin& at) const;
+  bool operator==(const DaemonConfig&) const = default;
 };
 
-/// Checks ranges and enumerations; throws ConfigError "<source>: field '<key>': <why> (got <value>)".
+/// config.validate(source).
 void validate_daemon_config(const DaemonConfig& config, const std::string& source);
+
+/// The key table (config_reader.hpp) that drives the JSON reader, the flags and --help.
+[[nodiscard]] const std::vector<config::Key<DaemonConfig>>& daemon_config_keys();
 
 /// Reads a JSON object of DaemonConfig keys over `base` (keys not present keep base's values) and
 /// validates the result. Throws ConfigError naming the path (and the field) when the file is
-/// missing, is not JSON, has an unknown key, a value of the wrong type or out of range.
+/// missing, is not JSON, has an unknown or duplicate key, a value of the wrong type or out of range.
 [[nodiscard]] DaemonConfig load_daemon_config(const std::string& path, const DaemonConfig& base = {});
 
 /// Sets one key from its text form (as a command-line flag gives it); throws ConfigError naming

@@ -11,7 +11,50 @@
 
 #include <Eigen/Core>
 
+#include "omniloc/config.hpp"
+
 namespace omniloc {
+
+/// A rectangle in front of a goal line (goal area, penalty area), cm.
+struct FieldArea {
+  double depth_cm = 0.0;  ///< along field x, from the goal line
+  double width_cm = 0.0;  ///< along field y, centred
+  bool operator==(const FieldArea&) const = default;
+};
+
+/// The arc in front of a penalty area: its centre lies centre_from_goal_line_cm from the goal line.
+struct PenaltyArc {
+  double radius_cm = 0.0;  ///< 0: no arc
+  double centre_from_goal_line_cm = 0.0;
+  bool operator==(const PenaltyArc&) const = default;
+};
+
+/// A geometry file (common/fields/<name>.json) as written: every key is required but "marks" (and
+/// the notes "description", "units" = "cm"), so the files are the only source of these values.
+struct FieldSpec {
+  std::string name;
+  double field_length_cm = 0.0;
+  double field_width_cm = 0.0;
+  double border_cm = 0.0;
+  double line_width_cm = 0.0;
+  double centre_circle_radius_cm = 0.0;  ///< 0: none
+  FieldArea goal_area;
+  FieldArea penalty_area;
+  PenaltyArc penalty_arc;
+  double corner_arc_radius_cm = 0.0;  ///< 0: none
+  double mark_radius_cm = 0.0;        ///< "marks": {"radius_cm", "from_centre_cm": [[dx, dy], ...]}
+  std::vector<Eigen::Vector2d> marks_from_centre_cm;
+
+  /// Throws ConfigError "<at>.<field>: <why> (got <value>)": non-positive sizes, circles or areas
+  /// that do not fit the field, marks outside the playing area.
+  void validate(const config::Origin& at) const;
+  bool operator==(const FieldSpec&) const = default;
+};
+
+/// Reads and validates a geometry file's object.
+[[nodiscard]] FieldSpec parse_field_spec(const config::Node& node);
+/// The key table (config_reader.hpp) of a geometry file.
+[[nodiscard]] const std::vector<config::Key<FieldSpec>>& field_spec_keys();
 
 /// A straight white line between two points (its centre line), field frame cm.
 struct FieldSegment {
@@ -52,8 +95,11 @@ struct FieldGeometry {
   [[nodiscard]] std::uint64_t fingerprint() const;
 };
 
-/// Loads a geometry file by name ("fira-robosot", "robocup-msl") or path. Throws
-/// std::runtime_error naming the file and the field for a missing, malformed or invalid entry.
+/// The lines of a (valid) spec; `source` is kept for error messages.
+[[nodiscard]] FieldGeometry build_field(const FieldSpec& spec, const std::string& source);
+
+/// Loads a geometry file by name ("fira-robosot", "robocup-msl") or path. Throws ConfigError
+/// naming the file and the field for a missing, malformed or invalid entry.
 [[nodiscard]] FieldGeometry load_field(const std::string& name_or_path);
 
 /// True when the floor point p (field frame, cm) is on a white line.

@@ -12,9 +12,7 @@
 #include <string>
 #include <vector>
 
-namespace cv {
-class FileNode;
-}
+#include "omniloc/config.hpp"
 
 namespace omniloc {
 
@@ -31,15 +29,22 @@ struct Trapezoid {
   double c = 0.0;
   double d = 0.0;
   [[nodiscard]] double degree(double x) const;
+  bool operator==(const Trapezoid&) const = default;
 };
 
+/// The member initialisers are the shipped defaults: a test checks they equal every key of the
+/// "fuzzy" block of common/localizer/default.json.
 struct FuzzyConfig {
   /// Input universe: robot speed over ground (cm/s). Inputs are clamped into it.
   double speed_max_cm_per_s = 300.0;
-  std::array<Trapezoid, kFuzzyTerms> speed_terms{};  // VL, L, H, VH (Fig. 12)
+  /// VL, L, H, VH (Fig. 12). The robot's top speed is ~300 cm/s; most play happens below 150 cm/s.
+  std::array<Trapezoid, kFuzzyTerms> speed_terms{
+      Trapezoid{0, 0, 20, 50}, Trapezoid{20, 50, 80, 120}, Trapezoid{80, 120, 150, 200}, Trapezoid{150, 200, 300, 300}};
   /// Output universe: search range A (cm), [0, range_max_cm].
   double range_max_cm = 30.0;
-  std::array<Trapezoid, kFuzzyTerms> range_terms{};  // VL, L, H, VH (Fig. 13)
+  /// VL, L, H, VH (Fig. 13): each term's core sits on (or against) one database range 0/10/20/30.
+  std::array<Trapezoid, kFuzzyTerms> range_terms{
+      Trapezoid{0, 0, 3, 8}, Trapezoid{3, 8, 12, 17}, Trapezoid{12, 17, 22, 27}, Trapezoid{22, 27, 30, 30}};
   /// rules[i] = output term for input term i; the paper's four rules are the identity
   /// (speed very low -> range very low, ..., very high -> very high).
   std::array<FuzzyTerm, kFuzzyTerms> rules{FuzzyTerm::kVeryLow, FuzzyTerm::kLow, FuzzyTerm::kHigh,
@@ -49,8 +54,14 @@ struct FuzzyConfig {
   /// Ranges the database search offers; the crisp output snaps to the nearest (ties go up).
   std::vector<double> snap_ranges_cm{0.0, 10.0, 20.0, 30.0};
 
-  /// The defaults documented in docs/LOCALIZER.md (same numbers as common/localizer/default.json).
+  /// FuzzyConfig{}: the defaults documented in docs/LOCALIZER.md.
   [[nodiscard]] static FuzzyConfig defaults();
+
+  /// Throws ConfigError "<at>.<field>: <why> (got <value>)": unordered or non-finite breakpoints,
+  /// terms outside their universe, input terms that leave a speed uncovered, rule indices out of
+  /// range, a too coarse or non-positive resolution, empty or unsorted snap ranges.
+  void validate(const config::Origin& at) const;
+  bool operator==(const FuzzyConfig&) const = default;
 };
 
 struct FuzzyResult {
@@ -68,15 +79,17 @@ struct FuzzyResult {
 /// Nearest of `ranges_cm` (ties, within 1e-9 cm, go to the larger).
 [[nodiscard]] double snap_to_ranges(double value_cm, const std::vector<double>& ranges_cm);
 
-/// Throws ConfigError (robot_config.hpp) naming `source` and the field: unordered or non-finite
-/// breakpoints, terms outside their universe, input terms that leave a speed uncovered, rule
-/// indices out of range, non-positive resolution, empty or unsorted snap ranges.
+/// config.validate(source).
 void validate_fuzzy_config(const FuzzyConfig& config, const std::string& source);
 
 /// Reads {"speed_max_cm_per_s", "speed_terms": {"VL": [a,b,c,d], "L": ..., "H": ..., "VH": ...},
 /// "range_max_cm", "range_terms": {...}, "rules": {"VL": "VL", ...}, "resolution_cm",
-/// "snap_ranges_cm": [...]} from a cv::FileStorage node and validates it.
-[[nodiscard]] FuzzyConfig parse_fuzzy_config(const cv::FileNode& node, const std::string& source);
+/// "snap_ranges_cm": [...]} (every key required) from a parsed JSON node and validates it; errors
+/// name the node's origin ("loc.json:fuzzy.speed_terms.L[1]").
+[[nodiscard]] FuzzyConfig parse_fuzzy_config(const config::Node& node);
+
+/// The key table (config_reader.hpp) of the fuzzy block.
+[[nodiscard]] const std::vector<config::Key<FuzzyConfig>>& fuzzy_config_keys();
 
 /// "VL", "L", "H", "VH".
 [[nodiscard]] const char* fuzzy_term_name(FuzzyTerm term);

@@ -41,10 +41,6 @@
 #include "omniloc/odometry.hpp"
 #include "omniloc/robot_config.hpp"
 
-namespace cv {
-class FileNode;
-}
-
 namespace omniloc {
 
 enum class LocalizerMode {
@@ -52,9 +48,11 @@ enum class LocalizerMode {
   kFull,   ///< the paper plus refinement, lost detection/recovery, ambiguity refusal
 };
 
+/// The member initialisers are the shipped defaults: a test checks they equal every key of
+/// common/localizer/default.json.
 struct LocalizerConfig {
   LocalizerMode mode = LocalizerMode::kFull;
-  FuzzyConfig fuzzy = FuzzyConfig::defaults();
+  FuzzyConfig fuzzy;
   double e_th = 20.0;              ///< match threshold on the normalised error (paper: 20)
   double reset_period_ms = 125.0;  ///< odometry origin reset period (paper: 125 ms)
   double history_ms = 1000.0;      ///< odometry history kept for late frames; older frames are dropped
@@ -86,14 +84,23 @@ struct LocalizerConfig {
 
   /// kPaper: refinement kNone, min range 0, no ambiguity refusal, no lost detection.
   [[nodiscard]] static LocalizerConfig paper();
+
+  /// Throws ConfigError "<at>.<field>: <why> (got <value>)" for the first bad field.
+  void validate(const config::Origin& at) const;
+  bool operator==(const LocalizerConfig&) const = default;
 };
 
-/// Reads the localizer config (common/localizer/default.json; docs/LOCALIZER.md) from a
-/// cv::FileStorage node, validating every field; errors (ConfigError) name `source` and the field.
-[[nodiscard]] LocalizerConfig parse_localizer_config(const cv::FileNode& node, const std::string& source);
+/// Reads the localizer config (common/localizer/default.json; docs/LOCALIZER.md) from a parsed
+/// JSON node and validates it; errors (ConfigError) name the node's origin and the field. "mode"
+/// is read first and chooses the values the other keys override (paper: LocalizerConfig::paper());
+/// "fuzzy" is required.
+[[nodiscard]] LocalizerConfig parse_localizer_config(const config::Node& node);
 /// Loads a file by name ("default" -> common/localizer/default.json) or path.
 [[nodiscard]] LocalizerConfig load_localizer_config(const std::string& name_or_path);
+/// config.validate(source).
 void validate_localizer_config(const LocalizerConfig& config, const std::string& source);
+/// The key table (config_reader.hpp) of a localizer file.
+[[nodiscard]] const std::vector<config::Key<LocalizerConfig>>& localizer_config_keys();
 
 enum class PoseSource {
   kNone,        ///< no fix yet (waiting for a good global search); pose meaningless

@@ -41,6 +41,10 @@ struct RecordingMeta {
   CameraModel camera;
   RobotConfig robot;
   std::optional<Pose2> initial_pose;
+
+  /// Throws ConfigError "<at>.<field>: <why> (got <value>)": an empty field name, a bad camera or
+  /// robot block, a non-finite initial pose.
+  void validate(const config::Origin& at) const;
 };
 
 struct FrameRef {
@@ -61,7 +65,8 @@ struct Recording {
   std::vector<TruthSample> truth;  ///< empty without truth.csv
 };
 
-/// Reads meta.json (cv::FileStorage; camera via camera_from_json, robot via parse_robot_config).
+/// Reads meta.json (config layer: camera via camera_from_json, robot via parse_robot_config);
+/// errors are RecordingError "<meta.json>:<field path>: <why> (got <value>)".
 [[nodiscard]] RecordingMeta read_meta(const std::filesystem::path& meta_json);
 [[nodiscard]] std::vector<EncoderWindow> read_encoders_csv(const std::filesystem::path& path);
 [[nodiscard]] std::vector<FrameRef> read_camera_csv(const std::filesystem::path& path);
@@ -119,7 +124,8 @@ class RecordingWriter {
   int frame_count_ = 0;
 };
 
-/// Writes meta.json (camera block in the camera-file format, including the optional mask).
+/// Writes meta.json with nlohmann-json (strings escaped, doubles exact): the camera block in the
+/// camera-file format including the mask, the robot block's six contract keys, initial_pose if set.
 void write_meta(const std::filesystem::path& meta_json, const RecordingMeta& meta);
 
 /// Streams poses.csv rows.

@@ -8,22 +8,15 @@
 #pragma once
 
 #include <filesystem>
-#include <stdexcept>
 #include <string>
+#include <vector>
 
-namespace cv {
-class FileNode;
-}
+#include "omniloc/config.hpp"  // ConfigError
 
 namespace omniloc {
 
-/// A robot (or odometry) configuration that cannot be used; what() names the source, the field
-/// and why, e.g. "robots/x.json: field 'decoding': must be 1, 2 or 4 (got 3)".
-class ConfigError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
+/// The member initialisers are the shipped defaults: a test checks they equal every key of
+/// common/robots/default.json.
 struct RobotConfig {
   // --- required (recording contract) ---
   double wheel_radius_cm = 5.0;     ///< r of equation (7)
@@ -41,6 +34,10 @@ struct RobotConfig {
   double max_accel_cm_per_s2 = 400.0;    ///< motion prior used to tell diagonal wheels apart
   double odometry_noise_fraction = 0.005;  ///< 1-sigma position uncertainty growth per cm driven
   double gyro_arw_deg_per_sqrt_s = 0.01;   ///< gyro angle random walk, for yaw uncertainty
+
+  /// Throws ConfigError "<at>.<field>: <why> (got <value>)" for the first bad field.
+  void validate(const config::Origin& at) const;
+  bool operator==(const RobotConfig&) const = default;
 };
 
 /// Encoder counts per wheel turn: counts_per_rev x decoding x gear_ratio (issue 7 contract).
@@ -49,12 +46,16 @@ struct RobotConfig {
 /// Wheel travel per count, in cm.
 [[nodiscard]] double cm_per_count(const RobotConfig& config);
 
-/// Throws ConfigError naming `source` and the first bad field.
+/// config.validate(source).
 void validate_robot_config(const RobotConfig& config, const std::string& source);
 
-/// Reads a robot block from an already opened cv::FileStorage node (e.g. meta.json's "robot");
-/// `source` names it in errors ("rec/meta.json: robot").
-[[nodiscard]] RobotConfig parse_robot_config(const cv::FileNode& node, const std::string& source);
+/// Reads and validates a robot block from a parsed JSON node (a robot file's root or meta.json's
+/// "robot"); errors name the node's origin ("rec/meta.json:robot.decoding").
+[[nodiscard]] RobotConfig parse_robot_config(const config::Node& node);
+
+/// The key table (config_reader.hpp) that reads and writes a robot block: the six contract keys
+/// are Need::kRequired (meta.json writes only those), the others optional.
+[[nodiscard]] const std::vector<config::Key<RobotConfig>>& robot_config_keys();
 
 /// Reads and validates a JSON file whose top level is the robot block.
 [[nodiscard]] RobotConfig load_robot_config(const std::filesystem::path& path);

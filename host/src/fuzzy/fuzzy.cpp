@@ -7,9 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include <opencv2/core/persistence.hpp>
-
-#include "omniloc/robot_config.hpp"
+#include "omniloc/config_reader.hpp"
 
 namespace omniloc {
 
@@ -31,16 +29,7 @@ const char* fuzzy_term_name(FuzzyTerm term) {
   return "?";
 }
 
-FuzzyConfig FuzzyConfig::defaults() {
-  FuzzyConfig c;
-  // Speed (cm/s): the robot's top speed is ~300 cm/s; most play happens below 150 cm/s.
-  c.speed_terms = {Trapezoid{0, 0, 20, 50}, Trapezoid{20, 50, 80, 120}, Trapezoid{80, 120, 150, 200},
-                   Trapezoid{150, 200, 300, 300}};
-  // Search range (cm): each term's core sits on (or against) one database range 0/10/20/30.
-  c.range_terms = {Trapezoid{0, 0, 3, 8}, Trapezoid{3, 8, 12, 17}, Trapezoid{12, 17, 22, 27},
-                   Trapezoid{22, 27, 30, 30}};
-  return c;
-}
+FuzzyConfig FuzzyConfig::defaults() { return FuzzyConfig{}; }
 
 double snap_to_ranges(double value_cm, const std::vector<double>& ranges_cm) {
   if (ranges_cm.empty()) throw std::invalid_argument("snap_to_ranges: no ranges");
@@ -85,23 +74,22 @@ FuzzyResult fuzzy_search_range(const FuzzyConfig& config, double speed_cm_per_s)
 
 namespace {
 
-[[noreturn]] void fail(const std::string& source, const std::string& field, const std::string& why) {
-  throw ConfigError(source + ": field '" + field + "': " + why);
+using config::Origin;
+
+std::string show_term(const Trapezoid& t) {
+  return config::show({t.a, t.b, t.c, t.d});
 }
 
-void check_terms(const std::array<Trapezoid, kFuzzyTerms>& terms, double max, const std::string& source,
-                 const std::string& prefix, bool must_cover) {
+void check_terms(const std::array<Trapezoid, kFuzzyTerms>& terms, double max, const Origin& at, bool must_cover) {
   for (int i = 0; i < kFuzzyTerms; ++i) {
     const Trapezoid& t = terms[i];
-    const std::string f = prefix + "." + fuzzy_term_name(static_cast<FuzzyTerm>(i));
-    if (!std::isfinite(t.a) || !std::isfinite(t.b) || !std::isfinite(t.c) || !std::isfinite(t.d))
-      fail(source, f, "breakpoints must be finite");
-    if (!(t.a <= t.b && t.b <= t.c && t.c <= t.d)) fail(source, f, "breakpoints must satisfy a <= b <= c <= d");
-    if (t.a < 0.0 || t.d > max) {
-      std::ostringstream os;
-      os << "breakpoints must lie in [0, " << max << "] (got " << t.a << " .. " << t.d << ")";
-      fail(source, f, os.str());
-    }
+    const Origin f = at / fuzzy_term_name(static_cast<FuzzyTerm>(i));
+    const bool finite = std::isfinite(t.a) && std::isfinite(t.b) && std::isfinite(t.c) && std::isfinite(t.d);
+    config::require(finite, f, "breakpoints must be finite", show_term(t));
+    config::require(t.a <= t.b && t.b <= t.c && t.c <= t.d, f, "breakpoints must satisfy a <= b <= c <= d",
+                    show_term(t));
+    config::require(t.a >= 0.0 && t.d <= max, f, "breakpoints must lie in [0, " + config::show(max) + "]",
+                    show_term(t));
   }
   if (!must_cover) return;
   // Every input must fire some rule: sample the universe finely (including each breakpoint).
@@ -113,117 +101,114 @@ void check_terms(const std::array<Trapezoid, kFuzzyTerms>& terms, double max, co
     if (x < 0.0 || x > max) continue;
     double mu = 0.0;
     for (const auto& t : terms) mu = std::max(mu, t.degree(x));
-    if (mu <= 0.0) {
-      std::ostringstream os;
-      os << "the terms leave the input " << x << " uncovered (no rule would fire)";
-      fail(source, prefix, os.str());
-    }
+    config::require(mu > 0.0, at, "the terms leave an input uncovered (no rule would fire) at speed", x);
   }
 }
 
 }  // namespace
 
-void validate_fuzzy_config(const FuzzyConfig& c, const std::string& source) {
-  if (!(c.speed_max_cm_per_s > 0.0) || !std::isfinite(c.speed_max_cm_per_s))
-    fail(source, "speed_max_cm_per_s", "must be a positive number");
-  if (!(c.range_max_cm > 0.0) || !std::isfinite(c.range_max_cm)) fail(source, "range_max_cm", "must be a positive number");
-  check_terms(c.speed_terms, c.speed_max_cm_per_s, source, "speed_terms", true);
-  check_terms(c.range_terms, c.range_max_cm, source, "range_terms", false);
+void FuzzyConfig::validate(const Origin& at) const {
+  config::require(speed_max_cm_per_s > 0.0 && std::isfinite(speed_max_cm_per_s), at / "speed_max_cm_per_s",
+                  "must be a positive number", speed_max_cm_per_s);
+  config::require(range_max_cm > 0.0 && std::isfinite(range_max_cm), at / "range_max_cm", "must be a positive number",
+                  range_max_cm);
+  check_terms(speed_terms, speed_max_cm_per_s, at / "speed_terms", true);
+  check_terms(range_terms, range_max_cm, at / "range_terms", false);
   for (int i = 0; i < kFuzzyTerms; ++i) {
-    const int o = static_cast<int>(c.rules[i]);
-    if (o < 0 || o >= kFuzzyTerms)
-      fail(source, std::string("rules.") + fuzzy_term_name(static_cast<FuzzyTerm>(i)), "output term out of range");
+    const int o = static_cast<int>(rules[i]);
+    config::require(o >= 0 && o < kFuzzyTerms, at / "rules" / fuzzy_term_name(static_cast<FuzzyTerm>(i)),
+                    "output term out of range", o);
   }
   for (int i = 0; i < kFuzzyTerms; ++i) {
-    const Trapezoid& t = c.range_terms[i];
-    if (!(t.d > t.a))
-      fail(source, std::string("range_terms.") + fuzzy_term_name(static_cast<FuzzyTerm>(i)),
-           "has zero width (its centroid would be undefined)");
+    const Trapezoid& t = range_terms[i];
+    config::require(t.d > t.a, at / "range_terms" / fuzzy_term_name(static_cast<FuzzyTerm>(i)),
+                    "has zero width (its centroid would be undefined)", show_term(t));
   }
-  if (!(c.resolution_cm > 0.0) || c.resolution_cm > c.range_max_cm / 10.0)
-    fail(source, "resolution_cm", "must be > 0 and at most a tenth of range_max_cm");
-  if (c.snap_ranges_cm.empty()) fail(source, "snap_ranges_cm", "must list at least one range");
-  for (std::size_t i = 0; i < c.snap_ranges_cm.size(); ++i) {
-    const double r = c.snap_ranges_cm[i];
-    if (!std::isfinite(r) || r < 0.0) fail(source, "snap_ranges_cm", "ranges must be finite and >= 0");
-    if (i > 0 && !(r > c.snap_ranges_cm[i - 1])) fail(source, "snap_ranges_cm", "must be strictly increasing");
+  config::require(resolution_cm > 0.0 && resolution_cm <= range_max_cm / 10.0, at / "resolution_cm",
+                  "must be > 0 and at most a tenth of range_max_cm", resolution_cm);
+  if (snap_ranges_cm.empty()) (at / "snap_ranges_cm").fail("must list at least one range", "[]");
+  for (std::size_t i = 0; i < snap_ranges_cm.size(); ++i) {
+    const double r = snap_ranges_cm[i];
+    config::require(std::isfinite(r) && r >= 0.0, (at / "snap_ranges_cm")[i], "ranges must be finite and >= 0", r);
+    if (i > 0)
+      config::require(r > snap_ranges_cm[i - 1], (at / "snap_ranges_cm")[i],
+                      "must be strictly increasing (after " + config::show(snap_ranges_cm[i - 1]) + ")", r);
   }
 }
+
+void validate_fuzzy_config(const FuzzyConfig& c, const std::string& source) { c.validate(source); }
 
 namespace {
 
-double read_number(const cv::FileNode& n, const std::string& source, const std::string& field) {
-  if (n.empty() || n.isNone()) fail(source, field, "missing");
-  if (!n.isReal() && !n.isInt()) fail(source, field, "must be a number");
-  return static_cast<double>(n);
+const config::Choices<FuzzyTerm>& term_choices() {
+  static const config::Choices<FuzzyTerm> choices = {
+      {"VL", FuzzyTerm::kVeryLow}, {"L", FuzzyTerm::kLow}, {"H", FuzzyTerm::kHigh}, {"VH", FuzzyTerm::kVeryHigh}};
+  return choices;
 }
 
-Trapezoid read_trapezoid(const cv::FileNode& n, const std::string& source, const std::string& field) {
-  if (n.empty() || n.isNone()) fail(source, field, "missing");
-  if (!n.isSeq() || n.size() != 4) fail(source, field, "must be an array of four numbers [a, b, c, d]");
-  std::array<double, 4> v{};
-  for (int i = 0; i < 4; ++i) v[i] = read_number(n[i], source, field + "[" + std::to_string(i) + "]");
+// {"VL": v, "L": v, "H": v, "VH": v}, every term once, into an array indexed by term.
+template <class V, class ReadOne>
+std::array<V, kFuzzyTerms> read_per_term(const config::Node& n, ReadOne read_one) {
+  n.expect_object();
+  for (auto it = n.json().begin(); it != n.json().end(); ++it) {
+    bool known = false;
+    for (const auto& [name, term] : term_choices()) known = known || name == it.key();
+    if (!known) (n / it.key()).fail("unknown term (the terms are VL, L, H, VH)");
+  }
+  std::array<V, kFuzzyTerms> out{};
+  for (const auto& [name, term] : term_choices()) out[static_cast<int>(term)] = read_one(n / name);
+  return out;
+}
+
+template <class V, class WriteOne>
+config::Json write_per_term(const std::array<V, kFuzzyTerms>& values, WriteOne write_one) {
+  config::Json out = config::Json::object();
+  for (const auto& [name, term] : term_choices()) out[name] = write_one(values[static_cast<int>(term)]);
+  return out;
+}
+
+Trapezoid read_trapezoid(const config::Node& n) {
+  const auto v = config::Codec<std::array<double, 4>>::read(n);
   return {v[0], v[1], v[2], v[3]};
 }
 
-std::array<Trapezoid, kFuzzyTerms> read_terms(const cv::FileNode& n, const std::string& source,
-                                              const std::string& field) {
-  if (n.empty() || n.isNone()) fail(source, field, "missing");
-  if (!n.isMap()) fail(source, field, "must be an object {\"VL\": [...], \"L\": ..., \"H\": ..., \"VH\": ...}");
-  std::array<Trapezoid, kFuzzyTerms> t{};
-  for (int i = 0; i < kFuzzyTerms; ++i) {
-    const std::string name = fuzzy_term_name(static_cast<FuzzyTerm>(i));
-    t[i] = read_trapezoid(n[name], source, field + "." + name);
-  }
-  for (auto it = n.begin(); it != n.end(); ++it) {
-    const std::string key = (*it).name();
-    if (key != "VL" && key != "L" && key != "H" && key != "VH") fail(source, field + "." + key, "unknown term");
-  }
-  return t;
-}
+config::Json write_trapezoid(const Trapezoid& t) { return config::Json::array({t.a, t.b, t.c, t.d}); }
 
-std::optional<FuzzyTerm> term_of(const std::string& s) {
-  for (int i = 0; i < kFuzzyTerms; ++i)
-    if (s == fuzzy_term_name(static_cast<FuzzyTerm>(i))) return static_cast<FuzzyTerm>(i);
-  return std::nullopt;
+config::Key<FuzzyConfig> terms_key(std::string name, std::array<Trapezoid, kFuzzyTerms> FuzzyConfig::*member) {
+  return config::custom<FuzzyConfig>(
+      std::move(name), config::Need::kRequired,
+      [member](const config::Node& n, FuzzyConfig& c) { c.*member = read_per_term<Trapezoid>(n, read_trapezoid); },
+      [member](const FuzzyConfig& c) { return write_per_term(c.*member, write_trapezoid); });
 }
 
 }  // namespace
 
-FuzzyConfig parse_fuzzy_config(const cv::FileNode& node, const std::string& source) {
-  if (node.empty() || !node.isMap()) throw ConfigError(source + ": must be an object");
-  FuzzyConfig c = FuzzyConfig::defaults();
-  for (auto it = node.begin(); it != node.end(); ++it) {
-    const std::string key = (*it).name();
-    if (key != "speed_max_cm_per_s" && key != "speed_terms" && key != "range_max_cm" && key != "range_terms" &&
-        key != "rules" && key != "resolution_cm" && key != "snap_ranges_cm")
-      fail(source, key, "unknown key");
-  }
-  c.speed_max_cm_per_s = read_number(node["speed_max_cm_per_s"], source, "speed_max_cm_per_s");
-  c.speed_terms = read_terms(node["speed_terms"], source, "speed_terms");
-  c.range_max_cm = read_number(node["range_max_cm"], source, "range_max_cm");
-  c.range_terms = read_terms(node["range_terms"], source, "range_terms");
-  const cv::FileNode rules = node["rules"];
-  if (rules.empty() || !rules.isMap()) fail(source, "rules", "missing or not an object {\"VL\": \"VL\", ...}");
-  for (auto it = rules.begin(); it != rules.end(); ++it) {
-    const std::string key = (*it).name();
-    if (!term_of(key)) fail(source, "rules." + key, "unknown input term");
-  }
-  for (int i = 0; i < kFuzzyTerms; ++i) {
-    const std::string name = fuzzy_term_name(static_cast<FuzzyTerm>(i));
-    const cv::FileNode r = rules[name];
-    if (r.empty() || !r.isString()) fail(source, "rules." + name, "missing or not a term name (VL, L, H, VH)");
-    const auto t = term_of(static_cast<std::string>(r));
-    if (!t) fail(source, "rules." + name, "unknown output term '" + static_cast<std::string>(r) + "'");
-    c.rules[i] = *t;
-  }
-  c.resolution_cm = read_number(node["resolution_cm"], source, "resolution_cm");
-  const cv::FileNode snaps = node["snap_ranges_cm"];
-  if (snaps.empty() || !snaps.isSeq()) fail(source, "snap_ranges_cm", "missing or not an array");
-  c.snap_ranges_cm.clear();
-  for (int i = 0; i < static_cast<int>(snaps.size()); ++i)
-    c.snap_ranges_cm.push_back(read_number(snaps[i], source, "snap_ranges_cm[" + std::to_string(i) + "]"));
-  validate_fuzzy_config(c, source);
+const config::KeyTable<FuzzyConfig>& fuzzy_config_keys() {
+  using config::key;
+  using config::Need;
+  static const config::KeyTable<FuzzyConfig> table = {
+      key("speed_max_cm_per_s", &FuzzyConfig::speed_max_cm_per_s, Need::kRequired),
+      terms_key("speed_terms", &FuzzyConfig::speed_terms),
+      key("range_max_cm", &FuzzyConfig::range_max_cm, Need::kRequired),
+      terms_key("range_terms", &FuzzyConfig::range_terms),
+      config::custom<FuzzyConfig>(
+          "rules", Need::kRequired,
+          [](const config::Node& n, FuzzyConfig& c) {
+            c.rules = read_per_term<FuzzyTerm>(n, [](const config::Node& r) { return read_choice(r, term_choices()); });
+          },
+          [](const FuzzyConfig& c) {
+            return write_per_term(c.rules, [](FuzzyTerm t) { return config::Json(fuzzy_term_name(t)); });
+          }),
+      key("resolution_cm", &FuzzyConfig::resolution_cm, Need::kRequired),
+      key("snap_ranges_cm", &FuzzyConfig::snap_ranges_cm, Need::kRequired),
+  };
+  return table;
+}
+
+FuzzyConfig parse_fuzzy_config(const config::Node& node) {
+  FuzzyConfig c;
+  config::read_keys(node, fuzzy_config_keys(), c);
+  c.validate(node.origin());
   return c;
 }
 

@@ -9,8 +9,9 @@
 #include <sstream>
 
 #include <opencv2/core.hpp>
-#include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
+
+#include "omniloc/config_reader.hpp"
 
 namespace omniloc {
 
@@ -171,62 +172,70 @@ std::vector<LocalizedPose> read_poses_csv(const fs::path& path) {
   return out;
 }
 
+namespace {
+
+const config::KeyTable<Pose2>& pose_keys() {
+  using config::Need;
+  static const config::KeyTable<Pose2> table = {
+      config::key("x_cm", &Pose2::x_cm, Need::kRequired),
+      config::key("y_cm", &Pose2::y_cm, Need::kRequired),
+      config::key("yaw_deg", &Pose2::yaw_deg, Need::kRequired),
+  };
+  return table;
+}
+
+// meta.json's keys. The camera and robot blocks are read (and validated) by their components; the
+// robot block is written with the contract's six keys only, as it always was.
+const config::KeyTable<RecordingMeta>& meta_keys() {
+  using config::Need;
+  using M = RecordingMeta;
+  static const config::KeyTable<RecordingMeta> table = {
+      config::key("field", &M::field, Need::kRequired),
+      config::custom<M>(
+          "camera", Need::kRequired, [](const config::Node& n, M& m) { m.camera = camera_from_json(n); },
+          [](const M& m) { return config::write_keys(m.camera, camera_keys()); }),
+      config::custom<M>(
+          "robot", Need::kRequired, [](const config::Node& n, M& m) { m.robot = parse_robot_config(n); },
+          [](const M& m) { return config::write_keys(m.robot, robot_config_keys(), Need::kRequired); }),
+      config::Key<M>{"initial_pose", Need::kOptional, config::Kind::kOther,
+                     [](const config::Node& n, M& m) {
+                       Pose2 p;
+                       config::read_keys(n, pose_keys(), p);
+                       m.initial_pose = p;
+                     },
+                     [](const M& m) -> std::optional<config::Json> {
+                       if (!m.initial_pose) return std::nullopt;
+                       return config::write_keys(*m.initial_pose, pose_keys());
+                     },
+                     {}},
+  };
+  return table;
+}
+
+}  // namespace
+
+void RecordingMeta::validate(const config::Origin& at) const {
+  config::require(!field.empty(), at / "field", "must name a geometry (a name or a path)", config::show(field));
+  camera.validate(at / "camera");
+  robot.validate(at / "robot");
+  if (initial_pose) {
+    config::require(std::isfinite(initial_pose->x_cm), at / "initial_pose" / "x_cm", "must be finite", initial_pose->x_cm);
+    config::require(std::isfinite(initial_pose->y_cm), at / "initial_pose" / "y_cm", "must be finite", initial_pose->y_cm);
+    config::require(std::isfinite(initial_pose->yaw_deg), at / "initial_pose" / "yaw_deg", "must be finite",
+                    initial_pose->yaw_deg);
+  }
+}
+
 RecordingMeta read_meta(const fs::path& meta_json) {
-  const std::string src = meta_json.string();
-  if (!fs::exists(meta_json)) throw RecordingError(src + ": missing");
-  cv::FileStorage fs;
   try {
-    if (!fs.open(src, cv::FileStorage::READ | cv::FileStorage::FORMAT_JSON)) throw RecordingError(src + ": cannot open");
-  } catch (const cv::Exception& e) {
-    throw RecordingError(src + ": not valid JSON (" + e.msg + ")");
-  }
-  const cv::FileNode root = fs.root();
-  if (!root.isMap()) throw RecordingError(src + ": the top level must be a JSON object");
-  for (auto it = root.begin(); it != root.end(); ++it) {
-    const std::string key = (*it).name();
-    if (key != "field" && key != "camera" && key != "robot" && key != "initial_pose")
-      throw RecordingError(src + ": unknown key '" + key + "'");
-  }
-  RecordingMeta m;
-  const cv::FileNode field = root["field"];
-  if (field.empty() || !field.isString() || static_cast<std::string>(field).empty())
-    throw RecordingError(src + ": field 'field': missing or not a string (a geometry name or path)");
-  m.field = static_cast<std::string>(field);
-  const cv::FileNode cam = root["camera"];
-  if (cam.empty() || !cam.isMap()) throw RecordingError(src + ": field 'camera': missing or not an object");
-  try {
-    m.camera = camera_from_json(cam, src + ": camera");
-  } catch (const RecordingError&) {
-    throw;
-  } catch (const std::exception& e) {
+    const config::Document doc = config::parse_json_file(meta_json);
+    RecordingMeta m;
+    config::read_keys(doc.root(), meta_keys(), m);
+    m.validate(doc.source);
+    return m;
+  } catch (const ConfigError& e) {
     throw RecordingError(e.what());
   }
-  const cv::FileNode robot = root["robot"];
-  if (robot.empty() || !robot.isMap()) throw RecordingError(src + ": field 'robot': missing or not an object");
-  try {
-    m.robot = parse_robot_config(robot, src + ": robot");
-  } catch (const std::exception& e) {
-    throw RecordingError(e.what());
-  }
-  const cv::FileNode ip = root["initial_pose"];
-  if (!ip.empty() && !ip.isNone()) {
-    if (!ip.isMap()) throw RecordingError(src + ": field 'initial_pose': must be an object {x_cm, y_cm, yaw_deg}");
-    Pose2 p;
-    for (const auto& [key, out] : {std::pair<const char*, double*>{"x_cm", &p.x_cm}, {"y_cm", &p.y_cm},
-                                   {"yaw_deg", &p.yaw_deg}}) {
-      const cv::FileNode n = ip[key];
-      if (n.empty() || (!n.isReal() && !n.isInt()) || !std::isfinite(static_cast<double>(n)))
-        throw RecordingError(src + ": field 'initial_pose." + key + "': missing or not a finite number");
-      *out = static_cast<double>(n);
-    }
-    for (auto it = ip.begin(); it != ip.end(); ++it) {
-      const std::string key = (*it).name();
-      if (key != "x_cm" && key != "y_cm" && key != "yaw_deg")
-        throw RecordingError(src + ": field 'initial_pose." + key + "': unknown key");
-    }
-    m.initial_pose = p;
-  }
-  return m;
 }
 
 Recording load_recording(const fs::path& dir) {
@@ -270,7 +279,7 @@ std::optional<Pose2> truth_at(const std::vector<TruthSample>& truth, double t_ms
 }
 
 // ---------------------------------------------------------------------------------------------
-// Writing. JSON is written by hand (it is only read back with cv::FileStorage).
+// Writing.
 
 namespace {
 
@@ -291,32 +300,10 @@ void close_file(std::FILE*& f, const fs::path& p) {
 }  // namespace
 
 void write_meta(const fs::path& meta_json, const RecordingMeta& m) {
-  std::ostringstream os;
-  os.precision(17);
-  os << "{\n  \"field\": \"" << m.field << "\",\n  \"camera\": {\n";
-  const CameraModel& c = m.camera;
-  os << "    \"width\": " << c.width_px << ",\n    \"height\": " << c.height_px << ",\n";
-  os << "    \"center_px\": [" << c.center_px.x() << ", " << c.center_px.y() << "],\n    \"radius_lut\": [";
-  for (std::size_t i = 0; i < c.radius_lut.size(); ++i)
-    os << (i ? ", " : "") << "[" << c.radius_lut[i].radius_px << ", " << c.radius_lut[i].ground_cm << "]";
-  os << "],\n    \"yaw_offset_deg\": " << c.yaw_offset_deg << ",\n    \"mirrored\": " << (c.mirrored ? "true" : "false");
-  if (c.body_radius_px > 0.0 || !c.masts.empty()) {
-    os << ",\n    \"mask\": {\"body_radius_px\": " << c.body_radius_px << ", \"masts\": [";
-    for (std::size_t i = 0; i < c.masts.size(); ++i)
-      os << (i ? ", " : "") << "{\"bearing_deg\": " << c.masts[i].bearing_deg
-         << ", \"half_width_deg\": " << c.masts[i].half_width_deg << "}";
-    os << "]}";
-  }
-  const RobotConfig& r = m.robot;
-  os << "\n  },\n  \"robot\": {\"wheel_radius_cm\": " << r.wheel_radius_cm << ", \"center_to_wheel_cm\": "
-     << r.center_to_wheel_cm << ", \"motor_angle_deg\": " << r.motor_angle_deg << ", \"gear_ratio\": " << r.gear_ratio
-     << ", \"counts_per_rev\": " << r.counts_per_rev << ", \"decoding\": " << r.decoding << "}";
-  if (m.initial_pose)
-    os << ",\n  \"initial_pose\": {\"x_cm\": " << m.initial_pose->x_cm << ", \"y_cm\": " << m.initial_pose->y_cm
-       << ", \"yaw_deg\": " << m.initial_pose->yaw_deg << "}";
-  os << "\n}\n";
+  // nlohmann escapes the strings (a field path with '\' or '"') and writes every double so that it
+  // reads back to the same value.
+  const std::string s = config::write_keys(m, meta_keys()).dump(2) + "\n";
   std::FILE* f = open_write(meta_json);
-  const std::string s = os.str();
   std::fwrite(s.data(), 1, s.size(), f);
   close_file(f, meta_json);
 }

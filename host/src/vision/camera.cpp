@@ -5,12 +5,9 @@
 #include <limits>
 #include <stdexcept>
 
-#include <opencv2/core/persistence.hpp>
-
 #include "fnv.hpp"
-#include "json_read.hpp"
+#include "omniloc/config_reader.hpp"
 #include "omniloc/conventions.hpp"
-#include "omniloc/data_files.hpp"
 
 namespace omniloc {
 
@@ -91,75 +88,109 @@ std::uint64_t CameraModel::fingerprint() const {
   return h;
 }
 
-CameraModel camera_from_json(const cv::FileNode& node, const std::string& ctx) {
-  using detail::read_number;
-  using detail::read_positive;
-  if (!node.isMap()) throw std::runtime_error(ctx + ": expected a JSON object");
+void CameraModel::validate(const config::Origin& at) const {
+  using config::require;
+  require(width_px >= 1 && width_px <= 16384, at / "width", "must be a pixel count in 1..16384", width_px);
+  require(height_px >= 1 && height_px <= 16384, at / "height", "must be a pixel count in 1..16384", height_px);
+  const bool centre_inside = center_px.x() >= 0 && center_px.y() >= 0 && center_px.x() <= width_px - 1.0 &&
+                             center_px.y() <= height_px - 1.0;
+  require(centre_inside, at / "center_px",
+          "lies outside the " + std::to_string(width_px) + " x " + std::to_string(height_px) + " image",
+          config::show({center_px.x(), center_px.y()}));
+  if (radius_lut.size() < 2)
+    (at / "radius_lut").fail("must be a list of at least two [r_px, d_cm] pairs",
+                             std::to_string(radius_lut.size()) + " row(s)");
+  for (std::size_t i = 0; i < radius_lut.size(); ++i) {
+    const RadiusMark& m = radius_lut[i];
+    const std::string row = config::show({m.radius_px, m.ground_cm});
+    require(m.radius_px >= 0 && m.ground_cm >= 0, (at / "radius_lut")[i], "values must be >= 0", row);
+    if (i > 0)
+      require(m.radius_px > radius_lut[i - 1].radius_px && m.ground_cm > radius_lut[i - 1].ground_cm,
+              (at / "radius_lut")[i], "table must be strictly increasing in both radius and distance", row);
+  }
+  require(std::isfinite(yaw_offset_deg), at / "yaw_offset_deg", "must be finite", yaw_offset_deg);
+  require(std::isfinite(body_radius_px) && body_radius_px >= 0.0, at / "mask" / "body_radius_px", "must be >= 0",
+          body_radius_px);
+  for (std::size_t i = 0; i < masts.size(); ++i) {
+    const config::Origin m = (at / "mask" / "masts")[i];
+    require(std::isfinite(masts[i].bearing_deg), m / "bearing_deg", "must be finite", masts[i].bearing_deg);
+    require(masts[i].half_width_deg >= 0.0 && masts[i].half_width_deg < 90.0, m / "half_width_deg",
+            "must be in [0, 90)", masts[i].half_width_deg);
+  }
+  require(view_radius_px() > min_radius_px() + 2.0, at,
+          "no visible floor ring: the image or 'radius_lut' ends inside the body radius " +
+              config::show(min_radius_px()) + " px",
+          config::show(view_radius_px()) + " px");
+}
+
+namespace {
+
+const config::KeyTable<MastSector>& mast_keys() {
+  using config::Need;
+  static const config::KeyTable<MastSector> table = {
+      config::key("bearing_deg", &MastSector::bearing_deg, Need::kRequired),
+      config::key("half_width_deg", &MastSector::half_width_deg, Need::kRequired),
+  };
+  return table;
+}
+
+}  // namespace
+}  // namespace omniloc
+
+namespace omniloc::config {
+
+/// A calibration row [r_px, d_cm].
+template <>
+struct Codec<RadiusMark> {
+  static constexpr Kind kKind = Kind::kOther;
+  static RadiusMark read(const Node& n) {
+    n.expect_array(2);
+    return {n[0].number(), n[1].number()};
+  }
+  static Json write(const RadiusMark& m) { return Json::array({m.radius_px, m.ground_cm}); }
+};
+
+template <>
+struct Codec<MastSector> : TableCodec<MastSector, &mast_keys> {};
+
+}  // namespace omniloc::config
+
+namespace omniloc {
+
+const config::KeyTable<CameraModel>& camera_keys() {
+  using config::key;
+  using config::Need;
+  using C = CameraModel;
+  static const config::KeyTable<CameraModel> table = {
+      config::note<C>("description"),
+      key("width", &C::width_px, Need::kRequired),
+      key("height", &C::height_px, Need::kRequired),
+      key("center_px", &C::center_px, Need::kRequired),
+      key("radius_lut", &C::radius_lut, Need::kRequired),
+      key("yaw_offset_deg", &C::yaw_offset_deg, Need::kRequired),
+      key("mirrored", &C::mirrored, Need::kRequired),
+      config::group<C>("mask",
+                       {
+                           key("body_radius_px", &C::body_radius_px, Need::kRequired),
+                           key("masts", &C::masts),
+                       }),
+  };
+  return table;
+}
+
+CameraModel camera_from_json(const config::Node& node) {
   CameraModel cam;
-  const double w = read_positive(node, "width", ctx);
-  const double h = read_positive(node, "height", ctx);
-  if (w != std::floor(w) || h != std::floor(h) || w > 16384 || h > 16384) {
-    throw std::runtime_error(ctx + ": fields 'width'/'height' must be whole pixel counts up to 16384");
-  }
-  cam.width_px = static_cast<int>(w);
-  cam.height_px = static_cast<int>(h);
-  const cv::FileNode c = node["center_px"];
-  if (c.empty()) throw std::runtime_error(ctx + ": missing field 'center_px'");
-  detail::read_pair(c, ctx + ": field 'center_px'", cam.center_px.x(), cam.center_px.y());
-  if (cam.center_px.x() < 0 || cam.center_px.y() < 0 || cam.center_px.x() > w - 1 || cam.center_px.y() > h - 1) {
-    throw std::runtime_error(ctx + ": field 'center_px' lies outside the " + std::to_string(cam.width_px) + " x " +
-                             std::to_string(cam.height_px) + " image");
-  }
-  const cv::FileNode lut = node["radius_lut"];
-  if (!lut.isSeq() || lut.size() < 2) {
-    throw std::runtime_error(ctx + ": field 'radius_lut' must be a list of at least two [r_px, d_cm] pairs");
-  }
-  for (int i = 0; i < static_cast<int>(lut.size()); ++i) {
-    const std::string row = ctx + ": field 'radius_lut' row " + std::to_string(i);
-    RadiusMark m{};
-    detail::read_pair(lut[i], row, m.radius_px, m.ground_cm);
-    if (m.radius_px < 0 || m.ground_cm < 0) throw std::runtime_error(row + ": values must be >= 0");
-    if (!cam.radius_lut.empty() &&
-        (m.radius_px <= cam.radius_lut.back().radius_px || m.ground_cm <= cam.radius_lut.back().ground_cm)) {
-      throw std::runtime_error(row + ": table must be strictly increasing in both radius and distance");
-    }
-    cam.radius_lut.push_back(m);
-  }
-  cam.yaw_offset_deg = read_number(node, "yaw_offset_deg", ctx);
-  const cv::FileNode mir = node["mirrored"];
-  if (mir.empty() || mir.isNone()) throw std::runtime_error(ctx + ": missing field 'mirrored'");
-  if (!mir.isInt()) throw std::runtime_error(ctx + ": field 'mirrored' must be true or false");
-  cam.mirrored = static_cast<int>(mir) != 0;
-  const cv::FileNode mask = node["mask"];
-  if (!mask.empty() && !mask.isNone()) {
-    const std::string mctx = ctx + ": field 'mask'";
-    if (!mask.isMap()) throw std::runtime_error(mctx + " must be an object");
-    cam.body_radius_px = read_positive(mask, "body_radius_px", mctx, true);
-    const cv::FileNode masts = mask["masts"];
-    if (!masts.empty() && !masts.isNone()) {
-      if (!masts.isSeq()) throw std::runtime_error(mctx + ": field 'masts' must be a list");
-      for (int i = 0; i < static_cast<int>(masts.size()); ++i) {
-        const std::string e = mctx + " masts[" + std::to_string(i) + "]";
-        MastSector s;
-        s.bearing_deg = read_number(masts[i], "bearing_deg", e);
-        s.half_width_deg = read_positive(masts[i], "half_width_deg", e, true);
-        if (s.half_width_deg >= 90.0) throw std::runtime_error(e + ": field 'half_width_deg' must be < 90");
-        cam.masts.push_back(s);
-      }
-    }
-  }
-  if (cam.view_radius_px() <= cam.min_radius_px() + 2.0) {
-    throw std::runtime_error(ctx + ": no visible floor ring: the image or 'radius_lut' ends at radius " +
-                             std::to_string(cam.view_radius_px()) + " px, inside the body radius " +
-                             std::to_string(cam.min_radius_px()) + " px");
-  }
+  // Without a mask nothing of the floor is hidden (the initialisers would say the same, but the
+  // file, not C++, is where a camera's values come from).
+  cam.body_radius_px = 0.0;
+  cam.masts.clear();
+  config::read_keys(node, camera_keys(), cam);
+  cam.validate(node.origin());
   return cam;
 }
 
 CameraModel load_camera(const std::string& name_or_path) {
-  const std::string file = resolve_data_file("cameras", name_or_path).string();
-  cv::FileStorage fs = detail::open_json(file);
-  return camera_from_json(fs.root(), file);
+  return camera_from_json(config::parse_json_file(resolve_data_file("cameras", name_or_path)).root());
 }
 
 }  // namespace omniloc

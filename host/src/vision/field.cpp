@@ -5,57 +5,111 @@
 #include <stdexcept>
 
 #include "fnv.hpp"
-#include "json_read.hpp"
+#include "omniloc/config_reader.hpp"
 #include "omniloc/conventions.hpp"
-#include "omniloc/data_files.hpp"
 
 namespace omniloc {
 
-namespace {
-
-using detail::read_number;
-using detail::read_positive;
-
-void check(bool ok, const std::string& context, const std::string& what) {
-  if (!ok) throw std::runtime_error(context + ": " + what);
+void FieldSpec::validate(const config::Origin& at) const {
+  using config::require;
+  const auto positive = [&](double v, const config::Origin& f) { require(v > 0.0, f, "must be > 0", v); };
+  const auto non_negative = [&](double v, const config::Origin& f) { require(v >= 0.0, f, "must be >= 0", v); };
+  require(!name.empty(), at / "name", "must not be empty", config::show(name));
+  positive(field_length_cm, at / "field_length_cm");
+  positive(field_width_cm, at / "field_width_cm");
+  non_negative(border_cm, at / "border_cm");
+  positive(line_width_cm, at / "line_width_cm");
+  const double L = field_length_cm, W = field_width_cm;
+  non_negative(centre_circle_radius_cm, at / "centre_circle_radius_cm");
+  require(centre_circle_radius_cm < W / 2.0, at / "centre_circle_radius_cm", "must be < field_width_cm / 2",
+          centre_circle_radius_cm);
+  non_negative(corner_arc_radius_cm, at / "corner_arc_radius_cm");
+  require(corner_arc_radius_cm < W / 2.0, at / "corner_arc_radius_cm", "must be < field_width_cm / 2",
+          corner_arc_radius_cm);
+  for (const auto& [key, area] : {std::pair{"goal_area", &goal_area}, std::pair{"penalty_area", &penalty_area}}) {
+    non_negative(area->depth_cm, at / key / "depth_cm");
+    require(area->depth_cm < L / 2.0, at / key / "depth_cm", "must be < field_length_cm / 2", area->depth_cm);
+    non_negative(area->width_cm, at / key / "width_cm");
+    require(area->width_cm < W, at / key / "width_cm", "must be < field_width_cm", area->width_cm);
+  }
+  non_negative(penalty_arc.radius_cm, at / "penalty_arc" / "radius_cm");
+  non_negative(penalty_arc.centre_from_goal_line_cm, at / "penalty_arc" / "centre_from_goal_line_cm");
+  require(penalty_arc.centre_from_goal_line_cm + penalty_arc.radius_cm < L / 2.0, at / "penalty_arc",
+          "arc must stay within its half of the field (centre_from_goal_line_cm + radius_cm < field_length_cm / 2)",
+          penalty_arc.centre_from_goal_line_cm + penalty_arc.radius_cm);
+  if (marks_from_centre_cm.empty()) return;
+  positive(mark_radius_cm, at / "marks" / "radius_cm");
+  for (std::size_t i = 0; i < marks_from_centre_cm.size(); ++i) {
+    const Eigen::Vector2d& d = marks_from_centre_cm[i];
+    require(std::abs(d.x()) + mark_radius_cm < L / 2.0 + 1e-9 && std::abs(d.y()) + mark_radius_cm < W / 2.0,
+            (at / "marks" / "from_centre_cm")[i], "lies outside the playing area",
+            config::show({d.x(), d.y()}));
+  }
 }
 
-FieldGeometry build_from_json(const cv::FileNode& root, const std::string& file) {
+const config::KeyTable<FieldSpec>& field_spec_keys() {
+  using config::key;
+  using config::Need;
+  using F = FieldSpec;
+  const config::KeyTable<FieldArea> area = {
+      key("depth_cm", &FieldArea::depth_cm, Need::kRequired),
+      key("width_cm", &FieldArea::width_cm, Need::kRequired),
+  };
+  static const config::KeyTable<FieldSpec> table = {
+      key("name", &F::name, Need::kRequired),
+      config::note<F>("description"),
+      config::custom<F>(
+          "units", Need::kOptional,
+          [](const config::Node& n, F&) {
+            if (n.text() != "cm") n.fail("the only unit is \"cm\"");
+          },
+          [](const F&) { return config::Json("cm"); }),
+      key("field_length_cm", &F::field_length_cm, Need::kRequired),
+      key("field_width_cm", &F::field_width_cm, Need::kRequired),
+      key("border_cm", &F::border_cm, Need::kRequired),
+      key("line_width_cm", &F::line_width_cm, Need::kRequired),
+      key("centre_circle_radius_cm", &F::centre_circle_radius_cm, Need::kRequired),
+      config::nested("goal_area", &F::goal_area, area, Need::kRequired),
+      config::nested("penalty_area", &F::penalty_area, area, Need::kRequired),
+      config::nested("penalty_arc", &F::penalty_arc,
+                     config::KeyTable<PenaltyArc>{
+                         key("radius_cm", &PenaltyArc::radius_cm, Need::kRequired),
+                         key("centre_from_goal_line_cm", &PenaltyArc::centre_from_goal_line_cm, Need::kRequired),
+                     },
+                     Need::kRequired),
+      key("corner_arc_radius_cm", &F::corner_arc_radius_cm, Need::kRequired),
+      config::group<F>("marks",
+                       {
+                           key("radius_cm", &F::mark_radius_cm, Need::kRequired),
+                           key("from_centre_cm", &F::marks_from_centre_cm, Need::kRequired),
+                       }),
+  };
+  return table;
+}
+
+FieldSpec parse_field_spec(const config::Node& node) {
+  FieldSpec spec;
+  config::read_keys(node, field_spec_keys(), spec);
+  spec.validate(node.origin());
+  return spec;
+}
+
+FieldGeometry build_field(const FieldSpec& spec, const std::string& source) {
   FieldGeometry f;
-  f.source = file;
-  const cv::FileNode name = root["name"];
-  check(name.isString(), file, "field 'name' must be a string");
-  f.name = name.string();
-  f.field_length_cm = read_positive(root, "field_length_cm", file);
-  f.field_width_cm = read_positive(root, "field_width_cm", file);
-  f.border_cm = read_positive(root, "border_cm", file, true);
-  f.line_width_cm = read_positive(root, "line_width_cm", file);
-  const double cc_r = read_positive(root, "centre_circle_radius_cm", file, true);
-  const double corner_r = read_positive(root, "corner_arc_radius_cm", file, true);
+  f.source = source;
+  f.name = spec.name;
+  f.field_length_cm = spec.field_length_cm;
+  f.field_width_cm = spec.field_width_cm;
+  f.border_cm = spec.border_cm;
+  f.line_width_cm = spec.line_width_cm;
+  const double cc_r = spec.centre_circle_radius_cm;
+  const double corner_r = spec.corner_arc_radius_cm;
+  const double goal_d = spec.goal_area.depth_cm, goal_w = spec.goal_area.width_cm;
+  const double pen_d = spec.penalty_area.depth_cm, pen_w = spec.penalty_area.width_cm;
+  const double pa_r = spec.penalty_arc.radius_cm;
+  const double pa_c = spec.penalty_arc.centre_from_goal_line_cm;
   const double L = f.field_length_cm;
   const double W = f.field_width_cm;
-  check(cc_r < W / 2.0, file, "field 'centre_circle_radius_cm' must be < field_width_cm / 2");
-  check(corner_r < W / 2.0, file, "field 'corner_arc_radius_cm' must be < field_width_cm / 2");
-
-  auto area = [&](const char* key, double& depth, double& width) {
-    const cv::FileNode n = root[key];
-    const std::string ctx = file + ": field '" + key + "'";
-    check(n.isMap(), file, std::string("missing object '") + key + "'");
-    depth = read_positive(n, "depth_cm", ctx, true);
-    width = read_positive(n, "width_cm", ctx, true);
-    check(depth < L / 2.0, ctx, "depth_cm must be < field_length_cm / 2");
-    check(width < W, ctx, "width_cm must be < field_width_cm");
-  };
-  double goal_d = 0, goal_w = 0, pen_d = 0, pen_w = 0;
-  area("goal_area", goal_d, goal_w);
-  area("penalty_area", pen_d, pen_w);
-
-  const cv::FileNode arc_node = root["penalty_arc"];
-  check(arc_node.isMap(), file, "missing object 'penalty_arc'");
-  const std::string arc_ctx = file + ": field 'penalty_arc'";
-  const double pa_r = read_positive(arc_node, "radius_cm", arc_ctx, true);
-  const double pa_c = read_positive(arc_node, "centre_from_goal_line_cm", arc_ctx, true);
-  check(pa_c + pa_r < L / 2.0, arc_ctx, "arc must stay within its half of the field");
 
   const double x0 = f.border_cm, x1 = f.border_cm + L;
   const double y0 = f.border_cm, y1 = f.border_cm + W;
@@ -94,24 +148,11 @@ FieldGeometry build_from_json(const cv::FileNode& root, const std::string& file)
     f.arcs.push_back({Eigen::Vector2d(x1, y1), corner_r, 180.0, 270.0});
     f.arcs.push_back({Eigen::Vector2d(x0, y1), corner_r, 270.0, 360.0});
   }
-
-  const cv::FileNode marks = root["marks"];
-  if (!marks.empty() && !marks.isNone()) {
-    const std::string ctx = file + ": field 'marks'";
-    check(marks.isMap(), file, "field 'marks' must be an object");
-    const double r = read_positive(marks, "radius_cm", ctx);
-    const cv::FileNode list = marks["from_centre_cm"];
-    check(list.isSeq(), ctx, "field 'from_centre_cm' must be a list of [dx, dy] pairs");
-    for (int i = 0; i < static_cast<int>(list.size()); ++i) {
-      double dx = 0, dy = 0;
-      detail::read_pair(list[i], ctx + " from_centre_cm[" + std::to_string(i) + "]", dx, dy);
-      check(std::abs(dx) + r < L / 2.0 + 1e-9 && std::abs(dy) + r < W / 2.0, ctx,
-            "from_centre_cm[" + std::to_string(i) + "] lies outside the playing area");
-      f.discs.push_back({c + Eigen::Vector2d(dx, dy), r});
-    }
-  }
+  for (const Eigen::Vector2d& d : spec.marks_from_centre_cm) f.discs.push_back({c + d, spec.mark_radius_cm});
   return f;
 }
+
+namespace {
 
 bool angle_in_sweep(double angle_deg, const FieldArc& a) {
   if (a.end_deg - a.start_deg >= 360.0) return true;
@@ -186,8 +227,7 @@ std::uint64_t FieldGeometry::fingerprint() const {
 
 FieldGeometry load_field(const std::string& name_or_path) {
   const std::string file = resolve_data_file("fields", name_or_path).string();
-  cv::FileStorage fs = detail::open_json(file);
-  return build_from_json(fs.root(), file);
+  return build_field(parse_field_spec(config::parse_json_file(file).root()), file);
 }
 
 bool on_carpet(const FieldGeometry& field, const Eigen::Vector2d& p) {

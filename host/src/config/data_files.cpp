@@ -1,12 +1,13 @@
-#include "omniloc/data_files.hpp"
-
+// Locating the shared data files (common/<kind>/<name>.json) from a short name, so that programs and
+// tests run from any build directory.
 #include <algorithm>
 #include <cstdlib>
-#include <stdexcept>
 #include <system_error>
 #include <vector>
 
-namespace omniloc {
+#include "omniloc/config.hpp"
+
+namespace omniloc::config {
 
 namespace fs = std::filesystem;
 
@@ -27,7 +28,9 @@ fs::path resolve_data_file(const std::string& kind, const std::string& name_or_p
   std::error_code ec;
   if (fs::is_regular_file(name_or_path, ec)) return fs::path(name_or_path);
   if (name_or_path.find('/') != std::string::npos || name_or_path.ends_with(".json")) {
-    throw std::runtime_error("data file '" + name_or_path + "' does not exist");
+    // A path, not a name: it must be a file.
+    if (fs::is_directory(name_or_path, ec)) throw ConfigError(name_or_path + ": is a directory, not a JSON file");
+    throw ConfigError(name_or_path + ": no such file");
   }
   std::vector<fs::path> roots;
   if (const char* env = std::getenv("OMNILOC_DATA_DIR"); env != nullptr && *env != '\0') {
@@ -45,8 +48,8 @@ fs::path resolve_data_file(const std::string& kind, const std::string& name_or_p
     if (!searched.empty()) searched += ", ";
     searched += (root / kind).string();
   }
-  throw std::runtime_error("no " + kind + " file named '" + name_or_path + "' (searched " + searched +
-                           "; set OMNILOC_DATA_DIR to the folder holding " + kind + "/)");
+  throw ConfigError("no " + kind + " file named '" + name_or_path + "' (searched " + searched +
+                    "; set OMNILOC_DATA_DIR to the folder holding " + kind + "/)");
 }
 
-}  // namespace omniloc
+}  // namespace omniloc::config
