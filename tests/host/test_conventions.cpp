@@ -127,6 +127,8 @@ TEST(Pose2Algebra, InterpolationIsLinearAndTakesTheShortArcAcrossTheSeam) {
   expect_pose_near(interpolate(a, b, 1.0), b);
   // Away from the seam: plain linear yaw.
   expect_pose_near(interpolate(Pose2{0, 0, 10.0}, Pose2{0, 0, 50.0}, 0.25), {0.0, 0.0, 20.0});
+  EXPECT_NEAR(interpolate_deg(-170.0, 170.0, 0.25), -175.0, 1e-12);
+  EXPECT_NEAR(interpolate_deg(350.0, 10.0, 0.5), 0.0, 1e-12);  // inputs need not be wrapped
   EXPECT_GE(interpolate(a, b, 0.5).yaw_deg, -180.0);
   EXPECT_LE(interpolate(a, b, 0.5).yaw_deg, 180.0);
 }

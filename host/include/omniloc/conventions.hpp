@@ -21,6 +21,9 @@ inline constexpr double kPi = 3.14159265358979323846;
 /// Signed smallest difference a - b, in (-180, 180] degrees.
 [[nodiscard]] double angle_diff_deg(double a_deg, double b_deg);
 
+/// The angle a fraction f of the way from a to b along the shorter arc, wrapped into (-180, 180].
+[[nodiscard]] double interpolate_deg(double a_deg, double b_deg, double f);
+
 /// A rigid 2-D pose: a position and a heading, in the field frame unless said otherwise. A value
 /// type with the algebra of SE(2), in the manner of B-Human's Pose2f: `a * b` is b expressed in
 /// a's frame carried into a's parent frame (compose), `a.inverse()` undoes a, `a * p` maps a point

@@ -13,6 +13,8 @@ double wrap_deg(double angle_deg) {
 
 double angle_diff_deg(double a_deg, double b_deg) { return wrap_deg(a_deg - b_deg); }
 
+double interpolate_deg(double a_deg, double b_deg, double f) { return wrap_deg(a_deg + f * angle_diff_deg(b_deg, a_deg)); }
+
 Eigen::Vector2d robot_to_field(const Eigen::Vector2d& v_robot, double yaw_deg) {
   const double c = std::cos(deg_to_rad(yaw_deg));
   const double s = std::sin(deg_to_rad(yaw_deg));
@@ -39,8 +41,7 @@ Pose2 Pose2::inverse() const {
 }
 
 Pose2 interpolate(const Pose2& a, const Pose2& b, double f) {
-  return {a.x_cm + f * (b.x_cm - a.x_cm), a.y_cm + f * (b.y_cm - a.y_cm),
-          wrap_deg(a.yaw_deg + f * angle_diff_deg(b.yaw_deg, a.yaw_deg))};
+  return {a.x_cm + f * (b.x_cm - a.x_cm), a.y_cm + f * (b.y_cm - a.y_cm), interpolate_deg(a.yaw_deg, b.yaw_deg, f)};
 }
 
 double distance_cm(const Pose2& a, const Pose2& b) { return (a.position_cm() - b.position_cm()).norm(); }
