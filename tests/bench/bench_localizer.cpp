@@ -83,10 +83,11 @@ void BM_FullModeFramePerFrame(benchmark::State& state) {
   const Setup& s = setup();
   for (auto _ : state) {
     const BearingScan b = scan_image_bearings(s.image, s.renderer->camera(), 4);
-    const Scan scan = rotate_to_field(b, s.truth.yaw_deg);
+    const FieldScan scan = make_field_scan(b, s.truth.yaw_deg);  // rotated and prepared once, as the localizer does
     MatchResult m = local_search(s.db, scan, {s.truth.x_cm, s.truth.y_cm}, 20.0);
-    interpolate_match(s.db, scan, m);
-    refine_match(s.renderer->field(), s.renderer->camera(), scan, m);
+    MatchOptions mo;
+    mo.refinement = Refinement::kRayCast;
+    apply_refinement(s.db, s.renderer->field(), s.renderer->camera(), scan, m, mo);
     benchmark::DoNotOptimize(m.position_cm);
   }
   state.SetItemsProcessed(state.iterations());

@@ -353,5 +353,81 @@ TEST_F(LocalizerSim, FramesWithoutWindowsAreBoundedAndDropped) {
   EXPECT_EQ(loc.take_frame_reports().size(), 80u);
 }
 
+// The local search reaches floor(range / step) cells each side: at a 20 cm step the default
+// fuzzy ranges 0/10/20/30 cm would search 1x1, 1x1, 3x3 and 3x3 points. The localizer refuses
+// such a database at construction, naming the range and the step.
+TEST_F(LocalizerSim, RefusesFuzzyRangesOffTheDatabaseGrid) {
+  const FeatureDb coarse =
+      build_feature_db(renderer_->field(), renderer_->camera(), GridSpec::covering(renderer_->field(), 20.0), {}, 1);
+  try {
+    Localizer loc(LocalizerConfig{}, robot_, renderer_->field(), renderer_->camera(), coarse);
+    FAIL() << "a 10 cm range on a 20 cm grid was accepted";
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    std::printf("refused: %s\n", what.c_str());
+    EXPECT_NE(what.find("fuzzy.snap_ranges_cm[1]"), std::string::npos) << what;
+    EXPECT_NE(what.find("search range 10 cm"), std::string::npos) << what;
+    EXPECT_NE(what.find("grid step 20 cm"), std::string::npos) << what;
+  }
+  // Ranges that are 0 or whole multiples of 20 cm are fine, in both modes.
+  LocalizerConfig ok;
+  ok.fuzzy.snap_ranges_cm = {0.0, 20.0, 40.0};
+  ok.min_range_cm = 20.0;
+  EXPECT_NO_THROW(Localizer(ok, robot_, renderer_->field(), renderer_->camera(), coarse));
+  LocalizerConfig paper = LocalizerConfig::paper();
+  paper.fuzzy.snap_ranges_cm = {0.0, 20.0, 40.0};
+  EXPECT_NO_THROW(Localizer(paper, robot_, renderer_->field(), renderer_->camera(), coarse));
+  // kFull's minimum range is searched too; kPaper does not use it.
+  ok.min_range_cm = 10.0;
+  EXPECT_THROW(Localizer(ok, robot_, renderer_->field(), renderer_->camera(), coarse), ConfigError);
+  paper.min_range_cm = 10.0;
+  EXPECT_NO_THROW(Localizer(paper, robot_, renderer_->field(), renderer_->camera(), coarse));
+}
+
+TEST(LocalizerRanges, WholeMultiplesOfTheStepOnly) {
+  GridSpec g;
+  g.step_cm = 20.0;
+  LocalizerConfig c = LocalizerConfig::paper();
+  for (const double bad : {10.0, 30.0, 19.999, 20.001, 5.0}) {
+    c.fuzzy.snap_ranges_cm = {0.0, bad};
+    EXPECT_THROW(validate_search_ranges(c, g, "test"), ConfigError) << bad;
+  }
+  for (const double good : {20.0, 40.0, 60.0}) {
+    c.fuzzy.snap_ranges_cm = {0.0, good};
+    EXPECT_NO_THROW(validate_search_ranges(c, g, "test")) << good;
+  }
+  // The shipped defaults on the shipped 10 cm grid.
+  g.step_cm = 10.0;
+  EXPECT_NO_THROW(validate_search_ranges(LocalizerConfig{}, g, "test"));
+  // The rule is the search's own: a range the check accepts reaches exactly range / step cells.
+  EXPECT_EQ(local_search_reach_cells(30.0, 10.0), 3);
+  EXPECT_EQ(local_search_reach_cells(10.0, 20.0), 0);
+}
+
+TEST(LocalizerPolicy, PaperModeHasNoneOfTheAdditions) {
+  const LocalizerPolicy paper = LocalizerPolicy::of(LocalizerConfig::paper());
+  EXPECT_FALSE(paper.search_any_yaw);
+  EXPECT_EQ(paper.min_range_cm, 0.0);
+  EXPECT_FALSE(paper.cross_check);
+  EXPECT_FALSE(paper.correct_yaw);
+  EXPECT_FALSE(paper.keep_anchor_on_reject);
+  EXPECT_FALSE(paper.detect_lost);
+  LocalizerConfig c;
+  c.gyro_yaw_known = false;
+  c.yaw_correction = false;
+  c.min_range_cm = 20.0;
+  const LocalizerPolicy full = LocalizerPolicy::of(c);
+  EXPECT_TRUE(full.search_any_yaw);
+  EXPECT_EQ(full.min_range_cm, 20.0);
+  EXPECT_TRUE(full.cross_check);
+  EXPECT_FALSE(full.correct_yaw);
+  EXPECT_TRUE(full.keep_anchor_on_reject);
+  EXPECT_TRUE(full.detect_lost);
+  // The mode alone decides: a kPaper config with kFull's knobs set still behaves as printed.
+  c.mode = LocalizerMode::kPaper;
+  EXPECT_FALSE(LocalizerPolicy::of(c).search_any_yaw);
+  EXPECT_EQ(LocalizerPolicy::of(c).min_range_cm, 0.0);
+}
+
 }  // namespace
 }  // namespace omniloc

@@ -239,5 +239,41 @@ TEST_F(Matcher, AmbiguityWhenLittleIsSeen) {
   EXPECT_GE((m.second_position_cm - m.grid_position_cm).norm(), 50.0);
 }
 
+// One frame's scan is rotated and prepared once (FieldScan) and every step takes it: the results
+// are those of the steps given the plain field-frame Scan (rotated by hand here, ray by ray).
+TEST_F(Matcher, FieldScanIsTheBearingsRotatedOnceWithTheSameResults) {
+  const Pose2 truth{461.4, 333.3, -71.6};
+  sim::RenderOptions opt;
+  opt.seed = 9;
+  const BearingScan b = scan_image_bearings(renderer_->render(truth, opt), renderer_->camera(), 4);
+  const FieldScan f = make_field_scan(b, truth.yaw_deg);
+  EXPECT_EQ(f.yaw_deg, truth.yaw_deg);
+  // Field ray k is robot bearing k - yaw: the nearest of the 4-per-degree robot rays.
+  for (int k = 0; k < kScanRays; ++k) {
+    long j = std::lround((k - truth.yaw_deg) * 4.0) % 1440;
+    if (j < 0) j += 1440;
+    ASSERT_EQ(f.scan.ray_valid[static_cast<std::size_t>(k)], b.ray_valid[static_cast<std::size_t>(j)]) << k;
+    for (int n = 0; n < kCrossingsPerRay; ++n)
+      ASSERT_EQ(f.scan.radii_px[static_cast<std::size_t>(4 * k + n)], b.radii_px[static_cast<std::size_t>(4 * j + n)]) << k;
+  }
+  EXPECT_EQ(f.prepared.rays_used, f.scan.rays_valid());
+  const Scan s = f.scan;
+  MatchOptions mo;
+  mo.refinement = Refinement::kRayCast;
+  const MatchResult g1 = global_search(*db_, f, mo), g2 = global_search(*db_, s, mo);
+  EXPECT_EQ(g1.cell, g2.cell);
+  EXPECT_EQ(g1.error, g2.error);
+  EXPECT_EQ(g1.second_error, g2.second_error);
+  MatchResult l1 = local_search(*db_, f, {460.0, 330.0}, 20.0, mo), l2 = local_search(*db_, s, {460.0, 330.0}, 20.0, mo);
+  EXPECT_EQ(l1.cell, l2.cell);
+  EXPECT_EQ(l1.error, l2.error);
+  apply_refinement(*db_, renderer_->field(), renderer_->camera(), f, l1, mo);
+  interpolate_match(*db_, s, l2);
+  refine_match(renderer_->field(), renderer_->camera(), s, l2, mo);
+  EXPECT_EQ(l1.position_cm, l2.position_cm);
+  EXPECT_EQ(l1.refined_error, l2.refined_error);
+  EXPECT_LT((l1.position_cm - truth.position_cm()).norm(), 2.0);
+}
+
 }  // namespace
 }  // namespace omniloc

@@ -1,6 +1,14 @@
 // Odometry units against hand-computed values: eq. (9)'s pseudo-inverse, single windows with known
 // motion, mid-window heading, timestamps, origin reset, uncertainty, slip isolation, and the paper
 // variant's equations (10)-(15) evaluated by hand.
+//
+// The wheel inputs are made here from the wheels' geometry, never through wheel_jacobian (the code
+// under test): wheel i rolls along a direction at angle alpha_i in the robot frame and sits R from
+// the centre, so over a body motion (dx, dy, dtheta) its rim travels
+//   dx cos(alpha_i) + dy sin(alpha_i) + R dtheta,
+// with alpha = 270 - tm, 90 + tm, tm - 90, 90 - tm for wheels 1..4 (the sign pattern of eq. (9):
+// at tm = 45 the four wheels roll along 225, 135, -45 and 45 degrees). The tests run at tm = 45 and
+// tm = 30: at 45 sin = cos and a Jacobian with the two swapped would go unnoticed.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,12 +20,63 @@ namespace {
 
 const double kS = std::sin(deg_to_rad(45.0));
 
-// Counts for a body-frame motion (cm, cm, rad) through eq. (9), rounded.
+// Rim travel (cm) of each wheel for a body-frame motion (cm, cm, rad), from the wheel geometry.
+std::array<double, 4> rim_travel_cm(const RobotConfig& r, double dx, double dy, double dth) {
+  const double tm = r.motor_angle_deg;
+  const double alpha_deg[4] = {270.0 - tm, 90.0 + tm, tm - 90.0, 90.0 - tm};
+  std::array<double, 4> t{};
+  for (int i = 0; i < 4; ++i) {
+    const double a = alpha_deg[i] * kPi / 180.0;
+    t[static_cast<std::size_t>(i)] = dx * std::cos(a) + dy * std::sin(a) + r.center_to_wheel_cm * dth;
+  }
+  return t;
+}
+
+// Counts for a body-frame motion, rounded: cm per count = 2 pi r / (counts_per_rev x decoding x N).
 std::array<std::int32_t, 4> counts_for(const RobotConfig& r, double dx, double dy, double dth) {
-  const Eigen::Vector4d travel = wheel_jacobian(r.motor_angle_deg, r.center_to_wheel_cm) * Eigen::Vector3d(dx, dy, dth);
+  const double cm_per_count_by_hand = 2.0 * kPi * r.wheel_radius_cm / (r.counts_per_rev * r.decoding * r.gear_ratio);
+  const std::array<double, 4> t = rim_travel_cm(r, dx, dy, dth);
   std::array<std::int32_t, 4> c{};
-  for (int i = 0; i < 4; ++i) c[static_cast<std::size_t>(i)] = static_cast<std::int32_t>(std::lround(travel[i] / cm_per_count(r)));
+  for (int i = 0; i < 4; ++i)
+    c[static_cast<std::size_t>(i)] = static_cast<std::int32_t>(std::lround(t[static_cast<std::size_t>(i)] / cm_per_count_by_hand));
   return c;
+}
+
+RobotConfig robot_at(double motor_angle_deg) {
+  RobotConfig r;
+  r.motor_angle_deg = motor_angle_deg;
+  return r;
+}
+
+TEST(OdometryMath, WheelGeometryHandNumbersAt30Degrees) {
+  // The helper above against numbers worked by hand: 1.5 cm forward at tm = 30 moves wheels 1, 2 by
+  // -1.5 sin 30 = -0.75 cm and wheels 3, 4 by +0.75; 1 cm left moves them by -cos 30, +cos 30,
+  // -cos 30, +cos 30 = -+0.8660254037844386; 0.01 rad in place moves each by R x 0.01 = 0.2 cm.
+  const RobotConfig r = robot_at(30.0);
+  const auto fwd = rim_travel_cm(r, 1.5, 0.0, 0.0);
+  const auto left = rim_travel_cm(r, 0.0, 1.0, 0.0);
+  const auto turn = rim_travel_cm(r, 0.0, 0.0, 0.01);
+  const double want_fwd[4] = {-0.75, -0.75, 0.75, 0.75};
+  const double want_left[4] = {-0.8660254037844386, 0.8660254037844386, -0.8660254037844386, 0.8660254037844386};
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_NEAR(fwd[i], want_fwd[i], 1e-12) << i;
+    EXPECT_NEAR(left[i], want_left[i], 1e-12) << i;
+    EXPECT_NEAR(turn[i], 0.2, 1e-12) << i;
+  }
+  // 38000 counts per wheel turn of 2 pi 5 cm: 0.75 cm is 907.2 -> 907 counts.
+  EXPECT_EQ(counts_for(r, 1.5, 0.0, 0.0)[2], 907);
+}
+
+// At tm = 30: J^T J = diag(4 sin^2, 4 cos^2, 4 R^2) = diag(1, 3, 1600) (the columns stay
+// orthogonal), so J+ = diag(1, 1/3, 1/1600) J^T: row 1 = (-0.5, -0.5, 0.5, 0.5), row 2 = cos 30 / 3
+// x (-1, 1, -1, 1) = (-+)0.28867513459481287, row 3 = 20 / 1600 = 0.0125 everywhere.
+TEST(OdometryMath, PseudoInverseHandValuesAt30Degrees) {
+  const auto p = wheel_pseudo_inverse(robot_at(30.0));
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_NEAR(p(0, i), i < 2 ? -0.5 : 0.5, 1e-12) << i;
+    EXPECT_NEAR(p(1, i), i % 2 == 0 ? -0.28867513459481287 : 0.28867513459481287, 1e-12) << i;
+    EXPECT_NEAR(p(2, i), 0.0125, 1e-12) << i;
+  }
 }
 
 TEST(OdometryMath, PseudoInverseHandValues) {
@@ -45,10 +104,29 @@ TEST(Odometry, ForwardWindowMovesForwardInTheFieldFrame) {
   EXPECT_FALSE(e.slip.detected);
 }
 
+// At tm = 30 a sideways motion: 0.6 cm forward and 0.8 cm left in 10 ms at heading 0 (the wheel
+// counts by hand: -0.3 - 0.69282 = -0.99282 cm on wheel 1, ...), read back as (0.6, 0.8) to the
+// counts' rounding (1/1209.6 cm).
+TEST(Odometry, DiagonalWindowAt30Degrees) {
+  for (const double tm : {30.0, 60.0}) {
+    SCOPED_TRACE(tm);
+    const RobotConfig r = robot_at(tm);
+    Odometry odo(r);
+    odo.reset({10.0, 20.0, 0.0});
+    const auto& e = odo.update({0, 10.0, counts_for(r, 0.6, 0.8, 0.0), 0.0});
+    EXPECT_NEAR(e.pose.x_cm, 10.6, 2e-3);
+    EXPECT_NEAR(e.pose.y_cm, 20.8, 2e-3);
+    EXPECT_NEAR(e.speed_cm_per_s, 100.0, 0.2);
+    EXPECT_FALSE(e.slip.detected);
+  }
+}
+
 // One window at constant twist v = (100, 40) cm/s, omega = 120 deg/s for 10 ms from yaw 30.
 // Exact end point: p0 + R(yaw0) [sin(a)/w, -(1-cos a)/w; (1-cos a)/w, sin(a)/w] v with a = w T.
 TEST(Odometry, MidWindowHeadingGivesTheExactChord) {
-  const RobotConfig r;
+  for (const double tm : {45.0, 30.0}) {
+  SCOPED_TRACE(tm);
+  const RobotConfig r = robot_at(tm);
   const double w = deg_to_rad(120.0), t = 0.01, a = w * t;
   const Eigen::Vector2d v(100.0, 40.0);
   const Eigen::Vector2d chord_body(std::sin(a) / w * v.x() - (1 - std::cos(a)) / w * v.y(),
@@ -62,6 +140,7 @@ TEST(Odometry, MidWindowHeadingGivesTheExactChord) {
   EXPECT_NEAR(e.wheel_yaw_deg, 30.0 + 1.2, 2e-3);
   // The start heading instead of the mid heading would be off by 0.6 deg * 1.08 cm = 0.011 cm.
   EXPECT_GT((robot_to_field(v * t, 30.0) - expect).norm(), 0.01);
+  }
 }
 
 TEST(Odometry, TimeComesFromWindowTimestamps) {

@@ -21,12 +21,41 @@ inline constexpr double kPi = 3.14159265358979323846;
 /// Signed smallest difference a - b, in (-180, 180] degrees.
 [[nodiscard]] double angle_diff_deg(double a_deg, double b_deg);
 
-/// A robot pose in the field frame.
+/// The angle a fraction f of the way from a to b along the shorter arc, wrapped into (-180, 180].
+[[nodiscard]] double interpolate_deg(double a_deg, double b_deg, double f);
+
+/// A rigid 2-D pose: a position and a heading, in the field frame unless said otherwise. A value
+/// type with the algebra of SE(2), in the manner of B-Human's Pose2f: `a * b` is b expressed in
+/// a's frame carried into a's parent frame (compose), `a.inverse()` undoes a, `a * p` maps a point
+/// given in a's frame. Yaw is kept wrapped into (-180, 180] by every operation here.
 struct Pose2 {
   double x_cm = 0.0;
   double y_cm = 0.0;
   double yaw_deg = 0.0;
+
+  [[nodiscard]] Eigen::Vector2d position_cm() const { return {x_cm, y_cm}; }
+  /// Compose: this pose, then `local` expressed in this pose's frame.
+  [[nodiscard]] Pose2 operator*(const Pose2& local) const;
+  Pose2& operator*=(const Pose2& local) { return *this = *this * local; }
+  /// A point given in this pose's frame, in the parent frame.
+  [[nodiscard]] Eigen::Vector2d operator*(const Eigen::Vector2d& p_local_cm) const;
+  /// The pose that undoes this one: p * p.inverse() and p.inverse() * p are the identity.
+  [[nodiscard]] Pose2 inverse() const;
+  friend bool operator==(const Pose2&, const Pose2&) = default;
 };
+
+/// a * b (see Pose2::operator*).
+[[nodiscard]] inline Pose2 compose(const Pose2& a, const Pose2& b) { return a * b; }
+
+/// The pose a fraction f of the way from a to b: the position linearly, the yaw along the shorter
+/// arc (from 170 to -170 through 180, not through 0). f = 0 gives a, f = 1 gives b (yaw wrapped).
+[[nodiscard]] Pose2 interpolate(const Pose2& a, const Pose2& b, double f);
+
+/// Euclidean distance between the positions (the headings do not count).
+[[nodiscard]] double distance_cm(const Pose2& a, const Pose2& b);
+
+/// Signed heading difference a - b along the shorter arc, in (-180, 180] degrees.
+[[nodiscard]] double yaw_difference_deg(const Pose2& a, const Pose2& b);
 
 /// Rotates a robot-frame vector into the field frame for a robot heading yaw_deg.
 [[nodiscard]] Eigen::Vector2d robot_to_field(const Eigen::Vector2d& v_robot, double yaw_deg);

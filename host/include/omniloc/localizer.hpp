@@ -36,6 +36,7 @@
 #include "omniloc/feature_db.hpp"
 #include "omniloc/field.hpp"
 #include "omniloc/fuzzy.hpp"
+#include "omniloc/heading_filter.hpp"
 #include "omniloc/line_scan.hpp"
 #include "omniloc/matcher.hpp"
 #include "omniloc/odometry.hpp"
@@ -101,6 +102,26 @@ struct LocalizerConfig {
 void validate_localizer_config(const LocalizerConfig& config, const std::string& source);
 /// The key table (config_reader.hpp) of a localizer file.
 [[nodiscard]] const std::vector<config::Key<LocalizerConfig>>& localizer_config_keys();
+
+/// The ranges the local search can be asked for (the fuzzy snap ranges, and kFull's min_range_cm)
+/// against the database's grid: the search reaches floor(range / step) cells each side
+/// (local_search_reach_cells), so a range must be 0 or a whole, non-zero multiple of the step,
+/// else it silently searches fewer cells than it says (at a 20 cm step a 10 cm range searches
+/// the centre point only). Throws ConfigError naming `source`, the field, the range and the step.
+/// The Localizer calls it at construction.
+void validate_search_ranges(const LocalizerConfig& config, const GridSpec& grid, const std::string& source);
+
+/// What LocalizerMode changes, decided once from the config: kPaper is Fig. 15 as printed, kFull
+/// adds the rest. The Localizer's steps consult this instead of the mode.
+struct LocalizerPolicy {
+  bool search_any_yaw = false;         ///< global searches try every heading (kFull, gyro_yaw_known false)
+  double min_range_cm = 0.0;           ///< the local search is at least this wide (kFull: min_range_cm)
+  bool cross_check = false;            ///< a global search checks the tracked pose (lost detection)
+  bool correct_yaw = false;            ///< the image heading filter at origin resets (kFull, yaw_correction)
+  bool keep_anchor_on_reject = false;  ///< a bad result keeps the last good image (paper: P_IL <- P_E)
+  bool detect_lost = false;            ///< lost_after_bad_frames bad results in a row -> lost
+  [[nodiscard]] static LocalizerPolicy of(const LocalizerConfig& config);
+};
 
 enum class PoseSource {
   kNone,        ///< no fix yet (waiting for a good global search); pose meaningless
@@ -194,7 +215,7 @@ class Localizer {
   [[nodiscard]] std::vector<FrameReport> take_frame_reports();
   [[nodiscard]] const LocalizerConfig& config() const { return config_; }
   /// The gyro drift learnt from the images (deg/s added to the gyro heading; 0 until learnt).
-  [[nodiscard]] double yaw_drift_deg_per_s() const { return yaw_rate_deg_per_s_; }
+  [[nodiscard]] double yaw_drift_deg_per_s() const { return heading_filter_.rate_deg_per_s(); }
 
  private:
   enum class State { kSearching, kTracking, kLost };
@@ -212,21 +233,62 @@ class Localizer {
     Pose2 pose;
     Pose2 odometry_at_t;  // odometry's pose at t_ms, to carry the anchor forward
     double error = kNoError;
+    /// The anchor moved by the odometry's field-frame displacement since t_ms; the heading is the
+    /// odometry's (both follow the same gyro, so the displacement needs no rotation).
+    [[nodiscard]] Pose2 carried_to(const Pose2& odometry_now) const;
   };
+  /// What is known of a frame before matching it.
+  struct Frame {
+    double t_ms = 0.0;
+    const BearingScan* bearings = nullptr;
+    Pose2 odometry;              // odometry pose at t_ms; its yaw is the gyro heading
+    double speed_cm_per_s = 0.0;
+    Pose2 predicted;             // the anchor carried to t_ms, else the odometry pose
+    double predicted_sigma_cm = 0.0;
+    FieldScan scan;              // the bearings in the field frame at the gyro heading (rotated once)
+  };
+  enum class CrossCheck { kNotRun, kAgrees, kContradicts, kRelocalized };
 
+  // --- the steps of one frame (process) ---
   FrameReport process(double t_ms, const BearingScan& bearings);
+  [[nodiscard]] Frame frame_at(double t_ms, const BearingScan& bearings) const;
+  /// Searching or lost: a global search; relocalizes on a good, unambiguous result.
+  void search(const Frame& frame, FrameReport& rep);
+  /// Tracking: a local search around the prediction in the fuzzy range, the cross-check, then
+  /// accept or reject.
+  void track(const Frame& frame, FrameReport& rep);
+  /// A global search compared with the tracked result: a consistent, clearly better match far
+  /// from the prediction (a kidnapping) relocalizes there after disagree_frames frames.
+  CrossCheck cross_check(const Frame& frame, const MatchResult& local, FrameReport& rep);
+  void accept(const Frame& frame, const MatchResult& local, FrameReport& rep);
+  void reject(FrameReport& rep);
+  void relocalize(double t_ms, const PoseMatch& global, FrameReport& rep);
+
+  // --- matching ---
+  /// Global search at the gyro heading (or over all headings, by policy), refined, error judged.
+  [[nodiscard]] PoseMatch global_match(const Frame& frame, FrameReport& rep);
+  [[nodiscard]] MatchResult local_match(const Frame& frame, double range_cm) const;
+  /// The error E_TH is judged on: at the refined position with ray-cast refinement (the error
+  /// surface is so steep that a grid point 5 cm from the robot often scores above E_TH).
+  [[nodiscard]] double judged_error(const MatchResult& m) const;
+  [[nodiscard]] double search_range_cm(double speed_cm_per_s) const;
+  void note_global(FrameReport& rep, const PoseMatch& global);
+
+  // --- odometry history ---
   [[nodiscard]] bool covered(double t_ms) const;
   [[nodiscard]] Pose2 odometry_pose_at(double t_ms, double* speed_cm_per_s, double* sigma_xy_cm) const;
   void reset_origin_at(double t_ms, const Pose2& pose, double sigma_xy_cm, double sigma_yaw_deg);
   void set_anchor(double t_ms, const Pose2& pose, double error);
+  [[nodiscard]] double anchor_sigma_cm(const Pose2& odometry_now) const;
   [[nodiscard]] LocalizedPose make_pose(const EncoderWindow& window);
   void trim_history();
-  /// kFull: the heading to reset the odometry with, corrected from the scan (alpha-beta filter);
-  /// nullopt when the scan gives no usable estimate.
+  /// The heading to reset the odometry with, from the image through the heading filter; nullopt
+  /// when the scan gives no usable estimate.
   std::optional<double> corrected_yaw(double t_ms, const BearingScan& bearings, const Eigen::Vector2d& position_cm,
                                       double gyro_yaw_deg);
 
   LocalizerConfig config_;
+  LocalizerPolicy policy_;
   RobotConfig robot_;
   const FieldGeometry& field_;
   const CameraModel& camera_;
@@ -250,8 +312,7 @@ class Localizer {
   int bad_run_ = 0;
   int disagree_run_ = 0;
   Eigen::Vector2d disagree_position_cm_{0.0, 0.0};
-  double yaw_rate_deg_per_s_ = 0.0;   // learnt drift correction (alpha-beta filter's rate)
-  double last_yaw_fix_ms_ = -1e300;
+  HeadingFilter heading_filter_;
   LocalizedPose last_pose_;
   LocalizerStats stats_;
 };

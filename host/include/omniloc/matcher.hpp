@@ -29,6 +29,20 @@ struct PreparedScan {
 };
 [[nodiscard]] PreparedScan prepare_scan(const Scan& scan);
 
+/// One frame's scan as every matcher step takes it: turned into the field frame at one heading
+/// and prepared for the SAD, once. The localizer makes one per frame (and per heading it tries)
+/// and hands it to the search, the interpolation and the refinement; the overloads below that
+/// take a plain Scan make one on the spot.
+struct FieldScan {
+  double yaw_deg = 0.0;  // the heading the robot-frame scan was rotated by (0 for a field-frame Scan)
+  Scan scan;             // field frame
+  PreparedScan prepared;
+};
+/// rotate_to_field(bearings, yaw_deg), then prepare_scan.
+[[nodiscard]] FieldScan make_field_scan(const BearingScan& bearings, double yaw_deg);
+/// A scan already in the field frame (scan_image at a known yaw, a database entry).
+[[nodiscard]] FieldScan make_field_scan(const Scan& field_frame_scan);
+
 /// Equation (5) on the valid rays, straightforward scalar code (the reference).
 [[nodiscard]] std::uint32_t sad_reference(const std::uint8_t* db_entry, const Scan& scan);
 /// The same sum, vectorised (AVX2 when the CPU has it, else a portable loop the compiler vectorises).
@@ -66,13 +80,20 @@ struct MatchResult {
 };
 
 /// Global search over all grid points.
+[[nodiscard]] MatchResult global_search(const FeatureDb& db, const FieldScan& scan, const MatchOptions& options = {});
 [[nodiscard]] MatchResult global_search(const FeatureDb& db, const Scan& scan, const MatchOptions& options = {});
 /// Global search with sad_reference and no shortcuts: the test and benchmark reference.
 [[nodiscard]] MatchResult global_search_reference(const FeatureDb& db, const Scan& scan, const MatchOptions& options = {});
 /// Grid points within range_cm (per axis) of the grid point nearest to centre_cm: 0 -> 1 point,
-/// 10 -> 3 x 3, 20 -> 5 x 5, 30 -> 7 x 7 on a 10 cm grid.
+/// 10 -> 3 x 3, 20 -> 5 x 5, 30 -> 7 x 7 on a 10 cm grid (see local_search_reach_cells).
+[[nodiscard]] MatchResult local_search(const FeatureDb& db, const FieldScan& scan, const Eigen::Vector2d& centre_cm,
+                                       double range_cm, const MatchOptions& options = {});
 [[nodiscard]] MatchResult local_search(const FeatureDb& db, const Scan& scan, const Eigen::Vector2d& centre_cm,
                                        double range_cm, const MatchOptions& options = {});
+/// How many grid cells a local search reaches on each side of its centre for a range:
+/// floor(range / step), so a range that is not a whole multiple of the step is cut down to one
+/// (at a 20 cm step, 10 cm searches the centre only and 30 cm the same 3 x 3 as 20 cm).
+[[nodiscard]] int local_search_reach_cells(double range_cm, double grid_step_cm);
 
 /// Normalised error of the scan against the expected scan at any position (ray cast on the fly).
 [[nodiscard]] double error_at(const FieldGeometry& field, const CameraModel& camera, const PreparedScan& scan,
@@ -81,12 +102,20 @@ struct MatchResult {
 /// Sub-grid position from the database errors at the best grid point and its four neighbours,
 /// fitting a V (the shape of a sum of absolute differences) along x and along y; updates
 /// position_cm (within half a step of the grid point). refined_error is left unchanged.
+void interpolate_match(const FeatureDb& db, const FieldScan& scan, MatchResult& result);
 void interpolate_match(const FeatureDb& db, const Scan& scan, MatchResult& result);
 
 /// Pattern search on ray-cast errors from result.position_cm with halving steps (4 neighbours per
 /// step); updates position_cm and refined_error.
+void refine_match(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, MatchResult& result,
+                  const MatchOptions& options = {});
 void refine_match(const FieldGeometry& field, const CameraModel& camera, const Scan& scan, MatchResult& result,
                   const MatchOptions& options = {});
+
+/// options.refinement applied to a search result: nothing (kNone), interpolate_match
+/// (kInterpolate), interpolate_match then refine_match (kRayCast).
+void apply_refinement(const FeatureDb& db, const FieldGeometry& field, const CameraModel& camera,
+                      const FieldScan& scan, MatchResult& result, const MatchOptions& options);
 
 /// Yaw from the scan itself: the heading within yaw_hint_deg +- range_deg whose field-frame
 /// rotation of `bearings` best matches the expected scan at position_cm, searched in steps of

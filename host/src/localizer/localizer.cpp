@@ -1,4 +1,14 @@
 // The integration localizer: Fig. 15's flow on Fig. 16's timeline (see localizer.hpp).
+//
+// One frame (process) goes through named steps:
+//   frame_at      odometry pose and speed at the frame's time, the prediction (the last good
+//                 image carried forward), and the scan rotated into the field frame once;
+//   search        (searching or lost) a global search; relocalize on a good, unambiguous result;
+//   track         a local search around the prediction in the fuzzy range, then
+//   cross_check   (policy) a global search that notices a kidnapping, then
+//   accept/reject the result sets the anchor (and every reset period the odometry origin, with
+//                 the image heading through the heading filter), or leaves the odometry standing.
+// What LocalizerMode changes is in LocalizerPolicy, read by these steps.
 #include "omniloc/localizer.hpp"
 
 #include <algorithm>
@@ -10,23 +20,68 @@ namespace omniloc {
 
 namespace {
 
-Pose2 lerp_pose(const Pose2& a, const Pose2& b, double f) {
-  return {a.x_cm + f * (b.x_cm - a.x_cm), a.y_cm + f * (b.y_cm - a.y_cm),
-          wrap_deg(a.yaw_deg + f * angle_diff_deg(b.yaw_deg, a.yaw_deg))};
+HeadingFilterConfig heading_filter_config(const LocalizerConfig& c) {
+  HeadingFilterConfig h;
+  h.gain = c.yaw_gain;
+  h.rate_gain = c.yaw_rate_gain;
+  h.rate_max_deg_per_s = c.yaw_rate_max_deg_per_s;
+  h.max_rate_gap_s = 1.0;  // the rate is only learnt from close fixes
+  return h;
 }
 
-double distance_cm(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return (a - b).norm(); }
-
-Eigen::Vector2d xy(const Pose2& p) { return {p.x_cm, p.y_cm}; }
+/// `range_cm` as the local search will use it on `grid`; throws unless it is 0 or a whole,
+/// non-zero multiple of the step (see validate_search_ranges).
+void check_range_on_grid(double range_cm, const GridSpec& grid, const std::string& source, const std::string& field) {
+  const int reach = local_search_reach_cells(range_cm, grid.step_cm);
+  const double searched_cm = reach * grid.step_cm;
+  if (std::abs(searched_cm - range_cm) <= 1e-6) return;
+  std::ostringstream os;
+  os << source << ": field '" << field << "': search range " << range_cm
+     << " cm is not 0 or a whole multiple of the feature database's grid step " << grid.step_cm
+     << " cm: the local search would reach " << reach << " cell(s) each side, i.e. search " << searched_cm
+     << " cm (" << 2 * reach + 1 << " x " << 2 * reach + 1 << " points)";
+  throw ConfigError(os.str());
+}
 
 }  // namespace
 
+void validate_search_ranges(const LocalizerConfig& config, const GridSpec& grid, const std::string& source) {
+  for (std::size_t i = 0; i < config.fuzzy.snap_ranges_cm.size(); ++i)
+    check_range_on_grid(config.fuzzy.snap_ranges_cm[i], grid, source, "fuzzy.snap_ranges_cm[" + std::to_string(i) + "]");
+  if (LocalizerPolicy::of(config).min_range_cm > 0.0) check_range_on_grid(config.min_range_cm, grid, source, "min_range_cm");
+}
+
+LocalizerPolicy LocalizerPolicy::of(const LocalizerConfig& c) {
+  LocalizerPolicy p;
+  if (c.mode == LocalizerMode::kPaper) return p;
+  p.search_any_yaw = !c.gyro_yaw_known;
+  p.min_range_cm = c.min_range_cm;
+  p.cross_check = true;
+  p.correct_yaw = c.yaw_correction;
+  p.keep_anchor_on_reject = true;
+  p.detect_lost = true;
+  return p;
+}
+
+Pose2 Localizer::Anchor::carried_to(const Pose2& odometry_now) const {
+  return {pose.x_cm + (odometry_now.x_cm - odometry_at_t.x_cm), pose.y_cm + (odometry_now.y_cm - odometry_at_t.y_cm),
+          odometry_now.yaw_deg};
+}
+
 Localizer::Localizer(const LocalizerConfig& config, const RobotConfig& robot, const FieldGeometry& field,
                      const CameraModel& camera, const FeatureDb& db, std::optional<Pose2> initial_pose)
-    : config_(config), robot_(robot), field_(field), camera_(camera), db_(db), odometry_(robot) {
+    : config_(config),
+      policy_(LocalizerPolicy::of(config)),
+      robot_(robot),
+      field_(field),
+      camera_(camera),
+      db_(db),
+      odometry_(robot),
+      heading_filter_(heading_filter_config(config)) {
   validate_localizer_config(config_, "localizer config");
   if (db.field_fingerprint != field.fingerprint() || db.camera_fingerprint != camera.fingerprint())
     throw std::invalid_argument("Localizer: the feature database was built for another field or camera");
+  validate_search_ranges(config_, db.grid, "localizer config");
   match_options_.refinement = config_.refinement;
   if (initial_pose) {
     odometry_.reset(*initial_pose, 0.0, 0.0);
@@ -71,7 +126,7 @@ Pose2 Localizer::odometry_pose_at(double t_ms, double* speed_cm_per_s, double* s
   const double f = (t_ms - t_lo) / (t_hi - t_lo);
   if (speed_cm_per_s) *speed_cm_per_s = hi->speed_cm_per_s;  // the window that contains t
   if (sigma_xy_cm) *sigma_xy_cm = lo->sigma_xy_cm + f * (hi->sigma_xy_cm - lo->sigma_xy_cm);
-  return lerp_pose(lo->pose, hi->pose, f);
+  return interpolate(lo->pose, hi->pose, f);
 }
 
 void Localizer::reset_origin_at(double t_ms, const Pose2& pose, double sigma_xy_cm, double sigma_yaw_deg) {
@@ -196,183 +251,194 @@ FrameReport Localizer::process(double t_ms, const BearingScan& bearings) {
     ++stats_.dropped;
     return rep;
   }
-  const bool full = config_.mode == LocalizerMode::kFull;
-  double speed = 0.0, odo_sigma = 0.0;
-  const Pose2 odo = odometry_pose_at(t_ms, &speed, &odo_sigma);
-  rep.speed_cm_per_s = speed;
-  // Prediction: the last good image carried forward by odometry (the output), else odometry.
-  Pose2 predicted = odo;
-  double predicted_sigma = odo_sigma;
-  if (anchor_.valid) {
-    predicted.x_cm = anchor_.pose.x_cm + (odo.x_cm - anchor_.odometry_at_t.x_cm);
-    predicted.y_cm = anchor_.pose.y_cm + (odo.y_cm - anchor_.odometry_at_t.y_cm);
-    const double moved = distance_cm(xy(odo), xy(anchor_.odometry_at_t));
-    predicted_sigma = std::hypot(config_.image_sigma_cm, robot_.odometry_noise_fraction * moved);
-  }
-  const double yaw = odo.yaw_deg;  // gyro heading (the odometry's yaw follows the gyro)
-  const Scan scan = rotate_to_field(bearings, yaw);
-
-  auto refine = [&](MatchResult& m, const Scan& s) {
-    if (config_.refinement != Refinement::kNone && m.cell >= 0) interpolate_match(db_, s, m);
-    if (config_.refinement == Refinement::kRayCast && m.cell >= 0) refine_match(field_, camera_, s, m, match_options_);
-  };
-  // With ray-cast refinement the error is judged at the refined position: the error surface is
-  // so steep that a grid point 5 cm away from the robot often scores above E_TH.
-  auto judged_error = [&](const MatchResult& m) {
-    return config_.refinement == Refinement::kRayCast ? m.refined_error : m.error;
-  };
-  auto relocalize = [&](const Eigen::Vector2d& p, double yaw_deg, double error) {
-    const Pose2 pose{p.x(), p.y(), yaw_deg};
-    reset_origin_at(t_ms, pose, config_.image_sigma_cm, config_.image_sigma_yaw_deg);
-    set_anchor(t_ms, pose, error);
-    state_ = State::kTracking;
-    bad_run_ = 0;
-    disagree_run_ = 0;
-    last_good_ = true;
-    applied_this_window_ = true;
-    last_image_ms_ = t_ms;
-    ++stats_.relocalizations;
-    rep.outcome = FrameOutcome::kRelocalized;
-  };
-  // A global search: at the gyro heading, or over all headings when it is not trusted.
-  auto global = [&](double* yaw_out) {
-    ++stats_.global_searches;
-    rep.global = true;
-    if (full && !config_.gyro_yaw_known) {
-      PoseMatch pm = global_search_any_yaw(db_, field_, camera_, bearings, 2.0, match_options_);
-      *yaw_out = pm.yaw_deg;
-      pm.match.error = judged_error(pm.match);
-      return pm.match;
-    }
-    MatchResult m = global_search(db_, scan, match_options_);
-    refine(m, scan);
-    m.error = judged_error(m);
-    *yaw_out = yaw;
-    return m;
-  };
-
-  if (state_ == State::kSearching || state_ == State::kLost) {
-    double gyaw = yaw;
-    const MatchResult g = global(&gyaw);
-    rep.position_cm = g.position_cm;
-    rep.yaw_deg = gyaw;
-    rep.error = g.error;
-    rep.search_range_cm = -1.0;
-    last_error_ = g.error;
-    last_range_cm_ = -1.0;
-    if (g.error < config_.e_th && !(config_.refuse_ambiguous && g.ambiguous)) {
-      relocalize(g.position_cm, gyaw, g.error);
-    } else if (g.error < config_.e_th) {
-      rep.outcome = FrameOutcome::kAmbiguous;
-      ++stats_.ambiguous;
-    } else {
-      rep.outcome = FrameOutcome::kRejected;
-      ++stats_.rejected;
-    }
-    return rep;
-  }
-
-  // Tracking: local search around the prediction in the fuzzy range.
-  double range = fuzzy_search_range(config_.fuzzy, speed).snapped_cm;
-  if (full) range = std::max(range, config_.min_range_cm);
-  MatchResult m = local_search(db_, scan, xy(predicted), range, match_options_);
-  refine(m, scan);
-  m.error = judged_error(m);
-  rep.position_cm = m.position_cm;
-  rep.yaw_deg = yaw;
-  rep.error = m.error;
-  rep.search_range_cm = range;
-  rep.predicted_offset_cm = distance_cm(m.position_cm, xy(predicted));
-  last_error_ = m.error;
-  last_range_cm_ = range;
-  last_image_ms_ = t_ms;
-  bool good = m.error < config_.e_th;
-
-  if (full) {
-    // Cross-check against a global search: after a kidnapping the local search can still find a
-    // passable match near the wrong place, so a bad result alone is not the only symptom.
-    if (!good || disagree_run_ > 0 || t_ms - last_check_ms_ >= config_.check_period_ms) {
-      last_check_ms_ = t_ms;
-      double gyaw = yaw;
-      const MatchResult g = global(&gyaw);
-      const double gate = std::max(config_.disagree_min_cm, config_.disagree_sigmas * predicted_sigma);
-      const bool far = distance_cm(g.position_cm, xy(predicted)) > gate;
-      const bool better = g.error < config_.disagree_error_ratio * m.error;
-      if (g.error < config_.e_th && !g.ambiguous && far && better) {
-        if (disagree_run_ > 0 && distance_cm(g.position_cm, disagree_position_cm_) > config_.disagree_min_cm)
-          disagree_run_ = 0;  // a different place each time: not a consistent disagreement
-        ++disagree_run_;
-        disagree_position_cm_ = g.position_cm;
-        if (disagree_run_ >= config_.disagree_frames) {
-          ++stats_.lost_events;
-          rep.position_cm = g.position_cm;
-          rep.yaw_deg = gyaw;
-          rep.error = g.error;
-          rep.search_range_cm = -1.0;
-          last_error_ = g.error;
-          last_range_cm_ = -1.0;
-          relocalize(g.position_cm, gyaw, g.error);
-          return rep;
-        }
-        good = false;  // do not feed a result the global search contradicts into the odometry
-      } else {
-        disagree_run_ = 0;
-      }
-    }
-  }
-
-  if (good) {
-    ++stats_.accepted;
-    bad_run_ = 0;
-    last_good_ = true;
-    applied_this_window_ = true;
-    rep.outcome = FrameOutcome::kAccepted;
-    Pose2 pose{m.position_cm.x(), m.position_cm.y(), yaw};
-    if (t_ms - last_reset_ms_ >= config_.reset_period_ms - 1e-6) {
-      double sigma_yaw = odometry_.estimate().sigma_yaw_deg;
-      if (full && config_.yaw_correction) {
-        if (const std::optional<double> y = corrected_yaw(t_ms, bearings, m.position_cm, yaw)) {
-          pose.yaw_deg = *y;
-          sigma_yaw = std::min(sigma_yaw, config_.image_sigma_yaw_deg);
-        }
-      }
-      reset_origin_at(t_ms, pose, config_.image_sigma_cm, sigma_yaw);
-    }
-    set_anchor(t_ms, pose, m.error);
+  const Frame frame = frame_at(t_ms, bearings);
+  rep.speed_cm_per_s = frame.speed_cm_per_s;
+  if (state_ == State::kTracking) {
+    track(frame, rep);
   } else {
-    ++stats_.rejected;
-    rep.outcome = FrameOutcome::kRejected;
-    last_good_ = false;
-    // The paper: P_IL <- P_E, the odometry pose stands; kFull keeps the last good image carried
-    // forward by odometry, which is the more recent fix.
-    if (!full) anchor_.valid = false;
-    ++bad_run_;
-    if (full && bad_run_ >= config_.lost_after_bad_frames) {
-      state_ = State::kLost;
-      ++stats_.lost_events;
-    }
+    search(frame, rep);
   }
   return rep;
 }
 
+Localizer::Frame Localizer::frame_at(double t_ms, const BearingScan& bearings) const {
+  Frame f;
+  f.t_ms = t_ms;
+  f.bearings = &bearings;
+  double odo_sigma = 0.0;
+  f.odometry = odometry_pose_at(t_ms, &f.speed_cm_per_s, &odo_sigma);
+  // Prediction: the last good image carried forward by odometry (the output), else odometry.
+  f.predicted = anchor_.valid ? anchor_.carried_to(f.odometry) : f.odometry;
+  f.predicted_sigma_cm = anchor_.valid ? anchor_sigma_cm(f.odometry) : odo_sigma;
+  f.scan = make_field_scan(bearings, f.odometry.yaw_deg);  // the odometry's yaw follows the gyro
+  return f;
+}
+
+void Localizer::search(const Frame& frame, FrameReport& rep) {
+  const PoseMatch g = global_match(frame, rep);
+  note_global(rep, g);
+  const bool good = g.match.error < config_.e_th;
+  if (good && !(config_.refuse_ambiguous && g.match.ambiguous)) {
+    relocalize(frame.t_ms, g, rep);
+  } else if (good) {
+    rep.outcome = FrameOutcome::kAmbiguous;
+    ++stats_.ambiguous;
+  } else {
+    rep.outcome = FrameOutcome::kRejected;
+    ++stats_.rejected;
+  }
+}
+
+void Localizer::track(const Frame& frame, FrameReport& rep) {
+  const double range = search_range_cm(frame.speed_cm_per_s);
+  const MatchResult m = local_match(frame, range);
+  rep.position_cm = m.position_cm;
+  rep.yaw_deg = frame.scan.yaw_deg;
+  rep.error = m.error;
+  rep.search_range_cm = range;
+  rep.predicted_offset_cm = (m.position_cm - frame.predicted.position_cm()).norm();
+  last_error_ = m.error;
+  last_range_cm_ = range;
+  last_image_ms_ = frame.t_ms;
+  bool good = m.error < config_.e_th;
+  if (policy_.cross_check) {
+    const CrossCheck check = cross_check(frame, m, rep);
+    if (check == CrossCheck::kRelocalized) return;
+    if (check == CrossCheck::kContradicts) good = false;  // do not feed it into the odometry
+  }
+  if (good) {
+    accept(frame, m, rep);
+  } else {
+    reject(rep);
+  }
+}
+
+Localizer::CrossCheck Localizer::cross_check(const Frame& frame, const MatchResult& local, FrameReport& rep) {
+  // After a kidnapping the local search can still find a passable match near the wrong place, so
+  // a bad result alone is not the only symptom. Checked on a bad result, while a disagreement
+  // runs, and at least every check_period_ms.
+  const bool good = local.error < config_.e_th;
+  if (good && disagree_run_ == 0 && frame.t_ms - last_check_ms_ < config_.check_period_ms) return CrossCheck::kNotRun;
+  last_check_ms_ = frame.t_ms;
+  const PoseMatch g = global_match(frame, rep);
+  const Eigen::Vector2d predicted = frame.predicted.position_cm();
+  const double gate = std::max(config_.disagree_min_cm, config_.disagree_sigmas * frame.predicted_sigma_cm);
+  const bool far = (g.match.position_cm - predicted).norm() > gate;
+  const bool better = g.match.error < config_.disagree_error_ratio * local.error;
+  if (!(g.match.error < config_.e_th && !g.match.ambiguous && far && better)) {
+    disagree_run_ = 0;
+    return CrossCheck::kAgrees;
+  }
+  if (disagree_run_ > 0 && (g.match.position_cm - disagree_position_cm_).norm() > config_.disagree_min_cm)
+    disagree_run_ = 0;  // a different place each time: not a consistent disagreement
+  ++disagree_run_;
+  disagree_position_cm_ = g.match.position_cm;
+  if (disagree_run_ < config_.disagree_frames) return CrossCheck::kContradicts;
+  ++stats_.lost_events;
+  note_global(rep, g);
+  relocalize(frame.t_ms, g, rep);
+  return CrossCheck::kRelocalized;
+}
+
+void Localizer::accept(const Frame& frame, const MatchResult& local, FrameReport& rep) {
+  ++stats_.accepted;
+  bad_run_ = 0;
+  last_good_ = true;
+  applied_this_window_ = true;
+  rep.outcome = FrameOutcome::kAccepted;
+  Pose2 pose{local.position_cm.x(), local.position_cm.y(), frame.odometry.yaw_deg};
+  if (frame.t_ms - last_reset_ms_ >= config_.reset_period_ms - 1e-6) {
+    double sigma_yaw = odometry_.estimate().sigma_yaw_deg;
+    if (policy_.correct_yaw) {
+      if (const std::optional<double> y = corrected_yaw(frame.t_ms, *frame.bearings, local.position_cm, pose.yaw_deg)) {
+        pose.yaw_deg = *y;
+        sigma_yaw = std::min(sigma_yaw, config_.image_sigma_yaw_deg);
+      }
+    }
+    reset_origin_at(frame.t_ms, pose, config_.image_sigma_cm, sigma_yaw);
+  }
+  set_anchor(frame.t_ms, pose, local.error);
+}
+
+void Localizer::reject(FrameReport& rep) {
+  ++stats_.rejected;
+  rep.outcome = FrameOutcome::kRejected;
+  last_good_ = false;
+  // The paper: P_IL <- P_E, the odometry pose stands; kFull keeps the last good image carried
+  // forward by odometry, which is the more recent fix.
+  if (!policy_.keep_anchor_on_reject) anchor_.valid = false;
+  ++bad_run_;
+  if (policy_.detect_lost && bad_run_ >= config_.lost_after_bad_frames) {
+    state_ = State::kLost;
+    ++stats_.lost_events;
+  }
+}
+
+void Localizer::relocalize(double t_ms, const PoseMatch& global, FrameReport& rep) {
+  const Pose2 pose{global.match.position_cm.x(), global.match.position_cm.y(), global.yaw_deg};
+  reset_origin_at(t_ms, pose, config_.image_sigma_cm, config_.image_sigma_yaw_deg);
+  set_anchor(t_ms, pose, global.match.error);
+  state_ = State::kTracking;
+  bad_run_ = 0;
+  disagree_run_ = 0;
+  last_good_ = true;
+  applied_this_window_ = true;
+  last_image_ms_ = t_ms;
+  ++stats_.relocalizations;
+  rep.outcome = FrameOutcome::kRelocalized;
+}
+
+PoseMatch Localizer::global_match(const Frame& frame, FrameReport& rep) {
+  ++stats_.global_searches;
+  rep.global = true;
+  PoseMatch pm;
+  if (policy_.search_any_yaw) {
+    pm = global_search_any_yaw(db_, field_, camera_, *frame.bearings, 2.0, match_options_);
+  } else {
+    pm.match = global_search(db_, frame.scan, match_options_);
+    apply_refinement(db_, field_, camera_, frame.scan, pm.match, match_options_);
+    pm.yaw_deg = frame.scan.yaw_deg;
+  }
+  pm.match.error = judged_error(pm.match);
+  return pm;
+}
+
+MatchResult Localizer::local_match(const Frame& frame, double range_cm) const {
+  MatchResult m = local_search(db_, frame.scan, frame.predicted.position_cm(), range_cm, match_options_);
+  apply_refinement(db_, field_, camera_, frame.scan, m, match_options_);
+  m.error = judged_error(m);
+  return m;
+}
+
+double Localizer::judged_error(const MatchResult& m) const {
+  return config_.refinement == Refinement::kRayCast ? m.refined_error : m.error;
+}
+
+double Localizer::search_range_cm(double speed_cm_per_s) const {
+  return std::max(fuzzy_search_range(config_.fuzzy, speed_cm_per_s).snapped_cm, policy_.min_range_cm);
+}
+
+void Localizer::note_global(FrameReport& rep, const PoseMatch& global) {
+  rep.position_cm = global.match.position_cm;
+  rep.yaw_deg = global.yaw_deg;
+  rep.error = global.match.error;
+  rep.search_range_cm = -1.0;
+  last_error_ = global.match.error;
+  last_range_cm_ = -1.0;
+}
+
 std::optional<double> Localizer::corrected_yaw(double t_ms, const BearingScan& bearings,
                                                const Eigen::Vector2d& position_cm, double gyro_yaw_deg) {
-  // Alpha-beta filter on the heading error: predict with the learnt drift rate since the last
-  // fix, then move by yaw_gain of the residual and learn the rate with yaw_rate_gain.
-  const double dt_s = (t_ms - last_yaw_fix_ms_) / 1000.0;
-  const bool recent = dt_s > 0.0 && dt_s <= 1.0;  // the rate is only learnt from close fixes
-  const double predicted = gyro_yaw_deg + (recent ? yaw_rate_deg_per_s_ * dt_s : 0.0);
+  const double predicted = heading_filter_.predict(t_ms, gyro_yaw_deg);
   const YawEstimate est = estimate_yaw(field_, camera_, bearings, position_cm, predicted, config_.yaw_search_deg);
   if (!(est.error < config_.e_th)) return std::nullopt;
-  const double residual = angle_diff_deg(est.yaw_deg, predicted);
-  if (recent) {
-    yaw_rate_deg_per_s_ += config_.yaw_rate_gain * residual / dt_s;
-    yaw_rate_deg_per_s_ = std::clamp(yaw_rate_deg_per_s_, -config_.yaw_rate_max_deg_per_s,
-                                     config_.yaw_rate_max_deg_per_s);
-  }
-  last_yaw_fix_ms_ = t_ms;
   ++stats_.yaw_corrections;
-  return wrap_deg(predicted + config_.yaw_gain * residual);
+  return heading_filter_.correct(t_ms, predicted, est.yaw_deg);
+}
+
+double Localizer::anchor_sigma_cm(const Pose2& odometry_now) const {
+  const double moved = distance_cm(odometry_now, anchor_.odometry_at_t);
+  return std::hypot(config_.image_sigma_cm, robot_.odometry_noise_fraction * moved);
 }
 
 LocalizedPose Localizer::make_pose(const EncoderWindow& window) {
@@ -385,15 +451,8 @@ LocalizedPose Localizer::make_pose(const EncoderWindow& window) {
   p.search_range_cm = last_range_cm_;
   p.image_age_ms = anchor_.valid && anchor_.t_ms > 0.0 ? window.t_end_ms - anchor_.t_ms : kNoError;
   p.sigma_yaw_deg = e.sigma_yaw_deg;
-  if (anchor_.valid) {
-    p.pose = {anchor_.pose.x_cm + (e.pose.x_cm - anchor_.odometry_at_t.x_cm),
-              anchor_.pose.y_cm + (e.pose.y_cm - anchor_.odometry_at_t.y_cm), e.pose.yaw_deg};
-    const double moved = distance_cm(xy(e.pose), xy(anchor_.odometry_at_t));
-    p.sigma_xy_cm = std::hypot(config_.image_sigma_cm, robot_.odometry_noise_fraction * moved);
-  } else {
-    p.pose = e.pose;
-    p.sigma_xy_cm = e.sigma_xy_cm;
-  }
+  p.pose = anchor_.valid ? anchor_.carried_to(e.pose) : e.pose;
+  p.sigma_xy_cm = anchor_.valid ? anchor_sigma_cm(e.pose) : e.sigma_xy_cm;
   if (state_ == State::kSearching) p.source = PoseSource::kNone;
   else if (state_ == State::kLost) p.source = PoseSource::kLost;
   else if (applied_this_window_) p.source = PoseSource::kImage;

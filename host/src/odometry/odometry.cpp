@@ -99,7 +99,7 @@ void Odometry::reset(const Pose2& pose, double sigma_xy_cm, double sigma_yaw_deg
   if (!have_window_) last_gyro_deg_ = pose.yaw_deg;  // gyro aligned with the field at start-up
   yaw_offset_deg_ = angle_diff_deg(pose.yaw_deg, last_gyro_deg_);
   // The motion prior's velocity turns with the heading correction.
-  last_velocity_field_ = robot_to_field(last_velocity_field_, angle_diff_deg(pose.yaw_deg, est_.pose.yaw_deg));
+  last_velocity_field_ = robot_to_field(last_velocity_field_, yaw_difference_deg(pose, est_.pose));
   est_.pose = {pose.x_cm, pose.y_cm, wrap_deg(pose.yaw_deg)};
   est_.sigma_xy_cm = sigma_xy_cm;
   est_.sigma_yaw_deg = sigma_yaw_deg;

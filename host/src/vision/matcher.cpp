@@ -86,10 +86,27 @@ void check_db(const FeatureDb& db) {
 
 }  // namespace
 
-MatchResult global_search(const FeatureDb& db, const Scan& scan, const MatchOptions& opt) {
+FieldScan make_field_scan(const BearingScan& bearings, double yaw_deg) {
+  FieldScan f = make_field_scan(rotate_to_field(bearings, yaw_deg));
+  f.yaw_deg = yaw_deg;
+  return f;
+}
+
+FieldScan make_field_scan(const Scan& field_frame_scan) {
+  FieldScan f;
+  f.scan = field_frame_scan;
+  f.prepared = prepare_scan(field_frame_scan);
+  return f;
+}
+
+MatchResult global_search(const FeatureDb& db, const FieldScan& scan, const MatchOptions& opt) {
   check_db(db);
-  const PreparedScan p = prepare_scan(scan);
+  const PreparedScan& p = scan.prepared;
   return search_window(db, full_window(db), p.rays_used, opt, [&](int c) { return sad_fast(db.cell_features(c), p); });
+}
+
+MatchResult global_search(const FeatureDb& db, const Scan& scan, const MatchOptions& opt) {
+  return global_search(db, make_field_scan(scan), opt);
 }
 
 MatchResult global_search_reference(const FeatureDb& db, const Scan& scan, const MatchOptions& opt) {
@@ -98,7 +115,11 @@ MatchResult global_search_reference(const FeatureDb& db, const Scan& scan, const
                        [&](int c) { return sad_reference(db.cell_features(c), scan); });
 }
 
-MatchResult local_search(const FeatureDb& db, const Scan& scan, const Eigen::Vector2d& centre, double range_cm,
+int local_search_reach_cells(double range_cm, double grid_step_cm) {
+  return static_cast<int>(std::floor(range_cm / grid_step_cm + 1e-9));
+}
+
+MatchResult local_search(const FeatureDb& db, const FieldScan& scan, const Eigen::Vector2d& centre, double range_cm,
                          const MatchOptions& opt) {
   check_db(db);
   if (!(range_cm >= 0.0) || !centre.allFinite()) {
@@ -107,11 +128,16 @@ MatchResult local_search(const FeatureDb& db, const Scan& scan, const Eigen::Vec
   const GridSpec& g = db.grid;
   const int ci = std::clamp(static_cast<int>(std::lround((centre.x() - g.x0_cm) / g.step_cm)), 0, g.nx - 1);
   const int cj = std::clamp(static_cast<int>(std::lround((centre.y() - g.y0_cm) / g.step_cm)), 0, g.ny - 1);
-  const int reach = static_cast<int>(std::floor(range_cm / g.step_cm + 1e-9));
+  const int reach = local_search_reach_cells(range_cm, g.step_cm);
   const Window w{std::max(0, ci - reach), std::min(g.nx - 1, ci + reach), std::max(0, cj - reach),
                  std::min(g.ny - 1, cj + reach)};
-  const PreparedScan p = prepare_scan(scan);
+  const PreparedScan& p = scan.prepared;
   return search_window(db, w, p.rays_used, opt, [&](int c) { return sad_fast(db.cell_features(c), p); });
+}
+
+MatchResult local_search(const FeatureDb& db, const Scan& scan, const Eigen::Vector2d& centre, double range_cm,
+                         const MatchOptions& opt) {
+  return local_search(db, make_field_scan(scan), centre, range_cm, opt);
 }
 
 double error_at(const FieldGeometry& field, const CameraModel& camera, const PreparedScan& p, const Eigen::Vector2d& pos) {
@@ -135,9 +161,9 @@ double equiangular_offset(double em, double e0, double ep) {
 
 }  // namespace
 
-void interpolate_match(const FeatureDb& db, const Scan& scan, MatchResult& r) {
+void interpolate_match(const FeatureDb& db, const FieldScan& scan, MatchResult& r) {
   if (r.cell < 0 || r.rays_used == 0) return;
-  const PreparedScan p = prepare_scan(scan);
+  const PreparedScan& p = scan.prepared;
   const GridSpec& g = db.grid;
   const int i = r.cell % g.nx, j = r.cell / g.nx;
   const double e0 = sad_fast(db.cell_features(r.cell), p);
@@ -153,10 +179,14 @@ void interpolate_match(const FeatureDb& db, const Scan& scan, MatchResult& r) {
                                                                    offset(err(i, j - 1), err(i, j + 1)));
 }
 
-void refine_match(const FieldGeometry& field, const CameraModel& camera, const Scan& scan, MatchResult& r,
+void interpolate_match(const FeatureDb& db, const Scan& scan, MatchResult& r) {
+  interpolate_match(db, make_field_scan(scan), r);
+}
+
+void refine_match(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, MatchResult& r,
                   const MatchOptions& opt) {
   if (r.cell < 0 || r.rays_used == 0) return;
-  const PreparedScan p = prepare_scan(scan);
+  const PreparedScan& p = scan.prepared;
   Eigen::Vector2d pos = r.position_cm;
   double best = pos == r.grid_position_cm ? r.error : error_at(field, camera, p, pos);
   const Eigen::Vector2d steps[] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
@@ -180,6 +210,17 @@ void refine_match(const FieldGeometry& field, const CameraModel& camera, const S
   }
   r.position_cm = pos;
   r.refined_error = best;
+}
+
+void refine_match(const FieldGeometry& field, const CameraModel& camera, const Scan& scan, MatchResult& r,
+                  const MatchOptions& opt) {
+  refine_match(field, camera, make_field_scan(scan), r, opt);
+}
+
+void apply_refinement(const FeatureDb& db, const FieldGeometry& field, const CameraModel& camera,
+                      const FieldScan& scan, MatchResult& r, const MatchOptions& opt) {
+  if (opt.refinement != Refinement::kNone) interpolate_match(db, scan, r);
+  if (opt.refinement == Refinement::kRayCast) refine_match(field, camera, scan, r, opt);
 }
 
 YawEstimate estimate_yaw(const FieldGeometry& field, const CameraModel& camera, const BearingScan& bearings,
@@ -225,7 +266,7 @@ PoseMatch global_search_any_yaw(const FeatureDb& db, const FieldGeometry& field,
   };
   std::vector<Candidate> per_yaw;
   for (double yaw = 0.0; yaw < 360.0 - 1e-9; yaw += yaw_step_deg) {
-    per_yaw.push_back({global_search(db, rotate_to_field(bearings, yaw), opt), yaw});
+    per_yaw.push_back({global_search(db, make_field_scan(bearings, yaw), opt), yaw});
   }
   auto better = [](const Candidate& a, const Candidate& b) { return a.m.error < b.m.error; };
   const Candidate best = *std::min_element(per_yaw.begin(), per_yaw.end(), better);
@@ -236,11 +277,10 @@ PoseMatch global_search_any_yaw(const FeatureDb& db, const FieldGeometry& field,
   }
   // Finer yaw at the best grid point, then the position again at that yaw.
   const YawEstimate y = estimate_yaw(field, camera, bearings, best.m.grid_position_cm, best.yaw, yaw_step_deg);
-  const Scan scan = rotate_to_field(bearings, y.yaw_deg);
+  const FieldScan scan = make_field_scan(bearings, y.yaw_deg);
   out.match = local_search(db, scan, best.m.grid_position_cm, db.grid.step_cm, opt);
   out.yaw_deg = wrap_deg(y.yaw_deg);
-  if (opt.refinement != Refinement::kNone) interpolate_match(db, scan, out.match);
-  if (opt.refinement == Refinement::kRayCast) refine_match(field, camera, scan, out.match, opt);
+  apply_refinement(db, field, camera, scan, out.match, opt);
   // Second candidate: the best per-yaw result far enough from the chosen position.
   out.match.second_error = kNoError;
   out.match.ambiguous = false;
@@ -260,10 +300,10 @@ PoseMatch global_search_any_yaw(const FeatureDb& db, const FieldGeometry& field,
 MatchResult image_to_position(const cv::Mat& bgr, const CameraModel& camera, const FieldGeometry& field,
                               const FeatureDb& db, double yaw_deg, const Eigen::Vector2d* around_cm, double range_cm,
                               const MatchOptions& opt, const ScanParams& scan_params) {
-  const Scan scan = scan_image(bgr, camera, yaw_deg, scan_params);
+  FieldScan scan = make_field_scan(scan_image(bgr, camera, yaw_deg, scan_params));
+  scan.yaw_deg = yaw_deg;
   MatchResult r = around_cm != nullptr ? local_search(db, scan, *around_cm, range_cm, opt) : global_search(db, scan, opt);
-  if (opt.refinement != Refinement::kNone) interpolate_match(db, scan, r);
-  if (opt.refinement == Refinement::kRayCast) refine_match(field, camera, scan, r, opt);
+  apply_refinement(db, field, camera, scan, r, opt);
   return r;
 }
 
