@@ -274,8 +274,7 @@ std::optional<Pose2> truth_at(const std::vector<TruthSample>& truth, double t_ms
   if (hi->t_ms == t_ms || hi == truth.begin()) return hi->pose;
   const auto lo = std::prev(hi);
   const double f = (t_ms - lo->t_ms) / (hi->t_ms - lo->t_ms);
-  return Pose2{lo->pose.x_cm + f * (hi->pose.x_cm - lo->pose.x_cm), lo->pose.y_cm + f * (hi->pose.y_cm - lo->pose.y_cm),
-               wrap_deg(lo->pose.yaw_deg + f * angle_diff_deg(hi->pose.yaw_deg, lo->pose.yaw_deg))};
+  return interpolate(lo->pose, hi->pose, f);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -71,10 +71,8 @@ class SimTruthLog final : public HeadingSource {
     const double f = (t_ms - a.t_ms) / (b.t_ms - a.t_ms);
     Sample s;
     s.t_ms = t_ms;
-    s.truth.x_cm = a.truth.x_cm + f * (b.truth.x_cm - a.truth.x_cm);
-    s.truth.y_cm = a.truth.y_cm + f * (b.truth.y_cm - a.truth.y_cm);
-    s.truth.yaw_deg = wrap_deg(a.truth.yaw_deg + f * angle_diff_deg(b.truth.yaw_deg, a.truth.yaw_deg));
-    s.gyro_yaw_deg = wrap_deg(a.gyro_yaw_deg + f * angle_diff_deg(b.gyro_yaw_deg, a.gyro_yaw_deg));
+    s.truth = interpolate(a.truth, b.truth, f);
+    s.gyro_yaw_deg = interpolate_deg(a.gyro_yaw_deg, b.gyro_yaw_deg, f);
     return s;
   }
   double keep_ms_;
