@@ -74,7 +74,7 @@ std::string pose_json(const PoseMessage& m) {
   put_number(out, m.yaw_deg, 3);
   out += ",\"source\":";
   put_string(out, m.source);
-  // Absent rather than null: OpenCV's JSON reader (the project's only one) refuses null.
+  // Absent rather than null: every key present is a number (docs/DAEMON.md).
   if (m.match_error >= 0) {
     out += ",\"match_error\":";
     put_number(out, m.match_error, 3);

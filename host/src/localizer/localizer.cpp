@@ -36,7 +36,7 @@ void check_range_on_grid(double range_cm, const GridSpec& grid, const std::strin
   const double searched_cm = reach * grid.step_cm;
   if (std::abs(searched_cm - range_cm) <= 1e-6) return;
   std::ostringstream os;
-  os << source << ": field '" << field << "': search range " << range_cm
+  os << source << ":" << field << ": search range " << range_cm
      << " cm is not 0 or a whole multiple of the feature database's grid step " << grid.step_cm
      << " cm: the local search would reach " << reach << " cell(s) each side, i.e. search " << searched_cm
      << " cm (" << 2 * reach + 1 << " x " << 2 * reach + 1 << " points)";
