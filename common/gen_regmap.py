@@ -117,6 +117,17 @@ def link_values(spec):
     return values
 
 
+def values_max(reg, field):
+    """The largest value of a field with named values; they must be 0..max, so that a value is valid
+    exactly when it is <= max (how the RTL checks a write)."""
+    values = sorted(field["values"].values())
+    if values != list(range(len(values))):
+        raise SpecError(f"{SOURCE.name}: field {reg['name']}.{field['name']}: values {values} are not 0..{len(values) - 1}")
+    if values[-1] >= (1 << field["width"]):
+        raise SpecError(f"{SOURCE.name}: field {reg['name']}.{field['name']}: value {values[-1]} does not fit {field['width']} bits")
+    return values[-1]
+
+
 def register_bits(reg):
     """Bits a register with fields uses: one above its highest field bit."""
     return max(f["lsb"] + f["width"] for f in reg["fields"])
@@ -158,6 +169,8 @@ def verilog(spec, regs):
             out.append(f"`define {key}_W {field['width']}")
             for vname, value in field.get("values", {}).items():
                 out.append(f"`define {key}_{vname} {field['width']}'d{value}")
+            if field.get("values"):
+                out.append(f"`define {key}_MAX {field['width']}'d{values_max(reg, field)}")
     fr = spec["frames"]
     out.append("")
     out.append("// UART frames")
@@ -214,15 +227,19 @@ def cpp(spec, regs):
     for reg in regs:
         out.append(f"inline constexpr std::uint8_t {camel('REG_' + reg['name'])} = 0x{reg['addr']:02X};")
     out.append("")
-    out.append("// Register fields")
+    out.append("// Register fields; k<Reg>Bits: the bits a register with fields uses")
     for reg in regs:
         if reg["index"] not in (None, 0):
             continue
+        if reg.get("fields"):
+            out.append(f"inline constexpr int {camel(reg['stem'] + '_BITS')} = {register_bits(reg)};")
         for field in reg.get("fields", []):
             key = f"{reg['stem']}_{field['name']}"
             out.append(f"inline constexpr Field {camel(key)}{{{field['lsb']}, {field['width']}}};")
             for vname, value in field.get("values", {}).items():
                 out.append(f"inline constexpr std::uint32_t {camel(key + '_' + vname)} = {value}u;")
+            if field.get("values"):
+                out.append(f"inline constexpr std::uint32_t {camel(key + '_MAX')} = {values_max(reg, field)}u;")
     access = {"ro": "kReadOnly", "rw": "kReadWrite", "w1c": "kWriteOneToClear", "ro_latch": "kReadOnlyLatching"}
     out.append("")
     out.append(f"inline constexpr std::array<Register, {len(regs)}> kRegisters{{{{")

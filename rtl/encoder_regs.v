@@ -276,7 +276,7 @@ initial assume (rst_i);
 always @(*) begin
     if (f_past_valid && !rst_i) begin
         // A refused value never gets into the datapath.
-        assert (decode_q != 2'd3);
+        assert (decode_q <= `OMNILOC_CONTROL_DECODE_MAX);
         assert (period_q >= PERIOD_MIN_CYCLES);
         assert (win_status_q[BYTE_W-1:ST_W] == {(BYTE_W - ST_W){1'b0}});
     end

@@ -68,23 +68,31 @@ inline constexpr std::uint8_t kRegErrorCount1 = 0x15;
 inline constexpr std::uint8_t kRegErrorCount2 = 0x16;
 inline constexpr std::uint8_t kRegErrorCount3 = 0x17;
 
-// Register fields
+// Register fields; k<Reg>Bits: the bits a register with fields uses
+inline constexpr int kVersionBits = 24;
 inline constexpr Field kVersionPatch{0, 8};
 inline constexpr Field kVersionMinor{8, 8};
 inline constexpr Field kVersionMajor{16, 8};
+inline constexpr int kControlBits = 4;
 inline constexpr Field kControlEnable{0, 1};
 inline constexpr Field kControlDecode{1, 2};
 inline constexpr std::uint32_t kControlDecodeX4 = 0u;
 inline constexpr std::uint32_t kControlDecodeX2 = 1u;
 inline constexpr std::uint32_t kControlDecodeX1 = 2u;
+inline constexpr std::uint32_t kControlDecodeMax = 2u;
 inline constexpr Field kControlStream{3, 1};
+inline constexpr int kFilterBits = 8;
 inline constexpr Field kFilterLength{0, 8};
+inline constexpr int kPeriodBits = 32;
 inline constexpr Field kPeriodCycles{0, 32};
+inline constexpr int kStatusBits = 6;
 inline constexpr Field kStatusIllegal{0, 4};
 inline constexpr Field kStatusOverrun{4, 1};
 inline constexpr Field kStatusBadWrite{5, 1};
+inline constexpr int kLinkErrorsBits = 32;
 inline constexpr Field kLinkErrorsFraming{0, 16};
 inline constexpr Field kLinkErrorsOverrun{16, 16};
+inline constexpr int kSnapDirBits = 4;
 inline constexpr Field kSnapDirDir{0, 4};
 
 inline constexpr std::array<Register, 24> kRegisters{{

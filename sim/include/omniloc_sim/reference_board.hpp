@@ -249,14 +249,15 @@ class ReferenceBoard final : public UartSide {
     if (!reg) return r::kErrBadAddress;
     switch (addr) {
       case r::kRegControl:
-        if (r::kControlDecode.get(v) == 3 || (v & ~0xFu) != 0) {
+        // A bit above CONTROL's fields, or a DECODE value it does not define (they are 0..max).
+        if (r::kControlDecode.get(v) > r::kControlDecodeMax || (v >> r::kControlBits) != 0) {
           status_ = r::kStatusBadWrite.put(status_, 1);
           return r::kErrBadValue;
         }
         control_ = v;
         break;
       case r::kRegFilter:
-        if (v > 255) {
+        if ((v >> r::kFilterBits) != 0) {
           status_ = r::kStatusBadWrite.put(status_, 1);
           return r::kErrBadValue;
         }
