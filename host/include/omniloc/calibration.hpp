@@ -88,6 +88,9 @@ struct CalibrationResult {
   RimCircle rim;
   CarpetColour carpet;
   double view_radius_px = 0.0;
+  // Radii between which lines crossing the rays measured the mapping (5th-95th percentile); the
+  // polynomial is extrapolated outside (towards the body when no line crosses there).
+  double measured_min_px = 0.0, measured_max_px = 0.0;
   bool mirrored_ambiguous = false;  // the other handedness fits as well (symmetric view)
   double mirrored_score = 0.0, unmirrored_score = 0.0;
   std::vector<FrameAnalysis> analyses;

@@ -5,9 +5,6 @@
 #include <numeric>
 #include <random>
 #include <stdexcept>
-#include <cstdio>
-#include <cstdlib>
-#include <opencv2/imgcodecs.hpp>
 
 #include <Eigen/Dense>
 #include <opencv2/imgproc.hpp>
@@ -356,12 +353,6 @@ FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx) {
     }
   }
 
-  if (std::getenv("OMNILOC_CALIB_DEBUG")) {  // DEBUG-REMOVE
-    cv::imwrite("/tmp/calib_carpet.png", fa.carpet_mask);
-    cv::imwrite("/tmp/calib_lines.png", fa.line_mask);
-    std::fprintf(stderr, "carpet hue %.0f +- %.0f sat_min %.0f val_min %.0f medS %.0f medV %.0f vstep %.1f sstep %.1f\n", cc.hue,
-                 cc.hue_half_width, cc.sat_min, cc.val_min, cc.median_sat, cc.median_val, cc.line_val_step, cc.line_sat_step);
-  }
   // Polar statistics about the rim centre: class per (angle, radius): 0 other, 1 carpet, 2 line.
   const int nr = static_cast<int>(rim.radius_px);
   std::vector<std::uint8_t> cls(static_cast<std::size_t>(kPolarAngles) * static_cast<std::size_t>(nr), 0);
@@ -433,7 +424,6 @@ FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx) {
     if (!mast[static_cast<std::size_t>(k)]) open_end.push_back(end[static_cast<std::size_t>(k)]);
   // The 10th percentile: the ball or a robot on a few rays does not pull the view in.
   fa.view_radius_px = percentile(open_end, 0.1);
-  if (std::getenv("OMNILOC_CALIB_DEBUG")) std::fprintf(stderr, "fmax %.2f body %d view0 %.1f view %.1f masts %zu\n", fmax, body, view0, fa.view_radius_px, fa.masts_image.size());
   if (fa.view_radius_px <= fa.body_radius_px + 2 * w) {
     throw std::runtime_error(ctx + ": no carpet ring: the carpet ends at " + std::to_string(fa.view_radius_px) +
                              " px, at the robot's body (" + std::to_string(fa.body_radius_px) + " px)");
