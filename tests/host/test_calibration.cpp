@@ -44,6 +44,12 @@ CameraModel test_camera(double scale) {
 }
 
 void expect_camera_close(const CalibrationResult& r, const CameraModel& truth, bool yaw_modulo_180) {
+  std::printf("found: centre (%.2f, %.2f) yaw offset %.3f body %.1f masts %zu (first %.2f +- %.2f); truth centre (%.2f, %.2f) "
+              "yaw offset %.3f body %.1f mast %.2f +- %.2f\n",
+              r.camera.center_px.x(), r.camera.center_px.y(), r.camera.yaw_offset_deg, r.camera.body_radius_px,
+              r.camera.masts.size(), r.camera.masts.empty() ? 0.0 : r.camera.masts[0].bearing_deg,
+              r.camera.masts.empty() ? 0.0 : r.camera.masts[0].half_width_deg, truth.center_px.x(), truth.center_px.y(),
+              truth.yaw_offset_deg, truth.body_radius_px, truth.masts[0].bearing_deg, truth.masts[0].half_width_deg);
   EXPECT_NEAR(r.camera.center_px.x(), truth.center_px.x(), 1.0);
   EXPECT_NEAR(r.camera.center_px.y(), truth.center_px.y(), 1.0);
   double worst = 0.0;
@@ -51,7 +57,6 @@ void expect_camera_close(const CalibrationResult& r, const CameraModel& truth, b
   for (double rr = r_lo; rr <= r_hi; rr += 1.0) {
     const double e = std::abs(r.radial.ground_cm(rr) / truth.ground_cm_at_radius(rr) - 1.0);
     worst = std::max(worst, e);
-    if (static_cast<int>(rr) % 10 == 0) std::printf("  r %.0f: d %.1f truth %.1f (%.2f %%)\n", rr, r.radial.ground_cm(rr), truth.ground_cm_at_radius(rr), 100 * e);
   }
   std::printf("mapping: worst relative ground-distance error %.2f %% over the measured radii [%.0f, %.0f] px\n",
               100 * worst, r_lo, r_hi);
@@ -95,6 +100,8 @@ TEST(Calibration, RoundTripMirroredUnknownHeadingOnTheCentreSpot) {
   const CalibrationResult r = calibrate_camera({f}, field);
   // From the centre spot the view is symmetric about the robot: the handedness is not seen, and a
   // mirrored camera fits as an unmirrored one turned round. The mapping and centre are seen.
+  std::printf("centre (%.2f, %.2f) vs (%.2f, %.2f), rms %.2f px\n", r.camera.center_px.x(), r.camera.center_px.y(),
+              truth.center_px.x(), truth.center_px.y(), r.rms_px);
   EXPECT_TRUE(r.mirrored_ambiguous);
   EXPECT_NEAR(r.camera.center_px.x(), truth.center_px.x(), 1.0);
   EXPECT_NEAR(r.camera.center_px.y(), truth.center_px.y(), 1.0);

@@ -101,13 +101,6 @@ std::vector<PolarPixel> to_polar(const std::vector<Eigen::Vector2d>& px, const E
   return out;
 }
 
-// Pixels per cm at a pixel: geometric mean of the radial (1 / d') and tangential (r / d) scales.
-double px_per_cm(const RadialPolynomial& m, double r) {
-  const double d = m.ground_cm(r), s = m.slope_cm_per_px(r);
-  if (!(d > 0) || !(s > 0)) return 0.0;
-  return std::sqrt((1.0 / s) * (r / d));
-}
-
 // Image residual (px) of one line pixel against the nearest line point q, as the fit measures it:
 // the ground error split radially (through 1 / d') and tangentially (through r / d).
 template <class T>
