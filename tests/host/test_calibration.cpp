@@ -139,6 +139,46 @@ TEST(Calibration, WrittenCameraIsReadBackByTheCameraReader) {
   expect_camera_close(r, truth, false);
 }
 
+TEST(Calibration, RoundTripAnotherImageSizeWithRobotsInView) {
+  const FieldGeometry field = load_field("fira-robosot");
+  CameraModel truth = test_camera(1.0);
+  truth.width_px = 960;
+  truth.height_px = 720;
+  truth.center_px = {478.3, 362.1};
+  for (auto& m : truth.radius_lut) m.radius_px *= 1.5;
+  truth.body_radius_px = 46.0;
+  truth.yaw_offset_deg = -30.0;
+  truth.masts = {{-75.0, 4.0}};
+  sim::RenderOptions opt;
+  opt.seed = 1305;
+  const Pose2 pose{520.0, 180.0, 110.0};
+  opt.obstacles = sim::random_obstacles(field, pose, 3, opt.seed);
+  std::printf("seed %llu, %zu robots in view\n", static_cast<unsigned long long>(opt.seed), opt.obstacles.size());
+  CalibrationFrame f{sim::render_omni(field, truth, pose, opt), "rendered-960", {pose.x_cm, pose.y_cm}, pose.yaw_deg};
+  const CalibrationResult r = calibrate_camera({f}, field);
+  expect_camera_close(r, truth, false);
+  EXPECT_LT(r.rms_px, 1.0);
+}
+
+TEST(Calibration, RoundTripTwoFramesShareOneCamera) {
+  const FieldGeometry field = load_field("fira-robosot");
+  const CameraModel truth = test_camera(1.03);
+  const sim::OmniRenderer renderer(field, truth);
+  std::vector<CalibrationFrame> frames;
+  const Pose2 poses[] = {{300.0, 200.0, 30.0}, {460.0, 330.0, -60.0}};
+  for (int i = 0; i < 2; ++i) {
+    sim::RenderOptions opt;
+    opt.seed = 1306 + static_cast<std::uint64_t>(i);
+    std::printf("seed %llu\n", static_cast<unsigned long long>(opt.seed));
+    frames.push_back({renderer.render(poses[i], opt), "frame" + std::to_string(i), {poses[i].x_cm, poses[i].y_cm},
+                      poses[i].yaw_deg});
+  }
+  const CalibrationResult r = calibrate_camera(frames, field);
+  ASSERT_EQ(r.fits.size(), 2u);
+  for (const auto& f : r.fits) EXPECT_LT(f.rms_px, 1.0);
+  expect_camera_close(r, truth, false);
+}
+
 TEST(Calibration, RealTkuFrameOnTheCentreSpotHeadingUnknown) {
   const auto path = test_data("tku-robosot-centre-spot.png");
   ASSERT_FALSE(path.empty()) << "tests/data/tku-robosot-centre-spot.png not found from " << std::filesystem::current_path();
