@@ -2,11 +2,16 @@
 // that drew them, the real TKU RoboSot frame (tests/data/, MIT licence beside it), and frames on
 // which nothing fits.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include <opencv2/core.hpp>
 #include <opencv2/core/persistence.hpp>
@@ -202,6 +207,38 @@ TEST(Calibration, RealTkuFrameOnTheCentreSpotHeadingUnknown) {
   EXPECT_TRUE(r.radial.monotonic_up_to(r.view_radius_px));
   // The image's own rods: three, as the frame shows.
   EXPECT_EQ(c.masts.size(), 3u);
+}
+
+// The program: the real frame, one pose with the heading unknown, the camera file and overlay.
+TEST(Calibration, CommandWritesACameraTheReaderLoadsAndAnOverlay) {
+  const auto path = test_data("tku-robosot-centre-spot.png");
+  ASSERT_FALSE(path.empty());
+  const auto dir = std::filesystem::temp_directory_path() / ("omniloc_calib_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto cam = dir / "cam.json", png = dir / "overlay.png", log = dir / "out.txt";
+  const std::string cmd = std::string(OMNILOC_CLI_PATH) + " calibrate " + path.string() + " --pose 375,275 --out " +
+                          cam.string() + " --overlay " + png.string() + " >" + log.string() + " 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  std::stringstream text;
+  text << std::ifstream(log).rdbuf();
+  EXPECT_NE(text.str().find("residual rms"), std::string::npos) << text.str();
+  const CameraModel c = load_camera(cam.string());
+  EXPECT_EQ(c.width_px, 640);
+  EXPECT_EQ(c.height_px, 480);
+  const cv::Mat ov = cv::imread(png.string());
+  EXPECT_EQ(ov.cols, 640);
+  // A grey frame: exit 1 with the reason, no camera written.
+  const auto grey = dir / "grey.png", cam2 = dir / "cam2.json";
+  cv::imwrite(grey.string(), cv::Mat(480, 640, CV_8UC3, cv::Scalar::all(128)));
+  const std::string cmd2 = std::string(OMNILOC_CLI_PATH) + " calibrate " + grey.string() + " --out " + cam2.string() +
+                           " >" + log.string() + " 2>&1";
+  const int status = std::system(cmd2.c_str());
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1) << status;
+  std::stringstream text2;
+  text2 << std::ifstream(log).rdbuf();
+  EXPECT_NE(text2.str().find("no mirror rim"), std::string::npos) << text2.str();
+  EXPECT_FALSE(std::filesystem::exists(cam2));
+  std::filesystem::remove_all(dir);
 }
 
 TEST(Calibration, UniformGreyFrameIsAClearError) {
