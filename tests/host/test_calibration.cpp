@@ -252,6 +252,17 @@ TEST(Calibration, UniformGreyFrameIsAClearError) {
   }
 }
 
+TEST(Calibration, TinyFrameIsAClearError) {
+  const FieldGeometry field = load_field("fira-robosot");
+  CalibrationFrame f{cv::Mat(30, 40, CV_8UC3, cv::Scalar(40, 140, 45)), "tiny.png", {375.0, 275.0}, std::nullopt};
+  try {
+    (void)calibrate_camera({f}, field);
+    FAIL() << "a 40 x 30 frame calibrated";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("tiny.png: image 40 x 30 is too small"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Calibration, NoiseFrameIsAClearError) {
   const FieldGeometry field = load_field("fira-robosot");
   cv::Mat img(480, 640, CV_8UC3);
