@@ -252,6 +252,20 @@ TEST(Calibration, UniformGreyFrameIsAClearError) {
   }
 }
 
+// The real frame said to be taken at (150, 100) (it was taken on the centre spot): no camera
+// puts most of its line pixels on the field seen from there.
+TEST(Calibration, RealFrameAtAWrongPoseFitsNothing) {
+  const auto path = test_data("tku-robosot-centre-spot.png");
+  ASSERT_FALSE(path.empty());
+  CalibrationFrame f{cv::imread(path.string(), cv::IMREAD_COLOR), "tku", {150.0, 100.0}, std::nullopt};
+  try {
+    (void)calibrate_camera({f}, load_field("fira-robosot"));
+    FAIL() << "calibrated at a wrong pose";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("tku: nothing fits"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Calibration, TinyFrameIsAClearError) {
   const FieldGeometry field = load_field("fira-robosot");
   CalibrationFrame f{cv::Mat(30, 40, CV_8UC3, cv::Scalar(40, 140, 45)), "tiny.png", {375.0, 275.0}, std::nullopt};
