@@ -153,9 +153,13 @@ int cmd_calibrate(std::span<const std::string_view> args) {
   for (std::size_t i = 0; i < r.fits.size(); ++i) {
     const auto& f = r.fits[i];
     std::printf("%s: heading %.2f deg%s, %d line pixels, %d within %.0f px: rms %.2f px (%.2f cm), median %.2f px\n",
-                frames[i].name.c_str(), f.yaw_deg, f.yaw_given ? " (given)" : " (found; twin +180 fits the same)",
+                frames[i].name.c_str(), f.yaw_deg, f.yaw_given ? " (given)" : " (found, yaw offset taken for heading 0)",
                 f.line_pixels, f.inliers, r.inlier_threshold_px, f.rms_px, f.rms_cm, f.median_px);
   }
+  const auto& f0 = r.fits.front();
+  std::printf("%s: coarse score %.2f px at heading %.1f deg; best distinct heading %.1f deg scores %.2f px%s\n",
+              frames.front().name.c_str(), f0.score, f0.yaw_deg, f0.twin_yaw_deg, f0.twin_score,
+              f0.twin_score < 1.1 * f0.score ? " (a twin: the heading is not told apart)" : "");
   std::printf("residual rms %.2f px (%.2f cm) over %.0f %% of the line pixels; wrote %s in %.2f s\n", r.rms_px, r.rms_cm,
               100 * r.inlier_fraction, out.c_str(), seconds);
   if (!overlay.empty()) {

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <stdexcept>
 
 #include <ceres/ceres.h>
@@ -214,13 +215,7 @@ void score_yaws(const std::vector<PolarPixel>& pp, const CoarseMap& m, double rv
   }
 }
 
-}  // namespace
-
-CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, const FieldGeometry& field,
-                                   const CalibrationOptions& options) {
-  auto say = [&](const std::string& m) {
-    if (options.progress) options.progress(m);
-  };
+void check_frames(const std::vector<CalibrationFrame>& frames, const FieldGeometry& field) {
   if (frames.empty()) throw std::runtime_error("calibrate: no frames");
   const cv::Size size = frames.front().image.size();
   for (const auto& f : frames) {
@@ -236,170 +231,126 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, 
                                std::to_string(f.position_cm.y()) + ") cm is not on the carpet of " + field.name);
     }
   }
-  CalibrationResult res;
-  for (const auto& f : frames) {
-    say(f.name + ": finding the mirror rim, carpet, lines, body and masts");
-    res.analyses.push_back(analyse_frame(f.image, f.name));
-    const auto& a = res.analyses.back();
-    say(f.name + ": rim (" + std::to_string(a.rim.centre_px.x()) + ", " + std::to_string(a.rim.centre_px.y()) +
-        ") r " + std::to_string(a.rim.radius_px) + " px, " + std::to_string(a.line_pixels.size()) + " line pixels");
-  }
-  say("building the field's distance transform");
-  const FieldDistance fd(field);
+}
 
-  // Coarse search on the first frame: centre = rim centre, both handednesses, every heading.
-  const FrameAnalysis& a0 = res.analyses.front();
-  const CalibrationFrame& f0 = frames.front();
-  const double rv = a0.view_radius_px;
-  constexpr double kCoarseTruncPx = 8.0;  // about the basin of the 3-degree heading step at 150 px
-  const std::vector<double> shapes{0.01, 0.3, 0.5, 0.65, 0.8, 0.9, 0.95};
+constexpr double kCoarseTruncPx = 8.0;  // about the basin of the 3-degree heading step at 150 px
+constexpr int kCoarseHeadings = 120;
+
+// Best coarse camera per handedness, and the heading scores of its mapping (for the twin).
+struct CoarseResult {
   CoarseHit best[2];
-  const int n_yaw = 120;
-  std::vector<double> scores(static_cast<std::size_t>(n_yaw));
-  std::vector<std::vector<double>> best_scores(2);
+  std::vector<double> heading_scores[2];
+};
+
+// Brute force on one frame (centre = rim centre): 7 shapes x 51 scales x 120 headings per
+// handedness, then 0.5 deg, 1 % scale and +-0.1 shape around the best.
+CoarseResult coarse_search(const FrameAnalysis& a, const CalibrationFrame& f, const FieldDistance& fd,
+                           const std::function<void(const std::string&)>& say) {
+  const double rv = a.view_radius_px;
+  const std::vector<double> shapes{0.01, 0.3, 0.5, 0.65, 0.8, 0.9, 0.95};
+  CoarseResult out;
+  std::vector<double> scores(static_cast<std::size_t>(kCoarseHeadings));
   for (int mir = 0; mir < 2; ++mir) {
     say(std::string("coarse search (") + (mir ? "mirrored" : "not mirrored") + "): 7 shapes x 51 scales x 120 headings");
-    const auto pp = to_polar(a0.line_pixels, a0.rim.centre_px, mir == 1, 1000);
+    CoarseHit& best = out.best[mir];
+    const auto pp = to_polar(a.line_pixels, a.rim.centre_px, mir == 1, 1000);
     for (double x : shapes) {
       for (int si = 0; si <= 50; ++si) {
         const CoarseMap m{60.0 * std::pow(1.08, si), x};
-        score_yaws(pp, m, rv, f0.position_cm, fd, 2 * kPi / n_yaw, kCoarseTruncPx, scores);
-        for (int k = 0; k < n_yaw; ++k) {
-          if (scores[static_cast<std::size_t>(k)] < best[mir].score) {
-            best[mir] = {scores[static_cast<std::size_t>(k)], m, k * 2 * kPi / n_yaw};
-            best_scores[static_cast<std::size_t>(mir)] = scores;
+        score_yaws(pp, m, rv, f.position_cm, fd, 2 * kPi / kCoarseHeadings, kCoarseTruncPx, scores);
+        for (int k = 0; k < kCoarseHeadings; ++k) {
+          if (scores[static_cast<std::size_t>(k)] < best.score) {
+            best = {scores[static_cast<std::size_t>(k)], m, k * 2 * kPi / kCoarseHeadings};
+            out.heading_scores[mir] = scores;
           }
         }
       }
     }
-    // Fine: around the best, 0.5 deg, 1 % scale, shape +-0.05.
-    const auto pp2 = to_polar(a0.line_pixels, a0.rim.centre_px, mir == 1, 3000);
-    const CoarseHit c = best[mir];
-    best[mir].score = 1e18;
+    const auto pp2 = to_polar(a.line_pixels, a.rim.centre_px, mir == 1, 3000);
+    const CoarseHit c = best;
+    best.score = 1e18;
+    std::vector<double> s1(1);
     for (double dx = -0.1; dx <= 0.1001; dx += 0.05) {
       const double x = std::clamp(c.map.x + dx, 0.01, 0.97);
       for (int si = -8; si <= 8; ++si) {
         const CoarseMap m{c.map.dv_cm * std::pow(1.01, si), x};
         for (int k = -6; k <= 6; ++k) {
-          std::vector<double> s1(1);
           const double alpha = c.alpha + deg_to_rad(0.5 * k);
           std::vector<PolarPixel> rot = pp2;
           for (auto& p : rot) p.phi -= alpha;
-          score_yaws(rot, m, rv, f0.position_cm, fd, 0.0, kCoarseTruncPx, s1);
-          if (s1[0] < best[mir].score) best[mir] = {s1[0], m, alpha};
+          score_yaws(rot, m, rv, f.position_cm, fd, 0.0, kCoarseTruncPx, s1);
+          if (s1[0] < best.score) best = {s1[0], m, alpha};
         }
       }
     }
   }
-  res.unmirrored_score = best[0].score;
-  res.mirrored_score = best[1].score;
-  const int mir = best[1].score < best[0].score ? 1 : 0;
-  // Within 3 %: the lines seen do not tell the handedness (a view symmetric about the robot).
-  res.mirrored_ambiguous = std::abs(best[1].score - best[0].score) < 0.03 * std::min(best[0].score, best[1].score);
-  const CoarseHit& hit = best[mir];
-  say("coarse best: " + std::string(mir ? "mirrored" : "not mirrored") + ", heading term " +
-      std::to_string(rad_to_deg(hit.alpha)) + " deg, d(" + std::to_string(rv) + " px) = " +
-      std::to_string(hit.map.dv_cm) + " cm, shape " + std::to_string(hit.map.x) + ", truncated mean " +
-      std::to_string(hit.score) + " px" + (res.mirrored_ambiguous ? " (handedness ambiguous)" : ""));
+  return out;
+}
 
-  // Polynomial through the coarse curve (least squares over the used radii).
-  FitState st{};
-  st.c[0] = a0.rim.centre_px.x();
-  st.c[1] = a0.rim.centre_px.y();
-  st.scale = rv;
-  st.mirrored = mir == 1;
-  {
-    Eigen::MatrixXd A(100, kRadialTerms);
-    Eigen::VectorXd y(100);
-    for (int i = 0; i < 100; ++i) {
-      const double x = (i + 1) / 100.0 * 1.1;
-      for (int k = 0; k < kRadialTerms; ++k) A(i, k) = std::pow(x, k + 1);
-      y(i) = coarse_d(hit.map, std::min(x, 0.999 / hit.map.x) * rv, rv);
-    }
-    const Eigen::VectorXd b = A.colPivHouseholderQr().solve(y);
-    for (int k = 0; k < 4; ++k) st.b[k] = k < kRadialTerms ? b(k) : 0.0;
+// The polynomial through the coarse curve (least squares over 0..1.1 view radii).
+void initial_polynomial(const CoarseHit& hit, FitState& st) {
+  Eigen::MatrixXd A(100, kRadialTerms);
+  Eigen::VectorXd y(100);
+  for (int i = 0; i < 100; ++i) {
+    const double x = (i + 1) / 100.0 * 1.1;
+    for (int k = 0; k < kRadialTerms; ++k) A(i, k) = std::pow(x, k + 1);
+    y(i) = coarse_d(hit.map, std::min(x, 0.999 / hit.map.x) * st.scale, st.scale);
   }
-  std::vector<FrameState> fs;
-  double yaw_offset = 0.0;
-  bool any_known = false;
-  for (std::size_t i = 0; i < frames.size(); ++i) {
-    FrameState s{&frames[i], &res.analyses[i]};
-    if (frames[i].yaw_deg) {
-      any_known = true;
-      s.yaw_rad = deg_to_rad(*frames[i].yaw_deg);
-    }
-    fs.push_back(s);
-  }
-  // Headings of the other frames: search with the first frame's mapping.
-  for (std::size_t i = 0; i < fs.size(); ++i) {
-    if (i == 0) {
-      fs[i].angle_rad = hit.alpha + fs[i].yaw_rad;
-      continue;
-    }
-    const auto pp = to_polar(fs[i].analysis->line_pixels, a0.rim.centre_px, st.mirrored, 1500);
-    std::vector<double> s(720);
-    score_yaws(pp, hit.map, rv, fs[i].frame->position_cm, fd, 2 * kPi / 720, kCoarseTruncPx, s);
-    const auto k = std::min_element(s.begin(), s.end()) - s.begin();
-    fs[i].angle_rad = static_cast<double>(k) * 2 * kPi / 720 + fs[i].yaw_rad;
-  }
-  if (any_known) {
-    for (const auto& s : fs)
-      if (s.frame->yaw_deg) yaw_offset = s.angle_rad;
-  }
+  const Eigen::VectorXd b = A.colPivHouseholderQr().solve(y);
+  for (int k = 0; k < 4; ++k) st.b[k] = k < kRadialTerms ? b(k) : 0.0;
+}
 
-  // Robust refinement: Huber (1 px) on the image residual, pixels beyond a shrinking truncation
-  // dropped, nearest line points re-associated between solves.
+// Robust refinement: Huber (1 px) on the image residual, pixels beyond a shrinking truncation
+// dropped, nearest line points re-associated between solves. Frames with a known heading share
+// one yaw offset (`shared_angle`); the others have their own heading term.
+void refine(FitState& st, std::vector<FrameState>& fs, double& shared_angle, const FieldDistance& fd,
+            const std::function<void(const std::string&)>& say) {
   const double trunc_schedule[] = {8.0, 6.0, 4.0, 3.0, 3.0, 3.0, 3.0, 3.0, 3.0, 3.0, 3.0, 3.0};
-  res.inlier_threshold_px = 3.0;  // a 5 cm line far away is 1-2 px: 3 px is one line width off
-  double shared_angle = yaw_offset;
+  auto ring_of = [&](const Eigen::Vector2d& p) {
+    return static_cast<std::size_t>(std::min(63.0, std::hypot(p.x() - st.c[0], p.y() - st.c[1]) / 10.0));
+  };
   for (std::size_t it = 0; it < std::size(trunc_schedule); ++it) {
-    ceres::Problem problem;
-    int used = 0;
-    // Every 10 px ring of radii weighs alike (square root of the inverse pixel count, at most 3x):
+    // Every 10 px ring of radii weighs alike (square root of the inverse pixel count, 1/3..3):
     // the few lines near the body otherwise count for nothing against the many far ones.
     std::vector<int> ring(64, 0);
     for (const auto& s : fs)
-      for (const auto& p : s.analysis->line_pixels)
-        ++ring[static_cast<std::size_t>(std::min(63.0, std::hypot(p.x() - st.c[0], p.y() - st.c[1]) / 10.0))];
+      for (const auto& p : s.analysis->line_pixels) ++ring[ring_of(p)];
     int rings = 0, ring_total = 0;
     for (int n : ring) {
       rings += n > 0;
       ring_total += n;
     }
-    auto ring_weight = [&](const Eigen::Vector2d& p) {
-      const int n = ring[static_cast<std::size_t>(std::min(63.0, std::hypot(p.x() - st.c[0], p.y() - st.c[1]) / 10.0))];
-      return std::clamp(std::sqrt(static_cast<double>(ring_total) / std::max(1, rings) / std::max(1, n)), 1.0 / 3.0, 3.0);
-    };
+    ceres::Problem problem;
+    int used = 0;
     for (auto& s : fs) {
       double* angle = s.frame->yaw_deg ? &shared_angle : &s.angle_rad;
       const double alpha = *angle - s.yaw_rad;
       const auto& lp = s.analysis->line_pixels;
       const std::size_t stride = std::max<std::size_t>(1, lp.size() / 6000);
+      const double sign = st.mirrored ? -1.0 : 1.0;
       for (std::size_t j = 0; j < lp.size(); j += stride) {
-        Eigen::Vector2d err;
-        const double e = residual_px(st, alpha, s.frame->position_cm, lp[j], fd, &err);
-        if (e > trunc_schedule[it]) continue;
-        const double sign = st.mirrored ? -1.0 : 1.0;
+        if (residual_px(st, alpha, s.frame->position_cm, lp[j], fd, nullptr) > trunc_schedule[it]) continue;
         const double du = sign * (lp[j].x() - st.c[0]), dv = st.c[1] - lp[j].y();
         const double d = st.poly().ground_cm(std::hypot(du, dv));
         const double th = std::atan2(dv, du) - alpha;
         const Eigen::Vector2d g = s.frame->position_cm + d * Eigen::Vector2d(std::cos(th), std::sin(th));
         auto* cost = new ceres::AutoDiffCostFunction<PixelCost, 2, 2, 4, 1>(
             new PixelCost{lp[j].x(), lp[j].y(), sign, 1.0 / st.scale, s.yaw_rad, s.frame->position_cm, fd.nearest(g)});
-        const double wgt = ring_weight(lp[j]);
-        problem.AddResidualBlock(cost, new ceres::ScaledLoss(new ceres::HuberLoss(1.0), wgt * wgt, ceres::TAKE_OWNERSHIP),
-                                 st.c, st.b, angle);
+        const double w = std::clamp(
+            std::sqrt(static_cast<double>(ring_total) / std::max(1, rings) / std::max(1, ring[ring_of(lp[j])])), 1.0 / 3.0, 3.0);
+        problem.AddResidualBlock(cost, new ceres::ScaledLoss(new ceres::HuberLoss(1.0), w * w, ceres::TAKE_OWNERSHIP), st.c,
+                                 st.b, angle);
         ++used;
       }
     }
-    if (kRadialTerms < 4 && used > 0) {
+    if (used < 50) {
+      throw std::runtime_error(fs.front().frame->name + ": nothing fits: only " + std::to_string(used) +
+                               " line pixels lie near the field model at the best coarse camera");
+    }
+    if (kRadialTerms < 4) {
       std::vector<int> fixed;
       for (int k = kRadialTerms; k < 4; ++k) fixed.push_back(k);
       problem.SetManifold(st.b, new ceres::SubsetManifold(4, fixed));
-    }
-    if (used < 50) {
-      throw std::runtime_error(f0.name + ": nothing fits: only " + std::to_string(used) +
-                               " line pixels lie near the field model at the best coarse camera");
     }
     ceres::Solver::Options so;
     so.linear_solver_type = ceres::DENSE_QR;
@@ -413,73 +364,58 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, 
   }
   for (auto& s : fs)
     if (s.frame->yaw_deg) s.angle_rad = shared_angle;
+}
 
-  res.radial = st.poly();
-  // The view: where the carpet ends all round in every frame, inside the rim.
-  res.view_radius_px = a0.view_radius_px;
-  for (const auto& a : res.analyses) res.view_radius_px = std::min(res.view_radius_px, a.view_radius_px);
-  double r_used = 0.0;
-  for (const auto& a : res.analyses)
-    for (const auto& p : a.line_pixels) r_used = std::max(r_used, std::hypot(p.x() - st.c[0], p.y() - st.c[1]));
-  if (!res.radial.monotonic_up_to(std::max(r_used, res.view_radius_px)) || !(res.radial.ground_cm(res.view_radius_px) > 0)) {
-    throw std::runtime_error(f0.name + ": nothing fits: the fitted radial model is not monotonic over the " +
-                             std::to_string(static_cast<int>(r_used)) + " px the lines span");
-  }
-
-  // Residuals per frame, over every line pixel.
+// Residuals per frame over every line pixel, and the totals.
+void measure_residuals(const FitState& st, const std::vector<FrameState>& fs, const FieldDistance& fd,
+                       CalibrationResult& res) {
   std::vector<double> all_px;
   double sum_px2 = 0.0, sum_cm2 = 0.0;
-  int inl_total = 0, n_total = 0;
-  for (std::size_t i = 0; i < fs.size(); ++i) {
+  int inl_total = 0;
+  for (const auto& s : fs) {
     FrameFit ff;
-    ff.yaw_given = frames[i].yaw_deg.has_value();
-    const double alpha = fs[i].angle_rad - fs[i].yaw_rad;
+    ff.yaw_given = s.frame->yaw_deg.has_value();
+    const double alpha = s.angle_rad - s.yaw_rad;
     ff.image_angle_of_field_x_deg = wrap_deg(rad_to_deg(alpha));
     std::vector<double> e_px;
     double s2 = 0.0, c2 = 0.0;
-    for (const auto& p : fs[i].analysis->line_pixels) {
+    for (const auto& p : s.analysis->line_pixels) {
       Eigen::Vector2d err;
-      const double e = residual_px(st, alpha, frames[i].position_cm, p, fd, &err);
+      const double e = residual_px(st, alpha, s.frame->position_cm, p, fd, &err);
       e_px.push_back(e);
-      all_px.push_back(e);
       if (e <= res.inlier_threshold_px) {
         s2 += e * e;
         c2 += err.squaredNorm();
         ++ff.inliers;
       }
     }
+    all_px.insert(all_px.end(), e_px.begin(), e_px.end());
     ff.line_pixels = static_cast<int>(e_px.size());
     ff.rms_px = std::sqrt(s2 / std::max(1, ff.inliers));
     ff.rms_cm = std::sqrt(c2 / std::max(1, ff.inliers));
-    std::vector<double> tmp = e_px;
-    std::nth_element(tmp.begin(), tmp.begin() + static_cast<std::ptrdiff_t>(tmp.size() / 2), tmp.end());
-    ff.median_px = tmp[tmp.size() / 2];
+    std::nth_element(e_px.begin(), e_px.begin() + static_cast<std::ptrdiff_t>(e_px.size() / 2), e_px.end());
+    ff.median_px = e_px[e_px.size() / 2];
     sum_px2 += s2;
     sum_cm2 += c2;
     inl_total += ff.inliers;
-    n_total += ff.line_pixels;
-    if (i == 0) {
-      ff.score = best[mir].score;
-      // Twin: the best coarse heading at least 30 deg from the fitted one.
-      const auto& sc = best_scores[static_cast<std::size_t>(mir)];
-      ff.twin_score = 1e18;
-      for (int k = 0; k < n_yaw; ++k) {
-        const double a_deg = k * 360.0 / n_yaw;
-        if (std::abs(angle_diff_deg(a_deg, rad_to_deg(hit.alpha))) < 30.0) continue;
-        if (sc[static_cast<std::size_t>(k)] < ff.twin_score) {
-          ff.twin_score = sc[static_cast<std::size_t>(k)];
-          ff.twin_yaw_deg = a_deg;
-        }
-      }
-    }
     res.fits.push_back(ff);
   }
-  // Radii where the mapping is measured: inlier pixels on lines that cross their ray (shorter
-  // along the ray than across it); a line running along the ray says nothing about distance.
+  res.inlier_fraction = static_cast<double>(inl_total) / std::max<double>(1.0, static_cast<double>(all_px.size()));
+  res.rms_px = std::sqrt(sum_px2 / std::max(1, inl_total));
+  res.rms_cm = std::sqrt(sum_cm2 / std::max(1, inl_total));
+  std::nth_element(all_px.begin(), all_px.begin() + static_cast<std::ptrdiff_t>(all_px.size() / 2), all_px.end());
+  res.median_px = all_px[all_px.size() / 2];
+}
+
+// Radii where the mapping is measured: inlier pixels on lines that cross their ray (shorter
+// along the ray than across it); a line running along the ray says nothing about distance.
+void measured_radii(const FitState& st, const std::vector<FrameState>& fs, const FieldDistance& fd,
+                    CalibrationResult& res) {
   std::vector<double> crossing_r;
-  for (std::size_t i = 0; i < fs.size(); ++i) {
-    const double alpha = fs[i].angle_rad - fs[i].yaw_rad;
-    const cv::Mat& lm = fs[i].analysis->line_mask;
+  const Eigen::Vector2d c(st.c[0], st.c[1]);
+  for (const auto& s : fs) {
+    const double alpha = s.angle_rad - s.yaw_rad;
+    const cv::Mat& lm = s.analysis->line_mask;
     auto run = [&](const Eigen::Vector2d& p, const Eigen::Vector2d& dir) {
       int n = 0;
       for (double sgn : {-1.0, 1.0}) {
@@ -492,50 +428,141 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, 
       }
       return n;
     };
-    for (const auto& p : fs[i].analysis->line_pixels) {
-      if (residual_px(st, alpha, frames[i].position_cm, p, fd, nullptr) > res.inlier_threshold_px) continue;
-      const Eigen::Vector2d c(st.c[0], st.c[1]);
+    for (const auto& p : s.analysis->line_pixels) {
+      if (residual_px(st, alpha, s.frame->position_cm, p, fd, nullptr) > res.inlier_threshold_px) continue;
       const Eigen::Vector2d radial = (p - c).normalized(), tangential(-radial.y(), radial.x());
       if (run(p, radial) < run(p, tangential)) crossing_r.push_back((p - c).norm());
     }
   }
   if (crossing_r.size() < 20) {
-    throw std::runtime_error(f0.name + ": nothing fits: no line seen crossing the rays, the mapping is not measured");
+    throw std::runtime_error(fs.front().frame->name +
+                             ": nothing fits: no line seen crossing the rays, the mapping is not measured");
   }
   std::sort(crossing_r.begin(), crossing_r.end());
   res.measured_min_px = crossing_r[crossing_r.size() / 20];
   res.measured_max_px = crossing_r[crossing_r.size() - 1 - crossing_r.size() / 20];
-  res.inlier_fraction = static_cast<double>(inl_total) / std::max(1, n_total);
-  res.rms_px = std::sqrt(sum_px2 / std::max(1, inl_total));
-  res.rms_cm = std::sqrt(sum_cm2 / std::max(1, inl_total));
-  std::nth_element(all_px.begin(), all_px.begin() + static_cast<std::ptrdiff_t>(all_px.size() / 2), all_px.end());
-  res.median_px = all_px[all_px.size() / 2];
-  // Most line pixels must lie on the model: otherwise the pose, the field or the frame is wrong.
-  if (res.inlier_fraction < 0.4) {
-    throw std::runtime_error(f0.name + ": nothing fits: only " + std::to_string(static_cast<int>(100 * res.inlier_fraction)) +
-                             " % of the line pixels lie within " + std::to_string(res.inlier_threshold_px) +
-                             " px of the field model at the best camera (wrong pose or field?)");
-  }
+}
 
-  // The camera in the project's model.
+// The camera in the project's model. Unknown headings: the offset is the image angle of the
+// robot's x axis with the robot facing field x (heading 0); the twin (180 deg away) fits the
+// symmetric field equally.
+void build_camera(const FitState& st, const std::vector<FrameState>& fs, double yaw_offset_rad, const cv::Size& size,
+                  CalibrationResult& res) {
+  const FrameAnalysis& a0 = res.analyses.front();
   CameraModel& cam = res.camera;
   cam.width_px = size.width;
   cam.height_px = size.height;
   cam.center_px = {st.c[0], st.c[1]};
   cam.mirrored = st.mirrored;
-  // Unknown headings: the offset is the image angle of the robot's x axis with the robot facing
-  // field x (heading 0); the twin (180 deg away) fits the symmetric field equally.
-  yaw_offset = any_known ? shared_angle : fs.front().angle_rad;
-  cam.yaw_offset_deg = wrap_deg(rad_to_deg(yaw_offset));
-  for (std::size_t i = 0; i < fs.size(); ++i)
-    res.fits[i].yaw_deg = frames[i].yaw_deg ? *frames[i].yaw_deg
-                                            : wrap_deg(cam.yaw_offset_deg - res.fits[i].image_angle_of_field_x_deg);
+  cam.yaw_offset_deg = wrap_deg(rad_to_deg(yaw_offset_rad));
+  for (std::size_t i = 0; i < fs.size(); ++i) {
+    FrameFit& ff = res.fits[i];
+    ff.yaw_deg = fs[i].frame->yaw_deg ? *fs[i].frame->yaw_deg : wrap_deg(cam.yaw_offset_deg - ff.image_angle_of_field_x_deg);
+  }
   for (double r = 0.0; r < res.view_radius_px; r += 4.0) cam.radius_lut.push_back({r, res.radial.ground_cm(r)});
   cam.radius_lut.push_back({res.view_radius_px, res.radial.ground_cm(res.view_radius_px)});
   cam.body_radius_px = a0.body_radius_px;
   for (const auto& m : a0.masts_image) {
     const double image_angle = st.mirrored ? 180.0 - m.bearing_deg : m.bearing_deg;
     cam.masts.push_back({wrap_deg(image_angle - cam.yaw_offset_deg), m.half_width_deg});
+  }
+}
+
+}  // namespace
+
+CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, const FieldGeometry& field,
+                                   const CalibrationOptions& options) {
+  const std::function<void(const std::string&)> say = [&](const std::string& m) {
+    if (options.progress) options.progress(m);
+  };
+  check_frames(frames, field);
+  CalibrationResult res;
+  for (const auto& f : frames) {
+    say(f.name + ": finding the mirror rim, carpet, lines, body and masts");
+    res.analyses.push_back(analyse_frame(f.image, f.name));
+    const auto& a = res.analyses.back();
+    say(f.name + ": rim (" + std::to_string(a.rim.centre_px.x()) + ", " + std::to_string(a.rim.centre_px.y()) +
+        ") r " + std::to_string(a.rim.radius_px) + " px, " + std::to_string(a.line_pixels.size()) + " line pixels");
+  }
+  say("building the field's distance transform");
+  const FieldDistance fd(field);
+  const FrameAnalysis& a0 = res.analyses.front();
+  const double rv = a0.view_radius_px;
+
+  const CoarseResult coarse = coarse_search(a0, frames.front(), fd, say);
+  res.unmirrored_score = coarse.best[0].score;
+  res.mirrored_score = coarse.best[1].score;
+  const int mir = res.mirrored_score < res.unmirrored_score ? 1 : 0;
+  // Within 3 %: the lines seen do not tell the handedness (a view symmetric about the robot).
+  res.mirrored_ambiguous = std::abs(res.mirrored_score - res.unmirrored_score) <
+                           0.03 * std::min(res.mirrored_score, res.unmirrored_score);
+  const CoarseHit& hit = coarse.best[mir];
+  say("coarse best: " + std::string(mir ? "mirrored" : "not mirrored") + ", heading term " +
+      std::to_string(rad_to_deg(hit.alpha)) + " deg, d(" + std::to_string(rv) + " px) = " +
+      std::to_string(hit.map.dv_cm) + " cm, shape " + std::to_string(hit.map.x) + ", truncated mean " +
+      std::to_string(hit.score) + " px" + (res.mirrored_ambiguous ? " (handedness ambiguous)" : ""));
+
+  FitState st{};
+  st.c[0] = a0.rim.centre_px.x();
+  st.c[1] = a0.rim.centre_px.y();
+  st.scale = rv;
+  st.mirrored = mir == 1;
+  initial_polynomial(hit, st);
+  std::vector<FrameState> fs;
+  double shared_angle = 0.0;
+  bool any_known = false;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    FrameState s{&frames[i], &res.analyses[i]};
+    if (frames[i].yaw_deg) s.yaw_rad = deg_to_rad(*frames[i].yaw_deg);
+    if (i == 0) {
+      s.angle_rad = hit.alpha + s.yaw_rad;
+    } else {  // the other frames' headings: searched with the first frame's mapping
+      const auto pp = to_polar(s.analysis->line_pixels, a0.rim.centre_px, st.mirrored, 1500);
+      std::vector<double> sc(720);
+      score_yaws(pp, hit.map, rv, s.frame->position_cm, fd, 2 * kPi / 720, kCoarseTruncPx, sc);
+      const auto k = std::min_element(sc.begin(), sc.end()) - sc.begin();
+      s.angle_rad = static_cast<double>(k) * 2 * kPi / 720 + s.yaw_rad;
+    }
+    if (frames[i].yaw_deg) {
+      any_known = true;
+      shared_angle = s.angle_rad;
+    }
+    fs.push_back(s);
+  }
+  res.inlier_threshold_px = 3.0;  // a 5 cm line far away is 1-2 px: 3 px is one line width off
+  refine(st, fs, shared_angle, fd, say);
+
+  res.radial = st.poly();
+  // The view: where the carpet ends all round in every frame.
+  res.view_radius_px = rv;
+  for (const auto& a : res.analyses) res.view_radius_px = std::min(res.view_radius_px, a.view_radius_px);
+  double r_used = 0.0;
+  for (const auto& a : res.analyses)
+    for (const auto& p : a.line_pixels) r_used = std::max(r_used, std::hypot(p.x() - st.c[0], p.y() - st.c[1]));
+  if (!res.radial.monotonic_up_to(std::max(r_used, res.view_radius_px)) || !(res.radial.ground_cm(res.view_radius_px) > 0)) {
+    throw std::runtime_error(frames.front().name + ": nothing fits: the fitted radial model is not monotonic over the " +
+                             std::to_string(static_cast<int>(r_used)) + " px the lines span");
+  }
+  measure_residuals(st, fs, fd, res);
+  // Most line pixels must lie on the model: otherwise the pose, the field or the frame is wrong.
+  if (res.inlier_fraction < 0.4) {
+    throw std::runtime_error(frames.front().name + ": nothing fits: only " +
+                             std::to_string(static_cast<int>(100 * res.inlier_fraction)) + " % of the line pixels lie within " +
+                             std::to_string(res.inlier_threshold_px) + " px of the field model at the best camera (wrong pose or field?)");
+  }
+  measured_radii(st, fs, fd, res);
+  build_camera(st, fs, any_known ? shared_angle : fs.front().angle_rad, frames.front().image.size(), res);
+  // Twin of the first frame: its best coarse heading term at least 30 deg from the fitted one.
+  FrameFit& f0 = res.fits.front();
+  f0.score = hit.score;
+  f0.twin_score = 1e18;
+  const auto& sc = coarse.heading_scores[mir];
+  for (int k = 0; k < kCoarseHeadings; ++k) {
+    const double a_deg = k * 360.0 / kCoarseHeadings;
+    if (std::abs(angle_diff_deg(a_deg, rad_to_deg(hit.alpha))) < 30.0 || !(sc[static_cast<std::size_t>(k)] < f0.twin_score))
+      continue;
+    f0.twin_score = sc[static_cast<std::size_t>(k)];
+    f0.twin_yaw_deg = wrap_deg(f0.yaw_deg + f0.image_angle_of_field_x_deg - a_deg);
   }
   res.rim = a0.rim;
   res.carpet = a0.carpet;
