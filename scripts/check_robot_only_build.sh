@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# The robot's library and programs build without the simulator and the tests: configures SRC with
-# -DOMNILOC_BUILD_SIM=OFF -DOMNILOC_BUILD_TESTS=OFF into OUT, builds omnilocd and omniloc, and checks
-# that nothing of the simulator got in: no Verilator in the configuration, no omniloc::sim or
+# The robot's library and programs build without the simulator, the tests and the calibration:
+# configures SRC with -DOMNILOC_BUILD_SIM=OFF -DOMNILOC_BUILD_TESTS=OFF -DOMNILOC_BUILD_CALIBRATION=OFF
+# into OUT, builds omnilocd and omniloc, and checks that nothing of the simulator got in: no
+# Verilator or Ceres in the configuration, no omniloc::sim or
 # Verilated symbol in omnilocd, no host/ source that includes a simulator header. Prints omnilocd's
 # dynamic libraries (ldd). Run by CTest (robot_only_build); usage: check_robot_only_build.sh SRC OUT
 set -euo pipefail
@@ -16,9 +17,10 @@ if grep -rn --include='*.hpp' --include='*.cpp' -E '#include [<"](omniloc_sim/|V
   fail "host/ includes a simulator or Verilator header (above)"
 fi
 
-cmake -S "$src" -B "$out" "${gen[@]}" -DCMAKE_BUILD_TYPE=Release -DOMNILOC_BUILD_SIM=OFF -DOMNILOC_BUILD_TESTS=OFF >"$out.configure.log" 2>&1 \
+cmake -S "$src" -B "$out" "${gen[@]}" -DCMAKE_BUILD_TYPE=Release -DOMNILOC_BUILD_SIM=OFF -DOMNILOC_BUILD_TESTS=OFF -DOMNILOC_BUILD_CALIBRATION=OFF >"$out.configure.log" 2>&1 \
   || { cat "$out.configure.log"; fail "configure"; }
 if grep -q "^verilator_DIR" "$out/CMakeCache.txt"; then fail "the robot-only configuration looked for Verilator"; fi
+if grep -q "^Ceres_DIR" "$out/CMakeCache.txt"; then fail "the robot-only configuration looked for Ceres"; fi
 cmake --build "$out" --target omnilocd omniloc_cli -j "$(nproc)" >"$out.build.log" 2>&1 || { tail -50 "$out.build.log"; fail "build"; }
 for t in omniloc_sim omniloc_board_sim omniloc_sim_daemon vencoder_core; do
   if grep -q "^build [^:]*$t" "$out/build.ninja" 2>/dev/null; then fail "target $t exists in the robot-only build"; fi
@@ -29,6 +31,7 @@ if nm -C "$bin" | grep -E 'omniloc::sim::|Verilated|Vomniloc' | head -5 | grep -
   nm -C "$bin" | grep -E 'omniloc::sim::|Verilated|Vomniloc' | head -5
   fail "omnilocd contains simulator symbols (above)"
 fi
+if ldd "$bin" | grep -q "libceres"; then fail "omnilocd links Ceres"; fi
 echo "robot_only_build: omnilocd links (ldd):"
 ldd "$bin" | awk '{print "  " $1}' | sort
 "$bin" --help >/dev/null || fail "omnilocd --help"

@@ -13,5 +13,6 @@ int cmd_regmap(std::span<const std::string_view> args);
 int cmd_probe(std::span<const std::string_view> args);
 int cmd_builddb(std::span<const std::string_view> args);
 int cmd_replay(std::span<const std::string_view> args);
+int cmd_calibrate(std::span<const std::string_view> args);
 
 }  // namespace omniloc::cli

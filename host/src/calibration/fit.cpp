@@ -1,0 +1,670 @@
+// Fitting side of the calibration: a field-frame distance transform of the white lines, a coarse
+// brute-force search of yaw and mapping, and a robust Ceres fit of centre, radial polynomial and
+// yaw with nearest-line-point re-association; the camera it writes and the overlay it draws.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <stdexcept>
+
+#include <ceres/ceres.h>
+#include <nlohmann/json.hpp>
+#include <Eigen/Dense>
+#include <opencv2/imgproc.hpp>
+
+#include "omniloc/calibration.hpp"
+#include "omniloc/conventions.hpp"
+
+namespace omniloc {
+
+double RadialPolynomial::ground_cm(double r) const { return r * (a[0] + r * (a[1] + r * (a[2] + r * a[3]))); }
+double RadialPolynomial::slope_cm_per_px(double r) const { return a[0] + r * (2 * a[1] + r * (3 * a[2] + r * 4 * a[3])); }
+bool RadialPolynomial::monotonic_up_to(double r_max) const {
+  for (double r = 0.0; r <= r_max; r += 0.5)
+    if (!(slope_cm_per_px(r) > 0.0)) return false;
+  return true;
+}
+
+namespace {
+
+// Field lines rasterised at 1 cm with a margin around the carpet, and their distance transform
+// with, per cell, the nearest white cell (for the re-association).
+class FieldDistance {
+ public:
+  explicit FieldDistance(const FieldGeometry& field) {
+    const WhiteLineIndex lines(field);
+    nx_ = static_cast<int>(std::ceil(field.total_x_cm() + 2 * kMarginCm));
+    ny_ = static_cast<int>(std::ceil(field.total_y_cm() + 2 * kMarginCm));
+    cv::Mat1b src(ny_, nx_, std::uint8_t{255});
+    for (int j = 0; j < ny_; ++j)
+      for (int i = 0; i < nx_; ++i)
+        if (lines.is_white(cell_centre(i, j))) src(j, i) = 0;
+    cv::Mat labels;
+    cv::distanceTransform(src, dist_, labels, cv::DIST_L2, 5, cv::DIST_LABEL_PIXEL);
+    label_xy_.assign(static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_) + 1, Eigen::Vector2f::Zero());
+    nearest_.create(ny_, nx_);
+    for (int j = 0; j < ny_; ++j)
+      for (int i = 0; i < nx_; ++i)
+        if (src(j, i) == 0) label_xy_[static_cast<std::size_t>(labels.at<int>(j, i))] = cell_centre(i, j).cast<float>();
+    for (int j = 0; j < ny_; ++j)
+      for (int i = 0; i < nx_; ++i) nearest_(j, i) = labels.at<int>(j, i);
+    // The coarse search's copy: 2 cm cells, whole cm, 255 = far (a quarter of the memory, so
+    // that the 10^8 look-ups of the brute force stay in the cache).
+    coarse_.create((ny_ + 1) / 2, (nx_ + 1) / 2);
+    for (int j = 0; j < coarse_.rows; ++j)
+      for (int i = 0; i < coarse_.cols; ++i)
+        coarse_(j, i) = static_cast<std::uint8_t>(std::min(255.0f, std::round(dist_(std::min(2 * j, ny_ - 1), std::min(2 * i, nx_ - 1)))));
+  }
+  [[nodiscard]] double coarse_distance_cm(double x, double y) const {
+    const double fx = (x + kMarginCm) * 0.5, fy = (y + kMarginCm) * 0.5;  // NaN (beyond a horizon) is far too
+    if (!(fx >= 0.0 && fy >= 0.0 && fx < coarse_.cols && fy < coarse_.rows)) return 1e4;
+    return coarse_(static_cast<int>(fy), static_cast<int>(fx));
+  }
+  /// Distance (cm) from p to the nearest white line (0 on a line); far beyond the raster, large.
+  [[nodiscard]] float distance_cm(const Eigen::Vector2d& p) const {
+    const double fx = p.x() + kMarginCm, fy = p.y() + kMarginCm;
+    if (!(fx >= 0.0 && fy >= 0.0 && fx < nx_ && fy < ny_)) return 1e4f;
+    return dist_(static_cast<int>(fy), static_cast<int>(fx));
+  }
+  /// Nearest white point to p (p itself on a line).
+  [[nodiscard]] Eigen::Vector2d nearest(const Eigen::Vector2d& p) const {
+    if (!std::isfinite(p.x()) || !std::isfinite(p.y())) return {0.0, 0.0};
+    const int i = static_cast<int>(std::clamp(std::floor(p.x() + kMarginCm), 0.0, nx_ - 1.0));
+    const int j = static_cast<int>(std::clamp(std::floor(p.y() + kMarginCm), 0.0, ny_ - 1.0));
+    if (dist_(j, i) == 0.0f) return p;
+    return label_xy_[static_cast<std::size_t>(nearest_(j, i))].cast<double>();
+  }
+
+ private:
+  static constexpr double kMarginCm = 150.0;
+  [[nodiscard]] static Eigen::Vector2d cell_centre(int i, int j) { return {i - kMarginCm + 0.5, j - kMarginCm + 0.5}; }
+  int nx_ = 0, ny_ = 0;
+  cv::Mat1f dist_;
+  cv::Mat1i nearest_;
+  cv::Mat1b coarse_;
+  std::vector<Eigen::Vector2f> label_xy_;
+};
+
+// A line pixel in polar form about the image centre (image angle, mirrored already applied).
+struct PolarPixel {
+  double r, phi;  // px, rad
+};
+
+std::vector<PolarPixel> to_polar(const std::vector<Eigen::Vector2d>& px, const Eigen::Vector2d& c, bool mirrored,
+                                 std::size_t max_count) {
+  std::vector<PolarPixel> out;
+  const std::size_t stride = std::max<std::size_t>(1, px.size() / std::max<std::size_t>(1, max_count));
+  for (std::size_t i = 0; i < px.size(); i += stride) {
+    const double du = (px[i].x() - c.x()) * (mirrored ? -1.0 : 1.0), dv = c.y() - px[i].y();
+    out.push_back({std::hypot(du, dv), std::atan2(dv, du)});
+  }
+  return out;
+}
+
+// Image residual (px) of one line pixel against the nearest line point q, as the fit measures it:
+// the ground error split radially (through 1 / d') and tangentially (through r / d).
+template <class T>
+void pixel_residual(const T* c, const T* b, const T* alpha, double u, double v, double sign, double inv_scale,
+                    const Eigen::Vector2d& pos, const Eigen::Vector2d& q, T* res) {
+  const T du = sign * (T(u) - c[0]), dv = c[1] - T(v);
+  const T r = ceres::sqrt(du * du + dv * dv);
+  const T x = r * inv_scale;
+  const T d = x * (b[0] + x * (b[1] + x * (b[2] + x * b[3])));
+  const T dd = (b[0] + x * (T(2) * b[1] + x * (T(3) * b[2] + x * T(4) * b[3]))) * inv_scale;
+  const T th = ceres::atan2(dv, du) - alpha[0];
+  const T ct = ceres::cos(th), st = ceres::sin(th);
+  const T ex = T(pos.x()) + d * ct - T(q.x()), ey = T(pos.y()) + d * st - T(q.y());
+  res[0] = (ex * ct + ey * st) / dd;
+  res[1] = (-ex * st + ey * ct) * r / d;
+}
+
+struct PixelCost {
+  double u, v, sign, inv_scale, yaw_rad;
+  Eigen::Vector2d pos, q;
+  template <class T>
+  bool operator()(const T* c, const T* b, const T* angle, T* res) const {
+    const T alpha = angle[0] - T(yaw_rad);
+    pixel_residual(c, b, &alpha, u, v, sign, inv_scale, pos, q, res);
+    return true;
+  }
+};
+
+// The camera being fitted: centre, polynomial in r / scale (coefficients in cm), and per frame
+// the image angle of the field's x axis.
+struct FitState {
+  double c[2];
+  double b[4];
+  double scale;  // px: r is normalised by it so that the coefficients are all in cm
+  bool mirrored;
+  RadialPolynomial poly() const {
+    RadialPolynomial p;
+    for (int k = 0; k < 4; ++k) p.a[static_cast<std::size_t>(k)] = b[k] / std::pow(scale, k + 1);
+    return p;
+  }
+};
+
+struct FrameState {
+  const CalibrationFrame* frame;
+  const FrameAnalysis* analysis;
+  double angle_rad = 0.0;  // yaw known: yaw_offset (shared); unknown: alpha of this frame
+  double yaw_rad = 0.0;    // known heading (0 when unknown)
+};
+
+double residual_px(const FitState& s, double alpha, const Eigen::Vector2d& pos, const Eigen::Vector2d& px,
+                   const FieldDistance& fd, Eigen::Vector2d* ground_err_cm) {
+  const double sign = s.mirrored ? -1.0 : 1.0;
+  const double du = sign * (px.x() - s.c[0]), dv = s.c[1] - px.y();
+  const double r = std::hypot(du, dv), th = std::atan2(dv, du) - alpha;
+  const double d = s.poly().ground_cm(r);
+  const Eigen::Vector2d g = pos + d * Eigen::Vector2d(std::cos(th), std::sin(th));
+  const Eigen::Vector2d q = fd.nearest(g);
+  double res[2];
+  pixel_residual(s.c, s.b, &alpha, px.x(), px.y(), sign, 1.0 / s.scale, pos, q, res);
+  if (ground_err_cm != nullptr) *ground_err_cm = g - q;
+  const double e = std::hypot(res[0], res[1]);
+  return std::isfinite(e) ? e : 1e9;
+}
+
+// Terms of the radial polynomial that are fitted (the rest stay 0). Four: a cubic through the
+// origin misses the rendered round trips' mapping by 1.5 % in mid-range, the quartic by 0.5 %.
+constexpr int kRadialTerms = 4;
+
+// Coarse mapping family: d(r) = -D ln(1 - x r / rv) with d(rv) = dv (x = 0.01 is nearly linear,
+// x -> 1 a horizon just beyond rv, as mirrors compress the far floor).
+struct CoarseMap {
+  double dv_cm, x;
+};
+double coarse_d(const CoarseMap& m, double r, double rv) {
+  const double dd = m.dv_cm / -std::log(1.0 - m.x);
+  return -dd * std::log(1.0 - m.x * r / rv);
+}
+
+struct CoarseHit {
+  double score = 1e18;
+  CoarseMap map{};
+  double alpha = 0.0;
+};
+
+// Truncated mean image distance of the pixels to the lines for a mapping and every heading.
+// Fills scores[a] for alpha = a * step.
+void score_yaws(const std::vector<PolarPixel>& pp, const CoarseMap& m, double rv, const Eigen::Vector2d& pos,
+                const FieldDistance& fd, double step_rad, double trunc_px, std::vector<double>& scores) {
+  const std::size_t n = pp.size();
+  std::vector<double> d(n), k(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    d[i] = coarse_d(m, pp[i].r, rv);
+    const double eps = 0.5;
+    const double slope = (coarse_d(m, pp[i].r + eps, rv) - coarse_d(m, pp[i].r - eps, rv)) / (2 * eps);
+    k[i] = std::sqrt((1.0 / slope) * (pp[i].r / d[i]));
+  }
+  std::vector<double> cp(n), sp(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    cp[i] = std::cos(pp[i].phi);
+    sp[i] = std::sin(pp[i].phi);
+  }
+  for (std::size_t a = 0; a < scores.size(); ++a) {
+    const double alpha = static_cast<double>(a) * step_rad, ca = std::cos(alpha), sa = std::sin(alpha);
+    double s = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      // cos / sin of (phi - alpha) by the angle-difference formulas: no trigonometry per pixel.
+      const double gx = pos.x() + d[i] * (cp[i] * ca + sp[i] * sa), gy = pos.y() + d[i] * (sp[i] * ca - cp[i] * sa);
+      s += std::min(fd.coarse_distance_cm(gx, gy) * k[i], trunc_px);
+    }
+    scores[a] = s / static_cast<double>(n);
+  }
+}
+
+void check_frames(const std::vector<CalibrationFrame>& frames, const FieldGeometry& field) {
+  if (frames.empty()) throw std::runtime_error("calibrate: no frames");
+  const cv::Size size = frames.front().image.size();
+  for (const auto& f : frames) {
+    if (f.image.empty()) throw std::runtime_error(f.name + ": empty image");
+    if (f.image.size() != size) {
+      throw std::runtime_error(f.name + ": image is " + std::to_string(f.image.cols) + " x " +
+                               std::to_string(f.image.rows) + ", but " + frames.front().name + " is " +
+                               std::to_string(size.width) + " x " + std::to_string(size.height) +
+                               ": all frames of one camera have one size");
+    }
+    if (!on_carpet(field, f.position_cm)) {
+      throw std::runtime_error(f.name + ": pose (" + std::to_string(f.position_cm.x()) + ", " +
+                               std::to_string(f.position_cm.y()) + ") cm is not on the carpet of " + field.name);
+    }
+  }
+}
+
+constexpr double kCoarseTruncPx = 8.0;  // about the basin of the 3-degree heading step at 150 px
+constexpr int kCoarseHeadings = 120;
+
+// Best coarse camera per handedness, and the heading scores of its mapping (for the twin).
+struct CoarseResult {
+  CoarseHit best[2];
+  std::vector<double> heading_scores[2];
+};
+
+// Brute force on one frame (centre = rim centre): 7 shapes x 51 scales x 120 headings per
+// handedness, then 0.5 deg, 1 % scale and +-0.1 shape around the best.
+CoarseResult coarse_search(const FrameAnalysis& a, const CalibrationFrame& f, const FieldDistance& fd,
+                           const std::function<void(const std::string&)>& say) {
+  const double rv = a.view_radius_px;
+  const std::vector<double> shapes{0.01, 0.3, 0.5, 0.65, 0.8, 0.9, 0.95};
+  CoarseResult out;
+  std::vector<double> scores(static_cast<std::size_t>(kCoarseHeadings));
+  for (int mir = 0; mir < 2; ++mir) {
+    say(std::string("coarse search (") + (mir ? "mirrored" : "not mirrored") + "): 7 shapes x 51 scales x 120 headings");
+    CoarseHit& best = out.best[mir];
+    const auto pp = to_polar(a.line_pixels, a.rim.centre_px, mir == 1, 1000);
+    for (double x : shapes) {
+      for (int si = 0; si <= 50; ++si) {
+        const CoarseMap m{60.0 * std::pow(1.08, si), x};
+        score_yaws(pp, m, rv, f.position_cm, fd, 2 * kPi / kCoarseHeadings, kCoarseTruncPx, scores);
+        for (int k = 0; k < kCoarseHeadings; ++k) {
+          if (scores[static_cast<std::size_t>(k)] < best.score) {
+            best = {scores[static_cast<std::size_t>(k)], m, k * 2 * kPi / kCoarseHeadings};
+            out.heading_scores[mir] = scores;
+          }
+        }
+      }
+    }
+    const auto pp2 = to_polar(a.line_pixels, a.rim.centre_px, mir == 1, 3000);
+    const CoarseHit c = best;
+    best.score = 1e18;
+    std::vector<double> s1(1);
+    for (double dx = -0.1; dx <= 0.1001; dx += 0.05) {
+      const double x = std::clamp(c.map.x + dx, 0.01, 0.97);
+      for (int si = -8; si <= 8; ++si) {
+        const CoarseMap m{c.map.dv_cm * std::pow(1.01, si), x};
+        for (int k = -6; k <= 6; ++k) {
+          const double alpha = c.alpha + deg_to_rad(0.5 * k);
+          std::vector<PolarPixel> rot = pp2;
+          for (auto& p : rot) p.phi -= alpha;
+          score_yaws(rot, m, rv, f.position_cm, fd, 0.0, kCoarseTruncPx, s1);
+          if (s1[0] < best.score) best = {s1[0], m, alpha};
+        }
+      }
+    }
+  }
+  return out;
+}
+
+// The polynomial through the coarse curve (least squares over 0..1.1 view radii).
+void initial_polynomial(const CoarseHit& hit, FitState& st) {
+  Eigen::MatrixXd A(100, kRadialTerms);
+  Eigen::VectorXd y(100);
+  for (int i = 0; i < 100; ++i) {
+    const double x = (i + 1) / 100.0 * 1.1;
+    for (int k = 0; k < kRadialTerms; ++k) A(i, k) = std::pow(x, k + 1);
+    y(i) = coarse_d(hit.map, std::min(x, 0.999 / hit.map.x) * st.scale, st.scale);
+  }
+  const Eigen::VectorXd b = A.colPivHouseholderQr().solve(y);
+  for (int k = 0; k < 4; ++k) st.b[k] = k < kRadialTerms ? b(k) : 0.0;
+}
+
+// Robust refinement: Huber (1 px) on the image residual, pixels beyond a shrinking truncation
+// dropped, nearest line points re-associated between solves. Frames with a known heading share
+// one yaw offset (`shared_angle`); the others have their own heading term.
+void refine(FitState& st, std::vector<FrameState>& fs, double& shared_angle, const FieldDistance& fd,
+            const std::function<void(const std::string&)>& say) {
+  const double trunc_schedule[] = {8.0, 6.0, 4.0, 3.0, 3.0, 3.0, 3.0, 3.0, 3.0, 3.0, 3.0, 3.0};
+  auto ring_of = [&](const Eigen::Vector2d& p) {
+    return static_cast<std::size_t>(std::min(63.0, std::hypot(p.x() - st.c[0], p.y() - st.c[1]) / 10.0));
+  };
+  for (std::size_t it = 0; it < std::size(trunc_schedule); ++it) {
+    // Every 10 px ring of radii weighs alike (square root of the inverse pixel count, 1/3..3):
+    // the few lines near the body otherwise count for nothing against the many far ones.
+    std::vector<int> ring(64, 0);
+    for (const auto& s : fs)
+      for (const auto& p : s.analysis->line_pixels) ++ring[ring_of(p)];
+    int rings = 0, ring_total = 0;
+    for (int n : ring) {
+      rings += n > 0;
+      ring_total += n;
+    }
+    ceres::Problem problem;
+    int used = 0;
+    for (auto& s : fs) {
+      double* angle = s.frame->yaw_deg ? &shared_angle : &s.angle_rad;
+      const double alpha = *angle - s.yaw_rad;
+      const auto& lp = s.analysis->line_pixels;
+      const std::size_t stride = std::max<std::size_t>(1, lp.size() / 6000);
+      const double sign = st.mirrored ? -1.0 : 1.0;
+      for (std::size_t j = 0; j < lp.size(); j += stride) {
+        if (residual_px(st, alpha, s.frame->position_cm, lp[j], fd, nullptr) > trunc_schedule[it]) continue;
+        const double du = sign * (lp[j].x() - st.c[0]), dv = st.c[1] - lp[j].y();
+        const double d = st.poly().ground_cm(std::hypot(du, dv));
+        const double th = std::atan2(dv, du) - alpha;
+        const Eigen::Vector2d g = s.frame->position_cm + d * Eigen::Vector2d(std::cos(th), std::sin(th));
+        auto* cost = new ceres::AutoDiffCostFunction<PixelCost, 2, 2, 4, 1>(
+            new PixelCost{lp[j].x(), lp[j].y(), sign, 1.0 / st.scale, s.yaw_rad, s.frame->position_cm, fd.nearest(g)});
+        const double w = std::clamp(
+            std::sqrt(static_cast<double>(ring_total) / std::max(1, rings) / std::max(1, ring[ring_of(lp[j])])), 1.0 / 3.0, 3.0);
+        problem.AddResidualBlock(cost, new ceres::ScaledLoss(new ceres::HuberLoss(1.0), w * w, ceres::TAKE_OWNERSHIP), st.c,
+                                 st.b, angle);
+        ++used;
+      }
+    }
+    if (used < 50) {
+      throw std::runtime_error(fs.front().frame->name + ": nothing fits: only " + std::to_string(used) +
+                               " line pixels lie near the field model at the best coarse camera");
+    }
+    if (kRadialTerms < 4) {
+      std::vector<int> fixed;
+      for (int k = kRadialTerms; k < 4; ++k) fixed.push_back(k);
+      problem.SetManifold(st.b, new ceres::SubsetManifold(4, fixed));
+    }
+    ceres::Solver::Options so;
+    so.linear_solver_type = ceres::DENSE_QR;
+    so.max_num_iterations = 50;
+    so.num_threads = 1;
+    ceres::Solver::Summary sum;
+    ceres::Solve(so, &problem, &sum);
+    say("refinement " + std::to_string(it + 1) + "/" + std::to_string(std::size(trunc_schedule)) + ": " +
+        std::to_string(used) + " pixels within " + std::to_string(trunc_schedule[it]) + " px, centre (" +
+        std::to_string(st.c[0]) + ", " + std::to_string(st.c[1]) + "), cost " + std::to_string(sum.final_cost));
+  }
+  for (auto& s : fs)
+    if (s.frame->yaw_deg) s.angle_rad = shared_angle;
+}
+
+// Residuals per frame over every line pixel, and the totals.
+void measure_residuals(const FitState& st, const std::vector<FrameState>& fs, const FieldDistance& fd,
+                       CalibrationResult& res) {
+  std::vector<double> all_px;
+  double sum_px2 = 0.0, sum_cm2 = 0.0;
+  int inl_total = 0;
+  for (const auto& s : fs) {
+    FrameFit ff;
+    ff.yaw_given = s.frame->yaw_deg.has_value();
+    const double alpha = s.angle_rad - s.yaw_rad;
+    ff.image_angle_of_field_x_deg = wrap_deg(rad_to_deg(alpha));
+    std::vector<double> e_px;
+    double s2 = 0.0, c2 = 0.0;
+    for (const auto& p : s.analysis->line_pixels) {
+      Eigen::Vector2d err;
+      const double e = residual_px(st, alpha, s.frame->position_cm, p, fd, &err);
+      e_px.push_back(e);
+      if (e <= res.inlier_threshold_px) {
+        s2 += e * e;
+        c2 += err.squaredNorm();
+        ++ff.inliers;
+      }
+    }
+    all_px.insert(all_px.end(), e_px.begin(), e_px.end());
+    ff.line_pixels = static_cast<int>(e_px.size());
+    ff.rms_px = std::sqrt(s2 / std::max(1, ff.inliers));
+    ff.rms_cm = std::sqrt(c2 / std::max(1, ff.inliers));
+    std::nth_element(e_px.begin(), e_px.begin() + static_cast<std::ptrdiff_t>(e_px.size() / 2), e_px.end());
+    ff.median_px = e_px[e_px.size() / 2];
+    sum_px2 += s2;
+    sum_cm2 += c2;
+    inl_total += ff.inliers;
+    res.fits.push_back(ff);
+  }
+  res.inlier_fraction = static_cast<double>(inl_total) / std::max<double>(1.0, static_cast<double>(all_px.size()));
+  res.rms_px = std::sqrt(sum_px2 / std::max(1, inl_total));
+  res.rms_cm = std::sqrt(sum_cm2 / std::max(1, inl_total));
+  std::nth_element(all_px.begin(), all_px.begin() + static_cast<std::ptrdiff_t>(all_px.size() / 2), all_px.end());
+  res.median_px = all_px[all_px.size() / 2];
+}
+
+// Radii where the mapping is measured: inlier pixels on lines that cross their ray (shorter
+// along the ray than across it); a line running along the ray says nothing about distance.
+void measured_radii(const FitState& st, const std::vector<FrameState>& fs, const FieldDistance& fd,
+                    CalibrationResult& res) {
+  std::vector<double> crossing_r;
+  const Eigen::Vector2d c(st.c[0], st.c[1]);
+  for (const auto& s : fs) {
+    const double alpha = s.angle_rad - s.yaw_rad;
+    const cv::Mat& lm = s.analysis->line_mask;
+    auto run = [&](const Eigen::Vector2d& p, const Eigen::Vector2d& dir) {
+      int n = 0;
+      for (double sgn : {-1.0, 1.0}) {
+        for (int k = 1; k <= 20; ++k) {
+          const Eigen::Vector2d q = p + sgn * k * dir;
+          const int u = static_cast<int>(std::lround(q.x())), v = static_cast<int>(std::lround(q.y()));
+          if (u < 0 || v < 0 || u >= lm.cols || v >= lm.rows || !lm.at<std::uint8_t>(v, u)) break;
+          ++n;
+        }
+      }
+      return n;
+    };
+    for (const auto& p : s.analysis->line_pixels) {
+      if (residual_px(st, alpha, s.frame->position_cm, p, fd, nullptr) > res.inlier_threshold_px) continue;
+      const Eigen::Vector2d radial = (p - c).normalized(), tangential(-radial.y(), radial.x());
+      if (run(p, radial) < run(p, tangential)) crossing_r.push_back((p - c).norm());
+    }
+  }
+  if (crossing_r.size() < 20) {
+    throw std::runtime_error(fs.front().frame->name +
+                             ": nothing fits: no line seen crossing the rays, the mapping is not measured");
+  }
+  std::sort(crossing_r.begin(), crossing_r.end());
+  res.measured_min_px = crossing_r[crossing_r.size() / 20];
+  res.measured_max_px = crossing_r[crossing_r.size() - 1 - crossing_r.size() / 20];
+}
+
+// The camera in the project's model. Unknown headings: the offset is the image angle of the
+// robot's x axis with the robot facing field x (heading 0); the twin (180 deg away) fits the
+// symmetric field equally.
+void build_camera(const FitState& st, const std::vector<FrameState>& fs, double yaw_offset_rad, const cv::Size& size,
+                  CalibrationResult& res) {
+  const FrameAnalysis& a0 = res.analyses.front();
+  CameraModel& cam = res.camera;
+  cam.width_px = size.width;
+  cam.height_px = size.height;
+  cam.center_px = {st.c[0], st.c[1]};
+  cam.mirrored = st.mirrored;
+  cam.yaw_offset_deg = wrap_deg(rad_to_deg(yaw_offset_rad));
+  for (std::size_t i = 0; i < fs.size(); ++i) {
+    FrameFit& ff = res.fits[i];
+    ff.yaw_deg = fs[i].frame->yaw_deg ? *fs[i].frame->yaw_deg : wrap_deg(cam.yaw_offset_deg - ff.image_angle_of_field_x_deg);
+  }
+  for (double r = 0.0; r < res.view_radius_px; r += 4.0) cam.radius_lut.push_back({r, res.radial.ground_cm(r)});
+  cam.radius_lut.push_back({res.view_radius_px, res.radial.ground_cm(res.view_radius_px)});
+  cam.body_radius_px = a0.body_radius_px;
+  for (const auto& m : a0.masts_image) {
+    const double image_angle = st.mirrored ? 180.0 - m.bearing_deg : m.bearing_deg;
+    cam.masts.push_back({wrap_deg(image_angle - cam.yaw_offset_deg), m.half_width_deg});
+  }
+}
+
+}  // namespace
+
+CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, const FieldGeometry& field,
+                                   const CalibrationOptions& options) {
+  const std::function<void(const std::string&)> say = [&](const std::string& m) {
+    if (options.progress) options.progress(m);
+  };
+  check_frames(frames, field);
+  CalibrationResult res;
+  for (const auto& f : frames) {
+    say(f.name + ": finding the mirror rim, carpet, lines, body and masts");
+    res.analyses.push_back(analyse_frame(f.image, f.name));
+    const auto& a = res.analyses.back();
+    say(f.name + ": rim (" + std::to_string(a.rim.centre_px.x()) + ", " + std::to_string(a.rim.centre_px.y()) +
+        ") r " + std::to_string(a.rim.radius_px) + " px, " + std::to_string(a.line_pixels.size()) + " line pixels");
+  }
+  say("building the field's distance transform");
+  const FieldDistance fd(field);
+  const FrameAnalysis& a0 = res.analyses.front();
+  const double rv = a0.view_radius_px;
+
+  const CoarseResult coarse = coarse_search(a0, frames.front(), fd, say);
+  res.unmirrored_score = coarse.best[0].score;
+  res.mirrored_score = coarse.best[1].score;
+  const int mir = res.mirrored_score < res.unmirrored_score ? 1 : 0;
+  // Within 3 %: the lines seen do not tell the handedness (a view symmetric about the robot).
+  res.mirrored_ambiguous = std::abs(res.mirrored_score - res.unmirrored_score) <
+                           0.03 * std::min(res.mirrored_score, res.unmirrored_score);
+  const CoarseHit& hit = coarse.best[mir];
+  say("coarse best: " + std::string(mir ? "mirrored" : "not mirrored") + ", heading term " +
+      std::to_string(rad_to_deg(hit.alpha)) + " deg, d(" + std::to_string(rv) + " px) = " +
+      std::to_string(hit.map.dv_cm) + " cm, shape " + std::to_string(hit.map.x) + ", truncated mean " +
+      std::to_string(hit.score) + " px" + (res.mirrored_ambiguous ? " (handedness ambiguous)" : ""));
+
+  FitState st{};
+  st.c[0] = a0.rim.centre_px.x();
+  st.c[1] = a0.rim.centre_px.y();
+  st.scale = rv;
+  st.mirrored = mir == 1;
+  initial_polynomial(hit, st);
+  std::vector<FrameState> fs;
+  double shared_angle = 0.0;
+  bool any_known = false;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    FrameState s{&frames[i], &res.analyses[i]};
+    if (frames[i].yaw_deg) s.yaw_rad = deg_to_rad(*frames[i].yaw_deg);
+    if (i == 0) {
+      s.angle_rad = hit.alpha + s.yaw_rad;
+    } else {  // the other frames' headings: searched with the first frame's mapping
+      const auto pp = to_polar(s.analysis->line_pixels, a0.rim.centre_px, st.mirrored, 1500);
+      std::vector<double> sc(720);
+      score_yaws(pp, hit.map, rv, s.frame->position_cm, fd, 2 * kPi / 720, kCoarseTruncPx, sc);
+      const auto k = std::min_element(sc.begin(), sc.end()) - sc.begin();
+      s.angle_rad = static_cast<double>(k) * 2 * kPi / 720 + s.yaw_rad;
+    }
+    if (frames[i].yaw_deg) {
+      any_known = true;
+      shared_angle = s.angle_rad;
+    }
+    fs.push_back(s);
+  }
+  res.inlier_threshold_px = 3.0;  // a 5 cm line far away is 1-2 px: 3 px is one line width off
+  refine(st, fs, shared_angle, fd, say);
+
+  res.radial = st.poly();
+  // The view: where the carpet ends all round in every frame.
+  res.view_radius_px = rv;
+  for (const auto& a : res.analyses) res.view_radius_px = std::min(res.view_radius_px, a.view_radius_px);
+  double r_used = 0.0;
+  for (const auto& a : res.analyses)
+    for (const auto& p : a.line_pixels) r_used = std::max(r_used, std::hypot(p.x() - st.c[0], p.y() - st.c[1]));
+  if (!res.radial.monotonic_up_to(std::max(r_used, res.view_radius_px)) || !(res.radial.ground_cm(res.view_radius_px) > 0)) {
+    throw std::runtime_error(frames.front().name + ": nothing fits: the fitted radial model is not monotonic over the " +
+                             std::to_string(static_cast<int>(r_used)) + " px the lines span");
+  }
+  measure_residuals(st, fs, fd, res);
+  // Most line pixels must lie on the model: otherwise the pose, the field or the frame is wrong.
+  if (res.inlier_fraction < 0.4) {
+    throw std::runtime_error(frames.front().name + ": nothing fits: only " +
+                             std::to_string(static_cast<int>(100 * res.inlier_fraction)) + " % of the line pixels lie within " +
+                             std::to_string(res.inlier_threshold_px) + " px of the field model at the best camera (wrong pose or field?)");
+  }
+  measured_radii(st, fs, fd, res);
+  build_camera(st, fs, any_known ? shared_angle : fs.front().angle_rad, frames.front().image.size(), res);
+  // Twin of the first frame: its best coarse heading term at least 30 deg from the fitted one.
+  FrameFit& f0 = res.fits.front();
+  f0.score = hit.score;
+  f0.twin_score = 1e18;
+  const auto& sc = coarse.heading_scores[mir];
+  for (int k = 0; k < kCoarseHeadings; ++k) {
+    const double a_deg = k * 360.0 / kCoarseHeadings;
+    if (std::abs(angle_diff_deg(a_deg, rad_to_deg(hit.alpha))) < 30.0 || !(sc[static_cast<std::size_t>(k)] < f0.twin_score))
+      continue;
+    f0.twin_score = sc[static_cast<std::size_t>(k)];
+    f0.twin_yaw_deg = wrap_deg(f0.yaw_deg + f0.image_angle_of_field_x_deg - a_deg);
+  }
+  res.rim = a0.rim;
+  res.carpet = a0.carpet;
+  return res;
+}
+
+std::string calibrated_camera_json(const CalibrationResult& r, const std::vector<CalibrationFrame>& frames) {
+  nlohmann::ordered_json j;
+  const CameraModel& c = r.camera;
+  j["description"] = "Calibrated by `omniloc calibrate` from " + std::to_string(frames.size()) +
+                     " frame(s); radius_lut samples the fitted radial polynomial every 4 px and ends at the view radius "
+                     "(where the carpet ends all round). The \"calibration\" block records how; the camera reader ignores it.";
+  j["width"] = c.width_px;
+  j["height"] = c.height_px;
+  j["center_px"] = {c.center_px.x(), c.center_px.y()};
+  nlohmann::ordered_json lut = nlohmann::ordered_json::array();
+  for (const auto& m : c.radius_lut) lut.push_back({std::round(m.radius_px * 1000) / 1000, std::round(m.ground_cm * 1000) / 1000});
+  j["radius_lut"] = lut;
+  j["yaw_offset_deg"] = c.yaw_offset_deg;
+  j["mirrored"] = c.mirrored;
+  nlohmann::ordered_json masts = nlohmann::ordered_json::array();
+  for (const auto& m : c.masts) masts.push_back({{"bearing_deg", m.bearing_deg}, {"half_width_deg", m.half_width_deg}});
+  j["mask"] = {{"body_radius_px", c.body_radius_px}, {"masts", masts}};
+  nlohmann::ordered_json cal;
+  cal["radial_model"] = {{"form", "ground_cm = a1 r + a2 r^2 + a3 r^3 + a4 r^4, r in px from center_px"},
+                         {"a", {r.radial.a[0], r.radial.a[1], r.radial.a[2], r.radial.a[3]}},
+                         {"note", "measured between measured_radii_px (5-95 % of the inlier pixels on lines crossing "
+                                  "their ray); extrapolated outside"}};
+  cal["view_radius_px"] = r.view_radius_px;
+  cal["measured_radii_px"] = {r.measured_min_px, r.measured_max_px};
+  cal["rim"] = {{"center_px", {r.rim.centre_px.x(), r.rim.centre_px.y()}}, {"radius_px", r.rim.radius_px},
+                {"rays_on_circle", r.rim.rays_on_circle}};
+  cal["carpet_hsv"] = {{"hue", r.carpet.hue}, {"hue_half_width", r.carpet.hue_half_width},
+                       {"sat_min", r.carpet.sat_min}, {"val_min", r.carpet.val_min}, {"val_max", r.carpet.val_max},
+                       {"median_sat", r.carpet.median_sat}, {"median_val", r.carpet.median_val},
+                       {"line_val_step", r.carpet.line_val_step}, {"line_sat_step", r.carpet.line_sat_step}};
+  cal["mirrored_ambiguous"] = r.mirrored_ambiguous;
+  cal["residual"] = {{"rms_px", r.rms_px}, {"rms_cm", r.rms_cm}, {"median_px", r.median_px},
+                     {"inlier_fraction", r.inlier_fraction}, {"inlier_threshold_px", r.inlier_threshold_px}};
+  nlohmann::ordered_json fr = nlohmann::ordered_json::array();
+  for (std::size_t i = 0; i < frames.size() && i < r.fits.size(); ++i) {
+    const auto& f = r.fits[i];
+    fr.push_back({{"image", frames[i].name},
+                  {"position_cm", {frames[i].position_cm.x(), frames[i].position_cm.y()}},
+                  {"yaw_deg", f.yaw_deg},
+                  {"yaw_given", f.yaw_given},
+                  {"rms_px", f.rms_px},
+                  {"line_pixels", f.line_pixels},
+                  {"inliers", f.inliers}});
+  }
+  cal["frames"] = fr;
+  j["calibration"] = cal;
+  return j.dump(2) + "\n";
+}
+
+cv::Mat calibration_overlay(const CalibrationFrame& frame, const FrameAnalysis& a, const FrameFit& fit,
+                            const CalibrationResult& r, const FieldGeometry& field) {
+  cv::Mat out = frame.image.clone();
+  const CameraModel& cam = r.camera;
+  for (const auto& p : a.line_pixels) out.at<cv::Vec3b>(static_cast<int>(p.y()), static_cast<int>(p.x())) = {255, 0, 255};
+  // Field model: ground distance -> radius by bisection in the fitted polynomial (beyond the LUT's
+  // view radius too, up to the rim, so the whole seen field is drawn).
+  const double r_max = r.rim.radius_px;
+  auto radius_of = [&](double d) {
+    double lo = 0.0, hi = r_max;
+    if (!(r.radial.ground_cm(hi) >= d) || !r.radial.monotonic_up_to(hi)) hi = r.view_radius_px;
+    if (r.radial.ground_cm(hi) < d) return -1.0;
+    for (int i = 0; i < 40; ++i) ((r.radial.ground_cm(0.5 * (lo + hi)) < d) ? lo : hi) = 0.5 * (lo + hi);
+    return 0.5 * (lo + hi);
+  };
+  const Eigen::Vector2d pos = frame.position_cm;
+  auto draw = [&](const Eigen::Vector2d& q) {
+    const Eigen::Vector2d rel = field_to_robot(q - pos, fit.yaw_deg);
+    const double rr = radius_of(rel.norm());
+    if (rr < cam.body_radius_px) return;
+    const double phi = deg_to_rad(rad_to_deg(std::atan2(rel.y(), rel.x())) + cam.yaw_offset_deg);
+    const double du = rr * std::cos(phi);
+    const int u = static_cast<int>(std::lround(cam.center_px.x() + (cam.mirrored ? -du : du)));
+    const int v = static_cast<int>(std::lround(cam.center_px.y() - rr * std::sin(phi)));
+    if (u >= 0 && v >= 0 && u < out.cols && v < out.rows) out.at<cv::Vec3b>(v, u) = {0, 255, 255};
+  };
+  for (const auto& s : field.segments) {
+    const double len = (s.b_cm - s.a_cm).norm();
+    for (double t = 0; t <= len; t += 0.5) draw(s.a_cm + (s.b_cm - s.a_cm) * (t / len));
+  }
+  for (const auto& arc : field.arcs)
+    for (double t = arc.start_deg; t <= arc.end_deg; t += 0.2)
+      draw(arc.centre_cm + arc.radius_cm * Eigen::Vector2d(std::cos(deg_to_rad(t)), std::sin(deg_to_rad(t))));
+  for (const auto& d : field.discs) draw(d.centre_cm);
+  const cv::Point c(static_cast<int>(std::lround(cam.center_px.x())), static_cast<int>(std::lround(cam.center_px.y())));
+  cv::circle(out, c, static_cast<int>(std::lround(r.rim.radius_px)), {255, 128, 0}, 1, cv::LINE_AA);
+  cv::circle(out, c, static_cast<int>(std::lround(cam.body_radius_px)), {0, 0, 255}, 1, cv::LINE_AA);
+  cv::circle(out, c, static_cast<int>(std::lround(r.view_radius_px)), {0, 255, 0}, 1, cv::LINE_AA);
+  for (const auto& m : cam.masts) {
+    for (double sgn : {-1.0, 1.0}) {
+      const double phi = deg_to_rad(m.bearing_deg + sgn * m.half_width_deg + cam.yaw_offset_deg);
+      const double ux = std::cos(phi) * (cam.mirrored ? -1.0 : 1.0), vy = -std::sin(phi);
+      cv::line(out, c + cv::Point(static_cast<int>(cam.body_radius_px * ux), static_cast<int>(cam.body_radius_px * vy)),
+               c + cv::Point(static_cast<int>(r.view_radius_px * ux), static_cast<int>(r.view_radius_px * vy)), {0, 0, 255}, 1);
+    }
+  }
+  return out;
+}
+
+}  // namespace omniloc

@@ -1,0 +1,452 @@
+// Image side of the calibration: the mirror rim, the carpet colour, line pixels, and the robot's
+// body, masts and the end of the carpet, all measured from the frame itself.
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <stdexcept>
+
+#include <Eigen/Dense>
+#include <opencv2/imgproc.hpp>
+
+#include "omniloc/calibration.hpp"
+#include "omniloc/conventions.hpp"
+
+namespace omniloc {
+
+namespace {
+
+constexpr int kRimRays = 360;
+constexpr int kPolarAngles = 720;  // 0.5 deg: a 3 px rod at 40 px spans 4 deg = 8 bins
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  const auto k = static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) * static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
+
+// Robust standard deviation (1.4826 x median absolute deviation from the median).
+double robust_sigma(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  const double med = percentile(v, 0.5);
+  for (double& x : v) x = std::abs(x - med);
+  return 1.4826 * percentile(std::move(v), 0.5);
+}
+
+float bilinear(const cv::Mat1f& img, double x, double y) {
+  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+  if (x0 < 0 || y0 < 0 || x0 + 1 >= img.cols || y0 + 1 >= img.rows) return 0.0f;
+  const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
+  const float* r0 = img.ptr<float>(y0);
+  const float* r1 = img.ptr<float>(y0 + 1);
+  return (1 - fy) * ((1 - fx) * r0[x0] + fx * r0[x0 + 1]) + fy * ((1 - fx) * r1[x0] + fx * r1[x0 + 1]);
+}
+
+// Window of the rim's step test: wider than the widest line in the image (a 5 cm line is ~6 px
+// at 480 px near the robot), so that a line's edge scores at most width/window of its contrast.
+int rim_window_px(const cv::Mat& img) { return std::clamp(static_cast<int>(std::lround(std::min(img.cols, img.rows) / 60.0)), 4, 16); }
+
+struct EdgeCandidate {
+  int ray;
+  Eigen::Vector2d p;
+  double contrast;
+};
+
+// Bright-to-dark steps (outwards) along 360 rays from `origin`: local maxima of
+// mean(inside window) - mean(outside window) above `min_contrast`, sub-pixel by a parabola.
+std::vector<EdgeCandidate> rim_candidates(const cv::Mat1f& gray, const Eigen::Vector2d& origin, int w, double min_contrast) {
+  std::vector<EdgeCandidate> out;
+  const double rmax = std::hypot(gray.cols, gray.rows);
+  std::vector<double> prof, pre;
+  for (int k = 0; k < kRimRays; ++k) {
+    const double a = deg_to_rad(k), c = std::cos(a), s = std::sin(a);
+    prof.clear();
+    for (int r = 0; r < rmax; ++r) {
+      const double x = origin.x() + r * c, y = origin.y() - r * s;
+      if (x < 0 || y < 0 || x > gray.cols - 2 || y > gray.rows - 2) break;
+      prof.push_back(bilinear(gray, x, y));
+    }
+    const int n = static_cast<int>(prof.size());
+    if (n < 2 * w + 3) continue;
+    pre.assign(static_cast<std::size_t>(n) + 1, 0.0);
+    for (int i = 0; i < n; ++i) pre[static_cast<std::size_t>(i) + 1] = pre[static_cast<std::size_t>(i)] + prof[static_cast<std::size_t>(i)];
+    auto contrast = [&](int r) {
+      return (pre[static_cast<std::size_t>(r)] - pre[static_cast<std::size_t>(r - w)]) / w -
+             (pre[static_cast<std::size_t>(r + w + 1)] - pre[static_cast<std::size_t>(r + 1)]) / w;
+    };
+    for (int r = w + 1; r + w + 2 < n; ++r) {
+      const double c0 = contrast(r);
+      if (c0 < min_contrast || c0 < contrast(r - 1) || c0 <= contrast(r + 1)) continue;
+      const double cm = contrast(r - 1), cp = contrast(r + 1);
+      const double den = cm - 2 * c0 + cp;
+      const double dr = den < 0 ? std::clamp(0.5 * (cm - cp) / den, -0.5, 0.5) : 0.0;
+      const double rr = r + dr;
+      out.push_back({k, origin + rr * Eigen::Vector2d(c, -s), c0});
+    }
+  }
+  return out;
+}
+
+bool circle_through(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c, Eigen::Vector2d& centre,
+                    double& radius) {
+  const double d = 2 * (a.x() * (b.y() - c.y()) + b.x() * (c.y() - a.y()) + c.x() * (a.y() - b.y()));
+  if (std::abs(d) < 1e-9) return false;
+  const double a2 = a.squaredNorm(), b2 = b.squaredNorm(), c2 = c.squaredNorm();
+  centre = {(a2 * (b.y() - c.y()) + b2 * (c.y() - a.y()) + c2 * (a.y() - b.y())) / d,
+            (a2 * (c.x() - b.x()) + b2 * (a.x() - c.x()) + c2 * (b.x() - a.x())) / d};
+  radius = (a - centre).norm();
+  return true;
+}
+
+// Least-squares (Kasa) circle through points.
+bool fit_circle(const std::vector<Eigen::Vector2d>& pts, Eigen::Vector2d& centre, double& radius) {
+  if (pts.size() < 3) return false;
+  Eigen::MatrixXd A(static_cast<Eigen::Index>(pts.size()), 3);
+  Eigen::VectorXd b(static_cast<Eigen::Index>(pts.size()));
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const auto r = static_cast<Eigen::Index>(i);
+    A(r, 0) = 2 * pts[i].x();
+    A(r, 1) = 2 * pts[i].y();
+    A(r, 2) = 1;
+    b(r) = pts[i].squaredNorm();
+  }
+  const Eigen::Vector3d x = A.colPivHouseholderQr().solve(b);
+  centre = {x(0), x(1)};
+  radius = std::sqrt(std::max(0.0, x(2) + centre.squaredNorm()));
+  return std::isfinite(radius);
+}
+
+// Per ray, the strongest candidate within `tol` of the circle; their contrast sum and points.
+double circle_support(const std::vector<std::vector<int>>& by_ray, const std::vector<EdgeCandidate>& cand,
+                      const Eigen::Vector2d& centre, double radius, double tol, std::vector<Eigen::Vector2d>* pts) {
+  double score = 0.0;
+  for (const auto& ray : by_ray) {
+    double best = 0.0;
+    const EdgeCandidate* bc = nullptr;
+    for (int i : ray) {
+      const auto& e = cand[static_cast<std::size_t>(i)];
+      if (std::abs((e.p - centre).norm() - radius) <= tol && e.contrast > best) {
+        best = e.contrast;
+        bc = &e;
+      }
+    }
+    score += best;
+    if (pts != nullptr && bc != nullptr) pts->push_back(bc->p);
+  }
+  return score;
+}
+
+// One RANSAC pass: among circles supported by at least half the best support, the outermost (the
+// rim is outside every line and the centre circle, which may also be concentric with the image).
+bool ransac_rim(const std::vector<EdgeCandidate>& cand, const cv::Size& size, Eigen::Vector2d& centre, double& radius,
+                int& rays) {
+  if (cand.size() < 3) return false;
+  std::vector<std::vector<int>> by_ray(kRimRays);
+  for (std::size_t i = 0; i < cand.size(); ++i) by_ray[static_cast<std::size_t>(cand[i].ray)].push_back(static_cast<int>(i));
+  std::mt19937 rng(1);  // fixed: the calibration is deterministic
+  std::uniform_int_distribution<std::size_t> pick(0, cand.size() - 1);
+  struct Hyp {
+    Eigen::Vector2d c;
+    double r, score;
+  };
+  std::vector<Hyp> hyps;
+  const double min_r = 0.15 * std::min(size.width, size.height);
+  for (int it = 0; it < 3000; ++it) {
+    const auto& a = cand[pick(rng)];
+    const auto& b = cand[pick(rng)];
+    const auto& c = cand[pick(rng)];
+    auto apart = [](int x, int y) { return std::abs(angle_diff_deg(x, y)) >= 40.0; };
+    if (!apart(a.ray, b.ray) || !apart(b.ray, c.ray) || !apart(a.ray, c.ray)) continue;
+    Eigen::Vector2d cc;
+    double rr = 0;
+    if (!circle_through(a.p, b.p, c.p, cc, rr) || rr < min_r) continue;
+    if (cc.x() < 0 || cc.y() < 0 || cc.x() >= size.width || cc.y() >= size.height) continue;
+    hyps.push_back({cc, rr, circle_support(by_ray, cand, cc, rr, 2.0, nullptr)});
+  }
+  if (hyps.empty()) return false;
+  double best = 0.0;
+  for (const auto& h : hyps) best = std::max(best, h.score);
+  const Hyp* chosen = nullptr;
+  for (const auto& h : hyps) {
+    if (h.score >= 0.5 * best && (chosen == nullptr || h.r > chosen->r)) chosen = &h;
+  }
+  std::vector<Eigen::Vector2d> pts;
+  (void)circle_support(by_ray, cand, chosen->c, chosen->r, 2.0, &pts);
+  centre = chosen->c;
+  radius = chosen->r;
+  if (!fit_circle(pts, centre, radius)) return false;
+  pts.clear();
+  (void)circle_support(by_ray, cand, centre, radius, 1.5, &pts);
+  rays = static_cast<int>(pts.size());
+  return fit_circle(pts, centre, radius);
+}
+
+}  // namespace
+
+RimCircle find_mirror_rim(const cv::Mat& bgr, const std::string& ctx) {
+  if (bgr.empty() || bgr.type() != CV_8UC3) throw std::runtime_error(ctx + ": expected a non-empty 8-bit colour image");
+  if (std::min(bgr.cols, bgr.rows) < 64) {
+    throw std::runtime_error(ctx + ": image " + std::to_string(bgr.cols) + " x " + std::to_string(bgr.rows) +
+                             " is too small for an omni frame (at least 64 px a side)");
+  }
+  cv::Mat gray8;
+  cv::cvtColor(bgr, gray8, cv::COLOR_BGR2GRAY);
+  cv::Mat1f gray;
+  gray8.convertTo(gray, CV_32F);
+  cv::GaussianBlur(gray, gray, cv::Size(3, 3), 0.8);
+  std::vector<double> g;
+  for (int v = 0; v < gray.rows; v += 2)
+    for (int u = 0; u < gray.cols; u += 2) g.push_back(gray(v, u));
+  const double range = percentile(g, 0.99) - percentile(g, 0.01);
+  // The rim steps from the floor (dimmest: the renderer's outside floor, 25 % of the range after
+  // dimming) to the black beyond the mirror: 15 % of the image's range keeps it and drops noise.
+  const double min_contrast = 0.15 * range;
+  if (range < 20.0) {
+    throw std::runtime_error(ctx + ": no mirror rim: the image has no contrast (1-99 % grey range " +
+                             std::to_string(static_cast<int>(range)) + " levels)");
+  }
+  const int w = rim_window_px(bgr);
+  Eigen::Vector2d origin(0.5 * (bgr.cols - 1), 0.5 * (bgr.rows - 1));
+  RimCircle rim;
+  double radius = 0.0;
+  int rays = 0;
+  for (int pass = 0; pass < 2; ++pass) {  // second pass: rays from the found centre cross the rim squarely
+    const auto cand = rim_candidates(gray, origin, w, min_contrast);
+    Eigen::Vector2d c;
+    if (!ransac_rim(cand, bgr.size(), c, radius, rays)) {
+      throw std::runtime_error(ctx + ": no mirror rim: no circle of bright-to-dark steps found");
+    }
+    origin = c;
+  }
+  // A quarter of the rays on the circle: the masts and a cropped image may hide the rest.
+  if (rays < kRimRays / 4) {
+    throw std::runtime_error(ctx + ": no mirror rim: the best circle is seen on only " + std::to_string(rays) +
+                             " of 360 rays");
+  }
+  rim.centre_px = origin;
+  rim.radius_px = radius;
+  rim.rays_on_circle = rays;
+  return rim;
+}
+
+namespace {
+
+// Carpet = the most frequent colour (a 3-D H x S x V histogram) in the ring just outside the body:
+// the robot stands on the carpet, so the floor next to it is carpet (walls and furniture, which
+// may share its hue under a colour cast, are farther out). Thresholds from the robust spread of
+// the pixels in and next to that histogram bin.
+CarpetColour carpet_colour(const cv::Mat& hsv, const RimCircle& rim, const std::string& ctx) {
+  constexpr int kHb = 45, kSb = 16, kVb = 16;  // 8 deg hue, 16 levels of S and V
+  std::vector<int> hist(kHb * kSb * kVb, 0);
+  std::vector<cv::Vec3b> samples;
+  const double r_in = 0.15 * rim.radius_px, r_out = 0.5 * rim.radius_px;
+  for (int v = 0; v < hsv.rows; ++v) {
+    for (int u = 0; u < hsv.cols; ++u) {
+      const double r = std::hypot(u - rim.centre_px.x(), v - rim.centre_px.y());
+      if (r < r_in || r > r_out) continue;
+      const auto& p = hsv.at<cv::Vec3b>(v, u);
+      ++hist[static_cast<std::size_t>((p[0] / 4) * kSb * kVb + (p[1] / 16) * kVb + p[2] / 16)];
+      samples.push_back(p);
+    }
+  }
+  if (samples.empty()) throw std::runtime_error(ctx + ": no carpet: the mirror's disc is empty");
+  const auto peak = static_cast<int>(std::max_element(hist.begin(), hist.end()) - hist.begin());
+  const int ph = peak / (kSb * kVb), ps = (peak / kVb) % kSb, pv = peak % kVb;
+  std::vector<double> hs, ss, vs;
+  for (const auto& p : samples) {
+    const int dh = std::abs(p[0] / 4 - ph);
+    if (std::min(dh, kHb - dh) <= 1 && std::abs(p[1] / 16 - ps) <= 1 && std::abs(p[2] / 16 - pv) <= 1) {
+      double h = p[0];
+      if (h - ph * 4 > 90) h -= 180;  // unwrap around the peak
+      if (ph * 4 - h > 90) h += 180;
+      hs.push_back(h);
+      ss.push_back(p[1]);
+      vs.push_back(p[2]);
+    }
+  }
+  CarpetColour c;
+  c.hue = std::fmod(percentile(hs, 0.5) + 180.0, 180.0);
+  c.median_sat = percentile(ss, 0.5);
+  c.median_val = percentile(vs, 0.5);
+  // Hue: three robust sigmas, 4..20 units (8..40 deg). Saturation: down to three sigmas or a
+  // quarter below the median. Value: half to 1.5 times the median (the renderer's +-20 % light
+  // and the real frame's vignetting stay inside; the black floor beyond the carpet and bright
+  // walls of the same hue do not).
+  c.hue_half_width = std::clamp(3.0 * robust_sigma(hs), 4.0, 20.0);
+  c.sat_min = c.median_sat - std::max(3.0 * robust_sigma(ss), 0.25 * c.median_sat);
+  c.val_min = 0.5 * c.median_val;
+  c.val_max = 1.5 * c.median_val;
+  if (static_cast<double>(hs.size()) < 0.05 * static_cast<double>(samples.size()) || c.median_sat < 20.0) {
+    throw std::runtime_error(ctx + ": no carpet: no dominant colour around the robot (hue " +
+                             std::to_string(static_cast<int>(2 * c.hue)) + " deg on " + std::to_string(hs.size()) +
+                             " of " + std::to_string(samples.size()) + " pixels, median saturation " +
+                             std::to_string(static_cast<int>(c.median_sat)) + ")");
+  }
+  return c;
+}
+
+cv::Mat1f normalised_box(const cv::Mat1f& value, const cv::Mat1f& weight, int k) {
+  cv::Mat1f num, den;
+  cv::boxFilter(value.mul(weight), num, CV_32F, cv::Size(k, k));
+  cv::boxFilter(weight, den, CV_32F, cv::Size(k, k));
+  return num / cv::max(den, 1e-3f);
+}
+
+}  // namespace
+
+FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx) {
+  FrameAnalysis fa;
+  fa.rim = find_mirror_rim(bgr, ctx);
+  const RimCircle& rim = fa.rim;
+  cv::Mat hsv;
+  cv::cvtColor(bgr, hsv, cv::COLOR_BGR2HSV);
+  CarpetColour& cc = fa.carpet;
+  cc = carpet_colour(hsv, rim, ctx);
+  const int w = rim_window_px(bgr);
+
+  cv::Mat1f hue, sat, val;
+  {
+    std::vector<cv::Mat> ch;
+    cv::split(hsv, ch);
+    ch[0].convertTo(hue, CV_32F);
+    ch[1].convertTo(sat, CV_32F);
+    ch[2].convertTo(val, CV_32F);
+  }
+  cv::Mat1f carpet(bgr.size(), 0.0f);
+  fa.carpet_mask = cv::Mat::zeros(bgr.size(), CV_8U);
+  for (int v = 0; v < bgr.rows; ++v) {
+    for (int u = 0; u < bgr.cols; ++u) {
+      if (std::hypot(u - rim.centre_px.x(), v - rim.centre_px.y()) > rim.radius_px) continue;
+      const double dh = std::abs(hue(v, u) - cc.hue);
+      if (std::min(dh, 180 - dh) <= cc.hue_half_width && sat(v, u) >= cc.sat_min && val(v, u) >= cc.val_min &&
+          val(v, u) <= cc.val_max) {
+        carpet(v, u) = 1.0f;
+        fa.carpet_mask.at<std::uint8_t>(v, u) = 255;
+      }
+    }
+  }
+  // Local carpet brightness and saturation over a window four rim windows wide (several line
+  // widths: the line itself never dominates it), from carpet pixels only.
+  const int kb = 4 * w + 1;
+  const cv::Mat1f vbg = normalised_box(val, carpet, kb), sbg = normalised_box(sat, carpet, kb);
+  cv::Mat1f near_carpet;
+  cv::boxFilter(carpet, near_carpet, CV_32F, cv::Size(kb, kb));
+  std::vector<double> ev, es;
+  for (int v = 0; v < bgr.rows; v += 2)
+    for (int u = 0; u < bgr.cols; u += 2)
+      if (carpet(v, u) > 0) {
+        ev.push_back(val(v, u) - vbg(v, u));
+        es.push_back(sat(v, u) - sbg(v, u));
+      }
+  // Four robust sigmas of the carpet's own spread (at least 2 levels: 8-bit quantisation).
+  cc.line_val_step = std::max(4.0 * robust_sigma(ev), 2.0);
+  cc.line_sat_step = std::max(2.0 * robust_sigma(es), 2.0);
+  fa.line_mask = cv::Mat::zeros(bgr.size(), CV_8U);
+  for (int v = 0; v < bgr.rows; ++v) {
+    for (int u = 0; u < bgr.cols; ++u) {
+      // A fifth of the window carpet: the pixel is on (or in a line across) the carpet.
+      if (carpet(v, u) > 0 || near_carpet(v, u) < 0.2f) continue;
+      if (std::hypot(u - rim.centre_px.x(), v - rim.centre_px.y()) > rim.radius_px) continue;
+      if (val(v, u) - vbg(v, u) >= cc.line_val_step && sbg(v, u) - sat(v, u) >= cc.line_sat_step)
+        fa.line_mask.at<std::uint8_t>(v, u) = 255;
+    }
+  }
+
+  // Polar statistics about the rim centre: class per (angle, radius): 0 other, 1 carpet, 2 line.
+  const int nr = static_cast<int>(rim.radius_px);
+  std::vector<std::uint8_t> cls(static_cast<std::size_t>(kPolarAngles) * static_cast<std::size_t>(nr), 0);
+  auto at = [&](int k, int r) -> std::uint8_t& { return cls[static_cast<std::size_t>(k) * static_cast<std::size_t>(nr) + static_cast<std::size_t>(r)]; };
+  for (int k = 0; k < kPolarAngles; ++k) {
+    const double a = deg_to_rad(k * 360.0 / kPolarAngles);
+    for (int r = 0; r < nr; ++r) {
+      const int u = static_cast<int>(std::lround(rim.centre_px.x() + r * std::cos(a)));
+      const int v = static_cast<int>(std::lround(rim.centre_px.y() - r * std::sin(a)));
+      if (u < 0 || v < 0 || u >= bgr.cols || v >= bgr.rows) continue;
+      at(k, r) = fa.line_mask.at<std::uint8_t>(v, u) ? 2 : (carpet(v, u) > 0 ? 1 : 0);
+    }
+  }
+  std::vector<double> floor_frac(static_cast<std::size_t>(nr), 0.0);
+  for (int r = 0; r < nr; ++r) {
+    int n = 0;
+    for (int k = 0; k < kPolarAngles; ++k) n += at(k, r) != 0;
+    floor_frac[static_cast<std::size_t>(r)] = static_cast<double>(n) / kPolarAngles;
+  }
+  const double fmax = *std::max_element(floor_frac.begin(), floor_frac.end());
+  if (fmax < 0.25) throw std::runtime_error(ctx + ": no carpet: at no radius is a quarter of the circle carpet or line");
+  // Body: inside the first radius where the floor is seen on 80 % as many angles as anywhere.
+  int body = 0;
+  while (body < nr && floor_frac[static_cast<std::size_t>(body)] < 0.8 * fmax) ++body;
+  fa.body_radius_px = body + 1.0;
+  // End of the carpet per angle: the first run of more than a rim window of "other" pixels.
+  std::vector<double> end(kPolarAngles, nr);
+  for (int k = 0; k < kPolarAngles; ++k) {
+    int run = 0;
+    for (int r = body; r < nr; ++r) {
+      run = at(k, r) == 0 ? run + 1 : 0;
+      if (run > w) {
+        end[static_cast<std::size_t>(k)] = r - run;
+        break;
+      }
+    }
+  }
+  const double view0 = percentile(end, 0.1);
+  // Masts: angles where most of [body, view] is neither carpet nor line (rods, the mast).
+  std::vector<double> other(kPolarAngles, 0.0);
+  const int r0 = body + w / 2, r1 = std::max(r0 + 1, static_cast<int>(view0));
+  for (int k = 0; k < kPolarAngles; ++k) {
+    int n = 0;
+    for (int r = r0; r < r1; ++r) n += at(k, r) == 0;
+    other[static_cast<std::size_t>(k)] = static_cast<double>(n) / (r1 - r0);
+  }
+  std::vector<bool> mast(kPolarAngles, false);
+  for (int k = 0; k < kPolarAngles; ++k) {
+    const double s = (other[static_cast<std::size_t>((k + kPolarAngles - 1) % kPolarAngles)] + other[static_cast<std::size_t>(k)] +
+                      other[static_cast<std::size_t>((k + 1) % kPolarAngles)]) / 3.0;
+    mast[static_cast<std::size_t>(k)] = s >= 0.6;
+  }
+  if (std::all_of(mast.begin(), mast.end(), [](bool b) { return b; })) {
+    throw std::runtime_error(ctx + ": no carpet: every direction is hidden between the body and the end of the carpet");
+  }
+  int start = 0;
+  while (mast[static_cast<std::size_t>(start)]) ++start;  // begin the sweep outside a sector
+  for (int i = 0; i < kPolarAngles; ++i) {
+    const int k = (start + i) % kPolarAngles;
+    if (!mast[static_cast<std::size_t>(k)] || mast[static_cast<std::size_t>((k + kPolarAngles - 1) % kPolarAngles)]) continue;
+    int len = 0;
+    while (mast[static_cast<std::size_t>((k + len) % kPolarAngles)]) ++len;
+    const double step = 360.0 / kPolarAngles;
+    // Half a bin each side for the sampling, one more bin of margin for the rod's soft edge.
+    fa.masts_image.push_back({wrap_deg((k + 0.5 * (len - 1)) * step), 0.5 * len * step + step});
+  }
+  std::vector<double> open_end;
+  for (int k = 0; k < kPolarAngles; ++k)
+    if (!mast[static_cast<std::size_t>(k)]) open_end.push_back(end[static_cast<std::size_t>(k)]);
+  // The 10th percentile: the ball or a robot on a few rays does not pull the view in.
+  fa.view_radius_px = percentile(open_end, 0.1);
+  if (fa.view_radius_px <= fa.body_radius_px + 2 * w) {
+    throw std::runtime_error(ctx + ": no carpet ring: the carpet ends at " + std::to_string(fa.view_radius_px) +
+                             " px, at the robot's body (" + std::to_string(fa.body_radius_px) + " px)");
+  }
+  // Line pixels for the fit: outside the body, before the carpet ends on their ray, not on a mast.
+  for (int v = 0; v < bgr.rows; ++v) {
+    for (int u = 0; u < bgr.cols; ++u) {
+      if (!fa.line_mask.at<std::uint8_t>(v, u)) continue;
+      const double du = u - rim.centre_px.x(), dv = rim.centre_px.y() - v;
+      const double r = std::hypot(du, dv);
+      if (r < fa.body_radius_px + 1.0) continue;
+      double a = rad_to_deg(std::atan2(dv, du));
+      if (a < 0) a += 360.0;
+      const auto k = static_cast<std::size_t>(std::min(kPolarAngles - 1, static_cast<int>(a * kPolarAngles / 360.0)));
+      if (mast[k] || r > end[k]) continue;
+      fa.line_pixels.emplace_back(u, v);
+    }
+  }
+  if (fa.line_pixels.size() < 50) {
+    throw std::runtime_error(ctx + ": no lines: only " + std::to_string(fa.line_pixels.size()) +
+                             " line pixels on the carpet");
+  }
+  return fa;
+}
+
+}  // namespace omniloc

@@ -1,0 +1,316 @@
+// Camera calibration (issue 13 items 1 and 7): round trips on rendered frames against the camera
+// that drew them, the real TKU RoboSot frame (tests/data/, MIT licence beside it), and frames on
+// which nothing fits.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <opencv2/core.hpp>
+#include <opencv2/core/persistence.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "omniloc/calibration.hpp"
+#include "omniloc/camera.hpp"
+#include "omniloc/conventions.hpp"
+#include "omniloc/field.hpp"
+#include "omniloc_sim/renderer.hpp"
+
+namespace omniloc {
+namespace {
+
+// tests/data/ found from the working directory (the build directory) upwards.
+std::filesystem::path test_data(const std::string& name) {
+  for (auto dir = std::filesystem::current_path(); !dir.empty(); dir = dir.parent_path()) {
+    const auto p = dir / "tests" / "data" / name;
+    if (std::filesystem::exists(p)) return p;
+    if (dir == dir.parent_path()) break;
+  }
+  return {};
+}
+
+// The default camera with its centre a few px off, distances scaled, a yaw offset and a mast.
+CameraModel test_camera(double scale) {
+  CameraModel cam = load_camera("default");
+  cam.center_px = {323.4, 236.7};
+  for (auto& m : cam.radius_lut) m.ground_cm *= scale;
+  cam.yaw_offset_deg = 7.0;
+  cam.masts = {{120.0, 5.0}};
+  cam.body_radius_px = 31.0;
+  return cam;
+}
+
+void expect_camera_close(const CalibrationResult& r, const CameraModel& truth, bool yaw_modulo_180) {
+  std::printf("found: centre (%.2f, %.2f) yaw offset %.3f body %.1f masts %zu (first %.2f +- %.2f); truth centre (%.2f, %.2f) "
+              "yaw offset %.3f body %.1f mast %.2f +- %.2f\n",
+              r.camera.center_px.x(), r.camera.center_px.y(), r.camera.yaw_offset_deg, r.camera.body_radius_px,
+              r.camera.masts.size(), r.camera.masts.empty() ? 0.0 : r.camera.masts[0].bearing_deg,
+              r.camera.masts.empty() ? 0.0 : r.camera.masts[0].half_width_deg, truth.center_px.x(), truth.center_px.y(),
+              truth.yaw_offset_deg, truth.body_radius_px, truth.masts[0].bearing_deg, truth.masts[0].half_width_deg);
+  EXPECT_NEAR(r.camera.center_px.x(), truth.center_px.x(), 1.0);
+  EXPECT_NEAR(r.camera.center_px.y(), truth.center_px.y(), 1.0);
+  double worst = 0.0;
+  const double r_lo = r.measured_min_px, r_hi = std::min(r.measured_max_px, r.view_radius_px);
+  for (double rr = r_lo; rr <= r_hi; rr += 1.0) {
+    const double e = std::abs(r.radial.ground_cm(rr) / truth.ground_cm_at_radius(rr) - 1.0);
+    worst = std::max(worst, e);
+  }
+  std::printf("mapping: worst relative ground-distance error %.2f %% over the measured radii [%.0f, %.0f] px\n",
+              100 * worst, r_lo, r_hi);
+  EXPECT_LT(worst, 0.02);
+  double dyaw = angle_diff_deg(r.camera.yaw_offset_deg, truth.yaw_offset_deg);
+  if (yaw_modulo_180 && std::abs(dyaw) > 90.0) dyaw = angle_diff_deg(dyaw, 180.0);
+  EXPECT_NEAR(dyaw, 0.0, 0.5);
+  EXPECT_EQ(r.camera.mirrored, truth.mirrored);
+  EXPECT_NEAR(r.camera.body_radius_px, truth.body_radius_px, 3.0);
+  ASSERT_EQ(r.camera.masts.size(), 1u);
+  double dm = angle_diff_deg(r.camera.masts[0].bearing_deg, truth.masts[0].bearing_deg);
+  if (yaw_modulo_180 && std::abs(dm) > 90.0) dm = angle_diff_deg(dm, 180.0);
+  EXPECT_NEAR(dm, 0.0, 1.5);
+  EXPECT_NEAR(r.camera.masts[0].half_width_deg, truth.masts[0].half_width_deg, 1.5);
+}
+
+TEST(Calibration, RoundTripKnownPoseRecoversCentreMappingYawAndMask) {
+  const FieldGeometry field = load_field("fira-robosot");
+  const CameraModel truth = test_camera(1.05);
+  sim::RenderOptions opt;
+  opt.seed = 1301;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(opt.seed));
+  const Pose2 pose{435.0, 235.0, 20.0};
+  CalibrationFrame f{sim::render_omni(field, truth, pose, opt), "rendered", {pose.x_cm, pose.y_cm}, pose.yaw_deg};
+  const CalibrationResult r = calibrate_camera({f}, field);
+  std::printf("centre (%.2f, %.2f) yaw %.2f rms %.2f px inliers %.0f %%\n", r.camera.center_px.x(), r.camera.center_px.y(),
+              r.camera.yaw_offset_deg, r.rms_px, 100 * r.inlier_fraction);
+  expect_camera_close(r, truth, false);
+  EXPECT_LT(r.rms_px, 1.0);
+}
+
+TEST(Calibration, RoundTripMirroredUnknownHeadingOnTheCentreSpot) {
+  const FieldGeometry field = load_field("fira-robosot");
+  CameraModel truth = test_camera(0.95);
+  truth.mirrored = true;
+  sim::RenderOptions opt;
+  opt.seed = 1302;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(opt.seed));
+  const Pose2 pose{375.0, 275.0, 0.0};
+  CalibrationFrame f{sim::render_omni(field, truth, pose, opt), "rendered", {pose.x_cm, pose.y_cm}, std::nullopt};
+  const CalibrationResult r = calibrate_camera({f}, field);
+  // From the centre spot the view is symmetric about the robot: the handedness is not seen, and a
+  // mirrored camera fits as an unmirrored one turned round. The mapping and centre are seen.
+  std::printf("centre (%.2f, %.2f) vs (%.2f, %.2f), rms %.2f px\n", r.camera.center_px.x(), r.camera.center_px.y(),
+              truth.center_px.x(), truth.center_px.y(), r.rms_px);
+  EXPECT_TRUE(r.mirrored_ambiguous);
+  EXPECT_NEAR(r.camera.center_px.x(), truth.center_px.x(), 1.0);
+  EXPECT_NEAR(r.camera.center_px.y(), truth.center_px.y(), 1.0);
+  double worst = 0.0;
+  std::printf("measured radii [%.0f, %.0f] px\n", r.measured_min_px, r.measured_max_px);
+  for (double rr = r.measured_min_px; rr <= std::min(r.measured_max_px, r.view_radius_px); rr += 1.0)
+    worst = std::max(worst, std::abs(r.radial.ground_cm(rr) / truth.ground_cm_at_radius(rr) - 1.0));
+  EXPECT_LT(worst, 0.02);
+  EXPECT_LT(r.rms_px, 1.0);
+}
+
+TEST(Calibration, WrittenCameraIsReadBackByTheCameraReader) {
+  const FieldGeometry field = load_field("fira-robosot");
+  const CameraModel truth = test_camera(1.0);
+  sim::RenderOptions opt;
+  opt.seed = 1303;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(opt.seed));
+  const Pose2 pose{300.0, 320.0, -35.0};
+  const std::vector<CalibrationFrame> frames{
+      {sim::render_omni(field, truth, pose, opt), "rendered", {pose.x_cm, pose.y_cm}, pose.yaw_deg}};
+  const CalibrationResult r = calibrate_camera(frames, field);
+  const std::string text = calibrated_camera_json(r, frames);
+  cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_JSON);
+  const CameraModel back = camera_from_json(fs.root(), "calibrated");
+  EXPECT_EQ(back.width_px, 640);
+  EXPECT_NEAR(back.center_px.x(), r.camera.center_px.x(), 1e-9);
+  EXPECT_NEAR(back.view_radius_px(), r.view_radius_px, 1e-3);
+  EXPECT_NEAR(back.yaw_offset_deg, r.camera.yaw_offset_deg, 1e-9);
+  EXPECT_EQ(back.masts.size(), r.camera.masts.size());
+  // The table is the polynomial: a floor point projects where the fitted model puts it.
+  for (double d : {40.0, 120.0, 200.0}) {
+    const double rr = back.radius_px_at_ground(d);
+    EXPECT_NEAR(r.radial.ground_cm(rr), d, 0.5) << d;
+  }
+  expect_camera_close(r, truth, false);
+}
+
+TEST(Calibration, RoundTripAnotherImageSizeWithRobotsInView) {
+  const FieldGeometry field = load_field("fira-robosot");
+  CameraModel truth = test_camera(1.0);
+  truth.width_px = 960;
+  truth.height_px = 720;
+  truth.center_px = {478.3, 362.1};
+  for (auto& m : truth.radius_lut) m.radius_px *= 1.5;
+  truth.body_radius_px = 46.0;
+  truth.yaw_offset_deg = -30.0;
+  truth.masts = {{-75.0, 4.0}};
+  sim::RenderOptions opt;
+  opt.seed = 1305;
+  const Pose2 pose{520.0, 180.0, 110.0};
+  opt.obstacles = sim::random_obstacles(field, pose, 3, opt.seed);
+  std::printf("seed %llu, %zu robots in view\n", static_cast<unsigned long long>(opt.seed), opt.obstacles.size());
+  CalibrationFrame f{sim::render_omni(field, truth, pose, opt), "rendered-960", {pose.x_cm, pose.y_cm}, pose.yaw_deg};
+  const CalibrationResult r = calibrate_camera({f}, field);
+  expect_camera_close(r, truth, false);
+  EXPECT_LT(r.rms_px, 1.0);
+}
+
+TEST(Calibration, RoundTripTwoFramesShareOneCamera) {
+  const FieldGeometry field = load_field("fira-robosot");
+  const CameraModel truth = test_camera(1.03);
+  const sim::OmniRenderer renderer(field, truth);
+  std::vector<CalibrationFrame> frames;
+  const Pose2 poses[] = {{300.0, 200.0, 30.0}, {460.0, 330.0, -60.0}};
+  for (int i = 0; i < 2; ++i) {
+    sim::RenderOptions opt;
+    opt.seed = 1306 + static_cast<std::uint64_t>(i);
+    std::printf("seed %llu\n", static_cast<unsigned long long>(opt.seed));
+    frames.push_back({renderer.render(poses[i], opt), "frame" + std::to_string(i), {poses[i].x_cm, poses[i].y_cm},
+                      poses[i].yaw_deg});
+  }
+  const CalibrationResult r = calibrate_camera(frames, field);
+  ASSERT_EQ(r.fits.size(), 2u);
+  for (const auto& f : r.fits) EXPECT_LT(f.rms_px, 1.0);
+  expect_camera_close(r, truth, false);
+}
+
+TEST(Calibration, RealTkuFrameOnTheCentreSpotHeadingUnknown) {
+  const auto path = test_data("tku-robosot-centre-spot.png");
+  ASSERT_FALSE(path.empty()) << "tests/data/tku-robosot-centre-spot.png not found from " << std::filesystem::current_path();
+  const FieldGeometry field = load_field("fira-robosot");
+  CalibrationFrame f{cv::imread(path.string(), cv::IMREAD_COLOR), "tku-robosot-centre-spot.png", {375.0, 275.0}, std::nullopt};
+  ASSERT_FALSE(f.image.empty());
+  const auto t0 = std::chrono::steady_clock::now();
+  const CalibrationResult r = calibrate_camera({f}, field);
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const CameraModel& c = r.camera;
+  std::printf("real frame: %.2f s, centre (%.2f, %.2f), rim r %.1f, a = [%.5g %.5g %.5g %.5g], yaw offset %.2f, "
+              "mirrored %d (ambiguous %d), view %.1f px, body %.1f px, %zu masts, rms %.2f px (%.2f cm), median %.2f px, "
+              "inliers %.0f %%\n",
+              s, c.center_px.x(), c.center_px.y(), r.rim.radius_px, r.radial.a[0], r.radial.a[1], r.radial.a[2], r.radial.a[3],
+              c.yaw_offset_deg, c.mirrored, r.mirrored_ambiguous, r.view_radius_px, c.body_radius_px, c.masts.size(), r.rms_px,
+              r.rms_cm, r.median_px, 100 * r.inlier_fraction);
+  for (const auto& m : c.masts) std::printf("  mast %.1f +- %.1f deg\n", m.bearing_deg, m.half_width_deg);
+  std::printf("  centre circle (60 cm) at %.1f px\n", c.radius_px_at_ground(60.0));
+  EXPECT_LT(r.rms_px, 2.0);
+  EXPECT_GT(r.inlier_fraction, 0.5);
+  EXPECT_TRUE(r.radial.monotonic_up_to(r.view_radius_px));
+  // The image's own rods: three, as the frame shows.
+  EXPECT_EQ(c.masts.size(), 3u);
+}
+
+// The program: the real frame, one pose with the heading unknown, the camera file and overlay.
+TEST(Calibration, CommandWritesACameraTheReaderLoadsAndAnOverlay) {
+  const auto path = test_data("tku-robosot-centre-spot.png");
+  ASSERT_FALSE(path.empty());
+  const auto dir = std::filesystem::temp_directory_path() / ("omniloc_calib_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto cam = dir / "cam.json", png = dir / "overlay.png", log = dir / "out.txt";
+  const std::string cmd = std::string(OMNILOC_CLI_PATH) + " calibrate " + path.string() + " --pose 375,275 --out " +
+                          cam.string() + " --overlay " + png.string() + " >" + log.string() + " 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  std::stringstream text;
+  text << std::ifstream(log).rdbuf();
+  EXPECT_NE(text.str().find("residual rms"), std::string::npos) << text.str();
+  const CameraModel c = load_camera(cam.string());
+  EXPECT_EQ(c.width_px, 640);
+  EXPECT_EQ(c.height_px, 480);
+  const cv::Mat ov = cv::imread(png.string());
+  EXPECT_EQ(ov.cols, 640);
+  // A grey frame: exit 1 with the reason, no camera written.
+  const auto grey = dir / "grey.png", cam2 = dir / "cam2.json";
+  cv::imwrite(grey.string(), cv::Mat(480, 640, CV_8UC3, cv::Scalar::all(128)));
+  const std::string cmd2 = std::string(OMNILOC_CLI_PATH) + " calibrate " + grey.string() + " --out " + cam2.string() +
+                           " >" + log.string() + " 2>&1";
+  const int status = std::system(cmd2.c_str());
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1) << status;
+  std::stringstream text2;
+  text2 << std::ifstream(log).rdbuf();
+  EXPECT_NE(text2.str().find("no mirror rim"), std::string::npos) << text2.str();
+  EXPECT_FALSE(std::filesystem::exists(cam2));
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Calibration, UniformGreyFrameIsAClearError) {
+  const FieldGeometry field = load_field("fira-robosot");
+  CalibrationFrame f{cv::Mat(480, 640, CV_8UC3, cv::Scalar::all(128)), "grey.png", {375.0, 275.0}, std::nullopt};
+  try {
+    (void)calibrate_camera({f}, field);
+    FAIL() << "a uniform grey frame calibrated";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("grey.png: no mirror rim"), std::string::npos) << e.what();
+  }
+}
+
+// The real frame said to be taken at (150, 100) (it was taken on the centre spot): no camera
+// puts most of its line pixels on the field seen from there.
+TEST(Calibration, RealFrameAtAWrongPoseFitsNothing) {
+  const auto path = test_data("tku-robosot-centre-spot.png");
+  ASSERT_FALSE(path.empty());
+  CalibrationFrame f{cv::imread(path.string(), cv::IMREAD_COLOR), "tku", {150.0, 100.0}, std::nullopt};
+  try {
+    (void)calibrate_camera({f}, load_field("fira-robosot"));
+    FAIL() << "calibrated at a wrong pose";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("tku: nothing fits"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Calibration, TinyFrameIsAClearError) {
+  const FieldGeometry field = load_field("fira-robosot");
+  CalibrationFrame f{cv::Mat(30, 40, CV_8UC3, cv::Scalar(40, 140, 45)), "tiny.png", {375.0, 275.0}, std::nullopt};
+  try {
+    (void)calibrate_camera({f}, field);
+    FAIL() << "a 40 x 30 frame calibrated";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("tiny.png: image 40 x 30 is too small"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Calibration, NoiseFrameIsAClearError) {
+  const FieldGeometry field = load_field("fira-robosot");
+  cv::Mat img(480, 640, CV_8UC3);
+  const std::uint64_t seed = 1304;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  cv::RNG rng(seed);
+  rng.fill(img, cv::RNG::UNIFORM, cv::Scalar::all(0), cv::Scalar::all(256));
+  CalibrationFrame f{img, "noise.png", {375.0, 275.0}, std::nullopt};
+  EXPECT_THROW((void)calibrate_camera({f}, field), std::runtime_error);
+}
+
+TEST(Calibration, FramesOfTwoSizesAreAClearError) {
+  const FieldGeometry field = load_field("fira-robosot");
+  const CameraModel cam = test_camera(1.0);
+  const cv::Mat a = sim::render_omni(field, cam, {375.0, 275.0, 0.0}, sim::noise_free());
+  cv::Mat b;
+  cv::resize(a, b, cv::Size(659, 493));
+  try {
+    (void)calibrate_camera({{a, "a.png", {375.0, 275.0}, 0.0}, {b, "b.png", {375.0, 275.0}, 0.0}}, field);
+    FAIL() << "frames of two sizes calibrated";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("b.png: image is 659 x 493"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Calibration, RadialPolynomialAlgebra) {
+  RadialPolynomial p;
+  p.a = {1.0, 0.01, 0.0, 0.0};
+  EXPECT_DOUBLE_EQ(p.ground_cm(10.0), 10.0 + 1.0);
+  EXPECT_DOUBLE_EQ(p.slope_cm_per_px(10.0), 1.0 + 0.2);
+  EXPECT_TRUE(p.monotonic_up_to(100.0));
+  p.a = {1.0, -0.01, 0.0, 0.0};  // turns over at r = 50
+  EXPECT_FALSE(p.monotonic_up_to(100.0));
+}
+
+}  // namespace
+}  // namespace omniloc
