@@ -129,8 +129,10 @@ TEST(Calibration, WrittenCameraIsReadBackByTheCameraReader) {
       {sim::render_omni(field, truth, pose, opt), "rendered", {pose.x_cm, pose.y_cm}, pose.yaw_deg}};
   const CalibrationResult r = calibrate_camera(frames, field);
   const std::string text = calibrated_camera_json(r, frames);
-  cv::FileStorage fs(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_JSON);
-  const CameraModel back = camera_from_json(fs.root(), "calibrated");
+  const auto file = std::filesystem::temp_directory_path() / ("omniloc_test_calibrated_" + std::to_string(::getpid()) + ".json");
+  std::ofstream(file) << text;
+  const CameraModel back = load_camera(file.string());  // the reader omnilocd and replay use
+  std::filesystem::remove(file);
   EXPECT_EQ(back.width_px, 640);
   EXPECT_NEAR(back.center_px.x(), r.camera.center_px.x(), 1e-9);
   EXPECT_NEAR(back.view_radius_px(), r.view_radius_px, 1e-3);

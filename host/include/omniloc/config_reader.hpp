@@ -246,6 +246,14 @@ Key<T> note(std::string name) {
                 [](const T&) -> std::optional<Json> { return std::nullopt; }, {}};
 }
 
+/// An optional object kept for the record and not read into the struct (e.g. how a camera file was
+/// made: `omniloc calibrate`'s fit report). It must be an object; what is inside is not checked.
+template <class T>
+Key<T> record(std::string name) {
+  return Key<T>{std::move(name), Need::kOptional, Kind::kOther, [](const Node& n, T&) { n.expect_object(); },
+                [](const T&) -> std::optional<Json> { return std::nullopt; }, {}};
+}
+
 template <class T>
 const Key<T>* find_key(const KeyTable<T>& table, std::string_view name) {
   for (const auto& k : table)

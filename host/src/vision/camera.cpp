@@ -163,6 +163,7 @@ const config::KeyTable<CameraModel>& camera_keys() {
   using C = CameraModel;
   static const config::KeyTable<CameraModel> table = {
       config::note<C>("description"),
+      config::record<C>("calibration"),  // written by `omniloc calibrate` (docs/CALIBRATION.md)
       key("width", &C::width_px, Need::kRequired),
       key("height", &C::height_px, Need::kRequired),
       key("center_px", &C::center_px, Need::kRequired),
