@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -310,6 +311,78 @@ TEST(FeatureDbSmall, MslFieldBuildsOnACoarseGrid) {
   const Comparison c = compare_with_reference(db, msl, cam, cells);
   EXPECT_EQ(c.differing, 0);
   EXPECT_LT(c.on_edge, c.rays / 100);
+}
+
+/// Rewrites one header field of a saved database and its checksum, so only the field is wrong.
+template <class T>
+void patch_with_valid_checksum(std::vector<char>& bytes, std::size_t offset, T value) {
+  std::memcpy(bytes.data() + offset, &value, sizeof value);
+  const std::size_t body = bytes.size() - sizeof(std::uint64_t);
+  // FNV-1a 64, written out here as the file format documents it (docs/VISION.md).
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  for (std::size_t i = 0; i < body; ++i) {
+    h ^= static_cast<unsigned char>(bytes[i]);
+    h *= 0x100000001b3ULL;
+  }
+  std::memcpy(bytes.data() + body, &h, sizeof h);
+}
+
+
+// Files whose checksum is valid but whose grid is nonsense for the field (a NaN or shifted origin,
+// an infinite or tiny step, a 1 x 1 grid) used to load, and a NaN origin then hung refine_match;
+// a directory or a device is refused by name before anything is read.
+TEST_F(FeatureDbTest, RefusesAValidChecksumOverANonsenseGridAndFilesThatAreNotFiles) {
+  save_feature_db(*db_, path_);
+  const std::vector<char> good = read_file();
+  // Header offsets: magic 0, version 8, header_bytes 12, nx 16, ny 20, x0 24, y0 32, step 40.
+  struct Case {
+    const char* what;
+    std::size_t offset;
+    double value;
+    const char* message;
+  };
+  const Case cases[] = {
+      {"NaN origin", 24, std::nan(""), "corrupt grid"},
+      {"infinite step", 40, INFINITY, "corrupt grid"},
+      {"tiny step", 40, 1e-300, "corrupt grid"},
+      {"shifted origin", 24, 25.0, "is not the grid of field"},
+      {"other step", 40, 20.0, "is not the grid of field"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    std::vector<char> bytes = good;
+    patch_with_valid_checksum(bytes, c.offset, c.value);
+    write_file(bytes);
+    expect_refused(c.message, *field_, *camera_);
+  }
+  // A 1 x 1 grid with a payload of one point and a valid checksum.
+  {
+    std::vector<char> bytes(good.begin(), good.begin() + 80 + kFeatureBytes);
+    bytes.resize(bytes.size() + 8);
+    std::int32_t one = 1;
+    std::memcpy(bytes.data() + 16, &one, 4);
+    std::memcpy(bytes.data() + 20, &one, 4);
+    const std::uint64_t payload = kFeatureBytes;
+    patch_with_valid_checksum(bytes, 72, payload);  // payload_bytes is the last header field
+    write_file(bytes);
+    expect_refused("is not the grid of field", *field_, *camera_);
+  }
+  // Not files.
+  const fs::path dir = fs::path(path_ + ".d");
+  fs::create_directories(dir);
+  try {
+    (void)load_feature_db(dir.string(), *field_, *camera_);
+    ADD_FAILURE() << "a directory loaded";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(dir.string() + ": is a directory"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
+  try {
+    (void)load_feature_db("/dev/zero", *field_, *camera_);
+    ADD_FAILURE() << "/dev/zero loaded";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("/dev/zero: not a regular file"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

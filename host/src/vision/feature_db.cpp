@@ -4,11 +4,13 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
+#include <vector>
 
 #include "fnv.hpp"
 
@@ -119,16 +121,26 @@ void save_feature_db(const FeatureDb& db, const std::string& path) {
   if (!out) throw std::runtime_error(path + ": write failed");
 }
 
-FeatureDb load_feature_db(const std::string& path, const FieldGeometry& field, const CameraModel& camera) {
+namespace {
+
+/// The file as bytes, refusing what is not a regular file of the size its header announces before
+/// reading more than the header (a directory, /dev/zero or a huge file never reaches the reader).
+std::vector<char> read_database_file(const std::string& path, const std::string& where, Header& h) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(status)) throw std::runtime_error(where + "cannot open feature database (no such file)");
+  if (std::filesystem::is_directory(status)) throw std::runtime_error(where + "is a directory, not a feature database");
+  if (!std::filesystem::is_regular_file(status))
+    throw std::runtime_error(where + "not a regular file (a device or pipe?), not a feature database");
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path + ": cannot open feature database");
-  const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::string where = path + ": ";
-  if (bytes.size() < sizeof(Header)) {
-    throw std::runtime_error(where + "truncated feature database (" + std::to_string(bytes.size()) +
+  if (ec || !in) throw std::runtime_error(where + "cannot open feature database");
+  if (size < sizeof(Header)) {
+    throw std::runtime_error(where + "truncated feature database (" + std::to_string(size) +
                              " bytes, shorter than its header)");
   }
-  Header h{};
+  std::vector<char> bytes(sizeof(Header));
+  in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   std::memcpy(&h, bytes.data(), sizeof h);
   if (std::memcmp(h.magic, kMagic, sizeof kMagic) != 0) throw std::runtime_error(where + "not an omniloc feature database");
   if (h.version != kFeatureDbVersion) {
@@ -136,16 +148,52 @@ FeatureDb load_feature_db(const std::string& path, const FieldGeometry& field, c
                              std::to_string(kFeatureDbVersion) + ": rebuild it with `omniloc builddb`");
   }
   if (h.header_bytes != sizeof(Header) || h.rays != kScanRays || h.crossings != kCrossingsPerRay || h.nx <= 0 ||
-      h.ny <= 0 || h.nx > 100000 || h.ny > 100000 || !(h.step_cm > 0.0) ||
+      h.ny <= 0 || h.nx > 100000 || h.ny > 100000 ||
       h.payload_bytes != static_cast<std::uint64_t>(h.nx) * static_cast<std::uint64_t>(h.ny) * kFeatureBytes) {
     throw std::runtime_error(where + "corrupt header (grid " + std::to_string(h.nx) + " x " + std::to_string(h.ny) +
                              ", " + std::to_string(h.rays) + " rays x " + std::to_string(h.crossings) + ")");
   }
   const std::uint64_t expected = sizeof(Header) + h.payload_bytes + sizeof(std::uint64_t);
-  if (bytes.size() != expected) {
-    throw std::runtime_error(where + (bytes.size() < expected ? "truncated" : "oversized") + " feature database: " +
-                             std::to_string(bytes.size()) + " bytes, the header announces " + std::to_string(expected));
+  if (size != expected) {
+    throw std::runtime_error(where + (size < expected ? "truncated" : "oversized") + " feature database: " +
+                             std::to_string(size) + " bytes, the header announces " + std::to_string(expected));
   }
+  bytes.resize(expected);
+  in.read(bytes.data() + sizeof(Header), static_cast<std::streamsize>(expected - sizeof(Header)));
+  if (!in) throw std::runtime_error(where + "read failed after " + std::to_string(in.gcount()) + " bytes of the payload");
+  return bytes;
+}
+
+/// The grid the file's points lie on must be the one the builder lays over this field at the
+/// file's step (GridSpec::covering): a checksum only proves the bytes are as written, not that a
+/// NaN origin, a shifted grid or a 1 x 1 grid make sense for the field in use.
+void check_grid(const Header& h, const FieldGeometry& field, const std::string& where) {
+  auto show = [](double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.9g", v);
+    return std::string(buf);
+  };
+  if (!std::isfinite(h.step_cm) || h.step_cm < 1.0 || h.step_cm > 100.0 || !std::isfinite(h.x0_cm) ||
+      !std::isfinite(h.y0_cm)) {
+    throw std::runtime_error(where + "corrupt grid (origin (" + show(h.x0_cm) + ", " + show(h.y0_cm) + ") cm, step " +
+                             show(h.step_cm) + " cm; the step must be 1 .. 100 cm)");
+  }
+  const GridSpec g = GridSpec::covering(field, h.step_cm);
+  constexpr double kTolCm = 1e-6;
+  if (g.nx != h.nx || g.ny != h.ny || std::abs(g.x0_cm - h.x0_cm) > kTolCm || std::abs(g.y0_cm - h.y0_cm) > kTolCm) {
+    throw std::runtime_error(where + "grid " + std::to_string(h.nx) + " x " + std::to_string(h.ny) + " from (" +
+                             show(h.x0_cm) + ", " + show(h.y0_cm) + ") cm is not the grid of field '" + field.name +
+                             "' at " + show(h.step_cm) + " cm (" + std::to_string(g.nx) + " x " + std::to_string(g.ny) +
+                             " from (" + show(g.x0_cm) + ", " + show(g.y0_cm) + ")): rebuild it with `omniloc builddb`");
+  }
+}
+
+}  // namespace
+
+FeatureDb load_feature_db(const std::string& path, const FieldGeometry& field, const CameraModel& camera) {
+  const std::string where = path + ": ";
+  Header h{};
+  const std::vector<char> bytes = read_database_file(path, where, h);
   std::uint64_t stored = 0;
   std::memcpy(&stored, bytes.data() + sizeof(Header) + h.payload_bytes, sizeof stored);
   const std::uint64_t actual = detail::fnv1a(bytes.data(), sizeof(Header) + h.payload_bytes);
@@ -163,6 +211,7 @@ FeatureDb load_feature_db(const std::string& path, const FieldGeometry& field, c
                              hex(h.camera_fingerprint) + ", camera in use has " + hex(camera.fingerprint()) +
                              "): rebuild it with `omniloc builddb`");
   }
+  check_grid(h, field, where);
   FeatureDb db;
   db.grid = {h.x0_cm, h.y0_cm, h.step_cm, h.nx, h.ny};
   db.field_fingerprint = h.field_fingerprint;

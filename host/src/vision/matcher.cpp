@@ -186,12 +186,20 @@ void interpolate_match(const FeatureDb& db, const Scan& scan, MatchResult& r) {
 void refine_match(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, MatchResult& r,
                   const MatchOptions& opt) {
   if (r.cell < 0 || r.rays_used == 0) return;
+  // A non-finite start would never compare equal to itself and never stop (a corrupt grid origin
+  // did that once); load_feature_db refuses such grids, and this keeps the loop finite regardless.
+  if (!r.position_cm.allFinite() || !r.grid_position_cm.allFinite()) return;
   const PreparedScan& p = scan.prepared;
   Eigen::Vector2d pos = r.position_cm;
   double best = pos == r.grid_position_cm ? r.error : error_at(field, camera, p, pos);
   const Eigen::Vector2d steps[] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
   const double limit = opt.refine_reach_cm;
-  for (double step = opt.refine_start_step_cm; step >= opt.refine_min_step_cm - 1e-9;) {
+  // Each move lowers the error strictly and stays within `limit`, so the walk ends; the cap only
+  // guards against options that would make it absurdly long (a min step of 1e-300).
+  constexpr int kMaxSteps = 10'000;
+  int steps_taken = 0;
+  for (double step = opt.refine_start_step_cm; step >= opt.refine_min_step_cm - 1e-9 && steps_taken < kMaxSteps;
+       ++steps_taken) {
     Eigen::Vector2d best_pos = pos;
     for (const auto& d : steps) {
       const Eigen::Vector2d q = pos + step * d;
