@@ -54,6 +54,21 @@ TEST(Replay, RecordedSimulationReplaysLikeTheLiveRun) {
   EXPECT_NE(log2.find("loaded from"), std::string::npos) << log2;
   EXPECT_EQ(built.features, db.features);
 
+  // A --db path that holds something else is never overwritten; a damaged database is rebuilt.
+  const fs::path notes = dir / "notes.txt";
+  std::ofstream(notes) << "my notes\n";
+  EXPECT_THROW((void)load_or_build_feature_db(field, camera, notes, {}), std::runtime_error);
+  EXPECT_EQ(fs::file_size(notes), 9u) << "the file was overwritten";
+  EXPECT_THROW((void)load_or_build_feature_db(field, camera, dir, {}), std::runtime_error) << "a directory";
+  {
+    std::fstream damage(cache, std::ios::binary | std::ios::in | std::ios::out);
+    damage.seekp(1000);
+    damage.put('\x7f');
+  }
+  std::string log3;
+  (void)load_or_build_feature_db(field, camera, cache, [&](const std::string& s) { log3 = s; });
+  EXPECT_NE(log3.find("unusable"), std::string::npos) << log3;
+
   const ReplayResult r = replay_recording(rec, LocalizerConfig{}, field, db);
   ASSERT_EQ(r.poses.size(), rec.windows.size());
 

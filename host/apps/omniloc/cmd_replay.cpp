@@ -18,7 +18,8 @@ void replay_usage(std::FILE* out) {
                "usage: omniloc replay REC_DIR [--out poses.csv] [--db FILE] [--config NAME|PATH] [--paper]\n"
                "  --out     output poses (default REC_DIR/poses.csv)\n"
                "  --db      feature database file: used if it matches the recording's field and camera,\n"
-               "            else built and written there (default: a cache file under the build directory)\n"
+               "            else built and written there; a file that is not a feature database is never\n"
+               "            overwritten (default: a cache file under the build directory)\n"
                "  --config  localizer config, name in common/localizer/ or path (default: default)\n"
                "  --paper   the paper's algorithm exactly (no refinement, no lost detection)\n");
 }

@@ -58,6 +58,10 @@ inline constexpr std::uint32_t kFeatureDbVersion = 1;
 /// Writes the file (throws std::runtime_error naming the path on I/O failure).
 void save_feature_db(const FeatureDb& db, const std::string& path);
 
+/// True if `path` is a regular file that starts as a feature database does (its magic), whatever
+/// its version, grid or checksum: a cache may overwrite such a file, never anything else.
+[[nodiscard]] bool is_feature_db_file(const std::string& path);
+
 /// Reads and checks a file against the field and camera in use; throws std::runtime_error naming
 /// the path and the problem (not a database, version, truncated, checksum, fingerprint mismatch).
 [[nodiscard]] FeatureDb load_feature_db(const std::string& path, const FieldGeometry& field, const CameraModel& camera);

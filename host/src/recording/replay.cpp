@@ -25,6 +25,11 @@ FeatureDb load_or_build_feature_db(const FieldGeometry& field, const CameraModel
       if (log) log("database loaded from " + cache_path.string());
       return db;
     } catch (const std::exception& e) {
+      // A stale or damaged database is a cache to rebuild; any other file is someone's data.
+      if (!is_feature_db_file(cache_path.string()))
+        throw std::runtime_error(cache_path.string() +
+                                 ": exists and is not an omniloc feature database; not overwriting it (" + e.what() +
+                                 "): remove it or give another database path");
       why = std::string("cached database unusable (") + e.what() + ")";
     }
   }

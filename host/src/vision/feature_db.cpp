@@ -190,6 +190,15 @@ void check_grid(const Header& h, const FieldGeometry& field, const std::string& 
 
 }  // namespace
 
+bool is_feature_db_file(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return false;
+  std::ifstream in(path, std::ios::binary);
+  char magic[sizeof kMagic] = {};
+  in.read(magic, sizeof magic);
+  return in.gcount() == sizeof magic && std::memcmp(magic, kMagic, sizeof kMagic) == 0;
+}
+
 FeatureDb load_feature_db(const std::string& path, const FieldGeometry& field, const CameraModel& camera) {
   const std::string where = path + ": ";
   Header h{};
