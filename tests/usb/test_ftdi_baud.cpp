@@ -1,5 +1,6 @@
-// FT2232H H-series baud divisor encoding against the values in TOOLCHAIN-NOTES (from libftdi1's
-// arithmetic) and hand-computed divisors.
+// FT2232H H-series baud divisor encoding against the values docs/PROTOCOL.md lists (worked out
+// from libftdi1's arithmetic: 12 Mbaud 0x0000, 3 Mbaud 0x0004, 1 Mbaud 0x000C, wIndex 0x0202 for
+// channel B) and hand-computed divisors.
 #include <gtest/gtest.h>
 
 #include <stdexcept>
