@@ -117,7 +117,7 @@ Ours integrated(Bench& b, const PaperRow& p, int i, const LocalizerConfig& cfg, 
   if (time_matching) {
     // Table 8's "computation time": the pattern match with the fuzzy range (image processing excluded).
     const cv::Mat img = b.renderer.render(t, opt.render);
-    const Scan scan = scan_image(img, b.renderer.camera(), t.yaw_deg);
+    const FieldScan scan = make_field_scan(scan_image(img, b.renderer.camera(), t.yaw_deg));
     const int reps = 200;
     const auto t0 = std::chrono::steady_clock::now();
     double sink = 0.0;
@@ -135,7 +135,7 @@ Ours integrated(Bench& b, const PaperRow& p, int i, const LocalizerConfig& cfg, 
     const int frame_reps = 20;
     for (int k = 0; k < frame_reps; ++k) {
       const BearingScan bs = scan_image_bearings(img, b.renderer.camera(), cfg.scan_rays_per_degree);
-      const Scan s = rotate_to_field(bs, t.yaw_deg);
+      const FieldScan s = make_field_scan(bs, t.yaw_deg);  // rotated and prepared once, as the localizer does
       MatchResult m = local_search(b.db, s, {t.x_cm, t.y_cm}, 20.0);
       interpolate_match(b.db, s, m);
       refine_match(b.renderer.field(), b.renderer.camera(), s, m);

@@ -174,7 +174,7 @@ class DemoObserver {
     if (!truth) return;
     const double gyro_yaw = robot_.truth().gyro_yaw_at(f.t_ms);
     const BearingScan bearings = scan_image_bearings(f.bgr, m_.camera, m_.localizer.scan_rays_per_degree);
-    const Scan scan = rotate_to_field(bearings, gyro_yaw);
+    const FieldScan scan = make_field_scan(bearings, gyro_yaw);  // rotated and prepared once
     MatchOptions mo;
     mo.refinement = Refinement::kInterpolate;
     MatchResult r = global_search(m_.db, scan, mo);
