@@ -235,7 +235,7 @@ TEST_F(FeatureDbTest, EntriesMatchNoiseFreeRenderedImages) {
     const Scan s = scan_image(renderer.render({p.x(), p.y(), yaw}, sim::noise_free()), *camera_, yaw);
     int c = 0, w = 0;
     for (int i = 0; i < kFeatureBytes; ++i) {
-      if (s.ray_valid[static_cast<std::size_t>(i / kCrossingsPerRay)] == 0) continue;
+      if (s.ray_end_px[static_cast<std::size_t>(i / kCrossingsPerRay)] != kRayToViewEnd) continue;
       ++c;
       w += std::abs(int{s.radii_px[static_cast<std::size_t>(i)]} - int{db_->cell_features(cell)[i]}) <= 1;
     }

@@ -22,10 +22,13 @@ struct Agreement {
 Agreement compare(const Scan& image, const Scan& geometry) {
   Agreement a;
   for (int k = 0; k < kScanRays; ++k) {
-    if (image.ray_valid[static_cast<std::size_t>(k)] == 0) continue;
+    const int end = image.ray_end_px[static_cast<std::size_t>(k)];
+    if (end == kRayHidden) continue;
+    // Beyond the ray's end both are unknown (kNoCrossing), as the matcher compares them.
+    auto clip = [end](int r) { return r >= end ? int{kNoCrossing} : r; };
     for (int n = 0; n < kCrossingsPerRay; ++n) {
       const int i = k * kCrossingsPerRay + n;
-      const int x = image.radii_px[static_cast<std::size_t>(i)], y = geometry.radii_px[static_cast<std::size_t>(i)];
+      const int x = clip(image.radii_px[static_cast<std::size_t>(i)]), y = clip(geometry.radii_px[static_cast<std::size_t>(i)]);
       ++a.compared;
       a.exact += x == y;
       a.within_1px += std::abs(x - y) <= 1;
@@ -89,7 +92,7 @@ TEST(LineScanCamera, MirroredCameraWithYawOffsetGivesTheSameFieldFrameScan) {
     total.compared += a.compared;
     total.within_1px += a.within_1px;
     // The mast is at robot bearing 180: field directions yaw + 180 +- 4 are missing.
-    EXPECT_EQ(img.ray_valid[static_cast<std::size_t>(std::lround(wrap_deg(pose.yaw_deg + 180.0) + 360.0) % 360)], 0);
+    EXPECT_EQ(img.ray_end_px[static_cast<std::size_t>(std::lround(wrap_deg(pose.yaw_deg + 180.0) + 360.0) % 360)], kRayHidden);
   }
   EXPECT_GE(total.within_1px, total.compared * 95 / 100);
 }
@@ -126,26 +129,42 @@ TEST_F(LineScan, FastScanEqualsOpenCvReference) {
     const Scan fast = scan_image(image, renderer_->camera(), pose.yaw_deg);
     const Scan ref = scan_image_reference(image, renderer_->camera(), pose.yaw_deg);
     EXPECT_EQ(fast.radii_px, ref.radii_px) << "pose " << i;
-    EXPECT_EQ(fast.ray_valid, ref.ray_valid) << "pose " << i;
+    EXPECT_EQ(fast.ray_end_px, ref.ray_end_px) << "pose " << i;
   }
 }
 
-TEST_F(LineScan, MastAndObstaclesMarkRaysMissing) {
+TEST_F(LineScan, MastHidesRaysAndObstaclesEndThem) {
   const Pose2 pose{375, 275, 40};
   sim::RenderOptions opt = sim::noise_free();
   const sim::Obstacle robot{Eigen::Vector2d(375 + 100, 275), 20.0};  // 100 cm along field +x
   opt.obstacles = {robot};
   const Scan s = scan_image(renderer_->render(pose, opt), renderer_->camera(), pose.yaw_deg);
-  // The obstacle subtends asin(20 / 100) = 11.5 deg on each side of field direction 0.
-  for (int k = -11; k <= 11; ++k) EXPECT_EQ(s.ray_valid[static_cast<std::size_t>((k + 360) % 360)], 0) << k;
-  for (int k : {-14, 14, 90, 180}) EXPECT_EQ(s.ray_valid[static_cast<std::size_t>((k + 360) % 360)], 1) << k;
+  const CameraModel& cam = renderer_->camera();
+  const Scan geometry = expected_scan(renderer_->field(), cam, {pose.x_cm, pose.y_cm});
+  // The obstacle subtends asin(20 / 100) = 11.5 deg on each side of field direction 0; each of
+  // those rays ends where it meets the cylinder, at 100 cos(k) - sqrt(20^2 - (100 sin(k))^2) cm,
+  // and keeps the crossings before it.
+  for (int k = -11; k <= 11; ++k) {
+    const double a = deg_to_rad(k);
+    const double hit_cm = 100.0 * std::cos(a) - std::sqrt(400.0 - std::pow(100.0 * std::sin(a), 2));
+    const std::size_t ray = static_cast<std::size_t>((k + 360) % 360);
+    EXPECT_NEAR(s.ray_end_px[ray], cam.radius_px_at_ground(hit_cm), 1.5) << k;
+    for (int n = 0; n < kCrossingsPerRay; ++n) {
+      const std::size_t i = ray * kCrossingsPerRay + static_cast<std::size_t>(n);
+      if (geometry.radii_px[i] < s.ray_end_px[ray]) EXPECT_NEAR(s.radii_px[i], geometry.radii_px[i], 1.0) << k;
+      else EXPECT_EQ(s.radii_px[i], kNoCrossing) << k;
+    }
+  }
+  EXPECT_GT(s.radii_px[0], 0);  // the centre circle, 60 cm away, is before the obstacle
+  EXPECT_LT(s.radii_px[0], s.ray_end_px[0]);
+  for (int k : {-14, 14, 90, 180}) EXPECT_EQ(s.ray_end_px[static_cast<std::size_t>((k + 360) % 360)], kRayToViewEnd) << k;
   // The mast is at bearing 180 +- 4: field directions 40 + 180 +- 4.
-  for (int k = 216; k <= 224; ++k) EXPECT_EQ(s.ray_valid[static_cast<std::size_t>(k)], 0) << k;
-  EXPECT_EQ(s.ray_valid[215], 1);
-  EXPECT_EQ(s.ray_valid[225], 1);
-  // Missing rays carry the sentinel, never zero radii.
-  for (int i = 0; i < kCrossingsPerRay; ++i) EXPECT_EQ(s.radii_px[static_cast<std::size_t>(i)], kNoCrossing);
-  EXPECT_EQ(s.rays_valid(), 360 - 23 - 9);  // rays -11..11 and the mast's 9
+  for (int k = 216; k <= 224; ++k) EXPECT_EQ(s.ray_end_px[static_cast<std::size_t>(k)], kRayHidden) << k;
+  EXPECT_EQ(s.ray_end_px[215], kRayToViewEnd);
+  EXPECT_EQ(s.ray_end_px[225], kRayToViewEnd);
+  // Hidden rays carry the sentinel, never zero radii.
+  for (int i = 0; i < kCrossingsPerRay; ++i) EXPECT_EQ(s.radii_px[220 * kCrossingsPerRay + i], kNoCrossing);
+  EXPECT_EQ(s.rays_valid(), 360 - 9);  // all but the mast's 9
 }
 
 TEST_F(LineScan, BearingScanRotatesIntoTheFieldFrame) {
@@ -156,7 +175,7 @@ TEST_F(LineScan, BearingScanRotatesIntoTheFieldFrame) {
   const Scan direct = scan_image(image, renderer_->camera(), pose.yaw_deg);
   const Scan rotated = rotate_to_field(b, pose.yaw_deg);
   EXPECT_EQ(direct.radii_px, rotated.radii_px);
-  EXPECT_EQ(direct.ray_valid, rotated.ray_valid);
+  EXPECT_EQ(direct.ray_end_px, rotated.ray_end_px);
 }
 
 TEST_F(LineScan, RejectsImagesThatDoNotFitTheCamera) {

@@ -347,7 +347,7 @@ TEST_F(LocalizerSim, FramesWithoutWindowsAreBoundedAndDropped) {
   Localizer loc(LocalizerConfig{}, robot_, renderer_->field(), renderer_->camera(), *db_, Pose2{300, 275, 0});
   BearingScan empty;
   empty.radii_px.assign(360 * 4 * 4, kNoCrossing);
-  empty.ray_valid.assign(360 * 4, 0);
+  empty.ray_end_px.assign(360 * 4, kRayHidden);
   for (int i = 0; i < 200; ++i) EXPECT_EQ(loc.on_bearings(5.0 + i, empty).outcome, FrameOutcome::kPending);
   EXPECT_EQ(loc.stats().dropped, 80);
   EXPECT_EQ(loc.take_frame_reports().size(), 80u);

@@ -28,7 +28,7 @@ class Matcher : public ::testing::Test {
   static Scan db_scan(int cell) {
     Scan s;
     std::copy_n(db_->cell_features(cell), kFeatureBytes, s.radii_px.begin());
-    s.ray_valid.fill(1);
+    s.ray_end_px.fill(kRayToViewEnd);
     return s;
   }
   // Renders a noise-free image at every grid point with the given parities and checks that the
@@ -66,16 +66,37 @@ TEST_F(Matcher, FastSadEqualsScalarReference) {
   for (int trial = 0; trial < 500; ++trial) {
     Scan s;
     for (auto& v : s.radii_px) v = static_cast<std::uint8_t>(byte(rng));
-    for (auto& v : s.ray_valid) v = coin(rng) == 0 ? 0 : 1;
+    for (auto& v : s.ray_end_px) v = coin(rng) == 0 ? kRayHidden : static_cast<std::uint8_t>(byte(rng));
     const int c = cell(rng);
     ASSERT_EQ(sad_fast(db_->cell_features(c), prepare_scan(s)), sad_reference(db_->cell_features(c), s)) << trial;
   }
   // Worst case: every byte differs by 255.
   Scan zeros;
-  zeros.ray_valid.fill(1);
+  zeros.ray_end_px.fill(kRayToViewEnd);
   std::vector<std::uint8_t> full(kFeatureBytes, 255);
   EXPECT_EQ(sad_fast(full.data(), prepare_scan(zeros)), 255u * 1440u);
   EXPECT_EQ(sad_reference(full.data(), zeros), 255u * 1440u);
+}
+
+// A ray cut short by an obstacle is compared up to its end only: a database crossing at or
+// beyond the end is unknown, not missing (hand-computed sums).
+TEST(MatcherRayEnd, DatabaseCrossingsBeyondTheRayEndAreNotCompared) {
+  std::vector<std::uint8_t> db(kFeatureBytes, kNoCrossing);
+  Scan s;
+  s.radii_px.fill(kNoCrossing);
+  s.ray_end_px.fill(kRayHidden);
+  const std::uint8_t entry[] = {50, 120, 200, kNoCrossing};
+  std::copy_n(entry, 4, db.begin() + 4 * 7);
+  s.ray_end_px[7] = 100;
+  s.radii_px[4 * 7] = 52;
+  EXPECT_EQ(sad_reference(db.data(), s), 2u);  // |50 - 52|; 120 and 200 lie beyond the end
+  EXPECT_EQ(sad_fast(db.data(), prepare_scan(s)), 2u);
+  s.ray_end_px[7] = 121;  // now 120 is in view but was not seen: |120 - 255|
+  EXPECT_EQ(sad_reference(db.data(), s), 2u + 135u);
+  EXPECT_EQ(sad_fast(db.data(), prepare_scan(s)), 2u + 135u);
+  s.ray_end_px[7] = 50;  // the obstacle starts at the first line: nothing of the ray is compared
+  EXPECT_EQ(sad_fast(db.data(), prepare_scan(s)), 0u);
+  EXPECT_EQ(prepare_scan(s).rays_used, 1);
 }
 
 TEST_F(Matcher, ErrorIsNormalisedByTheRaysUsed) {
@@ -86,13 +107,13 @@ TEST_F(Matcher, ErrorIsNormalisedByTheRaysUsed) {
   EXPECT_EQ(m.cells_searched, 1);
   EXPECT_EQ(m.rays_used, 360);
   EXPECT_DOUBLE_EQ(m.error, 4.0);  // 4 crossings x 1 px per ray
-  for (int k = 0; k < kScanRays; k += 2) s.ray_valid[static_cast<std::size_t>(k)] = 0;
-  for (int k = 100; k < 140; ++k) s.ray_valid[static_cast<std::size_t>(k)] = 0;
+  for (int k = 0; k < kScanRays; k += 2) s.ray_end_px[static_cast<std::size_t>(k)] = kRayHidden;
+  for (int k = 100; k < 140; ++k) s.ray_end_px[static_cast<std::size_t>(k)] = kRayHidden;
   m = local_search(*db_, s, {375, 275}, 0.0);
   EXPECT_EQ(m.rays_used, 160);
   EXPECT_DOUBLE_EQ(m.error, 4.0);  // same E with a third of the rays hidden
   // Nothing seen: no match.
-  s.ray_valid.fill(0);
+  s.ray_end_px.fill(kRayHidden);
   m = global_search(*db_, s);
   EXPECT_EQ(m.cell, -1);
   EXPECT_EQ(m.error, kNoError);
@@ -232,7 +253,7 @@ TEST_F(Matcher, AmbiguityWhenLittleIsSeen) {
   EXPECT_GT(m.second_error, 3.0 * m.error + 10.0);
   // Only the rays looking straight at the bottom boundary (field directions 265..275) are left:
   // they see one line 100 cm away, as they would from anywhere along y = 175.
-  for (int k = 0; k < kScanRays; ++k) s.ray_valid[static_cast<std::size_t>(k)] = (k >= 265 && k <= 275) ? 1 : 0;
+  for (int k = 0; k < kScanRays; ++k) s.ray_end_px[static_cast<std::size_t>(k)] = (k >= 265 && k <= 275) ? kRayToViewEnd : kRayHidden;
   m = global_search(*db_, s);
   EXPECT_TRUE(m.ambiguous) << "E " << m.error << " second " << m.second_error;
   EXPECT_NEAR(m.second_position_cm.y(), 175.0, 10.0);
@@ -252,7 +273,7 @@ TEST_F(Matcher, FieldScanIsTheBearingsRotatedOnceWithTheSameResults) {
   for (int k = 0; k < kScanRays; ++k) {
     long j = std::lround((k - truth.yaw_deg) * 4.0) % 1440;
     if (j < 0) j += 1440;
-    ASSERT_EQ(f.scan.ray_valid[static_cast<std::size_t>(k)], b.ray_valid[static_cast<std::size_t>(j)]) << k;
+    ASSERT_EQ(f.scan.ray_end_px[static_cast<std::size_t>(k)], b.ray_end_px[static_cast<std::size_t>(j)]) << k;
     for (int n = 0; n < kCrossingsPerRay; ++n)
       ASSERT_EQ(f.scan.radii_px[static_cast<std::size_t>(4 * k + n)], b.radii_px[static_cast<std::size_t>(4 * j + n)]) << k;
   }

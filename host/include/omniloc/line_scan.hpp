@@ -1,8 +1,9 @@
 // Line scan: the white-line feature of equations (1)-(4). For each of 360 field-frame directions,
 // the pixel radii (from the image centre) of the first four white-line crossings, where a crossing
 // is the entry edge of a white run. Radii are uint8 (0..254); kNoCrossing marks "no further
-// crossing within view"; a ray hidden by the mast or an obstacle is marked invalid in ray_valid
-// (never zero radii), so the matcher can leave it out.
+// crossing within view". Each ray also records where its view ends (ray_end_px): the mast hides a
+// ray entirely (end 0), an obstacle ends it where it begins, keeping the crossings before it, and a
+// database crossing at or beyond the end is unknown rather than missing, so the matcher leaves it out.
 //
 // Sampling (shared by the image scan and the geometric scan so that they agree): along each ray,
 // integer radii k = ceil(min_radius_px) .. floor(view_radius_px), each read at the nearest pixel; a
@@ -27,23 +28,31 @@ inline constexpr int kScanRays = 360;
 inline constexpr int kCrossingsPerRay = 4;
 inline constexpr int kFeatureBytes = kScanRays * kCrossingsPerRay;
 inline constexpr std::uint8_t kNoCrossing = 255;
+/// ray_end_px of a ray that saw nothing (mast), and of one seen to the end of the view.
+inline constexpr std::uint8_t kRayHidden = 0;
+inline constexpr std::uint8_t kRayToViewEnd = 255;
 
 /// A field-frame scan: ray k points along field direction k degrees; radii_px[4 k + n] is its
 /// (n+1)-th crossing. Contiguous so that matching can use SIMD.
 struct Scan {
   std::array<std::uint8_t, kFeatureBytes> radii_px{};
-  std::array<std::uint8_t, kScanRays> ray_valid{};  // 1 seen, 0 missing (mast or obstacle)
+  /// Where ray k's view ends (px from the image centre, exclusive): its crossings are the ones
+  /// below it. kRayHidden: nothing seen; kRayToViewEnd: seen to the end of the view.
+  std::array<std::uint8_t, kScanRays> ray_end_px{};
+  [[nodiscard]] bool ray_seen(int k) const { return ray_end_px[static_cast<std::size_t>(k)] != kRayHidden; }
+  /// Rays that saw anything (ray_end_px > 0).
   [[nodiscard]] int rays_valid() const;
 };
 
 /// Colour classes on the HSV of OpenCV's 8-bit conversion (S and V in 0..255). White lines are
 /// bright and unsaturated (survives a lighting gradient that scales brightness); an obstacle is a
-/// run of dark pixels; the green carpet and what lies beyond the border are neither.
+/// run of dark pixels, which ends the ray where it starts; the green carpet and what lies beyond
+/// the border are neither.
 struct ScanParams {
   int white_v_min = 150;
   int white_s_max = 70;
   int dark_v_max = 45;
-  int dark_run_px = 3;  // this many dark samples in a row hide the rest of the ray
+  int dark_run_px = 3;  // this many dark samples in a row end the ray (at the first of them)
   int min_gap_px = 2;   // must match the database (expected_features uses the default)
 };
 
@@ -62,14 +71,14 @@ struct ScanParams {
 struct BearingScan {
   int rays_per_degree = 4;
   std::vector<std::uint8_t> radii_px;   // 360 * rays_per_degree * 4
-  std::vector<std::uint8_t> ray_valid;  // 360 * rays_per_degree
+  std::vector<std::uint8_t> ray_end_px;  // 360 * rays_per_degree, as Scan::ray_end_px
 };
 [[nodiscard]] BearingScan scan_image_bearings(const cv::Mat& bgr, const CameraModel& camera,
                                               int rays_per_degree, const ScanParams& params = {});
 [[nodiscard]] Scan rotate_to_field(const BearingScan& scan, double yaw_deg);
 
 /// The scan a robot at `position_cm` would see, by casting rays through the field model and the
-/// camera's radius table (no obstacles, no mast: every ray valid). This is a database entry.
+/// camera's radius table (no obstacles, no mast: every ray seen to the end). This is a database entry.
 [[nodiscard]] Scan expected_scan(const FieldGeometry& field, const CameraModel& camera,
                                  const Eigen::Vector2d& position_cm);
 

@@ -20,11 +20,13 @@
 
 namespace omniloc {
 
-/// An observed scan ready for matching: radii with missing rays zeroed, and the byte mask
-/// (0xFF for bytes of valid rays, 0 otherwise).
+/// An observed scan ready for matching: each ray's end repeated on its four bytes, and the radii
+/// with every value at or beyond the end set to kNoCrossing. A database crossing at or beyond the
+/// end is compared as kNoCrossing too, so a hidden ray (end 0) costs nothing and a ray cut short
+/// by an obstacle is compared up to the obstacle only.
 struct PreparedScan {
-  alignas(32) std::array<std::uint8_t, kFeatureBytes> masked{};
-  alignas(32) std::array<std::uint8_t, kFeatureBytes> mask{};
+  alignas(32) std::array<std::uint8_t, kFeatureBytes> radii{};
+  alignas(32) std::array<std::uint8_t, kFeatureBytes> end{};
   int rays_used = 0;
 };
 [[nodiscard]] PreparedScan prepare_scan(const Scan& scan);
@@ -43,7 +45,7 @@ struct FieldScan {
 /// A scan already in the field frame (scan_image at a known yaw, a database entry).
 [[nodiscard]] FieldScan make_field_scan(const Scan& field_frame_scan);
 
-/// Equation (5) on the valid rays, straightforward scalar code (the reference).
+/// Equation (5) on the rays up to their ends, straightforward scalar code (the reference).
 [[nodiscard]] std::uint32_t sad_reference(const std::uint8_t* db_entry, const Scan& scan);
 /// The same sum, vectorised (AVX2 when the CPU has it, else a portable loop the compiler vectorises).
 [[nodiscard]] std::uint32_t sad_fast(const std::uint8_t* db_entry, const PreparedScan& scan);

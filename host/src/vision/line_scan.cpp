@@ -50,10 +50,10 @@ void check_image(const cv::Mat& bgr, const CameraModel& cam) {
 }
 
 // Walks one ray at image angle phi (rad). classify_at(u, v) gives the class of a pixel. Writes 4
-// radii (kNoCrossing-padded) and returns false when an obstacle hides the ray before its fourth
-// crossing.
+// radii (kNoCrossing-padded) and returns the ray's end: the first sample of a dark run (an
+// obstacle) before the fourth crossing, else kRayToViewEnd.
 template <class ClassifyAt>
-bool walk_ray(const CameraModel& cam, double phi, int k0, int k1, const ScanParams& p, std::uint8_t* out,
+std::uint8_t walk_ray(const CameraModel& cam, double phi, int k0, int k1, const ScanParams& p, std::uint8_t* out,
               ClassifyAt classify_at) {
   const double cu = std::cos(phi) * (cam.mirrored ? -1.0 : 1.0);
   const double sv = -std::sin(phi);
@@ -69,7 +69,7 @@ bool walk_ray(const CameraModel& cam, double phi, int k0, int k1, const ScanPara
     const int v = static_cast<int>(cy + k * sv + 0.5);
     const Px c = classify_at(u, v);
     if (c == Px::kDark) {
-      if (++dark >= p.dark_run_px) return false;
+      if (++dark >= p.dark_run_px) return static_cast<std::uint8_t>(std::max(k - dark + 1, 1));
     } else {
       dark = 0;
     }
@@ -80,7 +80,7 @@ bool walk_ray(const CameraModel& cam, double phi, int k0, int k1, const ScanPara
       ++gap;
     }
   }
-  return true;
+  return kRayToViewEnd;
 }
 
 // Unit vectors of the 360 field directions (immutable, built once).
@@ -105,12 +105,11 @@ Scan scan_with(const CameraModel& cam, double yaw_deg, const ScanParams& p, Clas
     std::uint8_t* out = s.radii_px.data() + k * kCrossingsPerRay;
     if (cam.bearing_hidden(bearing)) {
       std::fill(out, out + kCrossingsPerRay, kNoCrossing);
-      s.ray_valid[static_cast<std::size_t>(k)] = 0;
+      s.ray_end_px[static_cast<std::size_t>(k)] = kRayHidden;
       continue;
     }
     const double phi = deg_to_rad(cam.image_angle_deg(bearing));
-    s.ray_valid[static_cast<std::size_t>(k)] = walk_ray(cam, phi, k0, k1, p, out, classify_at) ? 1 : 0;
-    if (s.ray_valid[static_cast<std::size_t>(k)] == 0) std::fill(out, out + kCrossingsPerRay, kNoCrossing);
+    s.ray_end_px[static_cast<std::size_t>(k)] = walk_ray(cam, phi, k0, k1, p, out, classify_at);
   }
   return s;
 }
@@ -119,7 +118,7 @@ Scan scan_with(const CameraModel& cam, double yaw_deg, const ScanParams& p, Clas
 
 int Scan::rays_valid() const {
   int n = 0;
-  for (auto v : ray_valid) n += v != 0;
+  for (auto e : ray_end_px) n += e != kRayHidden;
   return n;
 }
 
@@ -151,19 +150,15 @@ BearingScan scan_image_bearings(const cv::Mat& bgr, const CameraModel& cam, int 
   s.rays_per_degree = rays_per_degree;
   const int n = kScanRays * rays_per_degree;
   s.radii_px.assign(static_cast<std::size_t>(n) * kCrossingsPerRay, kNoCrossing);
-  s.ray_valid.assign(static_cast<std::size_t>(n), 0);
+  s.ray_end_px.assign(static_cast<std::size_t>(n), kRayHidden);
   const int k0 = first_sample(cam), k1 = last_sample(cam);
   for (int j = 0; j < n; ++j) {
     const double bearing = static_cast<double>(j) / rays_per_degree;
     if (cam.bearing_hidden(bearing)) continue;
     std::uint8_t* out = s.radii_px.data() + static_cast<std::size_t>(j) * kCrossingsPerRay;
-    const bool ok = walk_ray(cam, deg_to_rad(cam.image_angle_deg(bearing)), k0, k1, p, out,
-                             [&](int u, int v) { return classify(bgr.ptr<std::uint8_t>(v) + 3 * u, p, sdiv); });
-    if (ok) {
-      s.ray_valid[static_cast<std::size_t>(j)] = 1;
-    } else {
-      std::fill(out, out + kCrossingsPerRay, kNoCrossing);
-    }
+    s.ray_end_px[static_cast<std::size_t>(j)] =
+        walk_ray(cam, deg_to_rad(cam.image_angle_deg(bearing)), k0, k1, p, out,
+                 [&](int u, int v) { return classify(bgr.ptr<std::uint8_t>(v) + 3 * u, p, sdiv); });
   }
   return s;
 }
@@ -171,11 +166,11 @@ BearingScan scan_image_bearings(const cv::Mat& bgr, const CameraModel& cam, int 
 Scan rotate_to_field(const BearingScan& b, double yaw_deg) {
   Scan s;
   const int n = kScanRays * b.rays_per_degree;
-  if (static_cast<int>(b.ray_valid.size()) != n) throw std::invalid_argument("rotate_to_field: malformed bearing scan");
+  if (static_cast<int>(b.ray_end_px.size()) != n) throw std::invalid_argument("rotate_to_field: malformed bearing scan");
   for (int k = 0; k < kScanRays; ++k) {
     long j = std::lround((static_cast<double>(k) - yaw_deg) * b.rays_per_degree) % n;
     if (j < 0) j += n;
-    s.ray_valid[static_cast<std::size_t>(k)] = b.ray_valid[static_cast<std::size_t>(j)];
+    s.ray_end_px[static_cast<std::size_t>(k)] = b.ray_end_px[static_cast<std::size_t>(j)];
     std::copy_n(b.radii_px.begin() + j * kCrossingsPerRay, kCrossingsPerRay, s.radii_px.begin() + k * kCrossingsPerRay);
   }
   return s;
@@ -211,7 +206,7 @@ Scan expected_scan(const FieldGeometry& field, const CameraModel& cam, const Eig
   Scan s;
   std::vector<WhiteInterval> scratch;
   expected_features(field, cam, pos, s.radii_px.data(), scratch, ScanParams{}.min_gap_px);
-  s.ray_valid.fill(1);
+  s.ray_end_px.fill(kRayToViewEnd);
   return s;
 }
 
