@@ -9,6 +9,7 @@
 #   make bitstream  iCEBreaker bitstream with the open iCE40 flow
 #   make bench      benchmarks (each against a naive reference, ratio printed)
 #   make soak       long simulated runs of the localizer (SOAK_MINUTES, default 10)
+#   make install    install the library, headers, programs and data under PREFIX (default /usr/local)
 #   make generate   regenerate headers and docs from common/regmap.json
 #   make clean      remove build/
 
@@ -16,9 +17,10 @@ BUILD      ?= build
 BUILD_TYPE ?= Release
 JOBS       ?= $(shell nproc)
 CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
+PREFIX     ?= /usr/local
 CTEST      := ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
 
-.PHONY: all deps configure build test demo lint formal bitstream bench soak generate clean
+.PHONY: all deps configure build test demo lint formal bitstream bench soak install generate clean
 
 all: build
 
@@ -54,6 +56,9 @@ bench: build
 SOAK_MINUTES ?= 10
 soak: build
 	$(BUILD)/soak/soak_localizer --minutes $(SOAK_MINUTES)
+
+install: build
+	cmake --install $(BUILD) --prefix $(PREFIX)
 
 generate:
 	python3 common/gen_regmap.py

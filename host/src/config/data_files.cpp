@@ -1,5 +1,7 @@
 // Locating the shared data files (common/<kind>/<name>.json) from a short name, so that programs and
-// tests run from any build directory.
+// tests run from any build directory and installed programs from any prefix. Searched in order:
+// $OMNILOC_DATA_DIR, common/ in the working directory and its parents, <exe>/../share/omniloc (the
+// installed layout), common/ beside the executable and its parents.
 #include <algorithm>
 #include <cstdlib>
 #include <system_error>
@@ -37,7 +39,13 @@ fs::path resolve_data_file(const std::string& kind, const std::string& name_or_p
     roots.emplace_back(env);
   }
   add_with_parents(fs::current_path(ec), roots);
-  add_with_parents(fs::read_symlink("/proc/self/exe", ec).parent_path(), roots);
+  const fs::path exe_dir = fs::read_symlink("/proc/self/exe", ec).parent_path();
+  // Installed programs (bin/) find the data under ../share/omniloc (cmake --install).
+  if (!exe_dir.empty()) {
+    const fs::path installed = fs::weakly_canonical(exe_dir / ".." / "share" / "omniloc", ec);
+    if (!ec) roots.push_back(installed);
+  }
+  add_with_parents(exe_dir, roots);
   std::string searched;
   std::vector<fs::path> seen;
   for (const auto& root : roots) {
