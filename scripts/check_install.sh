@@ -3,6 +3,8 @@
 # check_robot_only_build.sh) into a fresh prefix, then
 #   - runs the installed `omniloc version` and `omniloc builddb` from / (the field and camera found
 #     by name under PREFIX/share/omniloc, not in a source tree),
+#   - checks the systemd unit (systemd-analyze verify; ExecStart is PREFIX's omnilocd) and that the
+#     udev rule was installed (its contents are checked against the EEPROM by test_firmware_eeprom),
 #   - builds tests/install/consumer.cpp with find_package(omniloc) (CMake) and with pkg-config,
 #     runs both and compares their output with the field file's numbers and a hand-computed pose.
 # Run by CTest (install_consumer); usage: check_install.sh SRC OUT
@@ -19,7 +21,8 @@ cmake --install "$out" --prefix "$prefix" >"$work/install.log" 2>&1 || { cat "$w
 for f in bin/omniloc bin/omnilocd lib/libomniloc.a include/omniloc/localizer.hpp include/omniloc/regmap.hpp \
          share/omniloc/fields/fira-robosot.json share/omniloc/cameras/default.json share/omniloc/robots/default.json \
          share/omniloc/localizer/default.json share/omniloc/omnilocd/default.json \
-         lib/cmake/omniloc/omnilocConfig.cmake lib/pkgconfig/omniloc.pc; do
+         lib/cmake/omniloc/omnilocConfig.cmake lib/pkgconfig/omniloc.pc \
+         lib/systemd/system/omnilocd.service lib/udev/rules.d/60-omniloc.rules; do
   [ -e "$prefix/$f" ] || fail "$f was not installed"
 done
 
@@ -29,6 +32,18 @@ grep -q "register map" "$work/version.txt" || { cat "$work/version.txt"; fail "o
 (cd / && env -u OMNILOC_DATA_DIR "$prefix/bin/omniloc" builddb --out "$work/db.bin" --step 50) >"$work/builddb.txt" 2>&1 \
   || { cat "$work/builddb.txt"; fail "installed omniloc builddb did not find the installed field and camera"; }
 [ -s "$work/db.bin" ] || fail "builddb wrote no database"
+
+# The service unit names the installed daemon and passes systemd's own check (which only warns,
+# exit 0, about a bad key: any output is a failure here).
+unit="$prefix/lib/systemd/system/omnilocd.service"
+grep -qx "ExecStart=$prefix/bin/omnilocd \$OMNILOCD_ARGS" "$unit" || fail "$unit does not start $prefix/bin/omnilocd"
+grep -qx "Type=notify" "$unit" || fail "$unit is not Type=notify"
+if command -v systemd-analyze >/dev/null 2>&1; then
+  verify=$(cd / && systemd-analyze verify "$unit" 2>&1) || { echo "$verify"; fail "systemd-analyze verify $unit"; }
+  [ -z "$verify" ] || { echo "$verify"; fail "systemd-analyze verify complained about $unit"; }
+else
+  echo "install_consumer: systemd-analyze not installed: the unit's syntax was not checked"
+fi
 
 expected=$'field fira-robosot 600 x 400 cm\ncompose 100.0 60.0 90.0'
 gen=()

@@ -3,10 +3,16 @@
 // that file must refuse a broken one with the file and line.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <regex>
+#include <sstream>
+#include <vector>
 #include <stdexcept>
 #include <string>
+#include <algorithm>
 #include <unistd.h>
 
 #include "omniloc/usb_transport.hpp"
@@ -25,6 +31,48 @@ TEST(FirmwareEeprom, HostLooksForTheIdentityTheEepromGives) {
   EXPECT_EQ(id.channel_b_type, "UART");  // channel B is the FPGA's UART (docs/PROTOCOL.md)
   EXPECT_FALSE(id.manufacturer.empty());
   EXPECT_FALSE(id.serial.empty());
+}
+
+// The udev rule shipped for the board (packaging/udev/60-omniloc.rules) matches the same identity.
+// There is no udevd in CI, so the rule is checked here: every line is a comment, or comma-separated
+// KEY[{attribute}]OP"value" items with keys and operators udev knows (udev(7)), and the one matching
+// rule names exactly the EEPROM's VID, PID and product and grants the daemon's group access.
+TEST(FirmwareEeprom, UdevRuleMatchesTheEepromIdentity) {
+  const sim::EepromIdentity id = sim::read_eeprom_identity(OMNILOC_EEPROM_CONF);
+  std::ifstream in(OMNILOC_UDEV_RULE);
+  ASSERT_TRUE(in) << OMNILOC_UDEV_RULE;
+  const std::regex item(R"re(^([A-Z]+)(\{([A-Za-z_]+)\})?(==|!=|\+=|-=|:=|=)"([^"]*)"$)re");
+  const std::vector<std::string> known{"ACTION", "SUBSYSTEM", "ENV", "ATTR", "MODE", "GROUP", "SYMLINK", "GOTO", "LABEL"};
+  std::vector<std::map<std::string, std::string>> rules;  // "KEY{attr}OP" -> value
+  std::string line;
+  for (int n = 1; std::getline(in, line); ++n) {
+    if (line.empty() || line[0] == '#') continue;
+    std::map<std::string, std::string> rule;
+    std::stringstream items(line);
+    for (std::string it; std::getline(items, it, ',');) {
+      it.erase(0, it.find_first_not_of(' '));
+      std::smatch m;
+      ASSERT_TRUE(std::regex_match(it, m, item)) << OMNILOC_UDEV_RULE << ":" << n << ": not KEY{attr}OP\"value\": " << it;
+      ASSERT_NE(std::find(known.begin(), known.end(), m[1].str()), known.end()) << ":" << n << ": unknown key " << m[1];
+      rule[m[1].str() + (m[2].matched ? m[2].str() : "") + m[4].str()] = m[5].str();
+    }
+    rules.push_back(rule);
+  }
+  char vid[8], pid[8];
+  std::snprintf(vid, sizeof vid, "%04x", id.vendor_id);
+  std::snprintf(pid, sizeof pid, "%04x", id.product_id);
+  int matching = 0;
+  for (const auto& r : rules) {
+    if (!r.contains("ATTR{idVendor}==")) continue;
+    ++matching;
+    EXPECT_EQ(r.at("ATTR{idVendor}=="), vid);
+    EXPECT_EQ(r.at("ATTR{idProduct}=="), pid);
+    EXPECT_EQ(r.at("ATTR{product}=="), id.product);
+    EXPECT_EQ(r.at("SUBSYSTEM=="), "usb");
+    EXPECT_EQ(r.at("MODE="), "0660");
+    EXPECT_EQ(r.at("GROUP="), "plugdev");  // the service's SupplementaryGroups (packaging/systemd)
+  }
+  EXPECT_EQ(matching, 1);
 }
 
 class EepromFiles : public ::testing::Test {

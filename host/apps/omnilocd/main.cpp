@@ -6,12 +6,14 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <utility>
 #include <string_view>
 #include <vector>
 
 #include "omniloc/daemon.hpp"
 #include "omniloc/daemon_camera.hpp"
 #include "omniloc/daemon_config.hpp"
+#include "omniloc/service_notify.hpp"
 #include "omniloc/usb_transport.hpp"
 #include "stop_signal.hpp"
 
@@ -37,8 +39,17 @@ int run(const omniloc::daemon::DaemonConfig& config) {
   say("publishing poses to udp://" + config.udp_address + ":" + std::to_string(config.udp_port) +
       (config.record_dir.empty() ? "" : ", recording to " + config.record_dir));
   Daemon daemon(config, models, io);
+  // Under systemd (Type=notify): ready once the models are loaded and the loop starts; the loop
+  // feeds the watchdog whether or not a board is there.
+  ServiceNotifier service;
+  DaemonObserver observer;
+  observer.on_loop = [&service](double now_ms) { service.loop(now_ms); };
+  observer.on_status = [&service](const std::string& line) { service.status(line); };
+  daemon.set_observer(std::move(observer));
   omniloc::cli::install_stop_signal_handlers();
+  service.ready();
   const DaemonReport r = daemon.run(&omniloc::cli::g_stop_requested);
+  service.stopping();
   std::fprintf(stderr, "omnilocd: %s\n", report_line(r).c_str());
   return 0;
 }

@@ -121,6 +121,8 @@ struct DaemonObserver {
   std::function<void(const EncoderWindow&)> on_window;  ///< every window, with its heading
   std::function<void(const CameraFrame&)> on_frame;     ///< every frame given to the localizer
   std::function<void(const PoseEvent&)> on_pose;        ///< every datagram published
+  std::function<void(double now_ms)> on_loop;           ///< every turn of the main loop (board or not)
+  std::function<void(const std::string&)> on_status;    ///< every status line, as logged
 };
 
 struct DaemonReport {

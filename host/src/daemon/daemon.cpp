@@ -211,7 +211,9 @@ struct Daemon::Impl {
     s.published = publisher.sent();
     s.send_failed = publisher.failed();
     s.reconnects = report.reconnects;
-    log(status_line(s));
+    const std::string line = status_line(s);
+    log(line);
+    if (io.observer.on_status) io.observer.on_status(line);
     windows_at_status = report.windows;
     frames_at_status = report.frames;
     status_from_ms = now_ms;
@@ -227,6 +229,7 @@ struct Daemon::Impl {
     double next_degraded_ms = start;
     for (;;) {
       const double now = clock.now_ms();
+      if (io.observer.on_loop) io.observer.on_loop(now);
       if (stop && *stop) {
         report.stop_reason = "signal";
         break;
