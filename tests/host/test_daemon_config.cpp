@@ -1,13 +1,14 @@
 // omnilocd's config file and flags: the shipped default file is the struct's defaults (every key),
 // a file setting every key to a non-default value lands in every member (expected values by hand),
-// every kind of bad input is named by file and field, flags override the file, and --help lists
-// every key.
+// every kind of bad input is named by file and field, flags (CLI11, as omnilocd parses them)
+// override the file, and --help lists every key.
 #include <gtest/gtest.h>
 
 #include <string>
 #include <vector>
 
 #include "config_test_util.hpp"
+#include "daemon_cli.hpp"
 #include "omniloc/config.hpp"
 #include "omniloc/daemon_config.hpp"
 
@@ -52,8 +53,6 @@ TEST(DaemonConfig, ShippedDefaultFileIsTheStructDefaultsEveryKey) {
   EXPECT_TRUE(loaded == DaemonConfig{});
   EXPECT_EQ(loaded.camera, "0");
   EXPECT_EQ(loaded.udp_port, 5600);
-  // omnilocd with no arguments: the defaults are valid on their own.
-  EXPECT_NO_THROW((void)parse_daemon_args(std::span<const std::string_view>{}));
 }
 
 TEST(DaemonConfig, EveryKeyReachesItsMember) {
@@ -142,45 +141,76 @@ TEST(DaemonConfig, MissingFileAndDirectoryAreNamed) {
   EXPECT_THROW((void)load_daemon_config(dir), ConfigError);
 }
 
+// The command line as omnilocd and omnilocd-sim parse it (CLI11, host/apps/common/daemon_cli.hpp).
+struct CommandLine {
+  CLI::App app{"test", "omnilocd"};
+  cli::DaemonCommandLine cl;
+  CommandLine() { cli::add_daemon_options(app, cl); }
+  DaemonConfig parse(std::vector<std::string> args) {
+    std::vector<char*> argv{const_cast<char*>("omnilocd")};
+    for (auto& a : args) argv.push_back(a.data());
+    app.parse(static_cast<int>(argv.size()), argv.data());
+    return cli::daemon_config_from(cl);
+  }
+};
+
+DaemonConfig parse_flags(std::vector<std::string> args) { return CommandLine().parse(std::move(args)); }
+
+std::string flag_error(std::vector<std::string> args) {
+  try {
+    (void)parse_flags(std::move(args));
+  } catch (const CLI::ParseError& e) {
+    return std::string("usage: ") + e.what();
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
 TEST(DaemonConfig, FlagsOverrideTheFileWhateverTheirOrder) {
   const auto p = test::write_file("flags.json", R"({"udp_port": 6001, "camera": "none", "duration_s": 3})");
   const std::string ps = p.string();
-  const std::vector<std::string_view> args = {"--udp-port", "6002", "--config", ps, "--camera_fps", "15"};
-  const auto a = parse_daemon_args(args);
-  EXPECT_FALSE(a.help);
-  EXPECT_EQ(a.config_path, ps);
-  EXPECT_EQ(a.config.udp_port, 6002);  // flag beats file
-  EXPECT_EQ(a.config.camera, "none");  // file beats default
-  EXPECT_EQ(a.config.duration_s, 3.0);
-  EXPECT_EQ(a.config.camera_fps, 15.0);
+  CommandLine c;
+  const DaemonConfig a = c.parse({"--udp-port", "6002", "--config", ps, "--camera-fps=15"});
+  EXPECT_EQ(c.cl.config_path, ps);
+  EXPECT_EQ(a.udp_port, 6002);  // flag beats file
+  EXPECT_EQ(a.camera, "none");  // file beats default
+  EXPECT_EQ(a.duration_s, 3.0);
+  EXPECT_EQ(a.camera_fps, 15.0);  // --key=value as well as --key value
   // A text key takes the flag's text as it is (a camera index is the string "1").
-  EXPECT_EQ(parse_daemon_args(std::vector<std::string_view>{"--camera", "1"}).config.camera, "1");
+  EXPECT_EQ(parse_flags({"--camera", "1"}).camera, "1");
+  // No flag at all: the defaults, valid on their own.
+  EXPECT_TRUE(parse_flags({}) == DaemonConfig{});
 }
 
 TEST(DaemonConfig, BadFlagsAreRefusedWithTheFlagNamed) {
-  auto err = [](std::vector<std::string_view> args) { return error_of([&] { (void)parse_daemon_args(args); }); };
-  EXPECT_EQ(err({"--udp-port", "abc"}), "command line:udp_port: must be a number (got \"abc\")");
-  EXPECT_EQ(err({"--udp-port", "5600.5"}).rfind("command line:udp_port: must be an integer", 0), 0u);
-  EXPECT_EQ(err({"--camera-fps", "nan"}), "command line:camera_fps: must be a number (got \"nan\")");
-  EXPECT_EQ(err({"--no-such-key", "1"}), "command line:no_such_key: unknown key (see --help)");
-  EXPECT_EQ(err({"--board", "sim"}), "command line:board: unknown key (see --help)");
-  EXPECT_EQ(err({"--udp-port"}), "command line: --udp-port needs a value");
-  EXPECT_EQ(err({"stray"}), "command line: unexpected argument 'stray'");
-  EXPECT_EQ(err({"--udp-port", "0"}), "command line:udp_port: must be in [1, 65535] (got 0)");
-  EXPECT_TRUE(parse_daemon_args(std::vector<std::string_view>{"--help"}).help);
+  EXPECT_EQ(flag_error({"--udp-port", "abc"}), "command line:udp_port: must be a number (got \"abc\")");
+  EXPECT_EQ(flag_error({"--udp-port=5600.5"}).rfind("command line:udp_port: must be an integer", 0), 0u);
+  EXPECT_EQ(flag_error({"--camera-fps", "nan"}), "command line:camera_fps: must be a number (got \"nan\")");
+  EXPECT_EQ(flag_error({"--udp-port", "0"}), "command line:udp_port: must be in [1, 65535] (got 0)");
+  // What is not an option of the table is refused by the parser, naming it.
+  for (const auto& [args, named] : std::vector<std::pair<std::vector<std::string>, std::string>>{
+           {{"--no-such-key", "1"}, "--no-such-key"}, {{"--board", "sim"}, "--board"}, {{"stray"}, "stray"},
+           {{"--udp-port"}, "--udp-port"}}) {
+    const std::string e = flag_error(args);
+    EXPECT_EQ(e.rfind("usage: ", 0), 0u) << e;
+    EXPECT_NE(e.find(named), std::string::npos) << e;
+  }
 }
 
 TEST(DaemonConfig, HelpListsEveryKeyAsAFlagWithItsDefault) {
-  const std::string help = daemon_usage();
+  CommandLine c;
+  const std::string help = c.app.help();
   for (std::string flag : kEveryKey) {
     for (char& ch : flag)
       if (ch == '_') ch = '-';
-    EXPECT_NE(help.find("--" + flag + " "), std::string::npos) << flag;
+    EXPECT_NE(help.find("--" + flag + " "), std::string::npos) << flag << "\n" << help;
   }
-  EXPECT_NE(help.find("(5600)"), std::string::npos);
-  EXPECT_NE(help.find("UDP port the poses are sent to (5600)"), std::string::npos);
-  EXPECT_NE(help.find("(fira-robosot)"), std::string::npos);
-  EXPECT_NE(help.find("(\"\")"), std::string::npos);  // an empty default is shown as ""
+  EXPECT_NE(help.find("--config"), std::string::npos);
+  EXPECT_NE(help.find("UDP port the poses are sent to"), std::string::npos);
+  EXPECT_NE(help.find("5600"), std::string::npos);
+  EXPECT_NE(help.find("\"fira-robosot\""), std::string::npos);
+  EXPECT_NE(help.find("\"\""), std::string::npos);  // an empty default is shown as ""
   for (const char* gone : {"--board ", "--sim-", "sim |"}) EXPECT_EQ(help.find(gone), std::string::npos) << gone;
 }
 

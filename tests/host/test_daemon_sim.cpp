@@ -186,10 +186,12 @@ TEST(DaemonSim, PublishesTrackedPosesSurvivesUnplugAndCameraStop) {
   Daemon d(cfg, mod, io);
   // After the daemon has made the recording directory, as omnilocd-sim does.
   TruthCsvWriter truth_csv(rec_dir / "truth.csv");
-  d.set_observer(DaemonObserver{[&](const EncoderWindow& w) {
-                                  if (const auto t = rig.log.truth(w.t_end_ms)) truth_csv.add(w.t_end_ms, *t);
-                                },
-                                {}, io.observer.on_pose});
+  DaemonObserver observer;
+  observer.on_window = [&](const EncoderWindow& w) {
+    if (const auto t = rig.log.truth(w.t_end_ms)) truth_csv.add(w.t_end_ms, *t);
+  };
+  observer.on_pose = io.observer.on_pose;
+  d.set_observer(std::move(observer));
   volatile std::sig_atomic_t stop = 0;
   const DaemonReport r = d.run(&stop);
   truth_csv.close();

@@ -55,6 +55,12 @@ TEST(OmnilocdProgram, RefusesACameraItCannotOpenAndABadFlag) {
   EXPECT_NE(out.find("udp_port"), std::string::npos) << out;
   EXPECT_EQ(run("--help", out), 0) << out;
   EXPECT_NE(out.find("--udp-port"), std::string::npos) << out;
+  EXPECT_EQ(run("--udp-port=70000", out), 2) << out;  // --key=value as --key value
+  EXPECT_NE(out.find("udp_port: must be in [1, 65535] (got 70000)"), std::string::npos) << out;
+  EXPECT_EQ(run("--no-such-flag 1", out), 2) << out;
+  EXPECT_NE(out.find("--no-such-flag"), std::string::npos) << out;
+  EXPECT_EQ(run("--version", out), 0) << out;
+  EXPECT_EQ(out.rfind("omnilocd " OMNILOC_PROJECT_VERSION " (register map ", 0), 0u) << out;
 }
 
 // As a systemd Type=notify service: the daemon is given a notification socket (NOTIFY_SOCKET) and

@@ -13,10 +13,13 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <regex>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "omniloc/regmap.hpp"
 
 #include "omniloc/recording.hpp"
 #include "udp_receiver.hpp"
@@ -155,6 +158,32 @@ TEST(OmnilocSimDemo, ShortRunFixesAndWritesErrorsCsvNoCameraFails) {
   EXPECT_EQ(rc_none, 1) << out;
   EXPECT_NE(out.find("FAILED: the daemon never had a fix"), std::string::npos) << out;
   EXPECT_EQ(run(std::string(OMNILOC_SIM_PATH) + " demo --seed -1", dir.path / "bad.log", out), 2) << out;
+}
+
+// Every program answers --version with its name, the project version CMake was given, the
+// register-map version of common/regmap.json (0.1.0 today, read here from the generated header)
+// and the tree's git revision, and --key=value works as --key value.
+TEST(Programs, VersionAndKeyEqualsValue) {
+  TempDir dir("versions");
+  const auto v = regmap::kVersionValue;
+  const std::string regmap_version = std::to_string(regmap::kVersionMajor.get(v)) + "." +
+                                     std::to_string(regmap::kVersionMinor.get(v)) + "." +
+                                     std::to_string(regmap::kVersionPatch.get(v));
+  const std::regex line("^(omniloc|omniloc-sim|omnilocd-sim|omnilocd) " + std::regex_replace(std::string(OMNILOC_PROJECT_VERSION), std::regex("\\."), "\\.") +
+                        " \\(register map " + std::regex_replace(regmap_version, std::regex("\\."), "\\.") +
+                        ", board ID 0x4F4D4E4C, git ([0-9a-f]{7,40}(-dirty)?|unknown)\\)\n$");
+  for (const auto& [path, name] : std::vector<std::pair<std::string, std::string>>{
+           {OMNILOC_CLI_PATH, "omniloc"}, {OMNILOC_SIM_PATH, "omniloc-sim"}, {OMNILOCD_SIM_PATH, "omnilocd-sim"}}) {
+    std::string out;
+    ASSERT_EQ(run(path + " --version", dir.path / "v.log", out), 0) << out;
+    EXPECT_TRUE(std::regex_match(out, line)) << out;
+    EXPECT_EQ(out.rfind(name + " ", 0), 0u) << out;
+  }
+  std::string out;
+  EXPECT_EQ(run(std::string(OMNILOCD_SIM_PATH) + " --seed=abc", dir.path / "v.log", out), 2) << out;
+  EXPECT_NE(out.find("--seed: must be an integer"), std::string::npos) << out;
+  EXPECT_EQ(run(std::string(OMNILOCD_SIM_PATH) + " --udp-port=0", dir.path / "v.log", out), 2) << out;
+  EXPECT_NE(out.find("udp_port: must be in [1, 65535] (got 0)"), std::string::npos) << out;
 }
 
 }  // namespace

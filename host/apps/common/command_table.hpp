@@ -8,6 +8,8 @@
 #include <string_view>
 #include <vector>
 
+#include "omniloc/version.hpp"
+
 namespace omniloc::cli {
 
 /// Every subcommand takes its own arguments (argv after the subcommand name) and returns the
@@ -25,8 +27,8 @@ inline void print_command_usage(std::FILE* out, std::string_view program, std::s
   for (const auto& c : commands)
     std::fprintf(out, "  %-10.*s %.*s\n", static_cast<int>(c.name.size()), c.name.data(),
                  static_cast<int>(c.summary.size()), c.summary.data());
-  std::fprintf(out, "\n`%.*s COMMAND --help` describes one command.\n", static_cast<int>(program.size()),
-               program.data());
+  std::fprintf(out, "\n`%.*s COMMAND --help` describes one command; `%.*s --version` says what this is.\n",
+               static_cast<int>(program.size()), program.data(), static_cast<int>(program.size()), program.data());
 }
 
 /// Runs the command argv[1] names with argv[2...]; an exception becomes "PROGRAM CMD: error: ..." and 1.
@@ -38,6 +40,10 @@ inline int run_command_table(int argc, char** argv, std::string_view program, st
   const std::string_view name = argv[1];
   if (name == "-h" || name == "--help" || name == "help") {
     print_command_usage(stdout, program, commands);
+    return 0;
+  }
+  if (name == "--version") {
+    std::printf("%s\n", version_line(program).c_str());
     return 0;
   }
   const std::vector<std::string_view> args(argv + 2, argv + argc);

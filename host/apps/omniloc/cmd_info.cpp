@@ -3,6 +3,7 @@
 
 #include "commands.hpp"
 #include "omniloc/regmap.hpp"
+#include "omniloc/version.hpp"
 
 namespace omniloc::cli {
 
@@ -23,9 +24,7 @@ int cmd_version(std::span<const std::string_view> args) {
     std::fprintf(stderr, "usage: omniloc version\n");
     return 2;
   }
-  const auto v = regmap::kVersionValue;
-  std::printf("omniloc host, register map %u.%u.%u, board ID 0x%08X\n", regmap::kVersionMajor.get(v),
-              regmap::kVersionMinor.get(v), regmap::kVersionPatch.get(v), regmap::kIdValue);
+  std::printf("%s\n", version_line("omniloc").c_str());
   return 0;
 }
 

@@ -1,5 +1,5 @@
 // omnilocd: the localization daemon on the robot. All the work is in the daemon library
-// (omniloc/daemon.hpp); this file parses the command line, wires the board (USB) and the camera
+// (omniloc/daemon.hpp); this file parses the command line (CLI11, daemon_cli.hpp), wires the board (USB) and the camera
 // the config names (V4L2 device or video file, or none) and turns SIGINT/SIGTERM into a clean stop.
 // It links no simulator: the simulated robot is its own program, `omnilocd-sim` (sim/apps/).
 #include <csignal>
@@ -7,14 +7,15 @@
 #include <memory>
 #include <string>
 #include <utility>
-#include <string_view>
 #include <vector>
 
 #include "omniloc/daemon.hpp"
 #include "omniloc/daemon_camera.hpp"
+#include "daemon_cli.hpp"
 #include "omniloc/daemon_config.hpp"
 #include "omniloc/service_notify.hpp"
 #include "omniloc/usb_transport.hpp"
+#include "omniloc/version.hpp"
 #include "stop_signal.hpp"
 
 namespace {
@@ -57,14 +58,20 @@ int run(const omniloc::daemon::DaemonConfig& config) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::vector<std::string_view> args(argv + 1, argv + argc);
+  CLI::App app{"The robot's localization daemon: USB board + camera -> localizer -> UDP poses.\n"
+               "Flags override the config file (JSON, docs/DAEMON.md).",
+               "omnilocd"};
+  app.set_version_flag("--version", omniloc::version_line("omnilocd"));
+  app.footer("SIGINT / SIGTERM stop it cleanly (recording closed, board streaming switched off).");
+  omniloc::cli::DaemonCommandLine cl;
+  omniloc::cli::add_daemon_options(app, cl);
   try {
-    const auto parsed = omniloc::daemon::parse_daemon_args(args);
-    if (parsed.help) {
-      std::fputs(omniloc::daemon::daemon_usage().c_str(), stdout);
-      return 0;
-    }
-    return run(parsed.config);
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return omniloc::cli::exit_code_of(app, e);
+  }
+  try {
+    return run(omniloc::cli::daemon_config_from(cl));
   } catch (const omniloc::ConfigError& e) {
     std::fprintf(stderr, "omnilocd: error: %s\n", e.what());
     return 2;

@@ -59,18 +59,4 @@ void validate_daemon_config(const DaemonConfig& config, const std::string& sourc
 /// `source` and the key when the key is unknown or the text is not a valid value.
 void set_daemon_key(DaemonConfig& config, std::string_view key, std::string_view value, const std::string& source);
 
-/// What the command line asked for.
-struct DaemonArgs {
-  DaemonConfig config;
-  bool help = false;
-  std::string config_path;  ///< --config FILE, empty when not given
-};
-
-/// Parses `--config FILE` first (loaded over the defaults), then every `--key VALUE` flag (key with
-/// '-' or '_', e.g. --udp-port 5600) over it, then validates. Throws ConfigError on a bad flag.
-[[nodiscard]] DaemonArgs parse_daemon_args(std::span<const std::string_view> args);
-
-/// The --help text.
-[[nodiscard]] std::string daemon_usage();
-
 }  // namespace omniloc::daemon

@@ -1,5 +1,5 @@
-// omnilocd configuration: one table of keys drives the JSON reader, the flag parser and --help, so
-// the three cannot disagree about names or types.
+// omnilocd configuration: one table of keys drives the JSON reader, the flags and --help (CLI11 in
+// host/apps/common/daemon_cli.hpp), so the three cannot disagree about names or types.
 #include "omniloc/daemon_config.hpp"
 
 #include <arpa/inet.h>
@@ -90,56 +90,6 @@ void set_daemon_key(DaemonConfig& c, std::string_view key, std::string_view valu
     }
   }
   k->read(config::Node(json, at), c);
-}
-
-DaemonArgs parse_daemon_args(std::span<const std::string_view> args) {
-  DaemonArgs out;
-  // --config first, so that flags override the file whatever their order.
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    if (args[i] == "--config") {
-      if (i + 1 >= args.size()) throw ConfigError("command line: --config needs a file");
-      out.config_path = std::string(args[i + 1]);
-    }
-  }
-  if (!out.config_path.empty()) out.config = load_daemon_config(out.config_path);
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string_view a = args[i];
-    if (a == "-h" || a == "--help") {
-      out.help = true;
-      continue;
-    }
-    if (a == "--config") {
-      ++i;
-      continue;
-    }
-    if (a.size() < 3 || a.substr(0, 2) != "--") throw ConfigError("command line: unexpected argument '" + std::string(a) + "'");
-    std::string key(a.substr(2));
-    for (char& ch : key)
-      if (ch == '-') ch = '_';
-    if (i + 1 >= args.size()) throw ConfigError("command line: " + std::string(a) + " needs a value");
-    set_daemon_key(out.config, key, args[++i], "command line");
-  }
-  out.config.validate(out.config_path.empty() ? "command line" : out.config_path + " + command line");
-  return out;
-}
-
-std::string daemon_usage() {
-  std::ostringstream os;
-  os << "usage: omnilocd [--config FILE] [--KEY VALUE ...] [--help]\n\n"
-        "The robot's localization daemon: USB board + camera -> localizer -> UDP poses.\n"
-        "Flags override the config file (JSON, docs/DAEMON.md). Keys (default):\n";
-  const DaemonConfig d;
-  for (const auto& k : daemon_config_keys()) {
-    std::string flag(k.name);
-    for (char& ch : flag)
-      if (ch == '_') ch = '-';
-    const config::Json v = *k.write(d);
-    const std::string shown = v.is_string() && !v.get<std::string>().empty() ? v.get<std::string>() : v.dump();
-    os << "  --" << flag << std::string(flag.size() < 22 ? 22 - flag.size() : 1, ' ') << k.help << " (" << shown
-       << ")\n";
-  }
-  os << "\nSIGINT / SIGTERM stop it cleanly (recording closed, board streaming switched off).\n";
-  return os.str();
 }
 
 }  // namespace omniloc::daemon

@@ -145,8 +145,11 @@ class DemoObserver {
   }
 
   daemon::DaemonObserver callbacks() {
-    return {[this](const EncoderWindow& w) { on_window(w); }, [this](const daemon::CameraFrame& f) { on_frame(f); },
-            [this](const daemon::PoseEvent& e) { on_pose(e); }};
+    daemon::DaemonObserver o;
+    o.on_window = [this](const EncoderWindow& w) { on_window(w); };
+    o.on_frame = [this](const daemon::CameraFrame& f) { on_frame(f); };
+    o.on_pose = [this](const daemon::PoseEvent& e) { on_pose(e); };
+    return o;
   }
 
   void on_window(const EncoderWindow& w) {

@@ -6,13 +6,13 @@
 #include <charconv>
 #include <cstdio>
 #include <memory>
-#include <optional>
 #include <string>
 #include <string_view>
-#include <vector>
 
+#include "daemon_cli.hpp"
 #include "omniloc/daemon.hpp"
 #include "omniloc/daemon_config.hpp"
+#include "omniloc/version.hpp"
 #include "omniloc/recording.hpp"
 #include "omniloc_sim/playing_area.hpp"
 #include "omniloc_sim/sim_daemon.hpp"
@@ -23,17 +23,7 @@ namespace {
 struct SimArgs {
   std::string trajectory = "figure_eight";
   std::uint64_t seed = 1;
-  std::vector<std::string_view> daemon_args;  ///< everything else, for parse_daemon_args
 };
-
-std::string sim_usage() {
-  return "usage: omnilocd-sim [--trajectory NAME] [--seed N] [omnilocd options]\n"
-         "  The robot daemon on the simulated robot (Verilated board, rendered camera).\n"
-         "  --trajectory NAME  the simulated drive: " + omniloc::sim::trajectory_names() + " (default figure_eight)\n"
-         "  --seed N           world and sensor noise seed, 0 .. 2^64-1 (default 1)\n"
-         "  --camera none      no camera (odometry only); any other camera value means the rendered one\n\n"
-         "omnilocd options:\n";
-}
 
 std::uint64_t parse_seed(std::string_view v) {
   std::uint64_t n = 0;
@@ -42,29 +32,6 @@ std::uint64_t parse_seed(std::string_view v) {
     throw omniloc::ConfigError("command line: --seed: must be an integer 0 .. 18446744073709551615 (got '" +
                                std::string(v) + "')");
   return n;
-}
-
-/// Takes --trajectory and --seed (as "--key value" or "--key=value") out of the arguments.
-SimArgs split_args(std::span<const std::string_view> args) {
-  SimArgs s;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    std::string_view a = args[i];
-    std::optional<std::string_view> inline_value;
-    if (const auto eq = a.find('='); a.starts_with("--") && eq != std::string_view::npos) {
-      inline_value = a.substr(eq + 1);
-      a = a.substr(0, eq);
-    }
-    if (a != "--trajectory" && a != "--seed") {
-      s.daemon_args.push_back(args[i]);
-      continue;
-    }
-    if (!inline_value && i + 1 >= args.size())
-      throw omniloc::ConfigError("command line: " + std::string(a) + " needs a value");
-    const std::string_view v = inline_value ? *inline_value : args[++i];
-    if (a == "--seed") s.seed = parse_seed(v);
-    else s.trajectory = std::string(v);
-  }
-  return s;
 }
 
 int run(const omniloc::daemon::DaemonConfig& config, const SimArgs& sim_args) {
@@ -85,7 +52,9 @@ int run(const omniloc::daemon::DaemonConfig& config, const SimArgs& sim_args) {
   std::unique_ptr<TruthCsvWriter> truth_csv;
   if (!config.record_dir.empty()) {
     truth_csv = std::make_unique<TruthCsvWriter>(std::filesystem::path(config.record_dir) / "truth.csv");
-    d.set_observer(daemon::DaemonObserver{sim::truth_recorder(robot.truth(), *truth_csv), {}, {}});
+    daemon::DaemonObserver observer;
+    observer.on_window = sim::truth_recorder(robot.truth(), *truth_csv);
+    d.set_observer(std::move(observer));
   }
   omniloc::cli::install_stop_signal_handlers();
   const daemon::DaemonReport r = d.run(&omniloc::cli::g_stop_requested);
@@ -97,15 +66,25 @@ int run(const omniloc::daemon::DaemonConfig& config, const SimArgs& sim_args) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::vector<std::string_view> args(argv + 1, argv + argc);
+  CLI::App app{"The robot daemon (omnilocd's options) on the simulated robot: Verilated board, rendered camera\n"
+               "(--camera none: no camera, odometry only; any other camera value means the rendered one).",
+               "omnilocd-sim"};
+  app.set_version_flag("--version", omniloc::version_line("omnilocd-sim"));
+  SimArgs sim_args;
+  std::string seed_text;
+  app.add_option("--trajectory", sim_args.trajectory, "the simulated drive: " + omniloc::sim::trajectory_names())
+      ->default_str(sim_args.trajectory);
+  app.add_option("--seed", seed_text, "world and sensor noise seed, 0 .. 2^64-1")->default_str("1");
+  omniloc::cli::DaemonCommandLine cl;
+  omniloc::cli::add_daemon_options(app, cl);
   try {
-    const SimArgs sim_args = split_args(args);
-    const auto parsed = omniloc::daemon::parse_daemon_args(sim_args.daemon_args);
-    if (parsed.help) {
-      std::fputs((sim_usage() + omniloc::daemon::daemon_usage()).c_str(), stdout);
-      return 0;
-    }
-    return run(parsed.config, sim_args);
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return omniloc::cli::exit_code_of(app, e);
+  }
+  try {
+    if (!seed_text.empty()) sim_args.seed = parse_seed(seed_text);
+    return run(omniloc::cli::daemon_config_from(cl), sim_args);
   } catch (const omniloc::ConfigError& e) {
     std::fprintf(stderr, "omnilocd-sim: error: %s\n", e.what());
     return 2;

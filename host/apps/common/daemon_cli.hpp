@@ -1,0 +1,72 @@
+// The command line of omnilocd and omnilocd-sim, with CLI11: `--config FILE`, then one option per key
+// of the daemon's key table (daemon_config_keys(): the same table drives the JSON reader), as
+// `--udp-port 5600` or `--udp-port=5600`, plus --help (every option, its default) and --version.
+// The values are parsed by the key table (set_daemon_key), so a flag and a config file refuse the
+// same things with the same messages; flags override the file whatever their order.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "omniloc/config_reader.hpp"
+#include "omniloc/daemon_config.hpp"
+
+namespace omniloc::cli {
+
+struct DaemonCommandLine {
+  std::string config_path;
+  std::vector<std::string> keys;                   ///< daemon_config_keys() order
+  std::vector<std::optional<std::string>> values;  ///< the text given for each key, if any
+};
+
+/// "udp_port" -> "udp-port".
+inline std::string flag_of(std::string_view key) {
+  std::string flag(key);
+  for (char& ch : flag)
+    if (ch == '_') ch = '-';
+  return flag;
+}
+
+/// Adds --config and one option per daemon key to `app`; the values land in `cl` (which must
+/// outlive the parse).
+inline void add_daemon_options(CLI::App& app, DaemonCommandLine& cl) {
+  app.add_option("--config", cl.config_path, "JSON config file (docs/DAEMON.md); the flags below override it");
+  const auto& table = daemon::daemon_config_keys();
+  cl.keys.clear();
+  cl.values.assign(table.size(), std::nullopt);  // sized once: the callbacks keep pointers into it
+  const daemon::DaemonConfig defaults;
+  for (std::size_t i = 0; i < table.size(); ++i) {
+    const auto& k = table[i];
+    cl.keys.emplace_back(k.name);
+    const config::Json v = *k.write(defaults);
+    const std::string shown = v.is_string() ? "\"" + v.get<std::string>() + "\"" : v.dump();
+    std::optional<std::string>* slot = &cl.values[i];
+    app.add_option_function<std::string>("--" + flag_of(k.name), [slot](const std::string& text) { *slot = text; },
+                                         std::string(k.help))
+        ->type_name(k.kind == config::Kind::kText ? "TEXT" : "NUMBER")
+        ->default_str(shown);
+  }
+}
+
+/// The configuration the command line asks for: the defaults, the --config file over them, each
+/// given flag over that; validated. Throws ConfigError naming the file or "command line" and the key.
+inline daemon::DaemonConfig daemon_config_from(const DaemonCommandLine& cl) {
+  daemon::DaemonConfig c;
+  if (!cl.config_path.empty()) c = daemon::load_daemon_config(cl.config_path);
+  for (std::size_t i = 0; i < cl.keys.size(); ++i)
+    if (cl.values[i]) daemon::set_daemon_key(c, cl.keys[i], *cl.values[i], "command line");
+  c.validate(cl.config_path.empty() ? "command line" : cl.config_path + " + command line");
+  return c;
+}
+
+/// CLI11's answer to a parse: 0 after --help / --version (printed to stdout), else the message on
+/// stderr and 2 (bad usage, as for a bad value).
+inline int exit_code_of(const CLI::App& app, const CLI::ParseError& e) {
+  const int rc = app.exit(e);
+  return rc == 0 ? 0 : 2;
+}
+
+}  // namespace omniloc::cli
