@@ -57,6 +57,41 @@ TEST(DaemonPublish, StatusNamesAreTheDocumentedOnes) {
   EXPECT_EQ(omniloc::daemon::to_string(DaemonStatus::kOdometryOnly), "odometry_only");
   EXPECT_EQ(omniloc::daemon::to_string(DaemonStatus::kLost), "lost");
   EXPECT_EQ(omniloc::daemon::to_string(DaemonStatus::kDegraded), "degraded");
+  EXPECT_EQ(omniloc::daemon::to_string(DaemonStatus::kNoBoard), "no_board");
+}
+
+// A broadcast destination works (the docs offer one): 127.255.255.255 is the loopback network's
+// broadcast address, refused with EACCES unless the socket asks for SO_BROADCAST, and delivered to a
+// receiver bound to INADDR_ANY. A failed send keeps its reason for the status line.
+TEST(DaemonPublish, BroadcastAddressesAreSentToAndFailuresSayWhy) {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  ASSERT_GE(fd, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_ANY);
+  ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  socklen_t len = sizeof a;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
+  omniloc::daemon::UdpPublisher pub("127.255.255.255", ntohs(a.sin_port));
+  pub.send("hello");
+  EXPECT_EQ(pub.failed(), 0u) << pub.last_error();
+  EXPECT_EQ(pub.sent(), 1u);
+  pollfd p{fd, POLLIN, 0};
+  ASSERT_EQ(::poll(&p, 1, 2000), 1);
+  char buf[16];
+  EXPECT_EQ(::recv(fd, buf, sizeof buf, 0), 5);
+  EXPECT_EQ(std::string(buf, 5), "hello");
+  ::close(fd);
+
+  // Too big for UDP: the send fails and says why, and the status line shows it.
+  pub.send(std::string(70000, 'x'));
+  EXPECT_EQ(pub.failed(), 1u);
+  EXPECT_EQ(pub.last_error(), "Message too long");
+  omniloc::daemon::StatusSnapshot st;
+  st.send_failed = pub.failed();
+  st.send_error = pub.last_error();
+  EXPECT_NE(omniloc::daemon::status_line(st).find("dropped=1 send_error=Message too long"), std::string::npos)
+      << omniloc::daemon::status_line(st);
 }
 
 class LoopbackReceiver {

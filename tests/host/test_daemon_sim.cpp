@@ -281,6 +281,34 @@ TEST(DaemonSim, PublishesTrackedPosesSurvivesUnplugAndCameraStop) {
   std::filesystem::remove_all(rec_dir);
 }
 
+// `--camera none` without a start pose: there will never be an image fix, and the datagrams say
+// odometry_only from the first window (they said "starting" for ever before, against the docs).
+TEST(DaemonSim, NoCameraAndNoStartPoseIsOdometryOnly) {
+  const std::uint64_t seed = 12;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  DaemonModels mod = models();
+  Rig rig(sim::WorldConfig::default_noise(mod.robot, seed), sim::make_trajectory("circle", seed));
+  RigClock clock(rig);
+  DaemonConfig cfg;
+  cfg.camera = "none";
+  cfg.udp_port = 9;
+  std::vector<DaemonStatus> statuses;
+  volatile std::sig_atomic_t stop = 0;
+  DaemonIo io;
+  io.clock = &clock;
+  io.open_board = [&rig]() -> std::unique_ptr<Transport> { return std::make_unique<RigTransport>(rig); };
+  io.heading = &rig.log;
+  io.observer.on_pose = [&](const PoseEvent& e) {
+    statuses.push_back(e.message.status);
+    if (statuses.size() == 50) stop = 1;
+  };
+  io.log = [](const std::string&) {};
+  Daemon d(cfg, mod, io);
+  (void)d.run(&stop);
+  ASSERT_EQ(statuses.size(), 50u);
+  for (const DaemonStatus st : statuses) EXPECT_EQ(st, DaemonStatus::kOdometryOnly);
+}
+
 TEST(DaemonSim, StopFlagEndsTheRunAndSwitchesStreamingOff) {
   // No camera, a known start pose: dead reckoning from the first window, flagged odometry_only; a
   // "signal" (the flag set from the pose observer after 150 poses) ends the run cleanly.

@@ -14,6 +14,10 @@
 #include <thread>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
+#include "udp_receiver.hpp"
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -110,6 +114,25 @@ TEST(OmnilocdProgram, NotifiesSystemdReadyWatchdogAndStopping) {
   std::printf("%zu notifications, %d watchdog pings in 1.5 s\n", messages.size(), pings);
   EXPECT_GE(pings, 10);
   EXPECT_LE(pings, 16);
+}
+
+// With no board the daemon still publishes, so a consumer can tell "no board" from "daemon down":
+// a datagram every 10 ms with status no_board and source none (no pose yet).
+TEST(OmnilocdProgram, WithoutABoardItPublishesNoBoard) {
+  omniloc::test::UdpReceiver rx;
+  ASSERT_NE(rx.port(), 0);
+  std::string out;
+  const int rc = run("--camera none --duration-s 1 --udp-port " + std::to_string(rx.port()), out);
+  if (out.find("board open") != std::string::npos) GTEST_SKIP() << "a real omniloc board is plugged in";
+  ASSERT_EQ(rc, 0) << out;
+  const auto grams = rx.drain();
+  std::printf("%zu datagrams in 1 s without a board\n", grams.size());
+  EXPECT_GE(grams.size(), 50u) << out;  // 100 due; the loop also waits on USB enumeration
+  for (const auto& g : grams) {
+    const auto j = nlohmann::json::parse(g);
+    EXPECT_EQ(j.at("status"), "no_board") << g;
+    EXPECT_EQ(j.at("source"), "none") << g;
+  }
 }
 
 }  // namespace

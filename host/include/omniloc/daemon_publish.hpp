@@ -15,6 +15,7 @@ enum class DaemonStatus {
   kOdometryOnly, ///< the camera stopped delivering: the pose is dead reckoning, flagged
   kLost,         ///< the localizer does not know where it is (searching globally)
   kDegraded,     ///< the board is gone (unplugged): pose frozen at the last estimate, reconnecting
+  kNoBoard,      ///< no board since start-up: no pose at all (zeros, source none), trying to connect
 };
 
 [[nodiscard]] std::string_view to_string(DaemonStatus status);
@@ -51,11 +52,14 @@ class UdpPublisher {
   void send(std::string_view datagram);
   [[nodiscard]] std::uint64_t sent() const { return sent_; }
   [[nodiscard]] std::uint64_t failed() const { return failed_; }
+  /// Why the last failed send failed (strerror), empty before any failure.
+  [[nodiscard]] const std::string& last_error() const { return last_error_; }
 
  private:
   int fd_ = -1;
   std::uint64_t sent_ = 0;
   std::uint64_t failed_ = 0;
+  std::string last_error_;
   unsigned char addr_[16] = {};  // sockaddr_in, kept opaque to keep <netinet/in.h> out of the header
 };
 
@@ -72,6 +76,7 @@ struct StatusSnapshot {
   double frames_per_s = 0.0;    ///< camera frames used over the last period
   std::uint64_t published = 0;
   std::uint64_t send_failed = 0;
+  std::string send_error;  ///< why the last failed send failed (shown when sends fail)
   std::uint64_t reconnects = 0;
 };
 

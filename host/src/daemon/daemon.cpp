@@ -81,7 +81,10 @@ struct Daemon::Impl {
   void log(const std::string& s) const { io.log(s); }
 
   DaemonStatus status(double now_ms) const {
+    if (!ever_connected) return DaemonStatus::kNoBoard;
     if (board_gone || !client) return DaemonStatus::kDegraded;
+    // No camera at all: dead reckoning from the start, and said so (there will never be a fix).
+    if (!io.camera) return DaemonStatus::kOdometryOnly;
     if (!localizer.has_fix()) return DaemonStatus::kStarting;
     if (localizer.lost()) return DaemonStatus::kLost;
     if (!io.camera || now_ms - last_frame_ms > config.camera_timeout_ms) return DaemonStatus::kOdometryOnly;
@@ -210,6 +213,7 @@ struct Daemon::Impl {
     s.frames_per_s = span_s > 0 ? static_cast<double>(report.frames - frames_at_status) / span_s : 0.0;
     s.published = publisher.sent();
     s.send_failed = publisher.failed();
+    s.send_error = publisher.last_error();
     s.reconnects = report.reconnects;
     const std::string line = status_line(s);
     log(line);
@@ -241,8 +245,9 @@ struct Daemon::Impl {
       if (!client) {
         try_connect(now);
         if (!client) {
-          if (ever_connected && now >= next_degraded_ms) {
-            publish(last_localized, DaemonStatus::kDegraded, now, false);
+          // A consumer tells "no board" / "board gone" from "daemon down" by these datagrams.
+          if (now >= next_degraded_ms) {
+            publish(last_localized, status(now), now, false);
             next_degraded_ms = now + kDegradedTickMs;
           }
           status_tick(now, start);

@@ -22,6 +22,7 @@ std::string_view to_string(DaemonStatus status) {
     case DaemonStatus::kOdometryOnly: return "odometry_only";
     case DaemonStatus::kLost: return "lost";
     case DaemonStatus::kDegraded: return "degraded";
+    case DaemonStatus::kNoBoard: return "no_board";
   }
   return "unknown";
 }
@@ -104,6 +105,14 @@ UdpPublisher::UdpPublisher(const std::string& ipv4_address, int port) {
   if (fd_ < 0)
     throw std::runtime_error("UDP publisher for " + ipv4_address + ":" + std::to_string(port) +
                              ": socket() failed: " + std::strerror(errno));
+  // Broadcast destinations (192.168.1.255, 255.255.255.255) are refused with EACCES unless asked for.
+  const int on = 1;
+  if (::setsockopt(fd_, SOL_SOCKET, SO_BROADCAST, &on, sizeof on) != 0) {
+    const std::string why = std::strerror(errno);
+    ::close(fd_);
+    throw std::runtime_error("UDP publisher for " + ipv4_address + ":" + std::to_string(port) +
+                             ": SO_BROADCAST failed: " + why);
+  }
   std::memcpy(addr_, &a, sizeof a);
 }
 
@@ -115,22 +124,27 @@ void UdpPublisher::send(std::string_view datagram) {
   const ssize_t n = ::sendto(fd_, datagram.data(), datagram.size(), 0, reinterpret_cast<const sockaddr*>(addr_),
                              sizeof(sockaddr_in));
   // ECONNREFUSED (nobody listening yet) and EAGAIN are normal for a fire-and-forget stream.
-  if (n == static_cast<ssize_t>(datagram.size())) ++sent_;
-  else ++failed_;
+  if (n == static_cast<ssize_t>(datagram.size())) {
+    ++sent_;
+  } else {
+    ++failed_;
+    last_error_ = n < 0 ? std::strerror(errno) : "short send";
+  }
 }
 
 std::string status_line(const StatusSnapshot& s) {
-  char buf[320];
+  char buf[448];
   char err[32];
   if (s.match_error < 0) std::snprintf(err, sizeof err, "-");
   else std::snprintf(err, sizeof err, "%.1f", s.match_error);
   std::snprintf(buf, sizeof buf,
                 "omnilocd t=%.1fs %s pose=(%.1f,%.1f,%.1f) src=%s err=%s sigma=%.1fcm drift=%+.3fdeg/s win=%.0f/s cam=%.0f/s "
-                "sent=%llu dropped=%llu reconnects=%llu",
+                "sent=%llu dropped=%llu%s%s reconnects=%llu",
                 s.t_s, std::string(to_string(s.status)).c_str(), s.x_cm, s.y_cm, s.yaw_deg,
                 s.source.empty() ? "-" : s.source.c_str(), err, s.uncertainty_cm, s.gyro_drift_deg_per_s, s.windows_per_s, s.frames_per_s,
                 static_cast<unsigned long long>(s.published), static_cast<unsigned long long>(s.send_failed),
-                static_cast<unsigned long long>(s.reconnects));
+                s.send_failed > 0 && !s.send_error.empty() ? " send_error=" : "",
+                s.send_failed > 0 ? s.send_error.c_str() : "", static_cast<unsigned long long>(s.reconnects));
   return buf;
 }
 
