@@ -41,6 +41,10 @@ TEST(DaemonPublish, DatagramTextIsExactlyTheDocumentedSchema) {
             R"({"seq":42,"t_ms":1234.500,"x_cm":375.125,"y_cm":-2.500,"yaw_deg":179.750,"source":"integrated",)"
             R"("match_error":7.250,"search_range_cm":20.0,"uncertainty_cm":1.500,"uncertainty_yaw_deg":0.250,)"
             R"("status":"ok"})");
+  PoseMessage global = sample_message();  // the last image result came from a global search
+  global.search_range_cm = -1;
+  EXPECT_NE(omniloc::daemon::pose_json(global).find(R"("match_error":7.250,"search_range_cm":-1.0,)"), std::string::npos)
+      << omniloc::daemon::pose_json(global);
   PoseMessage none = sample_message();
   none.match_error = -1;
   none.search_range_cm = -1;

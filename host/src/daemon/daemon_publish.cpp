@@ -75,12 +75,11 @@ std::string pose_json(const PoseMessage& m) {
   put_number(out, m.yaw_deg, 3);
   out += ",\"source\":";
   put_string(out, m.source);
-  // Absent rather than null: every key present is a number (docs/DAEMON.md).
+  // Absent rather than null: every key present is a number (docs/DAEMON.md). The two come together:
+  // a search range of -1 says the last image result came from a global search.
   if (m.match_error >= 0) {
     out += ",\"match_error\":";
     put_number(out, m.match_error, 3);
-  }
-  if (m.search_range_cm >= 0) {
     out += ",\"search_range_cm\":";
     put_number(out, m.search_range_cm, 1);
   }

@@ -1,0 +1,124 @@
+"""The Python client (python/omniloc_client) against the real programs: omnilocd-sim publishes to a
+PoseReceiver and records; the datagrams are checked against the documented schema and the
+simulator's truth, the recording is read back, and a copy written by the client is replayed by
+`omniloc replay` exactly as the original. Paths of the programs come from the environment (CTest)."""
+
+import csv
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import threading
+import unittest
+from pathlib import Path
+
+from omniloc_client import (ENCODERS_HEADER, DatagramError, PoseReceiver, RecordingError, parse_pose,
+                            read_recording, write_recording)
+
+OMNILOCD_SIM = os.environ["OMNILOCD_SIM"]
+OMNILOC_CLI = os.environ["OMNILOC_CLI"]
+
+
+def replay(rec: Path, out: Path, db: Path) -> list:
+    subprocess.run([OMNILOC_CLI, "replay", str(rec), "--out", str(out), "--db", str(db)], check=True,
+                   capture_output=True, text=True, timeout=600)
+    with out.open() as f:
+        return list(csv.reader(f))
+
+
+class ParsePose(unittest.TestCase):
+    GOOD = ('{"seq":42,"t_ms":1234.500,"x_cm":375.125,"y_cm":-2.500,"yaw_deg":179.750,"source":"integrated",'
+            '"match_error":7.250,"search_range_cm":20.0,"uncertainty_cm":1.500,"uncertainty_yaw_deg":0.250,"status":"ok"}')
+
+    def test_documented_example(self):
+        p = parse_pose(self.GOOD)
+        self.assertEqual((p.seq, p.x_cm, p.y_cm, p.yaw_deg, p.source, p.match_error, p.status),
+                         (42, 375.125, -2.5, 179.75, "integrated", 7.25, "ok"))
+
+    def test_bad_datagrams_name_the_key(self):
+        cases = {
+            self.GOOD.replace('"status":"ok"', '"status":"fine"'): "status",
+            self.GOOD.replace('"seq":42', '"seq":0'): "seq",
+            self.GOOD.replace('"x_cm":375.125', '"x_cm":"375"'): "x_cm",
+            self.GOOD.replace(',"match_error":7.250', ''): "match_error",
+            self.GOOD.replace('"status":"ok"}', '"status":"ok","extra":1}'): "extra",
+            "[1,2]": "object",
+            "{": "JSON",
+        }
+        for text, named in cases.items():
+            with self.assertRaises(DatagramError) as e:
+                parse_pose(text)
+            self.assertIn(named, str(e.exception), text)
+
+
+class ReadmeCommand(unittest.TestCase):
+    def test_the_readme_line_runs(self):
+        root = Path(__file__).resolve().parents[2]
+        line = next(l for l in (root / "python" / "README.md").read_text().splitlines() if l.startswith("PYTHONPATH="))
+        out = subprocess.run(line, shell=True, cwd=root, capture_output=True, text=True, timeout=60)
+        self.assertEqual(out.returncode, 0, out.stderr)
+        self.assertIn(out.stdout.strip().split("(")[0], ("None", "PoseDatagram"))
+
+
+class AgainstTheSimulatedDaemon(unittest.TestCase):
+    def test_datagrams_recording_and_replay(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            tmp = Path(tmp)
+            rec = tmp / "rec"
+            poses, errors = [], []
+
+            def receive_all():
+                try:
+                    poses.extend(rx)
+                except Exception as e:  # a datagram off the schema: fail the test, not just the thread
+                    errors.append(e)
+
+            with PoseReceiver(timeout_s=10.0) as rx:
+                reader = threading.Thread(target=receive_all)
+                reader.start()
+                run = subprocess.run([OMNILOCD_SIM, "--duration-s", "2", "--seed", "4", "--udp-port", str(rx.port),
+                                      "--record-dir", str(rec), "--status-period-s", "0"],
+                                     capture_output=True, text=True, timeout=600)
+                rx.timeout_s = 0.5  # the daemon has stopped: drain and end
+                reader.join()
+                lost = rx.lost
+            self.assertEqual(run.returncode, 0, run.stderr)
+            self.assertEqual(errors, [])
+            print(f"{len(poses)} datagrams, {lost} lost", file=sys.stderr)
+            self.assertEqual(len(poses), 200)  # one per 10 ms window for 2 s
+            self.assertEqual([p.seq for p in poses], list(range(1, 201)))
+            self.assertEqual(lost, 0)
+
+            recording = read_recording(rec)
+            self.assertEqual(len(recording.encoders), 200)
+            self.assertGreaterEqual(len(recording.frames), 100)  # 60 Hz camera
+            self.assertIsNotNone(recording.truth)
+            self.assertEqual(recording.meta["field"], "fira-robosot")
+            # Against the simulator's truth at the same window times: once fixed, within 10 cm.
+            truth = {round(t.t_ms, 3): t for t in recording.truth}
+            fixed = [p for p in poses if p.status == "ok" and p.t_ms > 1000.0]
+            self.assertGreater(len(fixed), 50)
+            for p in fixed:
+                t = truth[round(p.t_ms, 3)]
+                self.assertLess(((p.x_cm - t.x_cm) ** 2 + (p.y_cm - t.y_cm) ** 2) ** 0.5, 10.0, p)
+
+            # A copy written by the client replays exactly as the original.
+            copy = write_recording(recording, tmp / "copy")
+            db = tmp / "features.db"
+            self.assertEqual(replay(rec, tmp / "a.csv", db), replay(copy, tmp / "b.csv", db))
+
+            # A damaged header is refused by the client and by omniloc replay, both naming the file.
+            enc = copy / "encoders.csv"
+            enc.write_text(enc.read_text().replace(",".join(ENCODERS_HEADER), "t,seq,c1,c2,c3,c4,gyro"))
+            with self.assertRaises(RecordingError) as e:
+                read_recording(copy)
+            self.assertIn("encoders.csv:1: header must be", str(e.exception))
+            bad = subprocess.run([OMNILOC_CLI, "replay", str(copy), "--db", str(db)], capture_output=True, text=True)
+            self.assertNotEqual(bad.returncode, 0)
+            self.assertIn("encoders.csv:1", bad.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
