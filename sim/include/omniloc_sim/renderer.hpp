@@ -127,7 +127,7 @@ struct TrueOptics {
   double yaw_offset_deg = 8.0;
   bool mirrored = false;
   double mirror_radius_px = 229.0;  // the mirror's rim: beyond it a dark ring, then the housing
-  double ring_px = 6.0;             // width of the dark ring just beyond the mirror's view
+  double ring_px = 12.0;            // width of the dark ring just beyond the mirror's view
   double body_radius_cm = 22.0;     // the robot's own body hides the floor closer than this
   std::vector<MirrorRod> rods{{100.0, 4.0}, {220.0, 4.0}, {340.0, 4.0}};
 
