@@ -52,7 +52,8 @@ bool parse_pose(std::string_view text, CalibrationFrame& f) {
 std::string numbered(const std::string& path, std::size_t i) {
   if (i == 0) return path;
   const std::size_t dot = path.rfind('.');
-  const std::string n = "-" + std::to_string(i + 1);
+  std::string n = "-";
+  n += std::to_string(i + 1);  // (not "-" + ...: GCC 12 warns -Wrestrict on it)
   return dot == std::string::npos ? path + n : path.substr(0, dot) + n + path.substr(dot);
 }
 }  // namespace
