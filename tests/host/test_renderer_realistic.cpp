@@ -17,18 +17,12 @@
 #include "omniloc/conventions.hpp"
 #include "omniloc/field.hpp"
 #include "omniloc_sim/renderer.hpp"
+#include "test_data_path.hpp"
 
 namespace omniloc {
 namespace {
 
-std::filesystem::path test_data(const std::string& name) {
-  for (auto dir = std::filesystem::current_path(); !dir.empty(); dir = dir.parent_path()) {
-    const auto p = dir / "tests" / "data" / name;
-    if (std::filesystem::exists(p)) return p;
-    if (dir == dir.parent_path()) break;
-  }
-  return {};
-}
+using test::test_data;
 
 cv::Vec3b hsv_at(const cv::Mat& bgr, const Eigen::Vector2d& px) {
   cv::Mat one(1, 1, CV_8UC3, bgr.at<cv::Vec3b>(static_cast<int>(std::lround(px.y())), static_cast<int>(std::lround(px.x()))));

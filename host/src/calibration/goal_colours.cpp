@@ -7,17 +7,14 @@
 
 #include "omniloc/calibration.hpp"
 #include "omniloc/conventions.hpp"
+#include "robust_stats.hpp"
 
 namespace omniloc {
 
 namespace {
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  const auto k = static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) * static_cast<double>(v.size() - 1));
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-  return v[k];
-}
+using calibration_detail::percentile;
+using calibration_detail::robust_sigma;
 
 // Largest opened connected region of `band` pixels, and its colour class.
 std::optional<GoalRegion> largest_region(const cv::Mat& hsv, const cv::Mat& band, double min_pixels) {
@@ -41,10 +38,8 @@ std::optional<GoalRegion> largest_region(const cv::Mat& hsv, const cv::Mat& band
   g.pixels = stats.at<int>(best, cv::CC_STAT_AREA);
   g.centroid_px = {centroids.at<double>(best, 0), centroids.at<double>(best, 1)};
   g.colour.hue = percentile(hs, 0.5);
-  std::vector<double> dev;
-  for (double h : hs) dev.push_back(std::abs(h - g.colour.hue));
-  // Three robust sigmas (1.4826 MAD), at least 4 hue units (JPEG and noise spread paint that much).
-  g.colour.hue_half_width = std::max(4.0, 3.0 * 1.4826 * percentile(dev, 0.5));
+  // Three robust sigmas, at least 4 hue units (JPEG and noise spread paint that much).
+  g.colour.hue_half_width = std::max(4.0, 3.0 * robust_sigma(hs));
   g.colour.sat_min = 0.8 * percentile(ss, 0.05);
   g.colour.val_min = 0.8 * percentile(vs, 0.05);
   return g;

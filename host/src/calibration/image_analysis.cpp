@@ -11,6 +11,7 @@
 
 #include "omniloc/calibration.hpp"
 #include "omniloc/conventions.hpp"
+#include "robust_stats.hpp"
 
 namespace omniloc {
 
@@ -19,20 +20,8 @@ namespace {
 constexpr int kRimRays = 360;
 constexpr int kPolarAngles = 720;  // 0.5 deg: a 3 px rod at 40 px spans 4 deg = 8 bins
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  const auto k = static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) * static_cast<double>(v.size() - 1));
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-  return v[k];
-}
-
-// Robust standard deviation (1.4826 x median absolute deviation from the median).
-double robust_sigma(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const double med = percentile(v, 0.5);
-  for (double& x : v) x = std::abs(x - med);
-  return 1.4826 * percentile(std::move(v), 0.5);
-}
+using calibration_detail::percentile;
+using calibration_detail::robust_sigma;
 
 float bilinear(const cv::Mat1f& img, double x, double y) {
   const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
