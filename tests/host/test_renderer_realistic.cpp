@@ -179,6 +179,25 @@ TEST(RealisticRenderer, JpegIsTheLastStepAndTheDefaultRendererIsUnchanged) {
   EXPECT_EQ(ideal.at<cv::Vec3b>(240, 320 + 100), cv::Vec3b(45, 140, 40));  // carpet
 }
 
+// The image analysis on realistic frames at spread poses: the rim (where the true optics put the
+// mirror's edge), the rods, line pixels. Includes frames (seeds 1404, 1410) where tall robots and
+// dark walls at the rim once made the rim finder take a large circle along one arc of the rim.
+TEST(RealisticRenderer, AnalysisFindsTheTrueRimOnSpreadPoses) {
+  const FieldGeometry field = load_field("fira-robosot");
+  const sim::TrueOptics o;
+  const sim::RealisticRenderer rr(field, o);
+  for (std::uint64_t seed = 1400; seed < 1412; ++seed) {
+    const Pose2 pose{100.0 + static_cast<double>((seed * 37) % 550), 80.0 + static_cast<double>((seed * 53) % 390),
+                     static_cast<double>((seed * 71) % 360)};
+    std::printf("seed %llu at (%.0f, %.0f, %.0f)\n", static_cast<unsigned long long>(seed), pose.x_cm, pose.y_cm, pose.yaw_deg);
+    const FrameAnalysis a = analyse_frame(rr.render(pose, sim::realistic(seed)), "realistic");
+    EXPECT_LT((a.rim.centre_px - o.centre_px).norm(), 1.5) << seed;
+    EXPECT_NEAR(a.rim.radius_px, o.mirror_radius_px, 1.5) << seed;
+    EXPECT_GE(a.masts_image.size(), o.rods.size()) << seed;
+    EXPECT_GT(a.line_pixels.size(), 2000u) << seed;
+  }
+}
+
 // --- the image analysis on another venue's frames ---------------------------------------------------
 
 struct RcjCase {

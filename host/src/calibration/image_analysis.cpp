@@ -126,6 +126,22 @@ double circle_support(const std::vector<std::vector<int>>& by_ray, const std::ve
   return score;
 }
 
+// Fraction of a circle's circumference inside the image. The rim is seen round most of its
+// circumference (the frame is at most cropped to it); a large circle centred near the image's edge
+// that passes along one arc of the rim and through stray steps elsewhere is not (on rendered
+// frames with dark walls at the rim such circles got half the rim's support and, being larger,
+// were taken as the rim).
+double inside_fraction(const Eigen::Vector2d& c, double r, const cv::Size& size) {
+  int in = 0;
+  constexpr int kSamples = 72;
+  for (int k = 0; k < kSamples; ++k) {
+    const double a = 2.0 * kPi * k / kSamples;
+    const double x = c.x() + r * std::cos(a), y = c.y() + r * std::sin(a);
+    in += x >= 0 && y >= 0 && x < size.width && y < size.height;
+  }
+  return static_cast<double>(in) / kSamples;
+}
+
 // One RANSAC pass: among circles supported by at least half the best support, the outermost (the
 // rim is outside every line and the centre circle, which may also be concentric with the image).
 bool ransac_rim(const std::vector<EdgeCandidate>& cand, const cv::Size& size, Eigen::Vector2d& centre, double& radius,
@@ -151,6 +167,7 @@ bool ransac_rim(const std::vector<EdgeCandidate>& cand, const cv::Size& size, Ei
     double rr = 0;
     if (!circle_through(a.p, b.p, c.p, cc, rr) || rr < min_r) continue;
     if (cc.x() < 0 || cc.y() < 0 || cc.x() >= size.width || cc.y() >= size.height) continue;
+    if (inside_fraction(cc, rr, size) < 0.5) continue;
     hyps.push_back({cc, rr, circle_support(by_ray, cand, cc, rr, 2.0, nullptr)});
   }
   if (hyps.empty()) return false;
