@@ -204,6 +204,13 @@ TEST(Calibration, RealTkuFrameOnTheCentreSpotHeadingUnknown) {
   EXPECT_TRUE(r.radial.monotonic_up_to(r.view_radius_px));
   // The image's own rods: three, as the frame shows.
   EXPECT_EQ(c.masts.size(), 3u);
+  // Its goals: a blue and a yellow one, as the frame shows (the vision block's colours).
+  ASSERT_TRUE(r.goals.blue && r.goals.yellow);
+  std::printf("  goals: blue hue %.0f +- %.0f (%d px), yellow hue %.0f +- %.0f (%d px)\n", r.goals.blue->colour.hue,
+              r.goals.blue->colour.hue_half_width, r.goals.blue->pixels, r.goals.yellow->colour.hue,
+              r.goals.yellow->colour.hue_half_width, r.goals.yellow->pixels);
+  EXPECT_NEAR(r.goals.blue->colour.hue, 112, 15);
+  EXPECT_NEAR(r.goals.yellow->colour.hue, 28, 12);
 }
 
 // The program: the real frame, one pose with the heading unknown, the camera file and overlay.

@@ -140,7 +140,7 @@ struct CalibrationOptions {
 };
 
 /// The goal colours of one analysed frame: pixels inside the rim and outside the body that are
-/// not carpet and lie in a colour name's band, opened 3 x 3, largest connected region; its colour
+/// not carpet (nor of the carpet's hue within twice its half width) and lie in a colour name's band, opened 3 x 3, largest connected region; its colour
 /// class from the region's pixels (median hue, 3 robust sigmas at least 4 units; S and V from the
 /// 5th percentile less a fifth). A pure function of the image and its analysis.
 [[nodiscard]] GoalColours measure_goal_colours(const cv::Mat& bgr, const FrameAnalysis& analysis,

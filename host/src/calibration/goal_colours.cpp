@@ -59,6 +59,10 @@ GoalColours measure_goal_colours(const cv::Mat& bgr, const FrameAnalysis& a, con
       if (!a.carpet_mask.empty() && a.carpet_mask.at<std::uint8_t>(v, u)) continue;
       const auto& p = hsv.at<cv::Vec3b>(v, u);
       if (p[1] < o.sat_min || p[2] < o.val_min) continue;
+      // The carpet's hue, darker or paler than its class (vignetting, shadows), is still carpet:
+      // a teal carpet otherwise bleeds into the blue band.
+      const double dh = std::abs(p[0] - a.carpet.hue);
+      if (std::min(dh, 180.0 - dh) <= 2.0 * a.carpet.hue_half_width) continue;
       if (p[0] >= o.blue_hue_min && p[0] <= o.blue_hue_max) blue.at<std::uint8_t>(v, u) = 255;
       if (p[0] >= o.yellow_hue_min && p[0] <= o.yellow_hue_max) yellow.at<std::uint8_t>(v, u) = 255;
     }
