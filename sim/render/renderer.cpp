@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <random>
+#include <stdexcept>
 #include <utility>
 
 #include <opencv2/imgproc.hpp>
@@ -76,6 +77,9 @@ OmniRenderer::OmniRenderer(FieldGeometry field, CameraModel camera)
 }
 
 cv::Mat OmniRenderer::render(const Pose2& pose, const RenderOptions& opt) const {
+  if (opt.realism.enabled) {
+    throw std::invalid_argument("OmniRenderer: realistic options need the true optics (use RealisticRenderer)");
+  }
   const CameraModel& cam = camera_;
   cv::Mat3f img(cam.height_px, cam.width_px);
   const Eigen::Vector2d p(pose.x_cm, pose.y_cm);

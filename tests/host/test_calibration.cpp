@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -13,6 +14,7 @@
 #include <fstream>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -23,19 +25,12 @@
 #include "omniloc/conventions.hpp"
 #include "omniloc/field.hpp"
 #include "omniloc_sim/renderer.hpp"
+#include "test_data_path.hpp"
 
 namespace omniloc {
 namespace {
 
-// tests/data/ found from the working directory (the build directory) upwards.
-std::filesystem::path test_data(const std::string& name) {
-  for (auto dir = std::filesystem::current_path(); !dir.empty(); dir = dir.parent_path()) {
-    const auto p = dir / "tests" / "data" / name;
-    if (std::filesystem::exists(p)) return p;
-    if (dir == dir.parent_path()) break;
-  }
-  return {};
-}
+using test::test_data;
 
 // The default camera with its centre a few px off, distances scaled, a yaw offset and a mast.
 CameraModel test_camera(double scale) {
@@ -209,6 +204,13 @@ TEST(Calibration, RealTkuFrameOnTheCentreSpotHeadingUnknown) {
   EXPECT_TRUE(r.radial.monotonic_up_to(r.view_radius_px));
   // The image's own rods: three, as the frame shows.
   EXPECT_EQ(c.masts.size(), 3u);
+  // Its goals: a blue and a yellow one, as the frame shows (the vision block's colours).
+  ASSERT_TRUE(r.goals.blue && r.goals.yellow);
+  std::printf("  goals: blue hue %.0f +- %.0f (%d px), yellow hue %.0f +- %.0f (%d px)\n", r.goals.blue->colour.hue,
+              r.goals.blue->colour.hue_half_width, r.goals.blue->pixels, r.goals.yellow->colour.hue,
+              r.goals.yellow->colour.hue_half_width, r.goals.yellow->pixels);
+  EXPECT_NEAR(r.goals.blue->colour.hue, 112, 15);
+  EXPECT_NEAR(r.goals.yellow->colour.hue, 28, 12);
 }
 
 // The program: the real frame, one pose with the heading unknown, the camera file and overlay.
@@ -301,6 +303,141 @@ TEST(Calibration, FramesOfTwoSizesAreAClearError) {
     FAIL() << "frames of two sizes calibrated";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("b.png: image is 659 x 493"), std::string::npos) << e.what();
+  }
+}
+
+// --- realistic frames through a true camera that is not the fitted model ----------------------------
+
+// Calibration on a realistic frame (hyperbolic, tilted, off-centre mirror; rods, robots, ball,
+// walls, goals, JPEG) at a known position, heading unknown, measured against the true optics.
+struct TrueOpticsErrors {
+  double centre_px, map_median, map_p95, yaw_deg;
+  int rods_found;
+};
+
+TrueOpticsErrors compare_with_truth(const CalibrationResult& r, const sim::TrueOptics& o, double pose_yaw_deg, bool modulo_180) {
+  TrueOpticsErrors e{};
+  e.centre_px = (r.camera.center_px - o.centre_px).norm();
+  // Mapping: at radii where lines measured it, round the calibrated centre, the calibrated ground
+  // distance against the true optics' (the tilt makes the truth depend on the angle too).
+  std::vector<double> rel;
+  const double r_hi = std::min(r.measured_max_px, r.view_radius_px);
+  for (double rr = r.measured_min_px; rr <= r_hi; rr += 2.0) {
+    for (int k = 0; k < 360; k += 5) {
+      const Eigen::Vector2d px = r.camera.center_px + rr * Eigen::Vector2d(std::cos(deg_to_rad(k)), std::sin(deg_to_rad(k)));
+      const Eigen::Vector3d ray = o.ray_of_pixel(px);
+      const double truth = o.viewpoint_height_cm * std::hypot(ray.x(), ray.y()) / ray.z();
+      rel.push_back(std::abs(r.radial.ground_cm(rr) / truth - 1.0));
+    }
+  }
+  std::sort(rel.begin(), rel.end());
+  e.map_median = rel[rel.size() / 2];
+  e.map_p95 = rel[rel.size() * 95 / 100];
+  // pose_yaw_deg: the heading the fit took as 0 (unknown heading) so its yaw offset is the true one
+  // minus the pose's; 0 when the heading was given.
+  double dyaw = angle_diff_deg(r.camera.yaw_offset_deg, o.yaw_offset_deg - pose_yaw_deg);
+  if (modulo_180 && std::abs(dyaw) > 90.0) dyaw = angle_diff_deg(dyaw, 180.0);
+  e.yaw_deg = dyaw;
+  for (const auto& rod : o.rods) {
+    bool found = false;
+    for (const auto& m : r.camera.masts)
+      found = found || std::abs(angle_diff_deg(m.bearing_deg + r.camera.yaw_offset_deg, rod.image_angle_deg)) <= m.half_width_deg + 2.0;
+    e.rods_found += found;
+  }
+  return e;
+}
+
+struct RealisticCase {
+  const char* name;
+  Pose2 pose;
+  std::uint64_t seed;
+  bool symmetric;  // on the centre spot: the heading is known only modulo 180 deg
+  bool heading_given = false;
+};
+
+class RealisticCalibration : public ::testing::TestWithParam<RealisticCase> {};
+
+TEST_P(RealisticCalibration, ConvergesAgainstTheTrueOptics) {
+  const RealisticCase& c = GetParam();
+  const FieldGeometry field = load_field("fira-robosot");
+  const sim::TrueOptics truth;
+  const sim::RealisticRenderer renderer(field, truth);
+  std::printf("seed %llu\n", static_cast<unsigned long long>(c.seed));
+  const CalibrationFrame f{renderer.render(c.pose, sim::realistic(c.seed)), c.name, {c.pose.x_cm, c.pose.y_cm},
+                           c.heading_given ? std::optional<double>(c.pose.yaw_deg) : std::nullopt};
+  const auto t0 = std::chrono::steady_clock::now();
+  const CalibrationResult r = calibrate_camera({f}, field);
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // Heading given: the yaw offset itself is found; unknown: the fit takes heading 0.
+  const TrueOpticsErrors e = compare_with_truth(r, truth, c.heading_given ? 0.0 : c.pose.yaw_deg, c.symmetric);
+  std::printf("%s: %.2f s; centre error %.2f px; mapping error median %.2f %%, 95th %.2f %% over [%.0f, %.0f] px; yaw offset "
+              "error %.2f deg; rods %d of %zu found (%zu masts); residual rms %.2f px (%.2f cm), inliers %.0f %%; view %.1f px, "
+              "body %.1f px (true %.1f); goals blue %d px, yellow %d px\n",
+              c.name, s, e.centre_px, 100 * e.map_median, 100 * e.map_p95, r.measured_min_px, std::min(r.measured_max_px, r.view_radius_px),
+              e.yaw_deg, e.rods_found, truth.rods.size(), r.camera.masts.size(), r.rms_px, r.rms_cm, 100 * r.inlier_fraction,
+              r.view_radius_px, r.camera.body_radius_px, truth.radius_px_at_ground(truth.body_radius_cm),
+              r.goals.blue ? r.goals.blue->pixels : 0, r.goals.yellow ? r.goals.yellow->pixels : 0);
+  EXPECT_LT(e.centre_px, 3.0);
+  // The camera file's model is radially symmetric; the true mirror is tilted 1.5 deg, which moves
+  // a floor point seen 45 deg below the horizon by 1.5 deg / (sin 45 cos 45) = 5 % of its
+  // distance to one side and the other round the circle: the bound near the robot.
+  EXPECT_LT(e.map_median, 0.06);
+  EXPECT_LT(e.map_p95, 0.10);
+  EXPECT_LT(std::abs(e.yaw_deg), 2.0);
+  EXPECT_EQ(e.rods_found, static_cast<int>(truth.rods.size()));
+  EXPECT_LT(r.rms_px, 1.5);
+  EXPECT_TRUE(r.goals.blue.has_value());
+  EXPECT_TRUE(r.goals.yellow.has_value());
+  // The camera file: the vision block's schema; the colour at x = max only with a given heading.
+  const auto j = nlohmann::json::parse(calibrated_camera_json(r, {f}));
+  const auto& v = j.at("vision");
+  for (const char* k : {"hue", "hue_half_width", "sat_min", "val_min", "val_max"}) EXPECT_TRUE(v.at("carpet_hsv").contains(k)) << k;
+  EXPECT_TRUE(v.at("line_contrast").contains("val_step"));
+  EXPECT_TRUE(v.at("line_contrast").contains("sat_step"));
+  for (const char* g : {"blue", "yellow"})
+    for (const char* k : {"hue", "hue_half_width", "sat_min", "val_min"}) EXPECT_TRUE(v.at("goals").at(g).contains(k)) << g << k;
+  EXPECT_NEAR(v.at("goals").at("blue").at("hue").get<double>(), 109, 6);
+  EXPECT_NEAR(v.at("goals").at("yellow").at("hue").get<double>(), 26, 6);
+  if (c.heading_given) {
+    ASSERT_TRUE(v.contains("goal_colour_at_x_max"));
+    EXPECT_EQ(v.at("goal_colour_at_x_max").get<std::string>(), "blue");  // the preset's, the field does not say
+  } else {
+    EXPECT_FALSE(v.contains("goal_colour_at_x_max"));
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Realistic, RealisticCalibration,
+    ::testing::Values(RealisticCase{"centre-spot", {375.0, 275.0, 0.0}, 1310, true},
+                      RealisticCase{"penalty-mark", {150.0, 375.0, 30.0}, 1311, false},
+                      RealisticCase{"arbitrary", {520.0, 180.0, 110.0}, 1312, false},
+                      RealisticCase{"arbitrary-heading-given", {520.0, 180.0, 110.0}, 1312, false, true}),
+    [](const auto& info) {
+      std::string n = info.param.name;
+      std::replace(n.begin(), n.end(), '-', '_');
+      return n;
+    });
+
+// Which goal is where, from a frame at a known pose and heading through a known camera (the true
+// optics' nominal camera: no calibration needed to check the rule).
+TEST(GoalColours, ColourAtXMaxFromAKnownPose) {
+  const FieldGeometry field = load_field("fira-robosot");
+  const sim::TrueOptics o;
+  const sim::RealisticRenderer renderer(field, o);
+  for (const auto& [at_max, pose] : {std::pair{GoalColour::kBlue, Pose2{300.0, 250.0, 40.0}},
+                                     std::pair{GoalColour::kYellow, Pose2{430.0, 300.0, -120.0}}}) {
+    sim::RenderOptions opt = sim::realistic(1320);
+    opt.realism.goal_colour_at_x_max = at_max;
+    const cv::Mat img = renderer.render(pose, opt);
+    // The analysis from the truth (rim, body), so that only the goal rule is under test here.
+    FrameAnalysis a;
+    a.rim = {o.centre_px, o.mirror_radius_px, 360};
+    a.body_radius_px = o.radius_px_at_ground(o.body_radius_cm);
+    const GoalColours g = measure_goal_colours(img, a);
+    ASSERT_TRUE(g.blue && g.yellow);
+    EXPECT_EQ(goal_colour_at_x_max(g, sim::nominal_camera(o), {pose.x_cm, pose.y_cm}, pose.yaw_deg, field), at_max);
+    // Turned round by 180 deg, the same image says the other colour.
+    EXPECT_NE(goal_colour_at_x_max(g, sim::nominal_camera(o), {pose.x_cm, pose.y_cm}, pose.yaw_deg + 180.0, field), at_max);
   }
 }
 

@@ -1,6 +1,7 @@
 // `omniloc calibrate`: estimates the camera (centre, radial model, yaw offset, mirroring, view
-// radius, body and mast mask) from frames taken at known positions, writes the camera file and an
-// overlay of the field model at the fitted pose.
+// radius, body and mast mask) and the venue's colours (carpet, lines, goals: the "vision" block)
+// from frames taken at known positions, writes the camera file and an overlay of the field model
+// at the fitted pose.
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -51,7 +52,8 @@ bool parse_pose(std::string_view text, CalibrationFrame& f) {
 std::string numbered(const std::string& path, std::size_t i) {
   if (i == 0) return path;
   const std::size_t dot = path.rfind('.');
-  const std::string n = "-" + std::to_string(i + 1);
+  std::string n = "-";
+  n += std::to_string(i + 1);  // (not "-" + ...: GCC 12 warns -Wrestrict on it)
   return dot == std::string::npos ? path + n : path.substr(0, dot) + n + path.substr(dot);
 }
 }  // namespace
@@ -150,6 +152,15 @@ int cmd_calibrate(std::span<const std::string_view> args) {
   std::printf("view radius %.1f px, body radius %.1f px, %zu mast(s):", r.view_radius_px, c.body_radius_px, c.masts.size());
   for (const auto& m : c.masts) std::printf(" %.1f+-%.1f deg", m.bearing_deg, m.half_width_deg);
   std::printf("\n");
+  for (const auto& [name, g] : {std::pair{"blue", &r.goals.blue}, std::pair{"yellow", &r.goals.yellow}}) {
+    if (*g) {
+      std::printf("%s goal: hue %.0f +- %.0f, S >= %.0f, V >= %.0f (%d px)\n", name, (*g)->colour.hue,
+                  (*g)->colour.hue_half_width, (*g)->colour.sat_min, (*g)->colour.val_min, (*g)->pixels);
+    } else {
+      std::printf("%s goal: not seen\n", name);
+    }
+  }
+  std::printf("goal colour at x = max: %s\n", goal_colour_name(r.goal_colour_at_x_max));
   for (std::size_t i = 0; i < r.fits.size(); ++i) {
     const auto& f = r.fits[i];
     std::printf("%s: heading %.2f deg%s, %d line pixels, %d within %.0f px: rms %.2f px (%.2f cm), median %.2f px\n",

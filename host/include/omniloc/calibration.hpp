@@ -72,6 +72,37 @@ struct FrameAnalysis {
   std::vector<Eigen::Vector2d> line_pixels;  // used for the fit (inside the ring, outside masts)
 };
 
+/// A colour class in OpenCV 8-bit HSV (H 0..179): hue within hue_half_width (circularly),
+/// S >= sat_min, V >= val_min.
+struct HsvClass {
+  double hue = 0.0, hue_half_width = 0.0, sat_min = 0.0, val_min = 0.0;
+};
+
+/// The largest region of one goal colour in a frame.
+struct GoalRegion {
+  HsvClass colour;             // measured from the region's own pixels
+  Eigen::Vector2d centroid_px{0.0, 0.0};
+  int pixels = 0;
+};
+
+/// The goal colours a frame shows (a goal not seen is empty).
+struct GoalColours {
+  std::optional<GoalRegion> blue, yellow;
+};
+
+/// What a goal colour is, before measuring it: the colour names' hue bands and how saturated and
+/// bright paint is (carpet, lines, the dark floor and grey walls are not). Bands in OpenCV hue
+/// units: blue 95..130 (190..260 deg), yellow 18..40 (36..80 deg), which leaves orange (the ball,
+/// hue ~5..15) and green carpet (hue ~45..90) out. A region must cover min_area_fraction of the
+/// mirror's disc (a goal 5 m away on a rendered 640 x 480 frame covers ~0.3 %; chromatic fringes
+/// and a coloured robot top cover less after the 3 x 3 opening).
+struct GoalColourOptions {
+  double blue_hue_min = 95.0, blue_hue_max = 130.0;
+  double yellow_hue_min = 18.0, yellow_hue_max = 40.0;
+  double sat_min = 90.0, val_min = 50.0;
+  double min_area_fraction = 0.0015;
+};
+
 struct FrameFit {
   double image_angle_of_field_x_deg = 0.0;  // alpha: image angle = field angle + alpha
   double yaw_deg = 0.0;                     // robot heading used (given, or found with yaw_offset 0)
@@ -97,11 +128,30 @@ struct CalibrationResult {
   std::vector<FrameFit> fits;
   double rms_px = 0.0, rms_cm = 0.0, median_px = 0.0, inlier_fraction = 0.0;
   double inlier_threshold_px = 0.0;
+  // Venue colours: the goals (the frame where each is largest) and, when a frame's heading was
+  // given, which colour is at the x = max end (kUnknown otherwise).
+  GoalColours goals;
+  GoalColour goal_colour_at_x_max = GoalColour::kUnknown;
 };
 
 struct CalibrationOptions {
   std::function<void(const std::string&)> progress;  // stage messages for a long run
+  GoalColourOptions goal_colours;
 };
+
+/// The goal colours of one analysed frame: pixels inside the rim and outside the body that are
+/// not carpet (nor of the carpet's hue within twice its half width) and lie in a colour name's band, opened 3 x 3, largest connected region; its colour
+/// class from the region's pixels (median hue, 3 robust sigmas at least 4 units; S and V from the
+/// 5th percentile less a fifth). A pure function of the image and its analysis.
+[[nodiscard]] GoalColours measure_goal_colours(const cv::Mat& bgr, const FrameAnalysis& analysis,
+                                               const GoalColourOptions& options = {});
+
+/// Which colour is at the field's x = max end, from where the regions lie seen from a known pose
+/// (position and heading) through the camera: the region whose direction is nearer the x = max
+/// goal's. kUnknown when no goal is seen or the two regions disagree.
+[[nodiscard]] GoalColour goal_colour_at_x_max(const GoalColours& goals, const CameraModel& camera,
+                                              const Eigen::Vector2d& position_cm, double yaw_deg,
+                                              const FieldGeometry& field);
 
 /// Finds the mirror rim. Throws std::runtime_error when no circle is consistent over the image.
 [[nodiscard]] RimCircle find_mirror_rim(const cv::Mat& bgr, const std::string& context);
@@ -115,7 +165,9 @@ struct CalibrationOptions {
 [[nodiscard]] CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, const FieldGeometry& field,
                                                  const CalibrationOptions& options = {});
 
-/// The camera file (today's keys plus a "calibration" block the reader ignores), as JSON text.
+/// The camera file (today's keys, a "calibration" block the reader ignores, and the "vision" colour
+/// model: carpet_hsv, line_contrast, goals.blue / goals.yellow when seen, goal_colour_at_x_max when
+/// known; docs/CALIBRATION.md), as JSON text.
 [[nodiscard]] std::string calibrated_camera_json(const CalibrationResult& result,
                                                  const std::vector<CalibrationFrame>& frames);
 

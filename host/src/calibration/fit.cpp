@@ -470,6 +470,28 @@ void build_camera(const FitState& st, const std::vector<FrameState>& fs, double 
 
 }  // namespace
 
+namespace {
+// The goals of every frame: each colour from the frame where its region is largest; the colour at
+// x = max from the frames whose heading was given (the fitted heading of a symmetric view may be a
+// twin, 180 deg off, so a found heading does not tell the ends apart).
+void measure_venue_goals(const std::vector<CalibrationFrame>& frames, const FieldGeometry& field,
+                         const GoalColourOptions& options, CalibrationResult& res) {
+  GoalColour at_max = GoalColour::kUnknown;
+  bool conflict = false;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const GoalColours g = measure_goal_colours(frames[i].image, res.analyses[i], options);
+    for (const auto& [mine, best] : {std::pair{&g.blue, &res.goals.blue}, std::pair{&g.yellow, &res.goals.yellow}})
+      if (*mine && (!*best || (*mine)->pixels > (*best)->pixels)) *best = *mine;
+    if (!frames[i].yaw_deg) continue;
+    const GoalColour c = goal_colour_at_x_max(g, res.camera, frames[i].position_cm, *frames[i].yaw_deg, field);
+    if (c == GoalColour::kUnknown) continue;
+    conflict = conflict || (at_max != GoalColour::kUnknown && at_max != c);
+    at_max = c;
+  }
+  res.goal_colour_at_x_max = conflict ? GoalColour::kUnknown : at_max;
+}
+}  // namespace
+
 CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, const FieldGeometry& field,
                                    const CalibrationOptions& options) {
   const std::function<void(const std::string&)> say = [&](const std::string& m) {
@@ -566,8 +588,28 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, 
   }
   res.rim = a0.rim;
   res.carpet = a0.carpet;
+  measure_venue_goals(frames, field, options.goal_colours, res);
   return res;
 }
+
+namespace {
+// The venue's colour model (schema in docs/CALIBRATION.md; read by the vision configuration).
+nlohmann::ordered_json vision_json(const CalibrationResult& r) {
+  nlohmann::ordered_json v;
+  v["carpet_hsv"] = {{"hue", r.carpet.hue}, {"hue_half_width", r.carpet.hue_half_width}, {"sat_min", r.carpet.sat_min},
+                     {"val_min", r.carpet.val_min}, {"val_max", r.carpet.val_max}};
+  v["line_contrast"] = {{"val_step", r.carpet.line_val_step}, {"sat_step", r.carpet.line_sat_step}};
+  nlohmann::ordered_json goals = nlohmann::ordered_json::object();
+  for (const auto& [name, g] : {std::pair{"blue", &r.goals.blue}, std::pair{"yellow", &r.goals.yellow}}) {
+    if (!*g) continue;
+    const HsvClass& c = (*g)->colour;
+    goals[name] = {{"hue", c.hue}, {"hue_half_width", c.hue_half_width}, {"sat_min", c.sat_min}, {"val_min", c.val_min}};
+  }
+  v["goals"] = goals;
+  if (r.goal_colour_at_x_max != GoalColour::kUnknown) v["goal_colour_at_x_max"] = goal_colour_name(r.goal_colour_at_x_max);
+  return v;
+}
+}  // namespace
 
 std::string calibrated_camera_json(const CalibrationResult& r, const std::vector<CalibrationFrame>& frames) {
   nlohmann::ordered_json j;
@@ -615,6 +657,7 @@ std::string calibrated_camera_json(const CalibrationResult& r, const std::vector
   }
   cal["frames"] = fr;
   j["calibration"] = cal;
+  j["vision"] = vision_json(r);
   return j.dump(2) + "\n";
 }
 

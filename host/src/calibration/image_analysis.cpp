@@ -11,6 +11,7 @@
 
 #include "omniloc/calibration.hpp"
 #include "omniloc/conventions.hpp"
+#include "robust_stats.hpp"
 
 namespace omniloc {
 
@@ -19,20 +20,8 @@ namespace {
 constexpr int kRimRays = 360;
 constexpr int kPolarAngles = 720;  // 0.5 deg: a 3 px rod at 40 px spans 4 deg = 8 bins
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  const auto k = static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) * static_cast<double>(v.size() - 1));
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-  return v[k];
-}
-
-// Robust standard deviation (1.4826 x median absolute deviation from the median).
-double robust_sigma(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const double med = percentile(v, 0.5);
-  for (double& x : v) x = std::abs(x - med);
-  return 1.4826 * percentile(std::move(v), 0.5);
-}
+using calibration_detail::percentile;
+using calibration_detail::robust_sigma;
 
 float bilinear(const cv::Mat1f& img, double x, double y) {
   const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
@@ -137,6 +126,22 @@ double circle_support(const std::vector<std::vector<int>>& by_ray, const std::ve
   return score;
 }
 
+// Fraction of a circle's circumference inside the image. The rim is seen round most of its
+// circumference (the frame is at most cropped to it); a large circle centred near the image's edge
+// that passes along one arc of the rim and through stray steps elsewhere is not (on rendered
+// frames with dark walls at the rim such circles got half the rim's support and, being larger,
+// were taken as the rim).
+double inside_fraction(const Eigen::Vector2d& c, double r, const cv::Size& size) {
+  int in = 0;
+  constexpr int kSamples = 72;
+  for (int k = 0; k < kSamples; ++k) {
+    const double a = 2.0 * kPi * k / kSamples;
+    const double x = c.x() + r * std::cos(a), y = c.y() + r * std::sin(a);
+    in += x >= 0 && y >= 0 && x < size.width && y < size.height;
+  }
+  return static_cast<double>(in) / kSamples;
+}
+
 // One RANSAC pass: among circles supported by at least half the best support, the outermost (the
 // rim is outside every line and the centre circle, which may also be concentric with the image).
 bool ransac_rim(const std::vector<EdgeCandidate>& cand, const cv::Size& size, Eigen::Vector2d& centre, double& radius,
@@ -162,6 +167,7 @@ bool ransac_rim(const std::vector<EdgeCandidate>& cand, const cv::Size& size, Ei
     double rr = 0;
     if (!circle_through(a.p, b.p, c.p, cc, rr) || rr < min_r) continue;
     if (cc.x() < 0 || cc.y() < 0 || cc.x() >= size.width || cc.y() >= size.height) continue;
+    if (inside_fraction(cc, rr, size) < 0.5) continue;
     hyps.push_back({cc, rr, circle_support(by_ray, cand, cc, rr, 2.0, nullptr)});
   }
   if (hyps.empty()) return false;

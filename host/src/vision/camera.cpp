@@ -164,6 +164,7 @@ const config::KeyTable<CameraModel>& camera_keys() {
   static const config::KeyTable<CameraModel> table = {
       config::note<C>("description"),
       config::record<C>("calibration"),  // written by `omniloc calibrate` (docs/CALIBRATION.md)
+      config::record<C>("vision"),       // colour model written by `omniloc calibrate`; its reader is separate
       key("width", &C::width_px, Need::kRequired),
       key("height", &C::height_px, Need::kRequired),
       key("center_px", &C::center_px, Need::kRequired),

@@ -1,14 +1,22 @@
-// Omni-camera renderer: a realistic image of the field from any pose through the camera model,
-// for tests, benchmarks and the simulated robot. Green carpet with white lines, a darker floor
-// beyond the border, the robot's own body and mast, other robots as dark blobs, a lighting
-// gradient, sensor noise and blur. Deterministic for a given seed.
+// Omni-camera renderer: an image of the field from any pose, for tests, benchmarks and the
+// simulated robot. Deterministic for a given seed. Two renderers:
+//  - OmniRenderer: the idealised frame through the database's own CameraModel (green carpet,
+//    white lines, a darker floor beyond the border, the robot's body and mast, other robots as dark
+//    blobs, a lighting gradient, sensor noise and blur). Today's default frames, unchanged.
+//  - RealisticRenderer (issue 13 item 6): a frame through a TRUE camera (TrueOptics: a hyperbolic
+//    mirror, off centre and tilted, its rods) that is not the database's camera, of a 3-D scene:
+//    walls, furniture and people beyond the carpet, coloured goal boxes, other robots and the ball
+//    with height, lines of varying width with colour fringes, vignetting, uneven light, noise and
+//    JPEG. Selected by RenderOptions::realism (the `realistic(seed)` preset).
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
 #include <opencv2/core/mat.hpp>
+#include <opencv2/core/matx.hpp>
 
 #include "omniloc/camera.hpp"
 #include "omniloc/conventions.hpp"
@@ -22,6 +30,24 @@ struct Obstacle {
   double radius_cm = 20.0;
 };
 
+/// The realistic frame's extras (RealisticRenderer; OmniRenderer refuses options with enabled set).
+/// The defaults are the `realistic()` preset's; every amount 0 turns its effect off.
+struct RealismOptions {
+  bool enabled = false;
+  int robots = 3;      // other robots on the carpet (random, seeded), besides RenderOptions::obstacles
+  bool ball = true;    // an orange ball on the carpet
+  int people = 6;      // people standing beyond the carpet
+  int furniture = 5;   // boxes (tables, cupboards, bright and dark) beyond the carpet
+  double wall_height_cm = 250.0;
+  double goal_height_cm = 40.0;
+  GoalColour goal_colour_at_x_max = GoalColour::kBlue;  // used when the field does not say
+  double line_width_spread = 0.25;   // each line's width is line_width_cm x (1 +- this), seeded
+  double chromatic_px_at_rim = 0.9;  // lateral colour: red and blue scaled apart radially by this at the rim
+  double vignetting = 0.35;          // brightness x (1 - this (r / mirror radius)^2)
+  double light_unevenness = 0.25;    // ceiling lights: floor brightness varies by about +-this
+  int jpeg_quality = 70;             // 0: no JPEG round trip
+};
+
 struct RenderOptions {
   std::uint64_t seed = 1;
   double noise_sigma = 6.0;          // Gaussian sensor noise per channel (0..255 scale)
@@ -29,10 +55,15 @@ struct RenderOptions {
   double gradient_strength = 0.2;    // brightness varies by +-this fraction across the image
   double gradient_direction_deg = 30.0;
   std::vector<Obstacle> obstacles;
+  RealismOptions realism;  // ignored unless realism.enabled (then only RealisticRenderer renders)
 };
 
 /// Options for an ideal image: no noise, blur or gradient.
 [[nodiscard]] RenderOptions noise_free();
+
+/// The realistic preset: realism on with its defaults, sensor noise sigma 4, blur, and a mild
+/// +-10 % gradient on top of the ceiling lights.
+[[nodiscard]] RenderOptions realistic(std::uint64_t seed);
 
 /// Renders omni images (BGR, camera.width_px x camera.height_px). Holds, per pixel, the floor
 /// point in the robot frame (or what hides it), computed once from the camera, so that rendering
@@ -59,6 +90,114 @@ class OmniRenderer {
 /// One-off rendering (builds an OmniRenderer each call).
 [[nodiscard]] cv::Mat render_omni(const FieldGeometry& field, const CameraModel& camera, const Pose2& pose,
                                   const RenderOptions& options);
+
+/// A thin dark bar across the mirror's view (a support rod), at an image angle (deg, about the
+/// optical centre, counter-clockwise from the image's +u axis), from the body to the rim.
+struct MirrorRod {
+  double image_angle_deg = 0.0;
+  double width_px = 4.0;
+};
+
+/// The camera as it really is (the realistic renderer's truth), separate from the CameraModel the
+/// database uses. A central catadioptric camera with a hyperbolic mirror (unified projection model,
+/// Geyer & Daniilidis 2000, Barreto & Araujo 2001): a ray leaving the mirror's effective
+/// viewpoint at angle theta from the mirror's (downward) axis appears at image radius
+///     r(theta) = focal_px sin(theta) / (cos(theta) + xi),   xi = e / sqrt(e^2 + 4 p^2) in (0, 1)
+/// (e: distance between the hyperbola's foci, 4p: its latus rectum; xi -> 1 is a parabolic mirror,
+/// xi = 0 a pinhole). A floor point at ground distance D seen from the viewpoint at height h
+/// (tan theta = D / h) appears at
+///     r(D) = focal_px D / (h + xi sqrt(D^2 + h^2))
+/// and back (lifting the pixel onto the unit sphere): with m = r / focal_px,
+///     lambda = (xi + sqrt(1 + (1 - xi^2) m^2)) / (1 + m^2),   D(r) = h lambda m / (lambda - xi).
+/// The horizon (theta = 90 deg) is at r = focal_px / xi; the rim may lie beyond it (walls and
+/// people are then seen above the camera's height). The mirror axis is tilted by tilt_deg towards the image angle tilt_towards_deg
+/// (rotation about the horizontal axis perpendicular to it), so the mapping is not radially
+/// symmetric; the image centre (where the axis meets the sensor) is centre_px. Image angle =
+/// bearing + yaw_offset_deg, u = cx + r cos (cx - r cos when mirrored), v = cy - r sin, as in
+/// CameraModel.
+struct TrueOptics {
+  int width_px = 640;
+  int height_px = 480;
+  Eigen::Vector2d centre_px{323.6, 236.2};  // a few px off the image centre
+  double focal_px = 180.0;
+  double xi = 0.8;  // horizon at 225 px, just inside the rim
+  double viewpoint_height_cm = 60.0;
+  double tilt_deg = 1.5;
+  double tilt_towards_deg = 35.0;
+  double yaw_offset_deg = 8.0;
+  bool mirrored = false;
+  double mirror_radius_px = 229.0;  // the mirror's rim: beyond it a dark ring, then the housing
+  double ring_px = 12.0;            // width of the dark ring just beyond the mirror's view
+  double body_radius_cm = 22.0;     // the robot's own body hides the floor closer than this
+  std::vector<MirrorRod> rods{{100.0, 4.0}, {220.0, 4.0}, {340.0, 4.0}};
+
+  /// Unit direction of the ray seen at pixel px, robot frame (x forward, y left, z DOWN).
+  [[nodiscard]] Eigen::Vector3d ray_of_pixel(const Eigen::Vector2d& px) const;
+  /// Pixel of a point (robot frame cm, z = height above the floor); nullopt behind the mirror.
+  [[nodiscard]] std::optional<Eigen::Vector2d> pixel_of_robot_point(const Eigen::Vector3d& p_robot_cm) const;
+  /// The untilted radial mapping: r(D) of the formula above, and its inverse (NaN beyond the horizon).
+  [[nodiscard]] double radius_px_at_ground(double ground_cm) const;
+  [[nodiscard]] double ground_cm_at_radius(double radius_px) const;
+};
+
+/// The CameraModel closest to the optics that the database's model can express: centre, the
+/// untilted radial mapping sampled every 4 px up to `max_ground_cm` (or the mirror rim), yaw
+/// offset, mirroring, the body radius; the rods are NOT in its mask (a calibration finds them).
+[[nodiscard]] CameraModel nominal_camera(const TrueOptics& optics, double max_ground_cm = 600.0);
+
+/// Something of the 3-D scene that stands on the floor: a vertical cylinder (robot, person, ball,
+/// furniture) with its colour (BGR) and, for a person, a second colour above half its height.
+struct Column {
+  Eigen::Vector2d position_cm;
+  double radius_cm = 20.0;
+  double height_cm = 60.0;
+  cv::Vec3f colour{20.0f, 20.0f, 24.0f};
+  cv::Vec3f top_colour{20.0f, 20.0f, 24.0f};  // colour of the upper half (and the top face)
+  bool textured = false;                      // blocks of brighter and darker (furniture)
+};
+
+/// A vertical wall panel standing on the floor between a and b (field frame).
+struct Panel {
+  Eigen::Vector2d a_cm, b_cm;
+  double height_cm = 250.0;
+  cv::Vec3f colour{150.0f, 150.0f, 150.0f};
+  bool textured = true;  // posters, doors, shelves: blocks of brighter and darker
+};
+
+/// The scene a realistic frame shows, built from the field, the pose and the options' seed:
+/// the room's walls at varying distances, the two goal boxes, robots, the ball, people and furniture.
+struct Scene {
+  std::vector<Panel> panels;
+  std::vector<Column> columns;
+  std::vector<double> line_width_cm;  // per line: segments, then arcs, then discs (FieldGeometry order)
+  Eigen::Vector2d ball_cm{-1.0, -1.0};
+};
+[[nodiscard]] Scene realistic_scene(const FieldGeometry& field, const Pose2& pose, const RenderOptions& options);
+
+/// Renders realistic frames (BGR, optics.width_px x optics.height_px) through the true optics.
+/// Holds the per-pixel rays (computed once from the optics).
+class RealisticRenderer {
+ public:
+  RealisticRenderer(FieldGeometry field, TrueOptics optics);
+  /// options.realism.enabled must be set (the `realistic(seed)` preset).
+  [[nodiscard]] cv::Mat render(const Pose2& pose, const RenderOptions& options) const;
+  [[nodiscard]] cv::Mat render(const Pose2& pose, const RenderOptions& options, const Scene& scene) const;
+  [[nodiscard]] const FieldGeometry& field() const { return field_; }
+  [[nodiscard]] const TrueOptics& optics() const { return optics_; }
+
+ private:
+  enum class Kind : std::uint8_t { kScene, kBody, kRod, kRing, kHousing };
+  struct PixelRay {
+    float dx, dy;        // horizontal unit direction, robot frame
+    float cot;           // descent per cm of horizontal travel (> 0: towards the floor)
+    float footprint_cm;  // floor cm per pixel here (radially), for anti-aliased lines
+    float radius_frac;   // radius / mirror radius (vignetting)
+    Kind kind;
+  };
+  FieldGeometry field_;
+  TrueOptics optics_;
+  std::vector<PixelRay> rays_;
+};
 
 /// `count` robots placed at random (seeded) on the carpet between 60 and 250 cm from `pose`, not
 /// overlapping each other.

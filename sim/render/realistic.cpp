@@ -1,0 +1,473 @@
+// Realistic omni frames (issue 13 item 6): a 3-D scene seen through a true hyperbolic-mirror camera
+// (TrueOptics) that is not the database's CameraModel. See renderer.hpp for the optics' formula.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <utility>
+
+#include <Eigen/Geometry>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "omniloc_sim/renderer.hpp"
+
+namespace omniloc::sim {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Colours (BGR, 0..255 before lighting). Chosen to look like the real frames (tests/data/): a
+// green-teal carpet, bluish-white lines, a black floor beyond the carpet, saturated goal paint.
+const cv::Vec3f kCarpet(70.0f, 140.0f, 35.0f);
+const cv::Vec3f kLine(245.0f, 232.0f, 216.0f);
+const cv::Vec3f kDarkFloor(34.0f, 32.0f, 36.0f);
+const cv::Vec3f kGoalBlue(190.0f, 80.0f, 20.0f);     // OpenCV hue ~109
+const cv::Vec3f kGoalYellow(30.0f, 200.0f, 230.0f);  // OpenCV hue ~26
+const cv::Vec3f kBall(20.0f, 110.0f, 250.0f);        // orange, hue ~11
+const cv::Vec3f kRobotDark(26.0f, 25.0f, 30.0f);
+const cv::Vec3f kBody(52.0f, 48.0f, 48.0f);
+const cv::Vec3f kLens(14.0f, 14.0f, 16.0f);
+const cv::Vec3f kRod(24.0f, 24.0f, 27.0f);
+const cv::Vec3f kRing(9.0f, 9.0f, 10.0f);
+const cv::Vec3f kHousing(58.0f, 56.0f, 62.0f);
+const cv::Vec3f kCeiling(190.0f, 190.0f, 196.0f);
+
+// Deterministic hash of integer cell coordinates to [0, 1): procedural textures.
+double cell_hash(std::int64_t a, std::int64_t b, std::uint64_t seed) {
+  std::uint64_t h = seed ^ 0x9E3779B97F4A7C15ull;
+  for (const std::int64_t v : {a, b}) {
+    h ^= static_cast<std::uint64_t>(v) + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2);
+    h *= 0xBF58476D1CE4E5B9ull;
+    h ^= h >> 31;
+  }
+  return static_cast<double>(h >> 11) * (1.0 / 9007199254740992.0);
+}
+
+// Textured surface: blocks (posters, doors, shelves) brighter or darker than the base.
+float block_factor(double s_cm, double z_cm, double cell_s, double cell_z, std::uint64_t seed) {
+  const double h = cell_hash(static_cast<std::int64_t>(std::floor(s_cm / cell_s)),
+                             static_cast<std::int64_t>(std::floor(z_cm / cell_z)), seed);
+  return static_cast<float>(0.45 + 1.0 * h);
+}
+
+Eigen::Matrix3d tilt_rotation(const TrueOptics& o) {
+  const double t = deg_to_rad(o.tilt_towards_deg);
+  return Eigen::AngleAxisd(deg_to_rad(o.tilt_deg), Eigen::Vector3d(-std::sin(t), std::cos(t), 0.0)).toRotationMatrix();
+}
+
+struct Hit {
+  enum Type { kNone, kFloor, kPanel, kColumnSide, kColumnTop } type = kNone;
+  double t = kInf;
+  int index = -1;
+  double s = 0.0, z = 0.0;  // position on a panel (along, height) for its texture
+};
+
+// Signed distance (cm, < 0 inside) from q to the nearest white line, each with its own width.
+double line_distance_cm(const FieldGeometry& f, const std::vector<double>& width, const Eigen::Vector2d& q) {
+  double best = kInf;
+  std::size_t i = 0;
+  for (const auto& s : f.segments) {
+    const double half = 0.5 * width[i++];
+    const Eigen::Vector2d ab = s.b_cm - s.a_cm;
+    const double len = ab.norm();
+    const Eigen::Vector2d ex = ab / len;
+    const Eigen::Vector2d ap = q - s.a_cm;
+    const double along = ap.dot(ex), across = std::abs(ex.x() * ap.y() - ex.y() * ap.x());
+    best = std::min(best, std::max({across - half, -along - half, along - len - half}));
+  }
+  for (const auto& a : f.arcs) {
+    const double half = 0.5 * width[i++];
+    const Eigen::Vector2d d = q - a.centre_cm;
+    const double radial = std::abs(d.norm() - a.radius_cm) - half;
+    if (radial > best) continue;
+    bool inside = a.end_deg - a.start_deg >= 360.0;
+    if (!inside) {
+      double rel = std::fmod(rad_to_deg(std::atan2(d.y(), d.x())) - a.start_deg, 360.0);
+      if (rel < 0.0) rel += 360.0;
+      inside = rel <= a.end_deg - a.start_deg;
+    }
+    if (inside) best = radial;
+  }
+  // A mark's radius varies with its "line" width like a painted disc would.
+  for (const auto& d : f.discs) best = std::min(best, (q - d.centre_cm).norm() - d.radius_cm * width[i++] / f.line_width_cm);
+  return best;
+}
+
+bool in_goal_box(const FieldGeometry& f, const Eigen::Vector2d& q, bool& at_x_max) {
+  const double cy = f.centre_cm().y(), w = f.goal.width_cm, d = f.goal.depth_cm;
+  if (std::abs(q.y() - cy) > w / 2.0) return false;
+  const double x0 = f.border_cm, x1 = f.border_cm + f.field_length_cm;
+  if (q.x() < x0 && q.x() >= x0 - d) {
+    at_x_max = false;
+    return true;
+  }
+  if (q.x() > x1 && q.x() <= x1 + d) {
+    at_x_max = true;
+    return true;
+  }
+  return false;
+}
+
+cv::Vec3f goal_paint(GoalColour c) { return c == GoalColour::kYellow ? kGoalYellow : kGoalBlue; }
+
+GoalColour colour_at_x_max(const FieldGeometry& f, const RealismOptions& r) {
+  return f.goal.colour_at_x_max != GoalColour::kUnknown ? f.goal.colour_at_x_max : r.goal_colour_at_x_max;
+}
+
+GoalColour other(GoalColour c) { return c == GoalColour::kYellow ? GoalColour::kBlue : GoalColour::kYellow; }
+
+}  // namespace
+
+// --- optics ---------------------------------------------------------------------------------------
+
+Eigen::Vector3d TrueOptics::ray_of_pixel(const Eigen::Vector2d& px) const {
+  const double ma = (px.x() - centre_px.x()) / focal_px * (mirrored ? -1.0 : 1.0);
+  const double mb = (centre_px.y() - px.y()) / focal_px;
+  const double m2 = ma * ma + mb * mb;
+  const double lambda = (xi + std::sqrt(1.0 + (1.0 - xi * xi) * m2)) / (1.0 + m2);
+  const Eigen::Vector3d img = tilt_rotation(*this) * Eigen::Vector3d(lambda * ma, lambda * mb, lambda - xi);
+  // Image angle = bearing + yaw offset: turn back by the offset into the robot frame.
+  const double c = std::cos(deg_to_rad(-yaw_offset_deg)), s = std::sin(deg_to_rad(-yaw_offset_deg));
+  return Eigen::Vector3d(c * img.x() - s * img.y(), s * img.x() + c * img.y(), img.z()).normalized();
+}
+
+std::optional<Eigen::Vector2d> TrueOptics::pixel_of_robot_point(const Eigen::Vector3d& p) const {
+  const Eigen::Vector3d d = Eigen::Vector3d(p.x(), p.y(), viewpoint_height_cm - p.z()).normalized();
+  const double c = std::cos(deg_to_rad(yaw_offset_deg)), s = std::sin(deg_to_rad(yaw_offset_deg));
+  const Eigen::Vector3d img(c * d.x() - s * d.y(), s * d.x() + c * d.y(), d.z());
+  const Eigen::Vector3d x = tilt_rotation(*this).transpose() * img;
+  if (x.z() + xi <= 1e-9) return std::nullopt;
+  const double ma = x.x() / (x.z() + xi), mb = x.y() / (x.z() + xi);
+  return Eigen::Vector2d(centre_px.x() + focal_px * ma * (mirrored ? -1.0 : 1.0), centre_px.y() - focal_px * mb);
+}
+
+double TrueOptics::radius_px_at_ground(double d) const {
+  const double h = viewpoint_height_cm;
+  return focal_px * d / (h + xi * std::sqrt(d * d + h * h));
+}
+
+double TrueOptics::ground_cm_at_radius(double r) const {
+  const double m = r / focal_px;
+  const double lambda = (xi + std::sqrt(1.0 + (1.0 - xi * xi) * m * m)) / (1.0 + m * m);
+  if (lambda - xi <= 1e-12) return std::numeric_limits<double>::quiet_NaN();  // at or above the horizon
+  return viewpoint_height_cm * lambda * m / (lambda - xi);
+}
+
+CameraModel nominal_camera(const TrueOptics& o, double max_ground_cm) {
+  CameraModel cam;
+  cam.width_px = o.width_px;
+  cam.height_px = o.height_px;
+  cam.center_px = o.centre_px;
+  cam.yaw_offset_deg = o.yaw_offset_deg;
+  cam.mirrored = o.mirrored;
+  cam.body_radius_px = o.radius_px_at_ground(o.body_radius_cm);
+  cam.radius_lut.clear();
+  const double r_end = std::min(o.mirror_radius_px, o.radius_px_at_ground(max_ground_cm));
+  for (double r = 0.0; r < r_end; r += 4.0) cam.radius_lut.push_back({r, r == 0.0 ? 0.0 : o.ground_cm_at_radius(r)});
+  cam.radius_lut.push_back({r_end, o.ground_cm_at_radius(r_end)});
+  return cam;
+}
+
+// --- scene ----------------------------------------------------------------------------------------
+
+RenderOptions realistic(std::uint64_t seed) {
+  RenderOptions o;
+  o.seed = seed;
+  o.noise_sigma = 4.0;
+  o.blur = true;
+  o.gradient_strength = 0.1;
+  o.realism.enabled = true;
+  return o;
+}
+
+Scene realistic_scene(const FieldGeometry& f, const Pose2& pose, const RenderOptions& opt) {
+  const RealismOptions& r = opt.realism;
+  Scene sc;
+  std::mt19937_64 rng(opt.seed * 0x2545F4914F6CDD1Dull + 17);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  auto uni = [&](double a, double b) { return a + (b - a) * u01(rng); };
+  const double X = f.total_x_cm(), Y = f.total_y_cm();
+  // Room: each wall 60..250 cm beyond the carpet, bright, middling or dark, textured.
+  const double m0 = uni(60, 250), m1 = uni(60, 250), m2 = uni(60, 250), m3 = uni(60, 250);
+  const Eigen::Vector2d c00(-m0, -m2), c10(X + m1, -m2), c11(X + m1, Y + m3), c01(-m0, Y + m3);
+  const cv::Vec3f palette[] = {{205, 208, 212}, {140, 132, 122}, {70, 64, 60}, {120, 150, 170}};
+  for (const auto& [a, b] : {std::pair{c00, c10}, std::pair{c10, c11}, std::pair{c11, c01}, std::pair{c01, c00}})
+    sc.panels.push_back({a, b, r.wall_height_cm, palette[static_cast<int>(uni(0, 3.999))], true});
+  // Goal boxes: back wall and two sides behind each goal line, painted.
+  const double cy = f.centre_cm().y(), gw = f.goal.width_cm / 2.0, gd = f.goal.depth_cm;
+  const GoalColour at_max = colour_at_x_max(f, r);
+  for (const bool x_max : {false, true}) {
+    const double xg = x_max ? f.border_cm + f.field_length_cm : f.border_cm;
+    const double xb = x_max ? xg + gd : xg - gd;
+    const cv::Vec3f paint = goal_paint(x_max ? at_max : other(at_max));
+    sc.panels.push_back({{xb, cy - gw}, {xb, cy + gw}, r.goal_height_cm, paint, false});
+    sc.panels.push_back({{xg, cy - gw}, {xb, cy - gw}, r.goal_height_cm, paint, false});
+    sc.panels.push_back({{xg, cy + gw}, {xb, cy + gw}, r.goal_height_cm, paint, false});
+  }
+  const Eigen::Vector2d p(pose.x_cm, pose.y_cm);
+  auto clear_of = [&](const Eigen::Vector2d& q, double rad) {
+    if ((q - p).norm() < rad + 35.0) return false;
+    for (const auto& c : sc.columns)
+      if ((c.position_cm - q).norm() < c.radius_cm + rad + 10.0) return false;
+    return true;
+  };
+  auto on_floor_ring = [&](int count, auto make) {
+    for (int k = 0, attempt = 0; k < count && attempt < 2000; ++attempt) {
+      const Eigen::Vector2d q(uni(-m0, X + m1), uni(-m2, Y + m3));
+      Column c = make(q);
+      const bool in_room = q.x() - c.radius_cm > -m0 && q.x() + c.radius_cm < X + m1 && q.y() - c.radius_cm > -m2 &&
+                           q.y() + c.radius_cm < Y + m3;
+      const bool off_carpet = q.x() < -c.radius_cm || q.x() > X + c.radius_cm || q.y() < -c.radius_cm || q.y() > Y + c.radius_cm;
+      if (!in_room || !off_carpet || !clear_of(q, c.radius_cm)) continue;
+      sc.columns.push_back(c);
+      ++k;
+    }
+  };
+  for (const auto& o : opt.obstacles) sc.columns.push_back({o.position_cm, o.radius_cm, 60.0, kRobotDark, kRobotDark, false});
+  // Robots: dark bodies, some with a coloured top (team markers), 60..250 cm away on the carpet.
+  const cv::Vec3f tops[] = {kRobotDark, {180, 40, 200}, {200, 190, 40}, {60, 60, 200}};
+  for (int k = 0, attempt = 0; k < r.robots && attempt < 2000; ++attempt) {
+    const double d = uni(60, 250), a = uni(0, 2 * kPi);
+    const Eigen::Vector2d q = p + d * Eigen::Vector2d(std::cos(a), std::sin(a));
+    if (!on_carpet(f, q) || !clear_of(q, 22.0)) continue;
+    sc.columns.push_back({q, 22.0, uni(55, 75), kRobotDark, tops[static_cast<int>(uni(0, 3.999))], false});
+    ++k;
+  }
+  if (r.ball) {
+    for (int attempt = 0; attempt < 2000; ++attempt) {
+      const double d = uni(45, 160), a = uni(0, 2 * kPi);
+      const Eigen::Vector2d q = p + d * Eigen::Vector2d(std::cos(a), std::sin(a));
+      if (!on_carpet(f, q) || !clear_of(q, 11.0)) continue;
+      sc.columns.push_back({q, 11.0, 21.0, kBall, kBall, false});
+      sc.ball_cm = q;
+      break;
+    }
+  }
+  on_floor_ring(r.people, [&](const Eigen::Vector2d& q) {
+    const cv::Vec3f shirt(static_cast<float>(uni(20, 230)), static_cast<float>(uni(20, 230)), static_cast<float>(uni(20, 230)));
+    return Column{q, 22.0, uni(160, 185), cv::Vec3f(60, 40, 30), shirt, false};
+  });
+  on_floor_ring(r.furniture, [&](const Eigen::Vector2d& q) {
+    const bool bright = u01(rng) < 0.5;
+    const cv::Vec3f c = bright ? cv::Vec3f(210, 212, 215) : cv::Vec3f(40, 52, 70);
+    return Column{q, uni(30, 55), uni(70, 120), c, c, true};
+  });
+  const std::size_t nlines = f.segments.size() + f.arcs.size() + f.discs.size();
+  for (std::size_t i = 0; i < nlines; ++i)
+    sc.line_width_cm.push_back(f.line_width_cm * (1.0 + r.line_width_spread * uni(-1.0, 1.0)));
+  return sc;
+}
+
+// --- renderer -------------------------------------------------------------------------------------
+
+RealisticRenderer::RealisticRenderer(FieldGeometry field, TrueOptics optics) : field_(std::move(field)), optics_(std::move(optics)) {
+  const TrueOptics& o = optics_;
+  if (o.width_px < 1 || o.height_px < 1 || !(o.focal_px > 0.0) || !(o.xi > 0.0 && o.xi < 1.0) || !(o.viewpoint_height_cm > 0.0))
+    throw std::invalid_argument("TrueOptics: size, focal_px > 0, 0 < xi < 1 and viewpoint_height_cm > 0 are required");
+  const double body_px = o.radius_px_at_ground(o.body_radius_cm);
+  rays_.resize(static_cast<std::size_t>(o.width_px) * static_cast<std::size_t>(o.height_px));
+  for (int v = 0; v < o.height_px; ++v) {
+    for (int u = 0; u < o.width_px; ++u) {
+      PixelRay& pr = rays_[static_cast<std::size_t>(v) * static_cast<std::size_t>(o.width_px) + static_cast<std::size_t>(u)];
+      pr = {1.0f, 0.0f, 0.0f, 1.0f, 0.0f, Kind::kScene};
+      const Eigen::Vector2d px(u, v), rel = px - o.centre_px;
+      const double r = rel.norm();
+      pr.radius_frac = static_cast<float>(r / o.mirror_radius_px);
+      if (r > o.mirror_radius_px + o.ring_px) {
+        pr.kind = Kind::kHousing;
+        continue;
+      }
+      if (r > o.mirror_radius_px) {
+        pr.kind = Kind::kRing;
+        continue;
+      }
+      bool rod = false;
+      for (const auto& rd : o.rods) {
+        const Eigen::Vector2d dir(std::cos(deg_to_rad(rd.image_angle_deg)), -std::sin(deg_to_rad(rd.image_angle_deg)));
+        const double along = rel.dot(dir), across = std::abs(dir.x() * rel.y() - dir.y() * rel.x());
+        rod = rod || (along > 0.6 * body_px && across <= rd.width_px / 2.0);
+      }
+      if (rod) {
+        pr.kind = Kind::kRod;
+        continue;
+      }
+      const Eigen::Vector3d d = o.ray_of_pixel(px);
+      const double n = std::hypot(d.x(), d.y());
+      if (n < 1e-9) {
+        pr.kind = Kind::kBody;
+        continue;
+      }
+      pr.dx = static_cast<float>(d.x() / n);
+      pr.dy = static_cast<float>(d.y() / n);
+      pr.cot = static_cast<float>(d.z() / n);
+      if (pr.cot > 0.0f && o.viewpoint_height_cm / pr.cot < o.body_radius_cm) {
+        pr.kind = Kind::kBody;
+        continue;
+      }
+      // Floor footprint of one pixel, radially (where lines thin out).
+      const Eigen::Vector2d e = r > 1e-9 ? Eigen::Vector2d(rel / r) : Eigen::Vector2d(1.0, 0.0);
+      auto floor_at = [&](const Eigen::Vector2d& q) {
+        const Eigen::Vector3d dd = o.ray_of_pixel(q);
+        return dd.z() > 1e-9 ? o.viewpoint_height_cm * std::hypot(dd.x(), dd.y()) / dd.z() : 1e6;
+      };
+      pr.footprint_cm = static_cast<float>(std::clamp(std::abs(floor_at(px + 0.5 * e) - floor_at(px - 0.5 * e)), 0.2, 1e3));
+    }
+  }
+}
+
+cv::Mat RealisticRenderer::render(const Pose2& pose, const RenderOptions& opt) const {
+  return render(pose, opt, realistic_scene(field_, pose, opt));
+}
+
+cv::Mat RealisticRenderer::render(const Pose2& pose, const RenderOptions& opt, const Scene& sc) const {
+  if (!opt.realism.enabled) throw std::invalid_argument("RealisticRenderer: options.realism.enabled is not set (use realistic(seed))");
+  const TrueOptics& o = optics_;
+  const RealismOptions& rz = opt.realism;
+  const double h = o.viewpoint_height_cm;
+  const Eigen::Vector2d p(pose.x_cm, pose.y_cm);
+  const double cy = std::cos(deg_to_rad(pose.yaw_deg)), sy = std::sin(deg_to_rad(pose.yaw_deg));
+  const GoalColour at_max = colour_at_x_max(field_, rz);
+  // Ceiling lights: the floor is brighter under them (+-light_unevenness).
+  std::mt19937_64 rng(opt.seed * 0x9E3779B97F4A7C15ull + 5);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  std::vector<Eigen::Vector2d> lights;
+  for (int k = 0; k < 3; ++k) lights.emplace_back(u01(rng) * field_.total_x_cm(), u01(rng) * field_.total_y_cm());
+  auto light = [&](const Eigen::Vector2d& q) {
+    double g = 0.0;
+    for (const auto& l : lights) g = std::max(g, std::exp(-(q - l).squaredNorm() / (2.0 * 280.0 * 280.0)));
+    return static_cast<float>(1.0 - rz.light_unevenness + 2.0 * rz.light_unevenness * g);
+  };
+  const std::uint64_t tex_seed = opt.seed * 31 + 7;
+  const double gd = deg_to_rad(opt.gradient_direction_deg);
+  const double half_diag = 0.5 * std::hypot(o.width_px, o.height_px);
+
+  cv::Mat3f img(o.height_px, o.width_px);
+  for (int v = 0; v < o.height_px; ++v) {
+    auto* row = img.ptr<cv::Vec3f>(v);
+    const PixelRay* prs = rays_.data() + static_cast<std::size_t>(v) * static_cast<std::size_t>(o.width_px);
+    for (int u = 0; u < o.width_px; ++u) {
+      const PixelRay& pr = prs[u];
+      cv::Vec3f colour;
+      switch (pr.kind) {
+        case Kind::kHousing: colour = kHousing; break;
+        case Kind::kRing: colour = kRing; break;
+        case Kind::kRod: colour = kRod; break;
+        case Kind::kBody:
+          colour = pr.radius_frac * o.mirror_radius_px < 0.35 * o.radius_px_at_ground(o.body_radius_cm) ? kLens : kBody;
+          break;
+        case Kind::kScene: {
+          const Eigen::Vector2d dir(cy * pr.dx - sy * pr.dy, sy * pr.dx + cy * pr.dy);
+          const double cot = pr.cot;
+          Hit hit;
+          if (cot > 1e-9) hit = {Hit::kFloor, h / cot, -1, 0.0, 0.0};
+          for (std::size_t i = 0; i < sc.panels.size(); ++i) {
+            const Panel& pn = sc.panels[i];
+            const Eigen::Vector2d e = pn.b_cm - pn.a_cm, w = pn.a_cm - p;
+            const double den = dir.x() * e.y() - dir.y() * e.x();
+            if (std::abs(den) < 1e-12) continue;
+            const double t = (w.x() * e.y() - w.y() * e.x()) / den;
+            const double s = (w.x() * dir.y() - w.y() * dir.x()) / den;
+            if (t <= 0.0 || t >= hit.t || s < 0.0 || s > 1.0) continue;
+            const double z = h - t * cot;
+            if (z < 0.0 || z > pn.height_cm) continue;
+            hit = {Hit::kPanel, t, static_cast<int>(i), s * e.norm(), z};
+          }
+          for (std::size_t i = 0; i < sc.columns.size(); ++i) {
+            const Column& c = sc.columns[i];
+            const Eigen::Vector2d fvec = c.position_cm - p;
+            const double along = fvec.dot(dir);
+            const double perp2 = fvec.squaredNorm() - along * along;
+            const double r2 = c.radius_cm * c.radius_cm;
+            if (perp2 > r2 || along + c.radius_cm <= 0.0) continue;
+            const double half = std::sqrt(r2 - perp2);
+            const double t_near = std::max(0.0, along - half), t_far = along + half;
+            if (t_near >= hit.t) continue;
+            const double z_near = h - t_near * cot;
+            if (z_near >= 0.0 && z_near <= c.height_cm) {
+              hit = {Hit::kColumnSide, t_near, static_cast<int>(i), std::atan2(fvec.y(), fvec.x()), z_near};
+            } else if (z_near > c.height_cm && cot > 1e-9) {
+              const double t_top = (h - c.height_cm) / cot;
+              if (t_top >= t_near && t_top <= t_far && t_top < hit.t) hit = {Hit::kColumnTop, t_top, static_cast<int>(i), 0.0, c.height_cm};
+            }
+          }
+          switch (hit.type) {
+            case Hit::kNone: colour = kCeiling; break;
+            case Hit::kFloor: {
+              const Eigen::Vector2d q = p + hit.t * dir;
+              bool x_max = false;
+              if (in_goal_box(field_, q, x_max)) {
+                colour = goal_paint(x_max ? at_max : other(at_max)) * 0.85f;
+              } else if (on_carpet(field_, q)) {
+                const double sd = line_distance_cm(field_, sc.line_width_cm, q);
+                const float cover = static_cast<float>(std::clamp(0.5 - sd / pr.footprint_cm, 0.0, 1.0));
+                const float grain = 0.96f + 0.08f * static_cast<float>(cell_hash(std::lround(q.x() / 3.0), std::lround(q.y() / 3.0), tex_seed));
+                colour = (kCarpet * grain) * (1.0f - cover) + kLine * cover;
+              } else {
+                colour = kDarkFloor * (0.8f + 0.4f * static_cast<float>(cell_hash(std::lround(q.x() / 20.0), std::lround(q.y() / 20.0), tex_seed + 1)));
+              }
+              colour *= light(q);
+              break;
+            }
+            case Hit::kPanel: {
+              const Panel& pn = sc.panels[static_cast<std::size_t>(hit.index)];
+              colour = pn.colour * (pn.textured ? block_factor(hit.s, hit.z, 45.0, 35.0, tex_seed + 3 + static_cast<std::uint64_t>(hit.index)) : 1.0f);
+              break;
+            }
+            case Hit::kColumnSide: {
+              const Column& c = sc.columns[static_cast<std::size_t>(hit.index)];
+              colour = hit.z > 0.5 * c.height_cm ? c.top_colour : c.colour;
+              if (c.textured) colour *= block_factor(hit.s * 50.0, hit.z, 30.0, 25.0, tex_seed + 101 + static_cast<std::uint64_t>(hit.index));
+              break;
+            }
+            case Hit::kColumnTop: colour = sc.columns[static_cast<std::size_t>(hit.index)].top_colour * 1.1f; break;
+          }
+          break;
+        }
+      }
+      float gain = static_cast<float>(1.0 - rz.vignetting * std::min(1.0f, pr.radius_frac) * std::min(1.0f, pr.radius_frac));
+      if (opt.gradient_strength != 0.0) {
+        const double along = ((u - o.centre_px.x()) * std::cos(gd) + (v - o.centre_px.y()) * std::sin(gd)) / half_diag;
+        gain *= static_cast<float>(1.0 + opt.gradient_strength * along);
+      }
+      row[u] = colour * gain;
+    }
+  }
+  // Lateral colour: red and blue imaged at slightly different magnifications about the centre.
+  if (rz.chromatic_px_at_rim != 0.0) {
+    std::vector<cv::Mat> ch;
+    cv::split(img, ch);
+    const double k = rz.chromatic_px_at_rim / o.mirror_radius_px;
+    for (const auto& [index, sign] : {std::pair{0, 1.0}, std::pair{2, -1.0}}) {
+      cv::Mat1f mx(img.size()), my(img.size());
+      for (int v = 0; v < img.rows; ++v)
+        for (int u = 0; u < img.cols; ++u) {
+          mx(v, u) = static_cast<float>(o.centre_px.x() + (u - o.centre_px.x()) * (1.0 - sign * k));
+          my(v, u) = static_cast<float>(o.centre_px.y() + (v - o.centre_px.y()) * (1.0 - sign * k));
+        }
+      cv::Mat out;
+      cv::remap(ch[static_cast<std::size_t>(index)], out, mx, my, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+      ch[static_cast<std::size_t>(index)] = out;
+    }
+    cv::merge(ch, img);
+  }
+  if (opt.blur) cv::GaussianBlur(img, img, cv::Size(3, 3), 0.8);
+  if (opt.noise_sigma > 0.0) {
+    cv::Mat3f noise(img.size());
+    cv::RNG nrng(opt.seed);
+    nrng.fill(noise, cv::RNG::NORMAL, cv::Scalar::all(0.0), cv::Scalar::all(opt.noise_sigma));
+    img += noise;
+  }
+  cv::Mat out;
+  img.convertTo(out, CV_8UC3);
+  if (rz.jpeg_quality > 0) {
+    std::vector<std::uint8_t> buf;
+    cv::imencode(".jpg", out, buf, {cv::IMWRITE_JPEG_QUALITY, rz.jpeg_quality});
+    out = cv::imdecode(buf, cv::IMREAD_COLOR);
+  }
+  return out;
+}
+
+}  // namespace omniloc::sim
