@@ -137,6 +137,7 @@ const std::vector<std::string> kEveryKey = {"name",
                                             "border_cm",
                                             "line_width_cm",
                                             "centre_circle_radius_cm",
+                                            "goal",
                                             "goal_area",
                                             "penalty_area",
                                             "penalty_arc",
@@ -158,7 +159,8 @@ TEST(FieldFile, ShippedFilesHaveEveryKey) {
 TEST(FieldFile, EveryKeyReachesItsMember) {
   const std::string file = test::write_file("f.json", R"({"name": "test-field", "description": "d", "units": "cm",
       "field_length_cm": 900, "field_width_cm": 600, "border_cm": 50, "line_width_cm": 8,
-      "centre_circle_radius_cm": 75, "goal_area": {"depth_cm": 50, "width_cm": 250},
+      "centre_circle_radius_cm": 75, "goal": {"width_cm": 120, "depth_cm": 40, "colour_at_x_max": "yellow"},
+      "goal_area": {"depth_cm": 50, "width_cm": 250},
       "penalty_area": {"depth_cm": 150, "width_cm": 400}, "penalty_arc": {"radius_cm": 40, "centre_from_goal_line_cm": 120},
       "corner_arc_radius_cm": 30, "marks": {"radius_cm": 6, "from_centre_cm": [[200, 50], [-200, -50]]}})")
                                .string();
@@ -169,6 +171,9 @@ TEST(FieldFile, EveryKeyReachesItsMember) {
   EXPECT_EQ(s.border_cm, 50.0);
   EXPECT_EQ(s.line_width_cm, 8.0);
   EXPECT_EQ(s.centre_circle_radius_cm, 75.0);
+  EXPECT_EQ(s.goal.width_cm, 120.0);
+  EXPECT_EQ(s.goal.depth_cm, 40.0);
+  EXPECT_EQ(s.goal.colour_at_x_max, GoalColour::kYellow);
   EXPECT_EQ(s.goal_area.depth_cm, 50.0);
   EXPECT_EQ(s.goal_area.width_cm, 250.0);
   EXPECT_EQ(s.penalty_area.depth_cm, 150.0);
@@ -183,6 +188,7 @@ TEST(FieldFile, EveryKeyReachesItsMember) {
   // And the lines built from them, by hand: centre (50 + 450, 50 + 300); marks at +-(200, 50).
   const FieldGeometry f = load_field(file);
   EXPECT_EQ(f.name, "test-field");
+  EXPECT_EQ(f.goal, s.goal);
   EXPECT_EQ(f.source, file);
   EXPECT_DOUBLE_EQ(f.total_x_cm(), 1000.0);
   EXPECT_DOUBLE_EQ(f.total_y_cm(), 700.0);
@@ -216,10 +222,25 @@ TEST(FieldFile, ErrorsNameFileAndFieldPath) {
           {replaced(v, "\"border_cm\": 75", "\"border_cm\": 1e400"), "border_cm", "number out of range"},
           {replaced(v, "\"border_cm\": 75", "\"border_cm\": 75, \"border_cm\": 76"), "border_cm", "duplicate key"},
           {replaced(v, "\"border_cm\": 75", "\"border_cm\": 75, \"border\": 76"), "border", "unknown key"},
+          {replaced(v, "\"width_cm\": 100", "\"width_cm\": 0"), "goal.width_cm", "must be > 0 (got 0)"},
+          {replaced(v, "\"depth_cm\": 30", "\"depth_cm\": 80"), "goal.depth_cm", "must be <= border_cm (got 80)"},
+          {replaced(v, "\"depth_cm\": 30", "\"depth_cm\": 30, \"colour_at_x_max\": \"red\""),
+           "goal.colour_at_x_max", "must be one of \"blue\", \"yellow\""},
+          {replaced(v, "\"goal\": { \"width_cm\": 100, \"depth_cm\": 30 },", ""), "goal", "missing (required)"},
           {"{ \"name\": \"x\", ", "", "not valid JSON"},
       });
   EXPECT_THROW((void)load_field("no-such-field"), ConfigError);
   EXPECT_NE(error_of([] { (void)load_field("no-such-field"); }).find("no-such-field"), std::string::npos);
+}
+
+TEST(FieldFile, ShippedGoalsAndTheirColourAreKnownOrAbsent) {
+  const FieldGeometry f = load_field("fira-robosot");
+  EXPECT_EQ(f.goal.width_cm, 100.0);
+  EXPECT_EQ(f.goal.depth_cm, 30.0);
+  EXPECT_EQ(f.goal.colour_at_x_max, GoalColour::kUnknown);  // learnt at calibration
+  const std::string blue = test::write_file("g.json", replaced(fira_text(), "\"depth_cm\": 30", "\"depth_cm\": 30, \"colour_at_x_max\": \"blue\"")).string();
+  EXPECT_EQ(load_field(blue).goal.colour_at_x_max, GoalColour::kBlue);
+  EXPECT_EQ(load_field(blue).fingerprint(), f.fingerprint());  // goals are not lines
 }
 
 TEST(FieldFile, MissingFileAndDirectoryAreNamed) {

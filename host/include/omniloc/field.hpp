@@ -29,6 +29,18 @@ struct PenaltyArc {
   bool operator==(const PenaltyArc&) const = default;
 };
 
+/// Which colour a goal is painted (FIRA and RoboCup Junior: one blue, one yellow goal).
+enum class GoalColour : std::uint8_t { kUnknown, kBlue, kYellow };
+
+/// The goals: a box behind each goal line, centred on it, standing in the border (cm). Its colour
+/// at the x = max end is optional: absent = unknown (learnt at calibration, camera "vision" block).
+struct FieldGoal {
+  double width_cm = 0.0;  ///< along field y, between the posts
+  double depth_cm = 0.0;  ///< along field x, behind the goal line (at most border_cm)
+  GoalColour colour_at_x_max = GoalColour::kUnknown;
+  bool operator==(const FieldGoal&) const = default;
+};
+
 /// A geometry file (common/fields/<name>.json) as written: every key is required but "marks" (and
 /// the notes "description", "units" = "cm"), so the files are the only source of these values.
 struct FieldSpec {
@@ -38,6 +50,7 @@ struct FieldSpec {
   double border_cm = 0.0;
   double line_width_cm = 0.0;
   double centre_circle_radius_cm = 0.0;  ///< 0: none
+  FieldGoal goal;
   FieldArea goal_area;
   FieldArea penalty_area;
   PenaltyArc penalty_arc;
@@ -83,6 +96,7 @@ struct FieldGeometry {
   double field_width_cm = 0.0;   // playing area, along field y
   double border_cm = 0.0;        // carpet around the playing area
   double line_width_cm = 0.0;
+  FieldGoal goal;  // not lines: not in the fingerprint (the database does not depend on it)
   std::vector<FieldSegment> segments;
   std::vector<FieldArc> arcs;
   std::vector<FieldDisc> discs;
@@ -94,6 +108,9 @@ struct FieldGeometry {
   /// Hash of everything that changes the lines (not the name or source), for database headers.
   [[nodiscard]] std::uint64_t fingerprint() const;
 };
+
+/// "blue", "yellow" or "unknown".
+[[nodiscard]] const char* goal_colour_name(GoalColour c);
 
 /// The lines of a (valid) spec; `source` is kept for error messages.
 [[nodiscard]] FieldGeometry build_field(const FieldSpec& spec, const std::string& source);

@@ -26,6 +26,11 @@ void FieldSpec::validate(const config::Origin& at) const {
   non_negative(corner_arc_radius_cm, at / "corner_arc_radius_cm");
   require(corner_arc_radius_cm < W / 2.0, at / "corner_arc_radius_cm", "must be < field_width_cm / 2",
           corner_arc_radius_cm);
+  positive(goal.width_cm, at / "goal" / "width_cm");
+  require(goal.width_cm < W, at / "goal" / "width_cm", "must be < field_width_cm", goal.width_cm);
+  positive(goal.depth_cm, at / "goal" / "depth_cm");
+  // The goal box stands on the carpet's border behind the goal line, inside the field frame.
+  require(goal.depth_cm <= border_cm, at / "goal" / "depth_cm", "must be <= border_cm", goal.depth_cm);
   for (const auto& [key, area] : {std::pair{"goal_area", &goal_area}, std::pair{"penalty_area", &penalty_area}}) {
     non_negative(area->depth_cm, at / key / "depth_cm");
     require(area->depth_cm < L / 2.0, at / key / "depth_cm", "must be < field_length_cm / 2", area->depth_cm);
@@ -46,6 +51,30 @@ void FieldSpec::validate(const config::Origin& at) const {
             config::show({d.x(), d.y()}));
   }
 }
+
+const char* goal_colour_name(GoalColour c) {
+  switch (c) {
+    case GoalColour::kBlue: return "blue";
+    case GoalColour::kYellow: return "yellow";
+    case GoalColour::kUnknown: break;
+  }
+  return "unknown";
+}
+
+namespace {
+// Optional "colour_at_x_max": "blue" | "yellow"; absent (unknown) is not written back.
+config::Key<FieldGoal> goal_colour_key() {
+  const config::Choices<GoalColour> names = {{"blue", GoalColour::kBlue}, {"yellow", GoalColour::kYellow}};
+  return config::Key<FieldGoal>{
+      "colour_at_x_max", config::Need::kOptional, config::Kind::kText,
+      [names](const config::Node& n, FieldGoal& g) { g.colour_at_x_max = config::read_choice(n, names); },
+      [](const FieldGoal& g) -> std::optional<config::Json> {
+        if (g.colour_at_x_max == GoalColour::kUnknown) return std::nullopt;
+        return config::Json(goal_colour_name(g.colour_at_x_max));
+      },
+      "which goal colour is at the x = max end; absent = unknown"};
+}
+}  // namespace
 
 const config::KeyTable<FieldSpec>& field_spec_keys() {
   using config::key;
@@ -69,6 +98,13 @@ const config::KeyTable<FieldSpec>& field_spec_keys() {
       key("border_cm", &F::border_cm, Need::kRequired),
       key("line_width_cm", &F::line_width_cm, Need::kRequired),
       key("centre_circle_radius_cm", &F::centre_circle_radius_cm, Need::kRequired),
+      config::nested("goal", &F::goal,
+                     config::KeyTable<FieldGoal>{
+                         key("width_cm", &FieldGoal::width_cm, Need::kRequired),
+                         key("depth_cm", &FieldGoal::depth_cm, Need::kRequired),
+                         goal_colour_key(),
+                     },
+                     Need::kRequired),
       config::nested("goal_area", &F::goal_area, area, Need::kRequired),
       config::nested("penalty_area", &F::penalty_area, area, Need::kRequired),
       config::nested("penalty_arc", &F::penalty_arc,
@@ -102,6 +138,7 @@ FieldGeometry build_field(const FieldSpec& spec, const std::string& source) {
   f.field_width_cm = spec.field_width_cm;
   f.border_cm = spec.border_cm;
   f.line_width_cm = spec.line_width_cm;
+  f.goal = spec.goal;
   const double cc_r = spec.centre_circle_radius_cm;
   const double corner_r = spec.corner_arc_radius_cm;
   const double goal_d = spec.goal_area.depth_cm, goal_w = spec.goal_area.width_cm;
