@@ -103,7 +103,8 @@ void write_camera(const fs::path& path, const std::optional<GoalColourModels>& g
     };
     j["vision"]["goals"]["blue"] = hsv(*goals->blue);
     j["vision"]["goals"]["yellow"] = hsv(*goals->yellow);
-    j["vision"]["goal_colour_at_x_max"] = goal_colour_name(goals->colour_at_x_max);
+    if (goals->colour_at_x_max != GoalColour::kUnknown)
+      j["vision"]["goal_colour_at_x_max"] = goal_colour_name(goals->colour_at_x_max);
   }
   std::ofstream(path) << j.dump(2);
 }
@@ -246,6 +247,20 @@ TEST_F(LocateProgram, WithoutAHeadingTheTwinIsAmbiguousUnlessTheGoalColoursTell)
   const nlohmann::json d = locate_json(painted_png, yellow_max, "", rc);
   EXPECT_FALSE(d["ambiguous"].get<bool>()) << d;
   EXPECT_LT(distance_to(d, twin), 5.0) << d;
+  // 5. The camera has the models but not the side; the field file says blue is at x = max.
+  const fs::path models_only = dir_ / "cam-models.json", field_blue = dir_ / "field-blue.json";
+  write_camera(models_only, models(GoalColour::kUnknown));
+  {
+    std::ifstream in(resolve_data_file("fields", "fira-robosot"));
+    nlohmann::ordered_json f = nlohmann::ordered_json::parse(in);
+    f["goal"]["colour_at_x_max"] = "blue";
+    std::ofstream(field_blue) << f.dump(2);
+  }
+  const nlohmann::json e = locate_json(painted_png, models_only, "", rc);
+  EXPECT_TRUE(e["ambiguous"].get<bool>()) << "the side unknown: " << e;
+  const nlohmann::json g = locate_json(painted_png, models_only, "--field " + field_blue.string(), rc);
+  EXPECT_FALSE(g["ambiguous"].get<bool>()) << g;
+  EXPECT_LT(distance_to(g, truth), 5.0) << g;
 }
 
 TEST_F(LocateProgram, UnreadableImageAndCameraOfAnotherSizeExitOne) {
@@ -293,6 +308,32 @@ TEST_F(LocateProgram, LocalizerWithoutAHeadingRelocalizesByTheGoalColours) {
   EXPECT_LT((r.position_cm - truth.position_cm()).norm(), 5.0) << r.position_cm.transpose();
   // The heading of the search without one: estimate_yaw at the best grid point, within its 2 deg step.
   EXPECT_LT(std::abs(angle_diff_deg(r.yaw_deg, truth.yaw_deg)), 2.0) << r.yaw_deg;
+}
+
+// No copy: the Localizer's global search is locate_frame, so both give the same pose and error
+// on the same scan (here at a known heading, and without one).
+TEST_F(LocateProgram, LocalizerGlobalSearchIsLocateFrame) {
+  const Pose2 truth{430, 190, 75};
+  const cv::Mat img = renderer_->render(truth, sim::RenderOptions{});
+  const RobotConfig robot = load_named_robot_config("default");
+  for (const bool yaw_known : {true, false}) {
+    LocalizerConfig config;
+    config.gyro_yaw_known = yaw_known;
+    Localizer loc(config, robot, *field_, renderer_->camera(), *db_);
+    EncoderWindow w;
+    w.t_end_ms = 10.0;
+    w.gyro_yaw_deg = truth.yaw_deg;
+    (void)loc.on_window(w);
+    const FrameReport r = loc.on_image(5.0, img);
+    const BearingScan bearings = scan_image_bearings(img, renderer_->camera(), config.scan_rays_per_degree);
+    const SingleFrameResult s = locate_frame(config, *field_, renderer_->camera(), *db_, bearings,
+                                             yaw_known ? std::optional<double>(truth.yaw_deg) : std::nullopt, nullptr);
+    EXPECT_TRUE(r.global);
+    EXPECT_EQ(r.position_cm, s.match.position_cm);
+    EXPECT_EQ(r.yaw_deg, s.pose.yaw_deg);
+    EXPECT_EQ(r.error, s.match.error);
+    EXPECT_EQ(r.outcome == FrameOutcome::kRelocalized, s.accepted) << frame_outcome_name(r.outcome);
+  }
 }
 
 TEST(GoalColours, HsvRangeWrapsTheHueAndTheVisionBlockIsValidated) {

@@ -85,6 +85,7 @@ struct CameraWithGoals {
 struct GoalPixel {
   float bearing_deg = 0.0f;
   float ground_cm = 0.0f;
+  float radius_px = 0.0f;  ///< in the image (for overlays)
   GoalColour colour = GoalColour::kUnknown;
 };
 

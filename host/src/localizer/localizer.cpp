@@ -13,12 +13,13 @@
 // What LocalizerMode changes is in LocalizerPolicy, read by these steps.
 #include "omniloc/localizer.hpp"
 
-#include "omniloc/locate.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
+
+#include "omniloc/locate.hpp"
 
 namespace omniloc {
 
@@ -198,8 +199,8 @@ LocalizedPose Localizer::on_window(const EncoderWindow& window) {
 }
 
 FrameReport Localizer::on_image(double t_ms, const cv::Mat& bgr) {
-  return on_bearings(t_ms, scan_image_bearings(bgr, camera_, config_.scan_rays_per_degree),
-                     observe_goals(bgr, camera_, field_, goal_colours_));
+  BearingScan bearings = scan_image_bearings(bgr, camera_, config_.scan_rays_per_degree);
+  return on_bearings(t_ms, std::move(bearings), observe_goals(bgr, camera_, field_, goal_colours_));
 }
 
 FrameReport Localizer::on_bearings(double t_ms, BearingScan bearings, std::optional<GoalObservation> goals) {

@@ -173,8 +173,7 @@ cv::Mat locate_overlay(const cv::Mat& bgr, const CameraModel& camera, const Fiel
   }
   if (in.goals != nullptr) {
     for (const auto& p : in.goals->pixels) {
-      const double r = std::isfinite(p.ground_cm) ? camera.radius_px_at_ground(p.ground_cm) : view;
-      put(out, pixel_at(camera, r, p.bearing_deg), p.colour == GoalColour::kBlue ? cv::Vec3b{255, 80, 0} : cv::Vec3b{0, 220, 255});
+      put(out, pixel_at(camera, p.radius_px, p.bearing_deg), p.colour == GoalColour::kBlue ? cv::Vec3b{255, 80, 0} : cv::Vec3b{0, 220, 255});
     }
   }
   if (in.result != nullptr) {

@@ -139,7 +139,8 @@ GoalObservation observe_goals(const cv::Mat& bgr, const CameraModel& camera, con
       if (camera.bearing_hidden(bearing)) continue;
       const double d = camera.ground_cm_at_radius(r);
       obs.pixels.push_back({static_cast<float>(bearing),
-                            std::isfinite(d) ? static_cast<float>(d) : std::numeric_limits<float>::infinity(), c});
+                            std::isfinite(d) ? static_cast<float>(d) : std::numeric_limits<float>::infinity(),
+                            static_cast<float>(r), c});
     }
   }
   return obs;
