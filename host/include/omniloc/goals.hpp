@@ -113,9 +113,6 @@ struct GoalEvidence {
 };
 [[nodiscard]] GoalEvidence goal_evidence(const FieldGeometry& field, const Pose2& pose, const GoalObservation& obs);
 
-/// The goal bearing (robot frame, deg) of the goal at the x = max end (or x = min) from `pose`.
-[[nodiscard]] double goal_bearing_deg(const FieldGeometry& field, const Pose2& pose, bool at_x_max);
-
 enum class TwinDecision { kFirst, kSecond, kUndecided };
 struct TwinChoice {
   TwinDecision decision = TwinDecision::kUndecided;

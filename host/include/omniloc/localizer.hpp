@@ -13,11 +13,12 @@
 // Frames may be given before the windows that cover their time (replay): they wait.
 //
 // Beyond the paper (LocalizerMode::kFull): sub-grid refinement, a minimum search range, refusal
-// of ambiguous matches, a cross-check by global search that detects being lost (a run of bad
+// of ambiguous matches (unless the goal colours tell a pose from its twin), a cross-check by global search that detects being lost (a run of bad
 // matches, or image and odometry disagreeing beyond their uncertainty as after a kidnapping) and
 // recovers, and an uncertainty on every pose. LocalizerMode::kPaper does exactly what the paper
 // describes (no refinement, no lost detection) for side-by-side figures.
 //
+// Every global search is locate_frame (locate.hpp), which `omniloc locate` runs on one frame.
 // One class serves omnilocd (live), `omniloc replay` and the demo. Not thread-safe: call it from
 // one thread (scan images elsewhere and pass the BearingScan to on_bearings() if needed).
 #pragma once

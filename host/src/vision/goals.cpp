@@ -179,13 +179,6 @@ GoalEvidence goal_evidence(const FieldGeometry& field, const Pose2& pose, const 
   return e;
 }
 
-double goal_bearing_deg(const FieldGeometry& field, const Pose2& pose, bool at_x_max) {
-  const double x = at_x_max ? field.border_cm + field.field_length_cm + field.goal.depth_cm / 2.0
-                            : field.border_cm - field.goal.depth_cm / 2.0;
-  const Eigen::Vector2d rel = field_to_robot(Eigen::Vector2d(x, field.centre_cm().y()) - pose.position_cm(), pose.yaw_deg);
-  return rad_to_deg(std::atan2(rel.y(), rel.x()));
-}
-
 TwinChoice choose_by_goals(const FieldGeometry& field, const Pose2& first, const Pose2& second, const GoalObservation& obs) {
   TwinChoice c;
   if (!obs.colours_known) {
