@@ -21,13 +21,6 @@ void builddb_usage(std::FILE* out) {
                "  --step     grid step in cm (default 10: 75 x 55 points on the FIRA field)\n"
                "  --threads  worker threads (default: one per core)\n");
 }
-
-bool parse_number(std::string_view text, double& out) {
-  const std::string s(text);
-  char* end = nullptr;
-  out = std::strtod(s.c_str(), &end);
-  return !s.empty() && end == s.c_str() + s.size();
-}
 }  // namespace
 
 int cmd_builddb(std::span<const std::string_view> args) {

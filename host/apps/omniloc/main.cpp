@@ -11,6 +11,7 @@ constexpr omniloc::cli::CommandEntry kCommands[] = {
     {"probe", "find omniloc boards on USB, print ID/version/status and live counts", omniloc::cli::cmd_probe},
     {"builddb", "build the vision feature database (field x camera x grid) with progress", omniloc::cli::cmd_builddb},
     {"replay", "run the localizer over a recording directory, write poses.csv, errors vs truth", omniloc::cli::cmd_replay},
+    {"locate", "one frame to a pose: the localizer's global search and acceptance, JSON and overlay", omniloc::cli::cmd_locate},
 #ifdef OMNILOC_WITH_CALIBRATION
     {"calibrate", "estimate the camera (centre, mapping, yaw, mask) from frames at known poses", omniloc::cli::cmd_calibrate},
 #endif

@@ -13,11 +13,12 @@
 // Frames may be given before the windows that cover their time (replay): they wait.
 //
 // Beyond the paper (LocalizerMode::kFull): sub-grid refinement, a minimum search range, refusal
-// of ambiguous matches, a cross-check by global search that detects being lost (a run of bad
+// of ambiguous matches (unless the goal colours tell a pose from its twin), a cross-check by global search that detects being lost (a run of bad
 // matches, or image and odometry disagreeing beyond their uncertainty as after a kidnapping) and
 // recovers, and an uncertainty on every pose. LocalizerMode::kPaper does exactly what the paper
 // describes (no refinement, no lost detection) for side-by-side figures.
 //
+// Every global search is locate_frame (locate.hpp), which `omniloc locate` runs on one frame.
 // One class serves omnilocd (live), `omniloc replay` and the demo. Not thread-safe: call it from
 // one thread (scan images elsewhere and pass the BearingScan to on_bearings() if needed).
 #pragma once
@@ -36,6 +37,7 @@
 #include "omniloc/feature_db.hpp"
 #include "omniloc/field.hpp"
 #include "omniloc/fuzzy.hpp"
+#include "omniloc/goals.hpp"
 #include "omniloc/heading_filter.hpp"
 #include "omniloc/line_scan.hpp"
 #include "omniloc/matcher.hpp"
@@ -43,6 +45,8 @@
 #include "omniloc/robot_config.hpp"
 
 namespace omniloc {
+
+struct SingleFrameResult;  // locate.hpp
 
 enum class LocalizerMode {
   kPaper,  ///< Fig. 15 as printed: grid-point results, no lost detection, no ambiguity check
@@ -198,8 +202,13 @@ class Localizer {
   /// A camera frame taken at t_ms (same time base as the windows). Processed now if a window at
   /// or after t_ms has been seen, else kept until one arrives (the report then says kPending).
   FrameReport on_image(double t_ms, const cv::Mat& bgr);
-  /// Same with a robot-frame scan already made (scan_image_bearings).
-  FrameReport on_bearings(double t_ms, BearingScan bearings);
+  /// Same with a robot-frame scan already made (scan_image_bearings); `goals` is the frame's goal
+  /// observation (observe_goals), if any, for telling a global result from its twin.
+  FrameReport on_bearings(double t_ms, BearingScan bearings, std::optional<GoalObservation> goals = std::nullopt);
+
+  /// The goal colour models on_image() observes the goals with (interim: until the camera carries
+  /// them, camera.vision.goals; see goals.hpp). Without them a twin stays ambiguous.
+  void set_goal_colours(const GoalColourModels& models) { goal_colours_ = models; }
 
   /// Forgets the window history and waiting frames, for when the board's time base restarts
   /// (reconnect): the current pose becomes the odometry origin and the next window may have any
@@ -226,6 +235,7 @@ class Localizer {
   struct PendingFrame {
     double t_ms;
     BearingScan bearings;
+    std::optional<GoalObservation> goals;
   };
   struct Anchor {      // last good image result, carried forward by odometry
     bool valid = false;
@@ -241,6 +251,7 @@ class Localizer {
   struct Frame {
     double t_ms = 0.0;
     const BearingScan* bearings = nullptr;
+    const GoalObservation* goals = nullptr;  // null: none observed
     Pose2 odometry;              // odometry pose at t_ms; its yaw is the gyro heading
     double speed_cm_per_s = 0.0;
     Pose2 predicted;             // the anchor carried to t_ms, else the odometry pose
@@ -250,8 +261,8 @@ class Localizer {
   enum class CrossCheck { kNotRun, kAgrees, kContradicts, kRelocalized };
 
   // --- the steps of one frame (process) ---
-  FrameReport process(double t_ms, const BearingScan& bearings);
-  [[nodiscard]] Frame frame_at(double t_ms, const BearingScan& bearings) const;
+  FrameReport process(double t_ms, const BearingScan& bearings, const GoalObservation* goals);
+  [[nodiscard]] Frame frame_at(double t_ms, const BearingScan& bearings, const GoalObservation* goals) const;
   /// Searching or lost: a global search; relocalizes on a good, unambiguous result.
   void search(const Frame& frame, FrameReport& rep);
   /// Tracking: a local search around the prediction in the fuzzy range, the cross-check, then
@@ -262,17 +273,14 @@ class Localizer {
   CrossCheck cross_check(const Frame& frame, const MatchResult& local, FrameReport& rep);
   void accept(const Frame& frame, const MatchResult& local, FrameReport& rep);
   void reject(FrameReport& rep);
-  void relocalize(double t_ms, const PoseMatch& global, FrameReport& rep);
+  void relocalize(double t_ms, const SingleFrameResult& global, FrameReport& rep);
 
   // --- matching ---
-  /// Global search at the gyro heading (or over all headings, by policy), refined, error judged.
-  [[nodiscard]] PoseMatch global_match(const Frame& frame, FrameReport& rep);
+  /// locate_frame (locate.hpp) at the gyro heading (or over all headings, by policy).
+  [[nodiscard]] SingleFrameResult global_match(const Frame& frame, FrameReport& rep);
   [[nodiscard]] MatchResult local_match(const Frame& frame, double range_cm) const;
-  /// The error E_TH is judged on: at the refined position with ray-cast refinement (the error
-  /// surface is so steep that a grid point 5 cm from the robot often scores above E_TH).
-  [[nodiscard]] double judged_error(const MatchResult& m) const;
   [[nodiscard]] double search_range_cm(double speed_cm_per_s) const;
-  void note_global(FrameReport& rep, const PoseMatch& global);
+  void note_global(FrameReport& rep, const SingleFrameResult& global);
 
   // --- odometry history ---
   [[nodiscard]] bool covered(double t_ms) const;
@@ -294,6 +302,7 @@ class Localizer {
   const CameraModel& camera_;
   const FeatureDb& db_;
   MatchOptions match_options_;
+  GoalColourModels goal_colours_;
   Odometry odometry_;
   std::deque<HistoryEntry> history_;
   std::deque<PendingFrame> pending_;

@@ -3,7 +3,9 @@
 // One frame (process) goes through named steps:
 //   frame_at      odometry pose and speed at the frame's time, the prediction (the last good
 //                 image carried forward), and the scan rotated into the field frame once;
-//   search        (searching or lost) a global search; relocalize on a good, unambiguous result;
+//   search        (searching or lost) a global search (locate_frame, shared with `omniloc
+//                 locate`); relocalize on a good, unambiguous result (the goal colours may tell
+//                 a result from its twin);
 //   track         a local search around the prediction in the fuzzy range, then
 //   cross_check   (policy) a global search that notices a kidnapping, then
 //   accept/reject the result sets the anchor (and every reset period the odometry origin, with
@@ -15,6 +17,9 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
+
+#include "omniloc/locate.hpp"
 
 namespace omniloc {
 
@@ -82,7 +87,7 @@ Localizer::Localizer(const LocalizerConfig& config, const RobotConfig& robot, co
   if (db.field_fingerprint != field.fingerprint() || db.camera_fingerprint != camera.fingerprint())
     throw std::invalid_argument("Localizer: the feature database was built for another field or camera");
   validate_search_ranges(config_, db.grid, "localizer config");
-  match_options_.refinement = config_.refinement;
+  match_options_ = match_options_of(config_);
   if (initial_pose) {
     odometry_.reset(*initial_pose, 0.0, 0.0);
     state_ = State::kTracking;
@@ -186,7 +191,7 @@ LocalizedPose Localizer::on_window(const EncoderWindow& window) {
   while (!pending_.empty() && covered(pending_.front().t_ms)) {
     PendingFrame f = std::move(pending_.front());
     pending_.pop_front();
-    reports_.push_back(process(f.t_ms, f.bearings));
+    reports_.push_back(process(f.t_ms, f.bearings, f.goals ? &*f.goals : nullptr));
   }
   trim_history();
   last_pose_ = make_pose(window);
@@ -194,16 +199,17 @@ LocalizedPose Localizer::on_window(const EncoderWindow& window) {
 }
 
 FrameReport Localizer::on_image(double t_ms, const cv::Mat& bgr) {
-  return on_bearings(t_ms, scan_image_bearings(bgr, camera_, config_.scan_rays_per_degree));
+  BearingScan bearings = scan_image_bearings(bgr, camera_, config_.scan_rays_per_degree);
+  return on_bearings(t_ms, std::move(bearings), observe_goals(bgr, camera_, field_, goal_colours_));
 }
 
-FrameReport Localizer::on_bearings(double t_ms, BearingScan bearings) {
+FrameReport Localizer::on_bearings(double t_ms, BearingScan bearings, std::optional<GoalObservation> goals) {
   if (!std::isfinite(t_ms)) throw std::invalid_argument("Localizer: frame time is not finite");
   if (!covered(t_ms)) {
     // Keep frames in time order; a frame older than a waiting one is still fine to queue.
     auto pos = std::upper_bound(pending_.begin(), pending_.end(), t_ms,
                                 [](double t, const PendingFrame& f) { return t < f.t_ms; });
-    pending_.insert(pos, PendingFrame{t_ms, std::move(bearings)});
+    pending_.insert(pos, PendingFrame{t_ms, std::move(bearings), std::move(goals)});
     if (pending_.size() > kMaxPending) {
       FrameReport dropped;
       dropped.t_ms = pending_.front().t_ms;
@@ -217,7 +223,7 @@ FrameReport Localizer::on_bearings(double t_ms, BearingScan bearings) {
     r.t_ms = t_ms;
     return r;
   }
-  FrameReport r = process(t_ms, bearings);
+  FrameReport r = process(t_ms, bearings, goals ? &*goals : nullptr);
   reports_.push_back(r);
   return r;
 }
@@ -242,7 +248,7 @@ std::vector<FrameReport> Localizer::take_frame_reports() {
   return out;
 }
 
-FrameReport Localizer::process(double t_ms, const BearingScan& bearings) {
+FrameReport Localizer::process(double t_ms, const BearingScan& bearings, const GoalObservation* goals) {
   FrameReport rep;
   rep.t_ms = t_ms;
   ++stats_.frames;
@@ -251,7 +257,7 @@ FrameReport Localizer::process(double t_ms, const BearingScan& bearings) {
     ++stats_.dropped;
     return rep;
   }
-  const Frame frame = frame_at(t_ms, bearings);
+  const Frame frame = frame_at(t_ms, bearings, goals);
   rep.speed_cm_per_s = frame.speed_cm_per_s;
   if (state_ == State::kTracking) {
     track(frame, rep);
@@ -261,10 +267,11 @@ FrameReport Localizer::process(double t_ms, const BearingScan& bearings) {
   return rep;
 }
 
-Localizer::Frame Localizer::frame_at(double t_ms, const BearingScan& bearings) const {
+Localizer::Frame Localizer::frame_at(double t_ms, const BearingScan& bearings, const GoalObservation* goals) const {
   Frame f;
   f.t_ms = t_ms;
   f.bearings = &bearings;
+  f.goals = goals;
   double odo_sigma = 0.0;
   f.odometry = odometry_pose_at(t_ms, &f.speed_cm_per_s, &odo_sigma);
   // Prediction: the last good image carried forward by odometry (the output), else odometry.
@@ -275,10 +282,10 @@ Localizer::Frame Localizer::frame_at(double t_ms, const BearingScan& bearings) c
 }
 
 void Localizer::search(const Frame& frame, FrameReport& rep) {
-  const PoseMatch g = global_match(frame, rep);
+  const SingleFrameResult g = global_match(frame, rep);
   note_global(rep, g);
   const bool good = g.match.error < config_.e_th;
-  if (good && !(config_.refuse_ambiguous && g.match.ambiguous)) {
+  if (g.accepted) {
     relocalize(frame.t_ms, g, rep);
   } else if (good) {
     rep.outcome = FrameOutcome::kAmbiguous;
@@ -320,12 +327,12 @@ Localizer::CrossCheck Localizer::cross_check(const Frame& frame, const MatchResu
   const bool good = local.error < config_.e_th;
   if (good && disagree_run_ == 0 && frame.t_ms - last_check_ms_ < config_.check_period_ms) return CrossCheck::kNotRun;
   last_check_ms_ = frame.t_ms;
-  const PoseMatch g = global_match(frame, rep);
+  const SingleFrameResult g = global_match(frame, rep);
   const Eigen::Vector2d predicted = frame.predicted.position_cm();
   const double gate = std::max(config_.disagree_min_cm, config_.disagree_sigmas * frame.predicted_sigma_cm);
   const bool far = (g.match.position_cm - predicted).norm() > gate;
   const bool better = g.match.error < config_.disagree_error_ratio * local.error;
-  if (!(g.match.error < config_.e_th && !g.match.ambiguous && far && better)) {
+  if (!(g.match.error < config_.e_th && !g.ambiguous && far && better)) {
     disagree_run_ = 0;
     return CrossCheck::kAgrees;
   }
@@ -374,8 +381,8 @@ void Localizer::reject(FrameReport& rep) {
   }
 }
 
-void Localizer::relocalize(double t_ms, const PoseMatch& global, FrameReport& rep) {
-  const Pose2 pose{global.match.position_cm.x(), global.match.position_cm.y(), global.yaw_deg};
+void Localizer::relocalize(double t_ms, const SingleFrameResult& global, FrameReport& rep) {
+  const Pose2 pose = global.pose;
   reset_origin_at(t_ms, pose, config_.image_sigma_cm, config_.image_sigma_yaw_deg);
   set_anchor(t_ms, pose, global.match.error);
   state_ = State::kTracking;
@@ -388,39 +395,27 @@ void Localizer::relocalize(double t_ms, const PoseMatch& global, FrameReport& re
   rep.outcome = FrameOutcome::kRelocalized;
 }
 
-PoseMatch Localizer::global_match(const Frame& frame, FrameReport& rep) {
+SingleFrameResult Localizer::global_match(const Frame& frame, FrameReport& rep) {
   ++stats_.global_searches;
   rep.global = true;
-  PoseMatch pm;
-  if (policy_.search_any_yaw) {
-    pm = global_search_any_yaw(db_, field_, camera_, *frame.bearings, 2.0, match_options_);
-  } else {
-    pm.match = global_search(db_, frame.scan, match_options_);
-    apply_refinement(db_, field_, camera_, frame.scan, pm.match, match_options_);
-    pm.yaw_deg = frame.scan.yaw_deg;
-  }
-  pm.match.error = judged_error(pm.match);
-  return pm;
+  const std::optional<double> yaw = policy_.search_any_yaw ? std::nullopt : std::optional<double>(frame.scan.yaw_deg);
+  return locate_frame(config_, field_, camera_, db_, *frame.bearings, yaw, frame.goals, &frame.scan);
 }
 
 MatchResult Localizer::local_match(const Frame& frame, double range_cm) const {
   MatchResult m = local_search(db_, frame.scan, frame.predicted.position_cm(), range_cm, match_options_);
   apply_refinement(db_, field_, camera_, frame.scan, m, match_options_);
-  m.error = judged_error(m);
+  m.error = judged_error(config_, m);
   return m;
-}
-
-double Localizer::judged_error(const MatchResult& m) const {
-  return config_.refinement == Refinement::kRayCast ? m.refined_error : m.error;
 }
 
 double Localizer::search_range_cm(double speed_cm_per_s) const {
   return std::max(fuzzy_search_range(config_.fuzzy, speed_cm_per_s).snapped_cm, policy_.min_range_cm);
 }
 
-void Localizer::note_global(FrameReport& rep, const PoseMatch& global) {
+void Localizer::note_global(FrameReport& rep, const SingleFrameResult& global) {
   rep.position_cm = global.match.position_cm;
-  rep.yaw_deg = global.yaw_deg;
+  rep.yaw_deg = global.pose.yaw_deg;
   rep.error = global.match.error;
   rep.search_range_cm = -1.0;
   last_error_ = global.match.error;

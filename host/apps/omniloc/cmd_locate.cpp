@@ -1,0 +1,193 @@
+// `omniloc locate IMAGE --camera CAMERA.json`: one frame to a pose by exactly the localizer's
+// global search and acceptance rule (locate_frame, shared with Localizer), with the goal colours
+// telling a pose from its twin; prints the result (or one JSON object) and draws an overlay.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "commands.hpp"
+#include "omniloc/feature_db.hpp"
+#include "omniloc/field.hpp"
+#include "omniloc/goals.hpp"
+#include "omniloc/locate.hpp"
+#include "omniloc/recording.hpp"
+
+namespace omniloc::cli {
+
+namespace {
+
+void locate_usage(std::FILE* out) {
+  std::fprintf(out,
+               "usage: omniloc locate IMAGE --camera CAMERA.json [--field NAME|PATH] [--yaw-deg Y] [--db FILE]\n"
+               "                      [--config NAME|PATH] [--overlay OUT.png] [--json]\n"
+               "  --camera   camera file or name in common/cameras/ (its size must be the image's); its optional\n"
+               "             \"vision\" block's goal colours tell a pose from its twin\n"
+               "  --field    geometry file or name in common/fields/ (default fira-robosot)\n"
+               "  --yaw-deg  the robot's heading if known (field frame, deg); default: unknown, every heading searched\n"
+               "  --db       feature database file: used if it matches the field and camera, else built and written\n"
+               "             there (default: built in memory, progress on stderr)\n"
+               "  --config   localizer config (E_TH, refinement, ambiguity refusal), name in common/localizer/ or path\n"
+               "             (default: default)\n"
+               "  --overlay  PNG of the frame with the rays, crossings, ray ends and the field model at the pose\n"
+               "  --json     print one JSON object: x_cm, y_cm, yaw_deg, match_error, accepted, ambiguous, twin,\n"
+               "             rays_used, time_ms (and goal_cue: the goal colours' verdict)\n"
+               "exit 0 with a pose (accepted or not), 1 for an unreadable image or a camera of another size, 2 usage\n");
+}
+
+struct LocateArgs {
+  std::string image, camera, field = "fira-robosot", db, config = "default", overlay;
+  std::optional<double> yaw_deg;
+  bool json = false;
+};
+
+// 0: parsed; else the exit code.
+int parse_args(std::span<const std::string_view> args, LocateArgs& out) {
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string_view a = args[i];
+    if (a == "-h" || a == "--help") {
+      locate_usage(stdout);
+      return -1;
+    }
+    if (a == "--json") {
+      out.json = true;
+      continue;
+    }
+    if (!a.starts_with("--")) {
+      if (!out.image.empty()) {
+        std::fprintf(stderr, "omniloc locate: more than one IMAGE given\n");
+        return 2;
+      }
+      out.image = a;
+      continue;
+    }
+    if (i + 1 >= args.size()) {
+      std::fprintf(stderr, "omniloc locate: '%.*s' needs a value\n", static_cast<int>(a.size()), a.data());
+      locate_usage(stderr);
+      return 2;
+    }
+    const std::string_view v = args[++i];
+    if (a == "--camera") {
+      out.camera = v;
+    } else if (a == "--field") {
+      out.field = v;
+    } else if (a == "--db") {
+      out.db = v;
+    } else if (a == "--config") {
+      out.config = v;
+    } else if (a == "--overlay") {
+      out.overlay = v;
+    } else if (a == "--yaw-deg") {
+      double y = 0.0;
+      if (!parse_number(v, y)) {
+        std::fprintf(stderr, "omniloc locate: bad value '%.*s' for --yaw-deg (a number of degrees)\n",
+                     static_cast<int>(v.size()), v.data());
+        return 2;
+      }
+      out.yaw_deg = y;
+    } else {
+      std::fprintf(stderr, "omniloc locate: unknown option '%.*s'\n", static_cast<int>(a.size()), a.data());
+      locate_usage(stderr);
+      return 2;
+    }
+  }
+  if (out.image.empty() || out.camera.empty()) {
+    std::fprintf(stderr, "omniloc locate: IMAGE and --camera CAMERA.json are required\n");
+    locate_usage(stderr);
+    return 2;
+  }
+  return 0;
+}
+
+FeatureDb feature_db_for(const LocateArgs& a, const FieldGeometry& field, const CameraModel& camera) {
+  auto log = [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); };
+  if (!a.db.empty()) return load_or_build_feature_db(field, camera, a.db, log);
+  const GridSpec grid = GridSpec::covering(field, 10.0);  // the grid load_or_build_feature_db builds
+  return build_feature_db(field, camera, grid, [](int done, int total) {
+    std::fprintf(stderr, "\rbuilding the feature database: %5d / %d grid points (%3d %%)", done, total, 100 * done / total);
+    if (done == total) std::fprintf(stderr, "\n");
+  });
+}
+
+nlohmann::ordered_json number_or_null(double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); }
+
+nlohmann::ordered_json result_json(const SingleFrameResult& r, double time_ms) {
+  nlohmann::ordered_json out = nlohmann::ordered_json::object();
+  const bool found = r.match.cell >= 0;
+  out["x_cm"] = found ? nlohmann::ordered_json(r.pose.x_cm) : nlohmann::ordered_json(nullptr);
+  out["y_cm"] = found ? nlohmann::ordered_json(r.pose.y_cm) : nlohmann::ordered_json(nullptr);
+  out["yaw_deg"] = found ? nlohmann::ordered_json(r.pose.yaw_deg) : nlohmann::ordered_json(nullptr);
+  out["match_error"] = number_or_null(r.match.error);
+  out["accepted"] = r.accepted;
+  out["ambiguous"] = r.ambiguous;
+  out["twin"] = r.twin ? nlohmann::ordered_json{{"x_cm", r.twin->x_cm}, {"y_cm", r.twin->y_cm}, {"yaw_deg", r.twin->yaw_deg}}
+                       : nlohmann::ordered_json(nullptr);
+  out["rays_used"] = r.match.rays_used;
+  out["time_ms"] = time_ms;
+  out["goal_cue"] = r.goal_choice.reason;
+  return out;
+}
+
+void print_text(const SingleFrameResult& r, double e_th, double time_ms) {
+  if (r.match.cell < 0) {
+    std::printf("no match (no ray seen anything)\n");
+    return;
+  }
+  std::printf("pose (%.1f, %.1f) cm, yaw %.1f deg%s; match error %.2f (E_TH %.2f) on %d rays: %s\n", r.pose.x_cm,
+              r.pose.y_cm, r.pose.yaw_deg, r.yaw_searched ? " (found)" : " (given)", r.match.error, e_th,
+              r.match.rays_used, r.accepted ? "accepted" : r.ambiguous && r.match.error < e_th ? "refused (ambiguous)" : "not accepted");
+  if (r.twin)
+    std::printf("twin (%.1f, %.1f) cm, yaw %.1f deg, error %.2f: %s\n", r.twin->x_cm, r.twin->y_cm, r.twin->yaw_deg,
+                r.twin_error, r.ambiguous ? "not told apart" : "ruled out by the goal colours");
+  std::printf("goal colours: %s\n", r.goal_choice.reason.c_str());
+  std::printf("located in %.1f ms\n", time_ms);
+}
+
+}  // namespace
+
+int cmd_locate(std::span<const std::string_view> args) {
+  LocateArgs a;
+  if (const int rc = parse_args(args, a); rc != 0) return rc < 0 ? 0 : rc;
+  const cv::Mat bgr = cv::imread(a.image, cv::IMREAD_COLOR);
+  if (bgr.empty()) {
+    std::fprintf(stderr, "omniloc locate: error: cannot read image '%s'\n", a.image.c_str());
+    return 1;
+  }
+  const CameraWithGoals cam = load_camera_with_goals(a.camera);
+  if (bgr.cols != cam.camera.width_px || bgr.rows != cam.camera.height_px) {
+    std::fprintf(stderr, "omniloc locate: error: image '%s' is %d x %d px but camera '%s' is for %d x %d px\n",
+                 a.image.c_str(), bgr.cols, bgr.rows, a.camera.c_str(), cam.camera.width_px, cam.camera.height_px);
+    return 1;
+  }
+  const FieldGeometry field = load_field(a.field);
+  const LocalizerConfig config = load_localizer_config(a.config);
+  const FeatureDb db = feature_db_for(a, field, cam.camera);
+
+  const auto t0 = std::chrono::steady_clock::now();
+  // The frame as Localizer::on_image takes it: the robot-frame scan and the goal observation.
+  const BearingScan bearings = scan_image_bearings(bgr, cam.camera, config.scan_rays_per_degree);
+  const GoalObservation goals = observe_goals(bgr, cam.camera, field, cam.goals);
+  const SingleFrameResult r = locate_frame(config, field, cam.camera, db, bearings, a.yaw_deg, &goals);
+  const double time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+
+  if (a.json) {
+    std::printf("%s\n", result_json(r, time_ms).dump().c_str());
+  } else {
+    print_text(r, config.e_th, time_ms);
+  }
+  if (!a.overlay.empty()) {
+    const cv::Mat ov = locate_overlay(bgr, cam.camera, field, {&bearings, &r, &goals});
+    if (!cv::imwrite(a.overlay, ov)) {
+      std::fprintf(stderr, "omniloc locate: error: cannot write overlay '%s'\n", a.overlay.c_str());
+      return 1;
+    }
+    if (!a.json) std::printf("overlay %s\n", a.overlay.c_str());
+  }
+  return 0;
+}
+
+}  // namespace omniloc::cli
