@@ -83,6 +83,9 @@ Localizer::Localizer(const LocalizerConfig& config, const RobotConfig& robot, co
     throw std::invalid_argument("Localizer: the feature database was built for another field or camera");
   validate_search_ranges(config_, db.grid, "localizer config");
   match_options_.refinement = config_.refinement;
+  match_options_.cost = config_.match_cost;
+  match_options_.crossing_cap_px = config_.crossing_cap_px;
+  match_options_.ambiguity_ratio = config_.ambiguity_ratio;
   if (initial_pose) {
     odometry_.reset(*initial_pose, 0.0, 0.0);
     state_ = State::kTracking;
@@ -430,7 +433,7 @@ void Localizer::note_global(FrameReport& rep, const PoseMatch& global) {
 std::optional<double> Localizer::corrected_yaw(double t_ms, const BearingScan& bearings,
                                                const Eigen::Vector2d& position_cm, double gyro_yaw_deg) {
   const double predicted = heading_filter_.predict(t_ms, gyro_yaw_deg);
-  const YawEstimate est = estimate_yaw(field_, camera_, bearings, position_cm, predicted, config_.yaw_search_deg);
+  const YawEstimate est = estimate_yaw(field_, camera_, bearings, position_cm, predicted, config_.yaw_search_deg, match_options_);
   if (!(est.error < config_.e_th)) return std::nullopt;
   ++stats_.yaw_corrections;
   return heading_filter_.correct(t_ms, predicted, est.yaw_deg);
