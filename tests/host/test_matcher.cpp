@@ -441,7 +441,8 @@ TEST_F(Matcher, ShippedThresholdsSeparateRightFromWrongOnRenderedFrames) {
   EXPECT_GT(sb.min_ratio, shipped.ambiguity_ratio);
 }
 
-// The refinement reaches the reference pattern search's accuracy with fewer ray casts.
+// The refinement (linearised ray cast) reaches the reference pattern search's accuracy with a
+// fraction of its full ray casts.
 TEST_F(Matcher, RefinementMatchesThePatternSearchWithFewerRayCasts) {
   const std::uint64_t seed = 78;
   std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
@@ -463,8 +464,10 @@ TEST_F(Matcher, RefinementMatchesThePatternSearchWithFewerRayCasts) {
     refine_match_reference(renderer_->field(), renderer_->camera(), f, b);
     sum_fast += (a.position_cm - truth.position_cm()).norm();
     sum_ref += (b.position_cm - truth.position_cm()).norm();
-    probes_fast += a.refine_probes;
-    probes_ref += b.refine_probes;
+    probes_fast += a.refine_casts;
+    probes_ref += b.refine_casts;
+    // The reported error is the exact ray-cast error at the reported position.
+    EXPECT_EQ(a.refined_error, error_at(renderer_->field(), renderer_->camera(), f.prepared, a.position_cm));
   }
   std::printf("refine_match: mean error %.2f cm, %.1f ray casts; reference pattern search %.2f cm, %.1f ray casts\n",
               sum_fast / n, static_cast<double>(probes_fast) / n, sum_ref / n, static_cast<double>(probes_ref) / n);

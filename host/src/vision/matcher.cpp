@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
+#include <utility>
 
 #include "omniloc/conventions.hpp"
 
@@ -228,35 +230,151 @@ void refine_match_reference(const FieldGeometry& field, const CameraModel& camer
   r.position_cm = pos;
   r.refined_error = best;
   r.refine_probes = probes;
+  r.refine_casts = probes;
 }
 
 namespace {
 
-// The ray-cast errors a refinement has computed: the walk comes back to points it has seen (the
-// centre it just left, a fitted point on a neighbour), and each costs a full ray cast.
-class ProbeCache {
+// The radii of a ray's first crossings from its white runs (px from the image centre, continuous),
+// exactly as expected_features turns them into samples: the integer samples inside each run, an
+// entry counting when at least min_gap_px non-white samples precede it.
+template <class Runs>
+void crossings_of_runs(int k0, int k1, int min_gap_px, const Runs& runs, std::uint8_t* out) {
+  std::fill(out, out + kCrossingsPerRay, kNoCrossing);
+  int found = 0;
+  int last_white = k0 - 1;  // as if white just before the first sample: it cannot be an entry
+  for (const auto& [enter_px, exit_px] : runs) {
+    const int ka = std::max(static_cast<int>(std::ceil(enter_px - 1e-9)), k0);
+    const int kb = std::min(static_cast<int>(std::floor(exit_px + 1e-9)), k1);
+    if (ka > kb) continue;
+    if (ka - last_white - 1 >= min_gap_px && found < kCrossingsPerRay) out[found++] = static_cast<std::uint8_t>(ka);
+    last_white = kb;
+  }
+}
+
+// Ray casting is most of the refinement's cost (~0.1 ms a point). Within a few cm of a point,
+// every white run a ray crosses keeps its place on the ray to first order: where a ray from a
+// shifted origin enters a straight line moves exactly linearly with the shift, an arc's nearly
+// so, and the radius table is smooth. So the caster casts three points (the centre, and 1 cm
+// along x and along y), keeps each run's radii in px and their gradients, and gives the expected
+// scan at any point near the centre from that model. A ray whose runs differ between the three
+// casts (a line's end or an arc's tangent lies in between) is cast exactly at every point. At the
+// centre the model is the ray cast itself, bit for bit.
+class LinearisedCaster {
  public:
-  ProbeCache(const FieldGeometry& field, const CameraModel& camera, const PreparedScan& scan, const MatchOptions& opt)
+  LinearisedCaster(const FieldGeometry& field, const CameraModel& camera, const Eigen::Vector2d& centre_cm)
+      : caster_(field), camera_(camera), centre_(centre_cm) {
+    k0_ = static_cast<int>(std::ceil(camera.min_radius_px()));
+    k1_ = static_cast<int>(std::floor(camera.view_radius_px()));
+    t_lo_ = camera.ground_cm_at_radius(k0_);
+    t_hi_ = camera.ground_cm_at_radius(k1_);
+    std::vector<Run> at_x, at_y;
+    for (int k = 0; k < kScanRays; ++k) {
+      dirs_[static_cast<std::size_t>(k)] = {std::cos(deg_to_rad(k)), std::sin(deg_to_rad(k))};
+      first_[static_cast<std::size_t>(k)] = static_cast<int>(runs_.size());
+      cast(centre_, k, runs_);
+      at_x.clear();
+      at_y.clear();
+      cast(centre_ + Eigen::Vector2d(kStepCm, 0.0), k, at_x);
+      cast(centre_ + Eigen::Vector2d(0.0, kStepCm), k, at_y);
+      const std::size_t n = runs_.size() - static_cast<std::size_t>(first_[static_cast<std::size_t>(k)]);
+      exact_[static_cast<std::size_t>(k)] = at_x.size() != n || at_y.size() != n;
+      if (exact_[static_cast<std::size_t>(k)]) continue;
+      for (std::size_t i = 0; i < n; ++i) {
+        Run& r = runs_[static_cast<std::size_t>(first_[static_cast<std::size_t>(k)]) + i];
+        r.enter_g = {(at_x[i].enter_px - r.enter_px) / kStepCm, (at_y[i].enter_px - r.enter_px) / kStepCm};
+        r.exit_g = {(at_x[i].exit_px - r.exit_px) / kStepCm, (at_y[i].exit_px - r.exit_px) / kStepCm};
+      }
+    }
+    first_[kScanRays] = static_cast<int>(runs_.size());
+  }
+
+  [[nodiscard]] const Eigen::Vector2d& centre() const { return centre_; }
+
+  /// The expected scan at q (kFeatureBytes radii).
+  void features(const Eigen::Vector2d& q, std::uint8_t* out) {
+    const Eigen::Vector2d d = q - centre_;
+    const int min_gap = ScanParams{}.min_gap_px;  // as the database (expected_features' default)
+    for (int k = 0; k < kScanRays; ++k) {
+      std::uint8_t* o = out + k * kCrossingsPerRay;
+      if (exact_[static_cast<std::size_t>(k)]) {
+        scratch_runs_.clear();
+        cast(q, k, scratch_runs_);
+        px_.clear();
+        for (const Run& r : scratch_runs_) px_.push_back({r.enter_px, r.exit_px});
+      } else {
+        px_.clear();
+        for (int i = first_[static_cast<std::size_t>(k)]; i < first_[static_cast<std::size_t>(k) + 1]; ++i) {
+          const Run& r = runs_[static_cast<std::size_t>(i)];
+          px_.push_back({r.enter_px + r.enter_g.dot(d), r.exit_px + r.exit_g.dot(d)});
+        }
+      }
+      crossings_of_runs(k0_, k1_, min_gap, px_, o);
+    }
+  }
+
+ private:
+  static constexpr double kStepCm = 1.0;
+  struct Run {
+    double enter_px = 0.0, exit_px = 0.0;
+    Eigen::Vector2d enter_g{0.0, 0.0}, exit_g{0.0, 0.0};  // px per cm of the origin's shift
+  };
+  void cast(const Eigen::Vector2d& origin, int k, std::vector<Run>& out) {
+    caster_.intervals(origin, dirs_[static_cast<std::size_t>(k)], t_lo_, t_hi_, iv_);
+    for (const auto& w : iv_) {
+      Run r;
+      r.enter_px = camera_.radius_px_at_ground(w.enter_cm);
+      r.exit_px = camera_.radius_px_at_ground(w.exit_cm);
+      out.push_back(r);
+    }
+  }
+
+  RayCaster caster_;
+  const CameraModel& camera_;
+  Eigen::Vector2d centre_;
+  int k0_ = 0, k1_ = 0;
+  double t_lo_ = 0.0, t_hi_ = 0.0;
+  std::array<Eigen::Vector2d, kScanRays> dirs_;
+  std::vector<Run> runs_;
+  std::array<int, kScanRays + 1> first_{};
+  std::array<bool, kScanRays> exact_{};
+  std::vector<WhiteInterval> iv_;
+  std::vector<Run> scratch_runs_;
+  std::vector<std::pair<double, double>> px_;
+};
+
+// The refinement's errors: from the linearised caster, re-centred when the walk leaves
+// kRecentreCm of its centre, and remembered, since the walk comes back to points it has seen.
+class ProbeErrors {
+ public:
+  ProbeErrors(const FieldGeometry& field, const CameraModel& camera, const PreparedScan& scan, const MatchOptions& opt)
       : field_(field), camera_(camera), scan_(scan), opt_(opt) {}
-  void seed(const Eigen::Vector2d& q, double e) { seen_.push_back({q, e}); }
   double operator()(const Eigen::Vector2d& q) {
     for (const auto& [at, e] : seen_) {
       if ((at - q).cwiseAbs().maxCoeff() < 1e-6) return e;
     }
-    const double e = error_at(field_, camera_, scan_, q, opt_);
+    if (!caster_ || (q - caster_->centre()).cwiseAbs().maxCoeff() > kRecentreCm) {
+      caster_.emplace(field_, camera_, q);
+      ++casts_;
+    }
+    alignas(32) std::array<std::uint8_t, kFeatureBytes> expected{};
+    caster_->features(q, expected.data());
+    const double e = match_error(expected.data(), scan_, opt_);
     seen_.push_back({q, e});
     return e;
   }
-  [[nodiscard]] int probes() const { return static_cast<int>(seen_.size()) - seeded_; }
-  void mark_seeded() { seeded_ = static_cast<int>(seen_.size()); }
+  [[nodiscard]] int probes() const { return static_cast<int>(seen_.size()); }
+  [[nodiscard]] int linearisations() const { return casts_; }
 
  private:
+  static constexpr double kRecentreCm = 3.0;
   const FieldGeometry& field_;
   const CameraModel& camera_;
   const PreparedScan& scan_;
   const MatchOptions& opt_;
+  std::optional<LinearisedCaster> caster_;
   std::vector<std::pair<Eigen::Vector2d, double>> seen_;
-  int seeded_ = 0;
+  int casts_ = 0;
 };
 
 }  // namespace
@@ -267,17 +385,16 @@ void refine_match(const FieldGeometry& field, const CameraModel& camera, const F
   // A non-finite start would never compare equal to itself and never stop (a corrupt grid origin
   // did that once); load_feature_db refuses such grids, and this keeps the loop finite regardless.
   if (!r.position_cm.allFinite() || !r.grid_position_cm.allFinite()) return;
-  ProbeCache error_of(field, camera, scan.prepared, opt);
-  error_of.seed(r.grid_position_cm, r.error);  // the database entry is the ray cast at the grid point
-  error_of.mark_seeded();
+  ProbeErrors error_of(field, camera, scan.prepared, opt);
   Eigen::Vector2d pos = r.position_cm;
-  double best = error_of(pos);
+  const Eigen::Vector2d start = pos;
+  double best = error_of(pos);  // the linearised caster is centred here: this one is exact
+  const double start_error = best;
   const double limit = opt.refine_reach_cm;
   const auto within = [&](const Eigen::Vector2d& q) { return (q - r.grid_position_cm).cwiseAbs().maxCoeff() <= limit; };
   // A pattern search as refine_match_reference, except that once the centre is the best of its
   // four neighbours, the V fitted through them along each axis (the shape of the bounded cost
-  // near its minimum, as interpolate_match) proposes a point below the step, and the step only
-  // halves after that: the fit does the last halvings' work with one probe each.
+  // near its minimum, as interpolate_match) proposes a point below the step before it halves.
   constexpr int kMaxSteps = 10'000;  // each move lowers the error strictly; this only bounds absurd options
   int steps_taken = 0;
   for (double step = opt.refine_start_step_cm; step >= opt.refine_min_step_cm - 1e-9 && steps_taken < kMaxSteps;
@@ -312,9 +429,18 @@ void refine_match(const FieldGeometry& field, const CameraModel& camera, const F
     }
     step /= 2.0;
   }
-  r.position_cm = pos;
-  r.refined_error = best;
+  // The walk ran on the model: the error at its end is cast exactly, and the start kept if that
+  // is no better.
+  const double exact = pos == start ? start_error : error_at(field, camera, scan.prepared, pos, opt);
   r.refine_probes = error_of.probes();
+  r.refine_casts = 3 * error_of.linearisations() + (pos == start ? 0 : 1);
+  if (exact < start_error) {
+    r.position_cm = pos;
+    r.refined_error = exact;
+  } else {
+    r.position_cm = start;
+    r.refined_error = start_error;
+  }
 }
 
 void refine_match(const FieldGeometry& field, const CameraModel& camera, const Scan& scan, MatchResult& r,
