@@ -54,6 +54,13 @@ class Matcher : public ::testing::Test {
     }
     std::printf("%d grid points checked, %d wrong\n", checked, wrong);
   }
+  // The field-frame scan of a noisy render at the truth's heading with `robots` other robots.
+  static FieldScan noisy_field_scan(const Pose2& truth, std::uint64_t seed, int robots) {
+    sim::RenderOptions opt;
+    opt.seed = seed;
+    opt.obstacles = sim::random_obstacles(renderer_->field(), truth, robots, seed);
+    return make_field_scan(scan_image(renderer_->render(truth, opt), renderer_->camera(), truth.yaw_deg));
+  }
   static std::unique_ptr<sim::OmniRenderer> renderer_;
   static std::unique_ptr<FeatureDb> db_;
 };
@@ -425,10 +432,7 @@ TEST_F(Matcher, ShippedThresholdsSeparateRightFromWrongOnRenderedFrames) {
   const int n = 60;
   for (int i = 0; i < n; ++i) {
     const Pose2 truth{ux(rng), uy(rng), uyaw(rng)};
-    sim::RenderOptions opt;
-    opt.seed = seed * 1000 + static_cast<std::uint64_t>(i);
-    opt.obstacles = sim::random_obstacles(renderer_->field(), truth, i % 5, opt.seed);
-    const FieldScan f = make_field_scan(scan_image(renderer_->render(truth, opt), renderer_->camera(), truth.yaw_deg));
+    const FieldScan f = noisy_field_scan(truth, seed * 1000 + static_cast<std::uint64_t>(i), i % 5);
     record(sb, global_search(*db_, f, bounded), truth);
     record(sp, global_search(*db_, f, paper), truth);
   }
@@ -453,10 +457,7 @@ TEST_F(Matcher, RefinementMatchesThePatternSearchWithFewerRayCasts) {
   int probes_fast = 0, probes_ref = 0;
   for (int i = 0; i < n; ++i) {
     const Pose2 truth{ux(rng), uy(rng), uyaw(rng)};
-    sim::RenderOptions opt;
-    opt.seed = seed * 1000 + static_cast<std::uint64_t>(i);
-    opt.obstacles = sim::random_obstacles(renderer_->field(), truth, i % 3, opt.seed);
-    const FieldScan f = make_field_scan(scan_image(renderer_->render(truth, opt), renderer_->camera(), truth.yaw_deg));
+    const FieldScan f = noisy_field_scan(truth, seed * 1000 + static_cast<std::uint64_t>(i), i % 3);
     MatchResult a = local_search(*db_, f, truth.position_cm(), 20.0);
     interpolate_match(*db_, f, a);
     MatchResult b = a;
