@@ -214,7 +214,7 @@ TEST(FuzzyConfig, ClearErrorsNameTheFieldPath) {
 
 // Every key of LocalizerConfig, by hand, in the shipped file's order.
 const std::vector<std::string> kEveryLocalizerKey = {
-    "mode", "e_th", "reset_period_ms", "history_ms", "scan_rays_per_degree", "refinement", "min_range_cm",
+    "mode", "match_cost", "crossing_cap_px", "e_th", "ambiguity_ratio", "reset_period_ms", "history_ms", "scan_rays_per_degree", "refinement", "min_range_cm",
     "refuse_ambiguous", "image_sigma_cm", "image_sigma_yaw_deg", "lost_after_bad_frames", "check_period_ms",
     "disagree_min_cm", "disagree_sigmas", "disagree_error_ratio", "disagree_frames", "gyro_yaw_known",
     "yaw_correction", "yaw_search_deg", "yaw_gain", "yaw_rate_gain", "yaw_rate_max_deg_per_s", "fuzzy"};
@@ -238,7 +238,12 @@ TEST(LocalizerConfigFile, ShippedFileIsTheStructDefaultsEveryKey) {
   EXPECT_TRUE(lc == LocalizerConfig{});
   EXPECT_TRUE(lc.fuzzy == FuzzyConfig{});
   // Spot values as documented in docs/LOCALIZER.md.
-  EXPECT_EQ(lc.e_th, 20.0);
+  EXPECT_EQ(lc.match_cost, MatchCost::kBounded);
+  EXPECT_EQ(lc.crossing_cap_px, 16);
+  EXPECT_EQ(lc.e_th, 8.0);
+  EXPECT_EQ(lc.ambiguity_ratio, 1.25);
+  EXPECT_EQ(LocalizerConfig::paper().match_cost, MatchCost::kPaperSad);
+  EXPECT_EQ(LocalizerConfig::paper().e_th, 20.0);
   EXPECT_EQ(lc.reset_period_ms, 125.0);
   EXPECT_TRUE(lc.yaw_correction);
   EXPECT_FALSE(LocalizerConfig::paper().yaw_correction);
@@ -246,7 +251,8 @@ TEST(LocalizerConfigFile, ShippedFileIsTheStructDefaultsEveryKey) {
 
 TEST(LocalizerConfigFile, EveryKeyReachesItsMember) {
   const LocalizerConfig c = parse_localizer(R"({
-    "mode": "full", "e_th": 15, "reset_period_ms": 150, "history_ms": 800, "scan_rays_per_degree": 2,
+    "mode": "full", "match_cost": "bounded", "crossing_cap_px": 20, "e_th": 15, "ambiguity_ratio": 1.5,
+    "reset_period_ms": 150, "history_ms": 800, "scan_rays_per_degree": 2,
     "refinement": "interpolate", "min_range_cm": 5, "refuse_ambiguous": false, "image_sigma_cm": 3.5,
     "image_sigma_yaw_deg": 0.75, "lost_after_bad_frames": 20, "check_period_ms": 200, "disagree_min_cm": 40,
     "disagree_sigmas": 3, "disagree_error_ratio": 0.6, "disagree_frames": 5, "gyro_yaw_known": false,
@@ -254,7 +260,10 @@ TEST(LocalizerConfigFile, EveryKeyReachesItsMember) {
     "yaw_rate_max_deg_per_s": 1.5,
     "fuzzy": )" + replaced(kGood, "\"resolution_cm\": 0.01", "\"resolution_cm\": 0.05") + "}");
   EXPECT_EQ(c.mode, LocalizerMode::kFull);
+  EXPECT_EQ(c.match_cost, MatchCost::kBounded);
+  EXPECT_EQ(c.crossing_cap_px, 20);
   EXPECT_EQ(c.e_th, 15.0);
+  EXPECT_EQ(c.ambiguity_ratio, 1.5);
   EXPECT_EQ(c.reset_period_ms, 150.0);
   EXPECT_EQ(c.history_ms, 800.0);
   EXPECT_EQ(c.scan_rays_per_degree, 2);
@@ -300,6 +309,7 @@ TEST(LocalizerConfigFile, EachKeyOfTheShippedFileMattersWhenChanged) {
     else if (v.is_number()) v = v.get<double>() * 0.9;
     else if (k == "mode") v = "paper";
     else if (k == "refinement") v = "interpolate";
+    else if (k == "match_cost") v = "paper_sad";
     const LocalizerConfig c = parse_localizer(changed.dump());
     EXPECT_FALSE(c == base) << k << " made no difference";
   }
@@ -324,6 +334,11 @@ TEST(LocalizerConfigFile, ClearErrorsNameTheFileAndField) {
   expect_error("\"e_th\": NaN, ", "e_th", "not valid JSON");
   expect_error("\"e_th\": 1e400, ", "e_th", "number out of range");
   expect_error("\"e_th\": 20, \"e_th\": 21, ", "e_th", "duplicate key");
+  expect_error("\"crossing_cap_px\": 0, ", "crossing_cap_px", "must be 1..127 px");
+  expect_error("\"crossing_cap_px\": 128, ", "crossing_cap_px", "(got 128)");
+  expect_error("\"e_th\": 17, ", "e_th", "must not exceed crossing_cap_px");
+  expect_error("\"match_cost\": \"sad\", ", "match_cost", "must be one of \"bounded\", \"paper_sad\" (got \"sad\")");
+  expect_error("\"ambiguity_ratio\": 0.9, ", "ambiguity_ratio", ">= 1 (got 0.9)");
   expect_error("\"disagree_frames\": 0, ", "disagree_frames", ">= 1 (got 0)");
   expect_error("\"disagree_frames\": 2.5, ", "disagree_frames", "must be an integer");
   expect_error("\"mode\": \"fast\", ", "mode", "must be one of \"full\", \"paper\" (got \"fast\")");

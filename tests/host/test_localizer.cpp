@@ -289,7 +289,7 @@ TEST_F(LocalizerSim, BadFramesLeaveTheOdometryStandingThenLost) {
   EXPECT_LT(position_error(out.back().first, out.back().second), 2.0);
   EXPECT_EQ(out[40].first.source, PoseSource::kOdometry);  // after ~10 bad frames
   EXPECT_EQ(out.back().first.source, PoseSource::kLost);   // after 30 bad frames in a row
-  EXPECT_TRUE(std::isinf(out.back().first.match_error) || out.back().first.match_error >= 20.0);
+  EXPECT_TRUE(std::isinf(out.back().first.match_error) || out.back().first.match_error >= LocalizerConfig{}.e_th);
 }
 
 TEST_F(LocalizerSim, RefusesAmbiguousMatchesWithoutAHeading) {

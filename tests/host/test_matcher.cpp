@@ -1,4 +1,5 @@
-// Matcher: the fast SAD against the scalar reference, the normalised error by hand, global search
+// Matcher: the fast SAD and the bounded cost against their scalar references, the normalised
+// errors by hand, E_TH and the ambiguity ratio against rendered frames, global search
 // against its reference, local-search windows, the right cell on noise-free images at every grid
 // point, refinement below the grid, yaw from the scan, and the ambiguity report.
 #include <gtest/gtest.h>
@@ -8,6 +9,7 @@
 #include <random>
 
 #include "omniloc/feature_db.hpp"
+#include "omniloc/localizer.hpp"
 #include "omniloc/matcher.hpp"
 #include "omniloc_sim/renderer.hpp"
 
@@ -52,6 +54,13 @@ class Matcher : public ::testing::Test {
     }
     std::printf("%d grid points checked, %d wrong\n", checked, wrong);
   }
+  // The field-frame scan of a noisy render at the truth's heading with `robots` other robots.
+  static FieldScan noisy_field_scan(const Pose2& truth, std::uint64_t seed, int robots) {
+    sim::RenderOptions opt;
+    opt.seed = seed;
+    opt.obstacles = sim::random_obstacles(renderer_->field(), truth, robots, seed);
+    return make_field_scan(scan_image(renderer_->render(truth, opt), renderer_->camera(), truth.yaw_deg));
+  }
   static std::unique_ptr<sim::OmniRenderer> renderer_;
   static std::unique_ptr<FeatureDb> db_;
 };
@@ -78,6 +87,74 @@ TEST_F(Matcher, FastSadEqualsScalarReference) {
   EXPECT_EQ(sad_reference(full.data(), zeros), 255u * 1440u);
 }
 
+// The bounded cost's three kernels agree bit for bit, on random bytes (kNoCrossing often) and
+// random ray ends, at every cap the config allows.
+TEST_F(Matcher, BoundedCostKernelsEqualTheScalarReference) {
+  const std::uint64_t seed = 4343;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  std::mt19937_64 rng(seed);
+  std::uniform_int_distribution<int> byte(0, 255), cell(0, db_->grid.cells() - 1), coin(0, 3), cap(1, 127);
+  for (int trial = 0; trial < 500; ++trial) {
+    Scan s;
+    for (auto& v : s.radii_px) v = coin(rng) == 0 ? kNoCrossing : static_cast<std::uint8_t>(byte(rng));
+    for (auto& v : s.ray_end_px) v = coin(rng) == 0 ? kRayHidden : static_cast<std::uint8_t>(byte(rng));
+    const std::uint8_t* entry = db_->cell_features(cell(rng));
+    const int c = trial < 2 ? (trial == 0 ? 1 : 127) : cap(rng);
+    const CostTerms ref = bounded_cost_reference(entry, s, c);
+    const PreparedScan p = prepare_scan(s);
+    ASSERT_EQ(bounded_cost_portable(entry, p, c), ref) << trial;
+    ASSERT_EQ(bounded_cost_fast(entry, p, c), ref) << trial;
+  }
+  // Worst case: every slot of the entry is a crossing and the scan has none: each costs the cap.
+  Scan none;
+  none.radii_px.fill(kNoCrossing);
+  none.ray_end_px.fill(kRayToViewEnd);
+  const std::vector<std::uint8_t> all(kFeatureBytes, 100);
+  EXPECT_EQ(bounded_cost_fast(all.data(), prepare_scan(none), 127), (CostTerms{127u * 1440u, 1440u}));
+  EXPECT_EQ(bounded_cost_reference(all.data(), none, 127), (CostTerms{127u * 1440u, 1440u}));
+}
+
+// The bounded cost by hand on one ray: each crossing against the nearest on the other side of
+// the ray, capped; a crossing with no counterpart costs the cap, wherever it lies on the ray.
+TEST(MatcherBoundedCost, NearestCrossingCappedAndNormalisedByTheCrossingsCompared) {
+  std::vector<std::uint8_t> db(kFeatureBytes, kNoCrossing);
+  Scan s;
+  s.radii_px.fill(kNoCrossing);
+  s.ray_end_px.fill(kRayHidden);
+  s.ray_end_px[3] = kRayToViewEnd;
+  const std::uint8_t entry[] = {40, 90, 150, kNoCrossing};
+  std::copy_n(entry, 4, db.begin() + 4 * 3);
+  // Seen: 42 and 150 match (2 px, 0 px), a spurious 60 comes first, 90 was not seen.
+  const std::uint8_t seen[] = {42, 60, 150, kNoCrossing};
+  std::copy_n(seen, 4, s.radii_px.begin() + 4 * 3);
+  const int cap = 16;
+  // Database side: 40 -> 2, 90 -> min(|90 - 60|, 16) = 16, 150 -> 0. Scan side: 42 -> 2,
+  // 60 -> min(|60 - 40|, 16) = 16, 150 -> 0. Six crossings.
+  EXPECT_EQ(bounded_cost_reference(db.data(), s, cap), (CostTerms{36u, 6u}));
+  EXPECT_EQ(bounded_cost_fast(db.data(), prepare_scan(s), cap), (CostTerms{36u, 6u}));
+  MatchOptions mo;
+  mo.crossing_cap_px = cap;
+  EXPECT_DOUBLE_EQ(match_error(db.data(), prepare_scan(s), mo), 6.0);
+  // The paper's slot-by-slot SAD: |40-42| + |90-60| + |150-150| + 0 = 32 over one ray.
+  mo.cost = MatchCost::kPaperSad;
+  EXPECT_DOUBLE_EQ(match_error(db.data(), prepare_scan(s), mo), 32.0);
+  mo.cost = MatchCost::kBounded;
+  // An obstacle at 100 ends the ray: 150 on both sides is unknown, 90 still unseen.
+  s.ray_end_px[3] = 100;
+  EXPECT_EQ(bounded_cost_reference(db.data(), s, cap), (CostTerms{36u, 4u}));
+  EXPECT_EQ(bounded_cost_fast(db.data(), prepare_scan(s), cap), (CostTerms{36u, 4u}));
+  // Near the end of the radius range a missing crossing still costs the full cap.
+  s.ray_end_px[3] = kRayToViewEnd;
+  const std::uint8_t far_entry[] = {250, kNoCrossing, kNoCrossing, kNoCrossing};
+  const std::uint8_t far_seen[] = {kNoCrossing, kNoCrossing, kNoCrossing, kNoCrossing};
+  std::copy_n(far_entry, 4, db.begin() + 4 * 3);
+  std::copy_n(far_seen, 4, s.radii_px.begin() + 4 * 3);
+  EXPECT_EQ(bounded_cost_fast(db.data(), prepare_scan(s), cap), (CostTerms{16u, 1u}));
+  // Nothing on either side: nothing to compare.
+  std::fill_n(db.begin() + 4 * 3, 4, kNoCrossing);
+  EXPECT_EQ(match_error(db.data(), prepare_scan(s), mo), kNoError);
+}
+
 // A ray cut short by an obstacle is compared up to its end only: a database crossing at or
 // beyond the end is unknown, not missing (hand-computed sums).
 TEST(MatcherRayEnd, DatabaseCrossingsBeyondTheRayEndAreNotCompared) {
@@ -99,19 +176,46 @@ TEST(MatcherRayEnd, DatabaseCrossingsBeyondTheRayEndAreNotCompared) {
   EXPECT_EQ(prepare_scan(s).rays_used, 1);
 }
 
-TEST_F(Matcher, ErrorIsNormalisedByTheRaysUsed) {
+TEST_F(Matcher, PaperSadIsNormalisedByTheRaysUsed) {
   const int cell = 27 * 75 + 37;  // (375, 275)
   Scan s = db_scan(cell);
-  for (auto& v : s.radii_px) v = v == kNoCrossing ? 254 : static_cast<std::uint8_t>(v + 1);  // every crossing off by 1
-  MatchResult m = local_search(*db_, s, {375, 275}, 0.0);
+  for (auto& v : s.radii_px) v = v == kNoCrossing ? 254 : static_cast<std::uint8_t>(v + 1);  // every slot off by 1
+  MatchOptions paper;
+  paper.cost = MatchCost::kPaperSad;
+  MatchResult m = local_search(*db_, s, {375, 275}, 0.0, paper);
   EXPECT_EQ(m.cells_searched, 1);
   EXPECT_EQ(m.rays_used, 360);
   EXPECT_DOUBLE_EQ(m.error, 4.0);  // 4 crossings x 1 px per ray
   for (int k = 0; k < kScanRays; k += 2) s.ray_end_px[static_cast<std::size_t>(k)] = kRayHidden;
   for (int k = 100; k < 140; ++k) s.ray_end_px[static_cast<std::size_t>(k)] = kRayHidden;
-  m = local_search(*db_, s, {375, 275}, 0.0);
+  m = local_search(*db_, s, {375, 275}, 0.0, paper);
   EXPECT_EQ(m.rays_used, 160);
   EXPECT_DOUBLE_EQ(m.error, 4.0);  // same E with a third of the rays hidden
+  // Nothing seen: no match.
+  s.ray_end_px.fill(kRayHidden);
+  m = global_search(*db_, s, paper);
+  EXPECT_EQ(m.cell, -1);
+  EXPECT_EQ(m.error, kNoError);
+}
+
+TEST_F(Matcher, BoundedErrorIsThePixelsPerCrossingWhateverIsHidden) {
+  const int cell = 27 * 75 + 37;  // (375, 275)
+  Scan s = db_scan(cell);
+  int crossings = 0;
+  for (auto& v : s.radii_px) {
+    if (v == kNoCrossing) continue;
+    ASSERT_LT(v, 254);
+    v = static_cast<std::uint8_t>(v + 1);  // every crossing off by 1 px
+    ++crossings;
+  }
+  ASSERT_GT(crossings, 300);
+  MatchResult m = local_search(*db_, s, {375, 275}, 0.0);
+  EXPECT_DOUBLE_EQ(m.error, 1.0);  // 1 px per crossing, both sides
+  for (int k = 0; k < kScanRays; k += 2) s.ray_end_px[static_cast<std::size_t>(k)] = kRayHidden;
+  for (int k = 100; k < 140; ++k) s.ray_end_px[static_cast<std::size_t>(k)] = kRayHidden;
+  m = local_search(*db_, s, {375, 275}, 0.0);
+  EXPECT_EQ(m.rays_used, 160);
+  EXPECT_DOUBLE_EQ(m.error, 1.0);  // the same with a third of the rays hidden
   // Nothing seen: no match.
   s.ray_end_px.fill(kRayHidden);
   m = global_search(*db_, s);
@@ -250,7 +354,7 @@ TEST_F(Matcher, AmbiguityWhenLittleIsSeen) {
   Scan s = scan_image(renderer_->render(truth, sim::noise_free()), renderer_->camera(), truth.yaw_deg);
   MatchResult m = global_search(*db_, s);
   EXPECT_FALSE(m.ambiguous) << "E " << m.error << " second " << m.second_error;
-  EXPECT_GT(m.second_error, 3.0 * m.error + 10.0);
+  EXPECT_GT(m.second_error, 3.0 * m.error + 0.25 * MatchOptions{}.crossing_cap_px);
   // Only the rays looking straight at the bottom boundary (field directions 265..275) are left:
   // they see one line 100 cm away, as they would from anywhere along y = 175.
   for (int k = 0; k < kScanRays; ++k) s.ray_end_px[static_cast<std::size_t>(k)] = (k >= 265 && k <= 275) ? kRayToViewEnd : kRayHidden;
@@ -294,6 +398,82 @@ TEST_F(Matcher, FieldScanIsTheBearingsRotatedOnceWithTheSameResults) {
   EXPECT_EQ(l1.position_cm, l2.position_cm);
   EXPECT_EQ(l1.refined_error, l2.refined_error);
   EXPECT_LT((l1.position_cm - truth.position_cm()).norm(), 2.0);
+}
+
+// Where the shipped E_TH and ambiguity ratio come from (docs/VISION.md "Match error"): on noisy
+// rendered frames with 0-4 other robots at random poses the global search finds the right cell
+// or its neighbour, whose error stays below E_TH, and the second minimum elsewhere is always more
+// than the ambiguity ratio above it. A second minimum can come close to E_TH (printed): the
+// ambiguity test, not E_TH, tells a wrong place apart. The paper's SAD is measured beside it.
+TEST_F(Matcher, ShippedThresholdsSeparateRightFromWrongOnRenderedFrames) {
+  const std::uint64_t seed = 77;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> ux(10, 740), uy(10, 540), uyaw(-180, 180);
+  const LocalizerConfig shipped;
+  MatchOptions bounded, paper;
+  bounded.crossing_cap_px = shipped.crossing_cap_px;
+  bounded.ambiguity_ratio = shipped.ambiguity_ratio;
+  paper.cost = MatchCost::kPaperSad;
+  struct Stats {
+    double worst_right = 0.0, best_second = kNoError, min_ratio = kNoError;
+    int wrong = 0;
+  } sb, sp;
+  const auto record = [&](Stats& st, const MatchResult& m, const Pose2& truth) {
+    const double off = (m.grid_position_cm - truth.position_cm()).cwiseAbs().maxCoeff();
+    if (off > 1.5 * db_->grid.step_cm) {  // beyond the neighbouring cell: a wrong place
+      ++st.wrong;
+      return;
+    }
+    st.worst_right = std::max(st.worst_right, m.error);
+    st.best_second = std::min(st.best_second, m.second_error);
+    st.min_ratio = std::min(st.min_ratio, m.second_error / m.error);
+  };
+  const int n = 60;
+  for (int i = 0; i < n; ++i) {
+    const Pose2 truth{ux(rng), uy(rng), uyaw(rng)};
+    const FieldScan f = noisy_field_scan(truth, seed * 1000 + static_cast<std::uint64_t>(i), i % 5);
+    record(sb, global_search(*db_, f, bounded), truth);
+    record(sp, global_search(*db_, f, paper), truth);
+  }
+  for (const auto& [name, st] : {std::pair{"bounded", sb}, std::pair{"paper SAD", sp}}) {
+    std::printf("%-9s over %d frames: right cell's error <= %.2f, second minima >= %.2f, ratio >= %.2f, %d wrong cells\n",
+                name, n, st.worst_right, st.best_second, st.min_ratio, st.wrong);
+  }
+  EXPECT_EQ(sb.wrong, 0);
+  EXPECT_LT(sb.worst_right, shipped.e_th);
+  EXPECT_GT(sb.min_ratio, shipped.ambiguity_ratio);
+}
+
+// The refinement (linearised ray cast) reaches the reference pattern search's accuracy with a
+// fraction of its full ray casts.
+TEST_F(Matcher, RefinementMatchesThePatternSearchWithFewerRayCasts) {
+  const std::uint64_t seed = 78;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> ux(10, 740), uy(10, 540), uyaw(-180, 180);
+  const int n = 40;
+  double sum_fast = 0.0, sum_ref = 0.0;
+  int probes_fast = 0, probes_ref = 0;
+  for (int i = 0; i < n; ++i) {
+    const Pose2 truth{ux(rng), uy(rng), uyaw(rng)};
+    const FieldScan f = noisy_field_scan(truth, seed * 1000 + static_cast<std::uint64_t>(i), i % 3);
+    MatchResult a = local_search(*db_, f, truth.position_cm(), 20.0);
+    interpolate_match(*db_, f, a);
+    MatchResult b = a;
+    refine_match(renderer_->field(), renderer_->camera(), f, a);
+    refine_match_reference(renderer_->field(), renderer_->camera(), f, b);
+    sum_fast += (a.position_cm - truth.position_cm()).norm();
+    sum_ref += (b.position_cm - truth.position_cm()).norm();
+    probes_fast += a.refine_casts;
+    probes_ref += b.refine_casts;
+    // The reported error is the exact ray-cast error at the reported position.
+    EXPECT_EQ(a.refined_error, error_at(renderer_->field(), renderer_->camera(), f.prepared, a.position_cm));
+  }
+  std::printf("refine_match: mean error %.2f cm, %.1f ray casts; reference pattern search %.2f cm, %.1f ray casts\n",
+              sum_fast / n, static_cast<double>(probes_fast) / n, sum_ref / n, static_cast<double>(probes_ref) / n);
+  EXPECT_LE(sum_fast / n, sum_ref / n + 0.1);
+  EXPECT_LT(probes_fast, probes_ref);
 }
 
 }  // namespace

@@ -58,7 +58,11 @@ enum class LocalizerMode {
 struct LocalizerConfig {
   LocalizerMode mode = LocalizerMode::kFull;
   FuzzyConfig fuzzy;
-  double e_th = 20.0;              ///< match threshold on the normalised error (paper: 20)
+  /// The match error (docs/VISION.md "Match error"); kPaper uses kPaperSad with the paper's E_TH 20.
+  MatchCost match_cost = MatchOptions{}.cost;
+  int crossing_cap_px = MatchOptions{}.crossing_cap_px;  ///< kBounded: cap C of one crossing's cost
+  double e_th = 8.0;               ///< match threshold on the normalised error (kBounded: px per crossing; paper: 20)
+  double ambiguity_ratio = MatchOptions{}.ambiguity_ratio;  ///< ambiguous when 2nd error <= ratio * best
   double reset_period_ms = 125.0;  ///< odometry origin reset period (paper: 125 ms)
   double history_ms = 1000.0;      ///< odometry history kept for late frames; older frames are dropped
   int scan_rays_per_degree = 4;    ///< on_image(): robot-frame scan step (for re-rotating by yaw)

@@ -1,6 +1,8 @@
-// Matcher: equation (5)'s sum of absolute differences between an observed scan and database
-// entries, leaving out missing rays and normalised by the rays used (so that a match threshold
-// E_TH means the same with or without obstacles), the global search (6) over every grid point,
+// Matcher: the match error between an observed scan and database entries (by default a bounded
+// per-crossing cost normalised by the crossings compared, so that one missing or spurious crossing
+// costs a bounded amount and a threshold E_TH means the same on real and rendered frames, with or
+// without obstacles; equation (5)'s literal SAD stays available as MatchCost::kPaperSad), the
+// global search (6) over every grid point,
 // the local search within a range A around a pose, sub-grid refinement by ray casting, yaw
 // estimation from the scan, and an ambiguity report (best versus second-best distinct minimum).
 #pragma once
@@ -50,14 +52,41 @@ struct FieldScan {
 /// The same sum, vectorised (AVX2 when the CPU has it, else a portable loop the compiler vectorises).
 [[nodiscard]] std::uint32_t sad_fast(const std::uint8_t* db_entry, const PreparedScan& scan);
 
+/// The match error (docs/VISION.md, "Match error").
+enum class MatchCost {
+  /// Per ray, every crossing of the scan and of the database entry (clipped at the ray's end) is
+  /// compared with the nearest crossing on the other side of the same ray: min(|d - o|, cap_px),
+  /// and cap_px when that side has none on the ray. Summed over both sides and divided by the
+  /// crossings on both sides (the "usable crossings"): a mean in px within [0, cap_px].
+  kBounded,
+  /// Equation (5) as printed: slot-by-slot |d - o| over the four crossings (a missing crossing
+  /// costs |255 - r|), divided by the rays used.
+  kPaperSad,
+};
+
+/// A bounded cost before normalisation: the capped sum and the crossings it covers.
+struct CostTerms {
+  std::uint32_t sum = 0;
+  std::uint32_t crossings = 0;
+  bool operator==(const CostTerms&) const = default;
+};
+/// The bounded cost, straightforward scalar code on the raw scan (the reference). cap_px 1..127.
+[[nodiscard]] CostTerms bounded_cost_reference(const std::uint8_t* db_entry, const Scan& scan, int cap_px);
+/// The same on a prepared scan, a portable loop (the fallback without AVX2).
+[[nodiscard]] CostTerms bounded_cost_portable(const std::uint8_t* db_entry, const PreparedScan& scan, int cap_px);
+/// The same, AVX2 when the CPU has it (else bounded_cost_portable); equal bit for bit.
+[[nodiscard]] CostTerms bounded_cost_fast(const std::uint8_t* db_entry, const PreparedScan& scan, int cap_px);
+
 /// How image_to_position goes below the grid step.
 enum class Refinement {
   kNone,         // the best grid point
   kInterpolate,  // V-shaped fit of the error at the best point and its four neighbours (~1 us)
-  kRayCast,      // then a pattern search on errors of ray-cast scans at off-grid points (~1 ms)
+  kRayCast,      // then a pattern search on (linearised) ray-cast errors at off-grid points (~0.5 ms)
 };
 
 struct MatchOptions {
+  MatchCost cost = MatchCost::kBounded;
+  int crossing_cap_px = 16;               // kBounded's cap C (the localizer config's crossing_cap_px)
   double ambiguity_separation_cm = 50.0;  // a second minimum must lie at least this far away
   double ambiguity_ratio = 1.25;          // ambiguous when second_error <= ratio * best error
   Refinement refinement = Refinement::kInterpolate;
@@ -68,17 +97,23 @@ struct MatchOptions {
 
 inline constexpr double kNoError = std::numeric_limits<double>::infinity();
 
+/// The normalised error of one database entry (or expected scan) under options.cost; kNoError
+/// when nothing can be compared (no ray seen, or kBounded with no crossing on either side).
+[[nodiscard]] double match_error(const std::uint8_t* db_entry, const PreparedScan& scan, const MatchOptions& options);
+
 struct MatchResult {
   Eigen::Vector2d position_cm{0.0, 0.0};       // refined when requested, else the grid point
   Eigen::Vector2d grid_position_cm{0.0, 0.0};  // best grid point
   int cell = -1;
-  double error = kNoError;          // normalised: SAD / rays used, at the best grid point
+  double error = kNoError;          // normalised (match_error), at the best grid point
   double refined_error = kNoError;  // at position_cm (equals error without refinement)
   double second_error = kNoError;   // best distinct local minimum elsewhere (global search)
   Eigen::Vector2d second_position_cm{0.0, 0.0};
   bool ambiguous = false;
   int rays_used = 0;
   int cells_searched = 0;
+  int refine_probes = 0;  // points refine_match evaluated
+  int refine_casts = 0;   // full ray casts among them (each ~0.1 ms; the rest come from a linear model)
 };
 
 /// Global search over all grid points.
@@ -97,20 +132,28 @@ struct MatchResult {
 /// (at a 20 cm step, 10 cm searches the centre only and 30 cm the same 3 x 3 as 20 cm).
 [[nodiscard]] int local_search_reach_cells(double range_cm, double grid_step_cm);
 
-/// Normalised error of the scan against the expected scan at any position (ray cast on the fly).
+/// Normalised error (match_error) of the scan against the expected scan at any position (ray cast on the fly).
 [[nodiscard]] double error_at(const FieldGeometry& field, const CameraModel& camera, const PreparedScan& scan,
-                              const Eigen::Vector2d& position_cm);
+                              const Eigen::Vector2d& position_cm, const MatchOptions& options = {});
 
 /// Sub-grid position from the database errors at the best grid point and its four neighbours,
-/// fitting a V (the shape of a sum of absolute differences) along x and along y; updates
+/// fitting a V (the shape of a sum of absolute differences, and of the bounded cost near its minimum) along x and along y; updates
 /// position_cm (within half a step of the grid point). refined_error is left unchanged.
-void interpolate_match(const FeatureDb& db, const FieldScan& scan, MatchResult& result);
-void interpolate_match(const FeatureDb& db, const Scan& scan, MatchResult& result);
+void interpolate_match(const FeatureDb& db, const FieldScan& scan, MatchResult& result, const MatchOptions& options = {});
+void interpolate_match(const FeatureDb& db, const Scan& scan, MatchResult& result, const MatchOptions& options = {});
 
 /// Pattern search on ray-cast errors from result.position_cm with halving steps (4 neighbours per
-/// step); updates position_cm and refined_error.
+/// step) and below each step the V fitted through the centre and its neighbours. The points come
+/// from a linearised ray cast (three casts give every white run's radius and its gradient; rays
+/// where that does not hold are cast exactly) and the end point is cast exactly: refined_error is
+/// the true ray-cast error there, never above the start's. Updates position_cm, refined_error,
+/// refine_probes and refine_casts.
 void refine_match(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, MatchResult& result,
                   const MatchOptions& options = {});
+/// The plain pattern search (4 neighbours per step, re-cast on every visit, halving when none is
+/// better): the reference refine_match is measured against (bench_frame_path).
+void refine_match_reference(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan,
+                            MatchResult& result, const MatchOptions& options = {});
 void refine_match(const FieldGeometry& field, const CameraModel& camera, const Scan& scan, MatchResult& result,
                   const MatchOptions& options = {});
 
@@ -128,7 +171,8 @@ struct YawEstimate {
   double error = kNoError;
 };
 [[nodiscard]] YawEstimate estimate_yaw(const FieldGeometry& field, const CameraModel& camera, const BearingScan& bearings,
-                                       const Eigen::Vector2d& position_cm, double yaw_hint_deg, double range_deg);
+                                       const Eigen::Vector2d& position_cm, double yaw_hint_deg, double range_deg,
+                                       const MatchOptions& options = {});
 
 /// Global search without a heading (no gyro, or after a kidnapping): every yaw from 0 to 360 in
 /// yaw_step_deg steps is tried on `bearings` (rotate_to_field + global_search); the best (cell,

@@ -425,7 +425,7 @@ void Localizer::note_global(FrameReport& rep, const SingleFrameResult& global) {
 std::optional<double> Localizer::corrected_yaw(double t_ms, const BearingScan& bearings,
                                                const Eigen::Vector2d& position_cm, double gyro_yaw_deg) {
   const double predicted = heading_filter_.predict(t_ms, gyro_yaw_deg);
-  const YawEstimate est = estimate_yaw(field_, camera_, bearings, position_cm, predicted, config_.yaw_search_deg);
+  const YawEstimate est = estimate_yaw(field_, camera_, bearings, position_cm, predicted, config_.yaw_search_deg, match_options_);
   if (!(est.error < config_.e_th)) return std::nullopt;
   ++stats_.yaw_corrections;
   return heading_filter_.correct(t_ms, predicted, est.yaw_deg);

@@ -9,6 +9,8 @@ namespace omniloc {
 LocalizerConfig LocalizerConfig::paper() {
   LocalizerConfig c;
   c.mode = LocalizerMode::kPaper;
+  c.match_cost = MatchCost::kPaperSad;  // equation (5) as printed, and the paper's threshold on it
+  c.e_th = 20.0;
   c.refinement = Refinement::kNone;
   c.min_range_cm = 0.0;
   c.refuse_ambiguous = false;
@@ -26,6 +28,14 @@ void LocalizerConfig::validate(const config::Origin& at) const {
   };
   fuzzy.validate(at / "fuzzy");
   positive(e_th, "e_th");
+  require(crossing_cap_px >= 1 && crossing_cap_px <= 127, at / "crossing_cap_px",
+          "must be 1..127 px (the two sides' costs of a slot add up in one byte)", crossing_cap_px);
+  if (match_cost == MatchCost::kBounded) {
+    require(e_th <= crossing_cap_px, at / "e_th",
+            "must not exceed crossing_cap_px: the bounded error never does, every match would be good", e_th);
+  }
+  require(std::isfinite(ambiguity_ratio) && ambiguity_ratio >= 1.0, at / "ambiguity_ratio", "must be a number >= 1",
+          ambiguity_ratio);
   positive(reset_period_ms, "reset_period_ms");
   require(std::isfinite(history_ms) && history_ms >= 100.0, at / "history_ms",
           "must be at least 100 ms (frames arrive up to ~50 ms late)", history_ms);
@@ -65,7 +75,11 @@ const config::KeyTable<LocalizerConfig>& localizer_config_keys() {
             c.mode = mode;
           },
           [](const L& c) { return config::Json(c.mode == LocalizerMode::kPaper ? "paper" : "full"); }),
+      config::choice<L, MatchCost>("match_cost", &L::match_cost,
+                                   {{"bounded", MatchCost::kBounded}, {"paper_sad", MatchCost::kPaperSad}}),
+      key("crossing_cap_px", &L::crossing_cap_px),
       key("e_th", &L::e_th),
+      key("ambiguity_ratio", &L::ambiguity_ratio),
       key("reset_period_ms", &L::reset_period_ms),
       key("history_ms", &L::history_ms),
       key("scan_rays_per_degree", &L::scan_rays_per_degree),

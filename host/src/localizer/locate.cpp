@@ -11,6 +11,9 @@ namespace omniloc {
 MatchOptions match_options_of(const LocalizerConfig& config) {
   MatchOptions o;
   o.refinement = config.refinement;
+  o.cost = config.match_cost;
+  o.crossing_cap_px = config.crossing_cap_px;
+  o.ambiguity_ratio = config.ambiguity_ratio;
   return o;
 }
 
@@ -31,7 +34,7 @@ Candidate refine_second(const LocalizerConfig& config, const FieldGeometry& fiel
                         const FeatureDb& db, const BearingScan& bearings, const Eigen::Vector2d& position_cm,
                         double yaw_deg, bool search_yaw) {
   const MatchOptions opt = match_options_of(config);
-  if (search_yaw) yaw_deg = wrap_deg(estimate_yaw(field, camera, bearings, position_cm, yaw_deg, kAnyYawStepDeg).yaw_deg);
+  if (search_yaw) yaw_deg = wrap_deg(estimate_yaw(field, camera, bearings, position_cm, yaw_deg, kAnyYawStepDeg, opt).yaw_deg);
   const FieldScan scan = make_field_scan(bearings, yaw_deg);
   Candidate c;
   c.match = local_search(db, scan, position_cm, db.grid.step_cm, opt);

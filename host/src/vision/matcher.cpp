@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
+#include <utility>
 
 #include "omniloc/conventions.hpp"
 
@@ -15,20 +17,20 @@ struct Window {
 };
 
 // Fills the errors of a window of cells, picks the best, the second distinct minimum and the
-// ambiguity flag. `sad_of(cell)` returns the raw SAD.
-template <class SadOf>
-MatchResult search_window(const FeatureDb& db, const Window& w, int rays_used, const MatchOptions& opt, SadOf sad_of) {
+// ambiguity flag. `error_of(cell)` returns the normalised error (kNoError: nothing compared).
+template <class ErrorOf>
+MatchResult search_window(const FeatureDb& db, const Window& w, int rays_used, const MatchOptions& opt, ErrorOf error_of) {
   MatchResult r;
   r.rays_used = rays_used;
   if (rays_used == 0) return r;  // nothing seen: error stays kNoError
   const int wi = w.i1 - w.i0 + 1, wj = w.j1 - w.j0 + 1;
-  std::vector<std::uint32_t> err(static_cast<std::size_t>(wi * wj));
-  std::uint32_t best = UINT32_MAX;
-  int best_at = 0;
+  std::vector<double> err(static_cast<std::size_t>(wi * wj));
+  double best = kNoError;
+  int best_at = -1;
   for (int j = 0; j < wj; ++j) {
     const int row = (w.j0 + j) * db.grid.nx;
     for (int i = 0; i < wi; ++i) {
-      const std::uint32_t e = sad_of(row + w.i0 + i);
+      const double e = error_of(row + w.i0 + i);
       err[static_cast<std::size_t>(j * wi + i)] = e;
       if (e < best) {
         best = e;
@@ -37,18 +39,19 @@ MatchResult search_window(const FeatureDb& db, const Window& w, int rays_used, c
     }
   }
   r.cells_searched = wi * wj;
+  if (best_at < 0) return r;  // no cell had anything to compare
   const int bi = best_at % wi, bj = best_at / wi;
   r.cell = (w.j0 + bj) * db.grid.nx + w.i0 + bi;
   r.grid_position_cm = db.grid.position(r.cell);
   r.position_cm = r.grid_position_cm;
-  r.error = static_cast<double>(best) / rays_used;
+  r.error = best;
   r.refined_error = r.error;
   // Second-best distinct minimum: a local minimum of the error surface far enough from the best.
   const double sep2 = opt.ambiguity_separation_cm * opt.ambiguity_separation_cm;
-  std::uint32_t second = UINT32_MAX;
+  double second = kNoError;
   for (int j = 0; j < wj; ++j) {
     for (int i = 0; i < wi; ++i) {
-      const std::uint32_t e = err[static_cast<std::size_t>(j * wi + i)];
+      const double e = err[static_cast<std::size_t>(j * wi + i)];
       if (e >= second) continue;
       const double dx = (i - bi) * db.grid.step_cm, dy = (j - bj) * db.grid.step_cm;
       if (dx * dx + dy * dy < sep2) continue;
@@ -69,8 +72,8 @@ MatchResult search_window(const FeatureDb& db, const Window& w, int rays_used, c
       }
     }
   }
-  if (second != UINT32_MAX) {
-    r.second_error = static_cast<double>(second) / rays_used;
+  if (second < kNoError) {
+    r.second_error = second;
     r.ambiguous = r.second_error <= opt.ambiguity_ratio * r.error;
   }
   return r;
@@ -102,7 +105,7 @@ FieldScan make_field_scan(const Scan& field_frame_scan) {
 MatchResult global_search(const FeatureDb& db, const FieldScan& scan, const MatchOptions& opt) {
   check_db(db);
   const PreparedScan& p = scan.prepared;
-  return search_window(db, full_window(db), p.rays_used, opt, [&](int c) { return sad_fast(db.cell_features(c), p); });
+  return search_window(db, full_window(db), p.rays_used, opt, [&](int c) { return match_error(db.cell_features(c), p, opt); });
 }
 
 MatchResult global_search(const FeatureDb& db, const Scan& scan, const MatchOptions& opt) {
@@ -111,8 +114,12 @@ MatchResult global_search(const FeatureDb& db, const Scan& scan, const MatchOpti
 
 MatchResult global_search_reference(const FeatureDb& db, const Scan& scan, const MatchOptions& opt) {
   check_db(db);
-  return search_window(db, full_window(db), scan.rays_valid(), opt,
-                       [&](int c) { return sad_reference(db.cell_features(c), scan); });
+  const int rays = scan.rays_valid();
+  return search_window(db, full_window(db), rays, opt, [&](int c) {
+    if (opt.cost == MatchCost::kPaperSad) return static_cast<double>(sad_reference(db.cell_features(c), scan)) / rays;
+    const CostTerms t = bounded_cost_reference(db.cell_features(c), scan, opt.crossing_cap_px);
+    return t.crossings == 0 ? kNoError : static_cast<double>(t.sum) / t.crossings;
+  });
 }
 
 int local_search_reach_cells(double range_cm, double grid_step_cm) {
@@ -132,7 +139,7 @@ MatchResult local_search(const FeatureDb& db, const FieldScan& scan, const Eigen
   const Window w{std::max(0, ci - reach), std::min(g.nx - 1, ci + reach), std::max(0, cj - reach),
                  std::min(g.ny - 1, cj + reach)};
   const PreparedScan& p = scan.prepared;
-  return search_window(db, w, p.rays_used, opt, [&](int c) { return sad_fast(db.cell_features(c), p); });
+  return search_window(db, w, p.rays_used, opt, [&](int c) { return match_error(db.cell_features(c), p, opt); });
 }
 
 MatchResult local_search(const FeatureDb& db, const Scan& scan, const Eigen::Vector2d& centre, double range_cm,
@@ -140,12 +147,13 @@ MatchResult local_search(const FeatureDb& db, const Scan& scan, const Eigen::Vec
   return local_search(db, make_field_scan(scan), centre, range_cm, opt);
 }
 
-double error_at(const FieldGeometry& field, const CameraModel& camera, const PreparedScan& p, const Eigen::Vector2d& pos) {
+double error_at(const FieldGeometry& field, const CameraModel& camera, const PreparedScan& p, const Eigen::Vector2d& pos,
+                const MatchOptions& opt) {
   if (p.rays_used == 0) return kNoError;
   alignas(32) std::array<std::uint8_t, kFeatureBytes> expected{};
   std::vector<WhiteInterval> scratch;
   expected_features(field, camera, pos, expected.data(), scratch);
-  return static_cast<double>(sad_fast(expected.data(), p)) / p.rays_used;
+  return match_error(expected.data(), p, opt);
 }
 
 namespace {
@@ -161,29 +169,30 @@ double equiangular_offset(double em, double e0, double ep) {
 
 }  // namespace
 
-void interpolate_match(const FeatureDb& db, const FieldScan& scan, MatchResult& r) {
+void interpolate_match(const FeatureDb& db, const FieldScan& scan, MatchResult& r, const MatchOptions& opt) {
   if (r.cell < 0 || r.rays_used == 0) return;
   const PreparedScan& p = scan.prepared;
   const GridSpec& g = db.grid;
   const int i = r.cell % g.nx, j = r.cell / g.nx;
-  const double e0 = sad_fast(db.cell_features(r.cell), p);
+  const double e0 = match_error(db.cell_features(r.cell), p, opt);
   auto err = [&](int ii, int jj) -> double {
-    if (ii < 0 || jj < 0 || ii >= g.nx || jj >= g.ny) return -1.0;
-    return sad_fast(db.cell_features(jj * g.nx + ii), p);
+    if (ii < 0 || jj < 0 || ii >= g.nx || jj >= g.ny) return kNoError;
+    return match_error(db.cell_features(jj * g.nx + ii), p, opt);
   };
   auto offset = [&](double em, double ep) {
-    if (em < 0.0 || ep < 0.0) return 0.0;  // at the grid's edge: stay on the grid point
+    // At the grid's edge (or next to a cell with nothing to compare): stay on the grid point.
+    if (!std::isfinite(em) || !std::isfinite(ep) || !std::isfinite(e0)) return 0.0;
     return equiangular_offset(em, e0, ep);
   };
   r.position_cm = r.grid_position_cm + g.step_cm * Eigen::Vector2d(offset(err(i - 1, j), err(i + 1, j)),
                                                                    offset(err(i, j - 1), err(i, j + 1)));
 }
 
-void interpolate_match(const FeatureDb& db, const Scan& scan, MatchResult& r) {
-  interpolate_match(db, make_field_scan(scan), r);
+void interpolate_match(const FeatureDb& db, const Scan& scan, MatchResult& r, const MatchOptions& opt) {
+  interpolate_match(db, make_field_scan(scan), r, opt);
 }
 
-void refine_match(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, MatchResult& r,
+void refine_match_reference(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, MatchResult& r,
                   const MatchOptions& opt) {
   if (r.cell < 0 || r.rays_used == 0) return;
   // A non-finite start would never compare equal to itself and never stop (a corrupt grid origin
@@ -191,7 +200,8 @@ void refine_match(const FieldGeometry& field, const CameraModel& camera, const F
   if (!r.position_cm.allFinite() || !r.grid_position_cm.allFinite()) return;
   const PreparedScan& p = scan.prepared;
   Eigen::Vector2d pos = r.position_cm;
-  double best = pos == r.grid_position_cm ? r.error : error_at(field, camera, p, pos);
+  int probes = pos == r.grid_position_cm ? 0 : 1;
+  double best = pos == r.grid_position_cm ? r.error : error_at(field, camera, p, pos, opt);
   const Eigen::Vector2d steps[] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
   const double limit = opt.refine_reach_cm;
   // Each move lowers the error strictly and stays within `limit`, so the walk ends; the cap only
@@ -204,7 +214,8 @@ void refine_match(const FieldGeometry& field, const CameraModel& camera, const F
     for (const auto& d : steps) {
       const Eigen::Vector2d q = pos + step * d;
       if ((q - r.grid_position_cm).cwiseAbs().maxCoeff() > limit) continue;
-      const double e = error_at(field, camera, p, q);
+      const double e = error_at(field, camera, p, q, opt);
+      ++probes;
       if (e < best) {
         best = e;
         best_pos = q;
@@ -218,6 +229,218 @@ void refine_match(const FieldGeometry& field, const CameraModel& camera, const F
   }
   r.position_cm = pos;
   r.refined_error = best;
+  r.refine_probes = probes;
+  r.refine_casts = probes;
+}
+
+namespace {
+
+// The radii of a ray's first crossings from its white runs (px from the image centre, continuous),
+// exactly as expected_features turns them into samples: the integer samples inside each run, an
+// entry counting when at least min_gap_px non-white samples precede it.
+template <class Runs>
+void crossings_of_runs(int k0, int k1, int min_gap_px, const Runs& runs, std::uint8_t* out) {
+  std::fill(out, out + kCrossingsPerRay, kNoCrossing);
+  int found = 0;
+  int last_white = k0 - 1;  // as if white just before the first sample: it cannot be an entry
+  for (const auto& [enter_px, exit_px] : runs) {
+    const int ka = std::max(static_cast<int>(std::ceil(enter_px - 1e-9)), k0);
+    const int kb = std::min(static_cast<int>(std::floor(exit_px + 1e-9)), k1);
+    if (ka > kb) continue;
+    if (ka - last_white - 1 >= min_gap_px && found < kCrossingsPerRay) out[found++] = static_cast<std::uint8_t>(ka);
+    last_white = kb;
+  }
+}
+
+// Ray casting is most of the refinement's cost (~0.1 ms a point). Within a few cm of a point,
+// every white run a ray crosses keeps its place on the ray to first order: where a ray from a
+// shifted origin enters a straight line moves exactly linearly with the shift, an arc's nearly
+// so, and the radius table is smooth. So the caster casts three points (the centre, and 1 cm
+// along x and along y), keeps each run's radii in px and their gradients, and gives the expected
+// scan at any point near the centre from that model. A ray whose runs differ between the three
+// casts (a line's end or an arc's tangent lies in between) is cast exactly at every point. At the
+// centre the model is the ray cast itself, bit for bit.
+class LinearisedCaster {
+ public:
+  LinearisedCaster(const FieldGeometry& field, const CameraModel& camera, const Eigen::Vector2d& centre_cm)
+      : caster_(field), camera_(camera), centre_(centre_cm) {
+    k0_ = static_cast<int>(std::ceil(camera.min_radius_px()));
+    k1_ = static_cast<int>(std::floor(camera.view_radius_px()));
+    t_lo_ = camera.ground_cm_at_radius(k0_);
+    t_hi_ = camera.ground_cm_at_radius(k1_);
+    std::vector<Run> at_x, at_y;
+    for (int k = 0; k < kScanRays; ++k) {
+      dirs_[static_cast<std::size_t>(k)] = {std::cos(deg_to_rad(k)), std::sin(deg_to_rad(k))};
+      first_[static_cast<std::size_t>(k)] = static_cast<int>(runs_.size());
+      cast(centre_, k, runs_);
+      at_x.clear();
+      at_y.clear();
+      cast(centre_ + Eigen::Vector2d(kStepCm, 0.0), k, at_x);
+      cast(centre_ + Eigen::Vector2d(0.0, kStepCm), k, at_y);
+      const std::size_t n = runs_.size() - static_cast<std::size_t>(first_[static_cast<std::size_t>(k)]);
+      exact_[static_cast<std::size_t>(k)] = at_x.size() != n || at_y.size() != n;
+      if (exact_[static_cast<std::size_t>(k)]) continue;
+      for (std::size_t i = 0; i < n; ++i) {
+        Run& r = runs_[static_cast<std::size_t>(first_[static_cast<std::size_t>(k)]) + i];
+        r.enter_g = {(at_x[i].enter_px - r.enter_px) / kStepCm, (at_y[i].enter_px - r.enter_px) / kStepCm};
+        r.exit_g = {(at_x[i].exit_px - r.exit_px) / kStepCm, (at_y[i].exit_px - r.exit_px) / kStepCm};
+      }
+    }
+    first_[kScanRays] = static_cast<int>(runs_.size());
+  }
+
+  [[nodiscard]] const Eigen::Vector2d& centre() const { return centre_; }
+
+  /// The expected scan at q (kFeatureBytes radii).
+  void features(const Eigen::Vector2d& q, std::uint8_t* out) {
+    const Eigen::Vector2d d = q - centre_;
+    const int min_gap = ScanParams{}.min_gap_px;  // as the database (expected_features' default)
+    for (int k = 0; k < kScanRays; ++k) {
+      std::uint8_t* o = out + k * kCrossingsPerRay;
+      if (exact_[static_cast<std::size_t>(k)]) {
+        scratch_runs_.clear();
+        cast(q, k, scratch_runs_);
+        px_.clear();
+        for (const Run& r : scratch_runs_) px_.push_back({r.enter_px, r.exit_px});
+      } else {
+        px_.clear();
+        for (int i = first_[static_cast<std::size_t>(k)]; i < first_[static_cast<std::size_t>(k) + 1]; ++i) {
+          const Run& r = runs_[static_cast<std::size_t>(i)];
+          px_.push_back({r.enter_px + r.enter_g.dot(d), r.exit_px + r.exit_g.dot(d)});
+        }
+      }
+      crossings_of_runs(k0_, k1_, min_gap, px_, o);
+    }
+  }
+
+ private:
+  static constexpr double kStepCm = 1.0;
+  struct Run {
+    double enter_px = 0.0, exit_px = 0.0;
+    Eigen::Vector2d enter_g{0.0, 0.0}, exit_g{0.0, 0.0};  // px per cm of the origin's shift
+  };
+  void cast(const Eigen::Vector2d& origin, int k, std::vector<Run>& out) {
+    caster_.intervals(origin, dirs_[static_cast<std::size_t>(k)], t_lo_, t_hi_, iv_);
+    for (const auto& w : iv_) {
+      Run r;
+      r.enter_px = camera_.radius_px_at_ground(w.enter_cm);
+      r.exit_px = camera_.radius_px_at_ground(w.exit_cm);
+      out.push_back(r);
+    }
+  }
+
+  RayCaster caster_;
+  const CameraModel& camera_;
+  Eigen::Vector2d centre_;
+  int k0_ = 0, k1_ = 0;
+  double t_lo_ = 0.0, t_hi_ = 0.0;
+  std::array<Eigen::Vector2d, kScanRays> dirs_;
+  std::vector<Run> runs_;
+  std::array<int, kScanRays + 1> first_{};
+  std::array<bool, kScanRays> exact_{};
+  std::vector<WhiteInterval> iv_;
+  std::vector<Run> scratch_runs_;
+  std::vector<std::pair<double, double>> px_;
+};
+
+// The refinement's errors: from the linearised caster, re-centred when the walk leaves
+// kRecentreCm of its centre, and remembered, since the walk comes back to points it has seen.
+class ProbeErrors {
+ public:
+  ProbeErrors(const FieldGeometry& field, const CameraModel& camera, const PreparedScan& scan, const MatchOptions& opt)
+      : field_(field), camera_(camera), scan_(scan), opt_(opt) {}
+  double operator()(const Eigen::Vector2d& q) {
+    for (const auto& [at, e] : seen_) {
+      if ((at - q).cwiseAbs().maxCoeff() < 1e-6) return e;
+    }
+    if (!caster_ || (q - caster_->centre()).cwiseAbs().maxCoeff() > kRecentreCm) {
+      caster_.emplace(field_, camera_, q);
+      ++casts_;
+    }
+    alignas(32) std::array<std::uint8_t, kFeatureBytes> expected{};
+    caster_->features(q, expected.data());
+    const double e = match_error(expected.data(), scan_, opt_);
+    seen_.push_back({q, e});
+    return e;
+  }
+  [[nodiscard]] int probes() const { return static_cast<int>(seen_.size()); }
+  [[nodiscard]] int linearisations() const { return casts_; }
+
+ private:
+  static constexpr double kRecentreCm = 3.0;
+  const FieldGeometry& field_;
+  const CameraModel& camera_;
+  const PreparedScan& scan_;
+  const MatchOptions& opt_;
+  std::optional<LinearisedCaster> caster_;
+  std::vector<std::pair<Eigen::Vector2d, double>> seen_;
+  int casts_ = 0;
+};
+
+}  // namespace
+
+void refine_match(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, MatchResult& r,
+                  const MatchOptions& opt) {
+  if (r.cell < 0 || r.rays_used == 0) return;
+  // A non-finite start would never compare equal to itself and never stop (a corrupt grid origin
+  // did that once); load_feature_db refuses such grids, and this keeps the loop finite regardless.
+  if (!r.position_cm.allFinite() || !r.grid_position_cm.allFinite()) return;
+  ProbeErrors error_of(field, camera, scan.prepared, opt);
+  Eigen::Vector2d pos = r.position_cm;
+  const Eigen::Vector2d start = pos;
+  double best = error_of(pos);  // the linearised caster is centred here: this one is exact
+  const double start_error = best;
+  const double limit = opt.refine_reach_cm;
+  const auto within = [&](const Eigen::Vector2d& q) { return (q - r.grid_position_cm).cwiseAbs().maxCoeff() <= limit; };
+  // A pattern search as refine_match_reference, except that once the centre is the best of its
+  // four neighbours, the V fitted through them along each axis (the shape of the bounded cost
+  // near its minimum, as interpolate_match) proposes a point below the step before it halves.
+  constexpr int kMaxSteps = 10'000;  // each move lowers the error strictly; this only bounds absurd options
+  int steps_taken = 0;
+  for (double step = opt.refine_start_step_cm; step >= opt.refine_min_step_cm - 1e-9 && steps_taken < kMaxSteps;
+       ++steps_taken) {
+    double e[4];  // +x, -x, +y, -y
+    const Eigen::Vector2d dirs[] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+    int best_dir = -1;
+    double best_e = best;
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Vector2d q = pos + step * dirs[k];
+      e[k] = within(q) ? error_of(q) : kNoError;
+      if (e[k] < best_e) {
+        best_e = e[k];
+        best_dir = k;
+      }
+    }
+    if (best_dir >= 0) {
+      pos += step * dirs[best_dir];
+      best = best_e;
+      continue;
+    }
+    const auto offset = [&](double em, double ep) {
+      return std::isfinite(em) && std::isfinite(ep) ? equiangular_offset(em, best, ep) : 0.0;
+    };
+    const Eigen::Vector2d q = pos + step * Eigen::Vector2d(offset(e[1], e[0]), offset(e[3], e[2]));
+    if (q != pos && within(q)) {
+      const double eq = error_of(q);
+      if (eq < best) {
+        best = eq;
+        pos = q;
+      }
+    }
+    step /= 2.0;
+  }
+  // The walk ran on the model: the error at its end is cast exactly, and the start kept if that
+  // is no better.
+  const double exact = pos == start ? start_error : error_at(field, camera, scan.prepared, pos, opt);
+  r.refine_probes = error_of.probes();
+  r.refine_casts = 3 * error_of.linearisations() + (pos == start ? 0 : 1);
+  if (exact < start_error) {
+    r.position_cm = pos;
+    r.refined_error = exact;
+  } else {
+    r.position_cm = start;
+    r.refined_error = start_error;
+  }
 }
 
 void refine_match(const FieldGeometry& field, const CameraModel& camera, const Scan& scan, MatchResult& r,
@@ -227,12 +450,13 @@ void refine_match(const FieldGeometry& field, const CameraModel& camera, const S
 
 void apply_refinement(const FeatureDb& db, const FieldGeometry& field, const CameraModel& camera,
                       const FieldScan& scan, MatchResult& r, const MatchOptions& opt) {
-  if (opt.refinement != Refinement::kNone) interpolate_match(db, scan, r);
+  if (opt.refinement != Refinement::kNone) interpolate_match(db, scan, r, opt);
   if (opt.refinement == Refinement::kRayCast) refine_match(field, camera, scan, r, opt);
 }
 
 YawEstimate estimate_yaw(const FieldGeometry& field, const CameraModel& camera, const BearingScan& bearings,
-                         const Eigen::Vector2d& position_cm, double yaw_hint_deg, double range_deg) {
+                         const Eigen::Vector2d& position_cm, double yaw_hint_deg, double range_deg,
+                         const MatchOptions& opt) {
   if (!(range_deg >= 0.0) || range_deg > 180.0) throw std::invalid_argument("estimate_yaw: range must be 0..180 deg");
   alignas(32) std::array<std::uint8_t, kFeatureBytes> expected{};
   std::vector<WhiteInterval> scratch;
@@ -243,9 +467,8 @@ YawEstimate estimate_yaw(const FieldGeometry& field, const CameraModel& camera, 
   int best_s = 0;
   for (int s = -steps; s <= steps; ++s) {
     const double yaw = yaw_hint_deg + static_cast<double>(s) / bearings.rays_per_degree;
-    const PreparedScan p = prepare_scan(rotate_to_field(bearings, yaw));
-    if (p.rays_used == 0) continue;
-    const double e = static_cast<double>(sad_fast(expected.data(), p)) / p.rays_used;
+    const double e = match_error(expected.data(), prepare_scan(rotate_to_field(bearings, yaw)), opt);
+    if (!(e < kNoError)) continue;
     errors[static_cast<std::size_t>(s + steps)] = e;
     if (e < best.error) {
       best = {yaw, e};
@@ -284,7 +507,7 @@ PoseMatch global_search_any_yaw(const FeatureDb& db, const FieldGeometry& field,
     return out;
   }
   // Finer yaw at the best grid point, then the position again at that yaw.
-  const YawEstimate y = estimate_yaw(field, camera, bearings, best.m.grid_position_cm, best.yaw, yaw_step_deg);
+  const YawEstimate y = estimate_yaw(field, camera, bearings, best.m.grid_position_cm, best.yaw, yaw_step_deg, opt);
   const FieldScan scan = make_field_scan(bearings, y.yaw_deg);
   out.match = local_search(db, scan, best.m.grid_position_cm, db.grid.step_cm, opt);
   out.yaw_deg = wrap_deg(y.yaw_deg);
