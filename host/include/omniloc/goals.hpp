@@ -29,10 +29,10 @@ namespace omniloc {
 /// A colour class in OpenCV 8-bit HSV (H 0..179, S/V 0..255): hue within +- hue_half_width
 /// (circular), saturation and value at least their minima. The camera "vision" block's shape.
 struct HsvRange {
-  int hue = 0;
-  int hue_half_width = 0;
-  int sat_min = 0;
-  int val_min = 0;
+  double hue = 0.0;  // calibration writes measured (fractional) values
+  double hue_half_width = 0.0;
+  double sat_min = 0.0;
+  double val_min = 0.0;
   [[nodiscard]] bool contains(int h, int s, int v) const;
   /// Throws ConfigError "<at>.<field>: <why> (got <value>)".
   void validate(const config::Origin& at) const;

@@ -14,8 +14,8 @@
 namespace omniloc {
 
 bool HsvRange::contains(int h, int s, int v) const {
-  const int d = std::abs(h - hue) % 180;
-  return std::min(d, 180 - d) <= hue_half_width && s >= sat_min && v >= val_min;
+  const double d = std::fmod(std::abs(h - hue), 180.0);
+  return std::min(d, 180.0 - d) <= hue_half_width && s >= sat_min && v >= val_min;
 }
 
 void HsvRange::validate(const config::Origin& at) const {
