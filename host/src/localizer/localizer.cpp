@@ -77,6 +77,7 @@ Localizer::Localizer(const LocalizerConfig& config, const RobotConfig& robot, co
       camera_(camera),
       db_(db),
       odometry_(robot),
+      extractor_(camera),
       heading_filter_(heading_filter_config(config)) {
   validate_localizer_config(config_, "localizer config");
   if (db.field_fingerprint != field.fingerprint() || db.camera_fingerprint != camera.fingerprint())
@@ -194,7 +195,19 @@ LocalizedPose Localizer::on_window(const EncoderWindow& window) {
 }
 
 FrameReport Localizer::on_image(double t_ms, const cv::Mat& bgr) {
-  return on_bearings(t_ms, scan_image_bearings(bgr, camera_, config_.scan_rays_per_degree));
+  ExtractionReport er;
+  BearingScan bearings = extractor_.extract(bgr, config_.scan_rays_per_degree, &er);
+  if (!er.usable) {
+    FrameReport r;
+    r.t_ms = t_ms;
+    r.outcome = FrameOutcome::kRejected;
+    r.no_measurement = er.reason;
+    ++stats_.frames;
+    ++stats_.rejected;
+    reports_.push_back(r);
+    return r;
+  }
+  return on_bearings(t_ms, std::move(bearings));
 }
 
 FrameReport Localizer::on_bearings(double t_ms, BearingScan bearings) {

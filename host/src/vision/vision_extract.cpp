@@ -1,0 +1,425 @@
+// LineExtractor: carpet-relative white-line crossings along precomputed pixel rays (vision.hpp).
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/imgproc.hpp>
+
+#include "omniloc/camera.hpp"
+#include "omniloc/conventions.hpp"
+#include "omniloc/line_scan.hpp"
+#include "omniloc/vision.hpp"
+
+namespace omniloc {
+
+namespace {
+
+constexpr int kMaxRaysPerDegree = 20;
+
+// OpenCV's 8-bit saturation divisor table (as line_scan.cpp): s = (diff * div[v] + 2^11) >> 12.
+struct SatTable {
+  int div[256];
+  SatTable() {
+    div[0] = 0;
+    for (int i = 1; i < 256; ++i) div[i] = static_cast<int>(std::lround((255 << 12) / static_cast<double>(i)));
+  }
+};
+const SatTable& sat_table() {
+  static const SatTable t;  // immutable lookup table, built once
+  return t;
+}
+
+// OpenCV 8-bit hue (0..179) of a colour quantised to 5 bits per channel (bin centres): a hue by
+// one table lookup instead of a division per pixel. Immutable, built once.
+struct HueTable {
+  std::uint8_t hue[1 << 15];
+  HueTable() {
+    for (int b = 0; b < 32; ++b)
+      for (int g = 0; g < 32; ++g)
+        for (int r = 0; r < 32; ++r) {
+          const double B = b * 8 + 4, G = g * 8 + 4, R = r * 8 + 4;
+          const double v = std::max({B, G, R}), d = v - std::min({B, G, R});
+          double h = 0.0;
+          if (d > 0) {
+            if (v == R) h = 60.0 * (G - B) / d;
+            else if (v == G) h = 120.0 + 60.0 * (B - R) / d;
+            else h = 240.0 + 60.0 * (R - G) / d;
+          }
+          if (h < 0) h += 360.0;
+          hue[(b << 10) | (g << 5) | r] = static_cast<std::uint8_t>(static_cast<int>(std::lround(h / 2.0)) % 180);
+        }
+  }
+};
+const HueTable& hue_table() {
+  static const HueTable t;
+  return t;
+}
+
+inline int hue_index(const std::uint8_t* p) { return ((p[0] >> 3) << 10) | ((p[1] >> 3) << 5) | (p[2] >> 3); }
+
+// Robust sigma (1.4826 MAD) of a histogram of integer deviations offset by 255.
+double hist_sigma(const std::array<int, 511>& h) {
+  long n = 0;
+  for (int c : h) n += c;
+  if (n == 0) return 0.0;
+  auto quantile_bin = [&](const std::array<int, 511>& hh, long total) {
+    long acc = 0;
+    for (int i = 0; i < 511; ++i) {
+      acc += hh[static_cast<std::size_t>(i)];
+      if (2 * acc >= total) return i;
+    }
+    return 510;
+  };
+  const int med = quantile_bin(h, n);
+  std::array<int, 511> dev{};
+  for (int i = 0; i < 511; ++i) dev[static_cast<std::size_t>(std::abs(i - med))] += h[static_cast<std::size_t>(i)];
+  return 1.4826 * quantile_bin(dev, n);
+}
+
+}  // namespace
+
+// Per-frame working state: the thresholds used and what the walk measured for the adaptation.
+struct LineExtractor::Frame {
+  std::vector<int> vmin, vmax;       // per sector carpet value window
+  std::vector<double> sum_v, sum_s;  // per sector, carpet bins
+  std::vector<long> count;
+  std::array<int, 511> dev_v{}, dev_s{};  // carpet bin minus the running carpet mean
+  int sat_min = 0;
+  int val_step = 0, sat_step = 0;
+};
+
+LineExtractor::LineExtractor(const CameraModel& cam)
+    : width_px_(cam.width_px),
+      height_px_(cam.height_px),
+      cx_(cam.center_px.x()),
+      cy_(cam.center_px.y()),
+      yaw_offset_deg_(cam.yaw_offset_deg),
+      mirrored_(cam.mirrored),
+      k0_(static_cast<int>(std::ceil(cam.min_radius_px()))),
+      k1_(static_cast<int>(std::floor(std::min(cam.view_radius_px(), CameraModel::kMaxViewRadiusPx)))),
+      vision_(cam.vision),
+      tables_(kMaxRaysPerDegree + 1),
+      carpet_(cam.vision.carpet_hsv),
+      contrast_(cam.vision.line_contrast) {
+  for (const auto& m : cam.masts) masts_.emplace_back(m.bearing_deg, m.half_width_deg);
+  if (carpet_) ref_val_ = 0.5 * (carpet_->val_min + carpet_->val_max);
+}
+
+// The pixels each ray touches, in order: a 4-connected path (a diagonal step gets the neighbour
+// nearer the ray inserted), so that no 1 px line, whatever its direction, lies between two
+// consecutive pixels. Each pixel is binned at the integer nearest its centre's distance along the ray.
+const LineExtractor::RayTable& LineExtractor::table(int rpd, std::size_t step_bytes) {
+  RayTable& t = tables_[static_cast<std::size_t>(rpd)];
+  if (!t.begin.empty() && t.step_bytes == static_cast<int>(step_bytes)) return t;
+  t = RayTable{};
+  t.step_bytes = static_cast<int>(step_bytes);
+  const int n = kScanRays * rpd;
+  const int sectors = vision_.extraction.sectors;
+  t.begin.reserve(static_cast<std::size_t>(n) + 1);
+  for (int j = 0; j < n; ++j) {
+    t.begin.push_back(static_cast<std::int32_t>(t.offset.size()));
+    const double bearing = static_cast<double>(j) / rpd;
+    bool hidden = false;
+    for (const auto& [b, w] : masts_) hidden = hidden || std::abs(angle_diff_deg(bearing, b)) <= w;
+    t.hidden.push_back(hidden);
+    t.sector.push_back(static_cast<std::uint8_t>(std::min(sectors - 1, j * sectors / n)));
+    if (hidden) continue;
+    const double phi = deg_to_rad(bearing + yaw_offset_deg_);
+    const double du = std::cos(phi) * (mirrored_ ? -1.0 : 1.0), dv = -std::sin(phi);
+    int pu = -1, pv = -1;
+    auto emit = [&](int u, int v) {
+      if (u < 0 || v < 0 || u >= width_px_ || v >= height_px_) return;
+      const double along = (u - cx_) * du + (v - cy_) * dv;
+      const int bin = static_cast<int>(std::lround(along));
+      if (bin < k0_ || bin > k1_) return;
+      t.offset.push_back(static_cast<std::int32_t>(v * static_cast<long>(step_bytes) + 3L * u));
+      t.bin.push_back(static_cast<std::uint8_t>(bin));
+    };
+    for (double r = k0_ - 0.5; r <= k1_ + 0.5; r += 0.05) {
+      const int u = static_cast<int>(std::floor(cx_ + r * du + 0.5)), v = static_cast<int>(std::floor(cy_ + r * dv + 0.5));
+      if (u == pu && v == pv) continue;
+      if (pu >= 0 && u != pu && v != pv) {
+        // Diagonal step: the corner pixel whose centre is nearer the ray line.
+        const double da = std::abs((u - cx_) * dv - (pv - cy_) * du), db = std::abs((pu - cx_) * dv - (v - cy_) * du);
+        if (da <= db) emit(u, pv);
+        else emit(pu, v);
+      }
+      emit(u, v);
+      pu = u;
+      pv = v;
+    }
+  }
+  t.begin.push_back(static_cast<std::int32_t>(t.offset.size()));
+  return t;
+}
+
+// The carpet colour from the frame when the camera has none: the pixels of the inner half of the
+// visible ring (the robot stands on the carpet), classified by carpet_colour_from_samples.
+bool LineExtractor::ensure_carpet(const cv::Mat& bgr, std::string* why) {
+  if (carpet_) return true;
+  const RayTable& t = table(1, bgr.step[0]);
+  const int r_hi = k0_ + (k1_ - k0_) / 2;
+  cv::Mat px(1, 0, CV_8UC3);
+  std::vector<cv::Vec3b> bgr_samples;
+  for (std::size_t i = 0; i < t.offset.size(); i += 2) {
+    if (t.bin[i] > r_hi) continue;
+    const std::uint8_t* p = bgr.data + t.offset[i];
+    bgr_samples.emplace_back(p[0], p[1], p[2]);
+  }
+  if (bgr_samples.empty()) {
+    *why = "no carpet: no pixels in the view";
+    return false;
+  }
+  cv::Mat in(1, static_cast<int>(bgr_samples.size()), CV_8UC3, bgr_samples.data()), hsv;
+  cv::cvtColor(in, hsv, cv::COLOR_BGR2HSV);
+  std::vector<cv::Vec3b> samples(hsv.begin<cv::Vec3b>(), hsv.end<cv::Vec3b>());
+  const auto c = carpet_colour_from_samples(samples, why);
+  if (!c) return false;
+  carpet_ = CarpetHsv{c->hue, c->hue_half_width, c->sat_min, c->val_min, c->val_max};
+  ref_val_ = c->median_val;
+  sector_val_.clear();
+  return true;
+}
+
+void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const {
+  const ExtractionParams& x = vision_.extraction;
+  const int* sdiv = sat_table().div;
+  const std::uint8_t* hues = hue_table().hue;
+  const int min_gap = ScanParams{}.min_gap_px;  // the database's gap rule (expected_features)
+  const float alpha = 1.0f / static_cast<float>(x.carpet_mean_px);
+  const int n = static_cast<int>(t.hidden.size());
+  long bins_seen = 0, bins_carpet = 0;
+  for (int j = 0; j < n; ++j) {
+    std::uint8_t* out = scan.radii_px.data() + static_cast<std::size_t>(j) * kCrossingsPerRay;
+    std::fill(out, out + kCrossingsPerRay, kNoCrossing);
+    if (t.hidden[static_cast<std::size_t>(j)]) {
+      scan.ray_end_px[static_cast<std::size_t>(j)] = kRayHidden;
+      rep.carpet_end_px[static_cast<std::size_t>(j)] = 0;
+      continue;
+    }
+    ++rep.rays;
+    const int sec = t.sector[static_cast<std::size_t>(j)];
+    const int vmin = fr.vmin[static_cast<std::size_t>(sec)], vmax = fr.vmax[static_cast<std::size_t>(sec)];
+    float vref = static_cast<float>(sector_val_[static_cast<std::size_t>(sec)]);
+    float sref = static_cast<float>(sector_sat_[static_cast<std::size_t>(sec)]);
+    int found = 0, gap = 0, other_run = 0, carpet_bins = 0, end = -1;
+    int bin = -1;
+    bool b_line = false, b_carpet = false;
+    int b_v = 0, b_s = 0;
+    // One bin decided: crossing (line entry after the gap), carpet (updates the running mean), or other.
+    auto close_bin = [&]() {
+      ++bins_seen;
+      if (b_line) {
+        if (gap >= min_gap && found < kCrossingsPerRay) out[found++] = static_cast<std::uint8_t>(bin);
+        gap = 0;
+        other_run = 0;
+      } else if (b_carpet) {
+        ++gap;
+        other_run = 0;
+        ++carpet_bins;
+        ++bins_carpet;
+        ++fr.dev_v[static_cast<std::size_t>(std::clamp(static_cast<int>(std::lround(b_v - vref)), -255, 255) + 255)];
+        ++fr.dev_s[static_cast<std::size_t>(std::clamp(static_cast<int>(std::lround(b_s - sref)), -255, 255) + 255)];
+        vref += alpha * (static_cast<float>(b_v) - vref);
+        sref += alpha * (static_cast<float>(b_s) - sref);
+        fr.sum_v[static_cast<std::size_t>(sec)] += b_v;
+        fr.sum_s[static_cast<std::size_t>(sec)] += b_s;
+        ++fr.count[static_cast<std::size_t>(sec)];
+      } else {
+        ++gap;
+        if (++other_run >= x.end_run_px) end = bin - other_run + 1;
+      }
+    };
+    const std::int32_t i1 = t.begin[static_cast<std::size_t>(j) + 1];
+    std::int32_t i = t.begin[static_cast<std::size_t>(j)];
+    for (; i < i1; ++i) {
+      const int bi = t.bin[static_cast<std::size_t>(i)];
+      if (bi != bin) {
+        if (bin >= 0) {
+          close_bin();
+          if (end >= 0) break;
+        }
+        bin = bi;
+        b_line = b_carpet = false;
+      }
+      const std::uint8_t* p = bgr.data + t.offset[static_cast<std::size_t>(i)];
+      const int v = std::max({p[0], p[1], p[2]});
+      const int s = ((v - std::min({p[0], p[1], p[2]})) * sdiv[v] + (1 << 11)) >> 12;
+      if (static_cast<float>(v) - vref >= static_cast<float>(fr.val_step) &&
+          sref - static_cast<float>(s) >= static_cast<float>(fr.sat_step)) {
+        b_line = true;
+      } else if (s >= fr.sat_min && v >= vmin && v <= vmax && hue_ok_[hues[hue_index(p)]]) {
+        b_carpet = true;
+        b_v = v;
+        b_s = s;
+      }
+    }
+    if (end < 0 && bin >= 0) close_bin();
+    std::uint8_t& ray_end = scan.ray_end_px[static_cast<std::size_t>(j)];
+    std::uint8_t& carpet_end = rep.carpet_end_px[static_cast<std::size_t>(j)];
+    if (carpet_bins >= x.carpet_resume_px) ++rep.rays_seen;
+    if (end < 0) {
+      ray_end = kRayToViewEnd;
+      carpet_end = 255;
+    } else {
+      ray_end = end <= k0_ ? kRayHidden : static_cast<std::uint8_t>(end);
+      // Obstacle or the carpet's end: does the carpet resume behind the blob?
+      int run = 0;
+      int cur = -1;
+      bool cur_carpet = false;
+      for (; i < i1 && run < x.carpet_resume_px; ++i) {
+        const int bi = t.bin[static_cast<std::size_t>(i)];
+        if (bi != cur) {
+          if (cur >= 0) run = cur_carpet ? run + 1 : 0;
+          cur = bi;
+          cur_carpet = false;
+        }
+        const std::uint8_t* p = bgr.data + t.offset[static_cast<std::size_t>(i)];
+        const int v = std::max({p[0], p[1], p[2]});
+        const int s = ((v - std::min({p[0], p[1], p[2]})) * sdiv[v] + (1 << 11)) >> 12;
+        cur_carpet = cur_carpet || (s >= fr.sat_min && v >= vmin && v <= vmax && hue_ok_[hues[hue_index(p)]]);
+      }
+      if (run >= x.carpet_resume_px) {
+        ++rep.rays_ended_at_obstacle;
+        carpet_end = 255;
+      } else {
+        ++rep.rays_ended_at_carpet_edge;
+        carpet_end = static_cast<std::uint8_t>(std::max(end, 1));
+      }
+    }
+    // Crossings at or beyond the end are not kept (the end is exclusive).
+    for (int c = 0; c < kCrossingsPerRay; ++c)
+      if (out[c] != kNoCrossing && out[c] >= ray_end) out[c] = kNoCrossing;
+    for (int c = 0; c < kCrossingsPerRay; ++c) rep.crossings += out[c] != kNoCrossing;
+  }
+  rep.carpet_fraction = bins_seen > 0 ? static_cast<double>(bins_carpet) / static_cast<double>(bins_seen) : 0.0;
+}
+
+// Follows the light: each sector's carpet level moves light_follow of the way to this frame's mean
+// (bounded to light_range of the reference), and estimated line steps follow the carpet's spread.
+void LineExtractor::adapt(const Frame& fr) {
+  const ExtractionParams& x = vision_.extraction;
+  for (std::size_t k = 0; k < sector_val_.size(); ++k) {
+    if (fr.count[k] == 0) continue;
+    const double v = fr.sum_v[k] / static_cast<double>(fr.count[k]), s = fr.sum_s[k] / static_cast<double>(fr.count[k]);
+    sector_val_[k] = std::clamp(sector_val_[k] + x.light_follow * (v - sector_val_[k]), ref_val_ / x.light_range,
+                                ref_val_ * x.light_range);
+    sector_sat_[k] += x.light_follow * (s - sector_sat_[k]);
+  }
+  if (!vision_.line_contrast) {
+    const LineContrast seen{std::max(x.val_sigmas * hist_sigma(fr.dev_v), x.min_val_step),
+                            std::max(x.sat_sigmas * hist_sigma(fr.dev_s), x.min_sat_step)};
+    if (!contrast_) {
+      contrast_ = seen;
+    } else {
+      contrast_->val_step += x.light_follow * (seen.val_step - contrast_->val_step);
+      contrast_->sat_step += x.light_follow * (seen.sat_step - contrast_->sat_step);
+    }
+  }
+}
+
+BearingScan LineExtractor::extract(const cv::Mat& bgr, int rpd, ExtractionReport* report) {
+  if (bgr.empty()) throw std::invalid_argument("extract: empty image");
+  if (bgr.type() != CV_8UC3) throw std::invalid_argument("extract: image must be 8-bit BGR (CV_8UC3), got type " + std::to_string(bgr.type()));
+  if (bgr.cols != width_px_ || bgr.rows != height_px_) {
+    throw std::invalid_argument("extract: image is " + std::to_string(bgr.cols) + " x " + std::to_string(bgr.rows) +
+                                " but the camera model expects " + std::to_string(width_px_) + " x " + std::to_string(height_px_));
+  }
+  if (rpd < 1 || rpd > kMaxRaysPerDegree) throw std::invalid_argument("extract: rays_per_degree must be 1..20, got " + std::to_string(rpd));
+  ExtractionReport local;
+  ExtractionReport& rep = report != nullptr ? *report : local;
+  rep = ExtractionReport{};
+  const int n = kScanRays * rpd;
+  BearingScan scan;
+  scan.rays_per_degree = rpd;
+  scan.radii_px.assign(static_cast<std::size_t>(n) * kCrossingsPerRay, kNoCrossing);
+  scan.ray_end_px.assign(static_cast<std::size_t>(n), kRayHidden);
+  rep.carpet_end_px.assign(static_cast<std::size_t>(n), 0);
+  rep.carpet_estimated = !vision_.carpet_hsv;
+  if (!ensure_carpet(bgr, &rep.reason)) return scan;
+  const ExtractionParams& x = vision_.extraction;
+  const auto sectors = static_cast<std::size_t>(x.sectors);
+  const bool first = sector_val_.size() != sectors;
+  if (first) {
+    sector_val_.assign(sectors, ref_val_);
+    // Before any frame: the middle of the saturation range above sat_min (measured by pass one).
+    sector_sat_.assign(sectors, 0.5 * (carpet_->sat_min + 255.0));
+  }
+  for (int i = 0; i < 180; ++i) {
+    const double dh = std::abs(i - carpet_->hue);
+    hue_ok_[static_cast<std::size_t>(i)] = std::min(dh, 180.0 - dh) <= carpet_->hue_half_width;
+  }
+  const RayTable& t = table(rpd, bgr.step[0]);
+  // The first frame is walked twice: once to measure the light and the carpet's spread, then with them.
+  for (int pass = first ? 0 : 1; pass < 2; ++pass) {
+    Frame fr;
+    fr.vmin.resize(sectors);
+    fr.vmax.resize(sectors);
+    for (std::size_t k = 0; k < sectors; ++k) {
+      const double f = sector_val_[k] / ref_val_;
+      fr.vmin[k] = static_cast<int>(std::floor(carpet_->val_min * f));
+      fr.vmax[k] = static_cast<int>(std::ceil(std::min(255.0, carpet_->val_max * f)));
+    }
+    fr.sum_v.assign(sectors, 0.0);
+    fr.sum_s.assign(sectors, 0.0);
+    fr.count.assign(sectors, 0);
+    fr.sat_min = static_cast<int>(std::ceil(carpet_->sat_min));
+    const LineContrast c = contrast_.value_or(LineContrast{});
+    fr.val_step = std::max(1, static_cast<int>(std::lround(c.val_step)));
+    fr.sat_step = static_cast<int>(std::lround(c.sat_step));
+    rep = ExtractionReport{};
+    rep.carpet_end_px.assign(static_cast<std::size_t>(n), 0);
+    rep.carpet_estimated = !vision_.carpet_hsv;
+    rep.contrast = c;
+    walk(bgr, t, scan, rep, fr);
+    if (pass == 0) {
+      const double keep = vision_.extraction.light_follow;
+      vision_.extraction.light_follow = 1.0;  // the first measurement is taken whole
+      adapt(fr);
+      vision_.extraction.light_follow = keep;
+    } else {
+      adapt(fr);
+    }
+  }
+  rep.carpet = *carpet_;
+  // Obstacle blobs: neighbouring rays ended on the carpet at similar radii.
+  for (int j = 0; j < n; ++j) {
+    const auto e = scan.ray_end_px[static_cast<std::size_t>(j)];
+    const bool obstacle = e != kRayHidden && e != kRayToViewEnd && rep.carpet_end_px[static_cast<std::size_t>(j)] == 255;
+    if (!obstacle) continue;
+    if (!rep.obstacles.empty()) {
+      ObstacleBlob& b = rep.obstacles.back();
+      const int prev = (b.last_ray + 1) % n;
+      const auto pe = scan.ray_end_px[static_cast<std::size_t>(b.last_ray)];
+      if (prev == j && std::abs(static_cast<int>(e) - static_cast<int>(pe)) <= std::max(4, e / 8)) {
+        b.last_ray = j;
+        b.near_radius_px = std::min(b.near_radius_px, static_cast<int>(e));
+        continue;
+      }
+    }
+    rep.obstacles.push_back({j, j, static_cast<int>(e)});
+  }
+  if (rep.obstacles.size() > 1 && rep.obstacles.back().last_ray == n - 1 && rep.obstacles.front().first_ray == 0) {
+    rep.obstacles.front().first_ray = rep.obstacles.back().first_ray;  // wraps through ray 0
+    rep.obstacles.front().near_radius_px = std::min(rep.obstacles.front().near_radius_px, rep.obstacles.back().near_radius_px);
+    rep.obstacles.pop_back();
+  }
+  const int total = n - static_cast<int>(std::count(t.hidden.begin(), t.hidden.end(), true));
+  if (rep.carpet_fraction < x.min_carpet_fraction) {
+    rep.reason = "no carpet: " + std::to_string(static_cast<int>(std::lround(100 * rep.carpet_fraction))) +
+                 " % of the view is carpet (at least " + std::to_string(static_cast<int>(std::lround(100 * x.min_carpet_fraction))) + " % needed)";
+    if (rep.carpet_estimated) {
+      carpet_.reset();  // estimated from something else: estimate again on the next frame
+      sector_val_.clear();
+    }
+  } else if (rep.rays_seen < x.min_rays_seen * total) {
+    rep.reason = "too few rays see the carpet: " + std::to_string(rep.rays_seen) + " of " + std::to_string(total);
+  } else if (rep.crossings < x.min_crossings) {
+    rep.reason = "too few line crossings: " + std::to_string(rep.crossings) + " (at least " + std::to_string(x.min_crossings) + ")";
+  }
+  rep.usable = rep.reason.empty();
+  return scan;
+}
+
+}  // namespace omniloc
