@@ -30,33 +30,30 @@ const SatTable& sat_table() {
   return t;
 }
 
-// OpenCV 8-bit hue (0..179) of a colour quantised to 5 bits per channel (bin centres): a hue by
-// one table lookup instead of a division per pixel. Immutable, built once.
-struct HueTable {
-  std::uint8_t hue[1 << 15];
-  HueTable() {
-    for (int b = 0; b < 32; ++b)
-      for (int g = 0; g < 32; ++g)
-        for (int r = 0; r < 32; ++r) {
-          const double B = b * 8 + 4, G = g * 8 + 4, R = r * 8 + 4;
-          const double v = std::max({B, G, R}), d = v - std::min({B, G, R});
-          double h = 0.0;
-          if (d > 0) {
-            if (v == R) h = 60.0 * (G - B) / d;
-            else if (v == G) h = 120.0 + 60.0 * (B - R) / d;
-            else h = 240.0 + 60.0 * (R - G) / d;
-          }
-          if (h < 0) h += 360.0;
-          hue[(b << 10) | (g << 5) | r] = static_cast<std::uint8_t>(static_cast<int>(std::lround(h / 2.0)) % 180);
-        }
+// OpenCV's 8-bit BGR->HSV hue divisor table (color_hsv: hdiv_table180), so that the hue is one
+// multiplication and equals cvtColor's bit for bit (a coarser lookup is too coarse for dark carpet).
+struct HueDivTable {
+  int div[256];
+  HueDivTable() {
+    div[0] = 0;
+    for (int i = 1; i < 256; ++i) div[i] = static_cast<int>(std::lround((180 << 12) / (6.0 * i)));
   }
 };
-const HueTable& hue_table() {
-  static const HueTable t;
+const HueDivTable& hue_div_table() {
+  static const HueDivTable t;  // immutable lookup table, built once
   return t;
 }
 
-inline int hue_index(const std::uint8_t* p) { return ((p[0] >> 3) << 10) | ((p[1] >> 3) << 5) | (p[2] >> 3); }
+// OpenCV 8-bit hue (0..179) of BGR p with max v and max - min diff.
+inline int hue_of(const std::uint8_t* p, int v, int diff, const int* hdiv) {
+  const int b = p[0], g = p[1], r = p[2];
+  int h;
+  if (v == r) h = g - b;
+  else if (v == g) h = b - r + 2 * diff;
+  else h = r - g + 4 * diff;
+  h = (h * hdiv[diff] + (1 << 11)) >> 12;
+  return h < 0 ? h + 180 : (h >= 180 ? h - 180 : h);
+}
 
 // Robust sigma (1.4826 MAD) of a histogram of integer deviations offset by 255.
 double hist_sigma(const std::array<int, 511>& h) {
@@ -131,7 +128,9 @@ const LineExtractor::RayTable& LineExtractor::table(int rpd, std::size_t step_by
     auto emit = [&](int u, int v) {
       if (u < 0 || v < 0 || u >= width_px_ || v >= height_px_) return;
       const double along = (u - cx_) * du + (v - cy_) * dv;
-      const int bin = static_cast<int>(std::lround(along));
+      // The sample convention of the database (expected_features): a crossing at the first integer
+      // radius at or beyond the line's edge, so a pixel counts at the integer at or above its centre.
+      const int bin = static_cast<int>(std::ceil(along - 1e-9));
       if (bin < k0_ || bin > k1_) return;
       t.offset.push_back(static_cast<std::int32_t>(v * static_cast<long>(step_bytes) + 3L * u));
       t.bin.push_back(static_cast<std::uint8_t>(bin));
@@ -185,7 +184,7 @@ bool LineExtractor::ensure_carpet(const cv::Mat& bgr, std::string* why) {
 void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const {
   const ExtractionParams& x = vision_.extraction;
   const int* sdiv = sat_table().div;
-  const std::uint8_t* hues = hue_table().hue;
+  const int* hdiv = hue_div_table().div;
   const int min_gap = ScanParams{}.min_gap_px;  // the database's gap rule (expected_features)
   const float alpha = 1.0f / static_cast<float>(x.carpet_mean_px);
   const int n = static_cast<int>(t.hidden.size());
@@ -206,15 +205,53 @@ void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& sca
     int found = 0, gap = 0, other_run = 0, carpet_bins = 0, end = -1;
     int bin = -1;
     bool b_line = false, b_carpet = false;
-    int b_v = 0, b_s = 0;
+    int b_v = 0, b_s = 0, b_line_v = 0, b_any_v = 0;
+    int prev_bin = -1, prev_v = 0;  // the last closed bin that was not line, and its brightest pixel
+    // The current white run: its edge is placed where it first reaches half-way from the carpet to
+    // its peak (a blurred edge's foot is brighter than the carpet but is not yet the line).
+    bool in_run = false, run_counts = false;
+    int run_start = 0, run_n = 0, run_peak = 0, run_before_v = 0;
+    float run_floor = 0.0f;
+    int gap_before_run = 0;
+    std::array<std::uint8_t, 32> run_v{};
+    auto finish_run = [&]() {
+      if (!in_run) return;
+      in_run = false;
+      if (!run_counts || found >= kCrossingsPerRay) return;
+      const float half = 0.5f * (run_floor + static_cast<float>(run_peak));
+      // The bin before the run may already be half-way (its pixel failed the saturation step).
+      if (static_cast<float>(run_before_v) >= half && run_start - 1 >= k0_ && gap_before_run > min_gap) {
+        out[found++] = static_cast<std::uint8_t>(run_start - 1);
+        return;
+      }
+      int k = 0;
+      while (k + 1 < run_n && static_cast<float>(run_v[static_cast<std::size_t>(k)]) < half) ++k;
+      out[found++] = static_cast<std::uint8_t>(run_start + k);
+    };
     // One bin decided: crossing (line entry after the gap), carpet (updates the running mean), or other.
     auto close_bin = [&]() {
       ++bins_seen;
       if (b_line) {
-        if (gap >= min_gap && found < kCrossingsPerRay) out[found++] = static_cast<std::uint8_t>(bin);
+        if (!in_run) {
+          in_run = true;
+          run_counts = gap >= min_gap;
+          gap_before_run = gap;
+          run_before_v = prev_bin == bin - 1 ? prev_v : 0;
+          run_start = bin;
+          run_n = 0;
+          run_peak = 0;
+          run_floor = vref;
+        }
+        if (run_n < static_cast<int>(run_v.size())) run_v[static_cast<std::size_t>(run_n++)] = static_cast<std::uint8_t>(b_line_v);
+        run_peak = std::max(run_peak, b_line_v);
         gap = 0;
         other_run = 0;
-      } else if (b_carpet) {
+        return;
+      }
+      finish_run();
+      prev_bin = bin;
+      prev_v = b_any_v;
+      if (b_carpet) {
         ++gap;
         other_run = 0;
         ++carpet_bins;
@@ -242,20 +279,26 @@ void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& sca
         }
         bin = bi;
         b_line = b_carpet = false;
+        b_line_v = 0;
+        b_any_v = 0;
       }
       const std::uint8_t* p = bgr.data + t.offset[static_cast<std::size_t>(i)];
       const int v = std::max({p[0], p[1], p[2]});
-      const int s = ((v - std::min({p[0], p[1], p[2]})) * sdiv[v] + (1 << 11)) >> 12;
+      const int diff = v - std::min({p[0], p[1], p[2]});
+      const int s = (diff * sdiv[v] + (1 << 11)) >> 12;
+      b_any_v = std::max(b_any_v, v);
       if (static_cast<float>(v) - vref >= static_cast<float>(fr.val_step) &&
           sref - static_cast<float>(s) >= static_cast<float>(fr.sat_step)) {
         b_line = true;
-      } else if (s >= fr.sat_min && v >= vmin && v <= vmax && hue_ok_[hues[hue_index(p)]]) {
+        b_line_v = std::max(b_line_v, v);
+      } else if (s >= fr.sat_min && v >= vmin && v <= vmax && hue_ok_[static_cast<std::size_t>(hue_of(p, v, diff, hdiv))]) {
         b_carpet = true;
         b_v = v;
         b_s = s;
       }
     }
     if (end < 0 && bin >= 0) close_bin();
+    finish_run();
     std::uint8_t& ray_end = scan.ray_end_px[static_cast<std::size_t>(j)];
     std::uint8_t& carpet_end = rep.carpet_end_px[static_cast<std::size_t>(j)];
     if (carpet_bins >= x.carpet_resume_px) ++rep.rays_seen;
@@ -277,8 +320,9 @@ void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& sca
         }
         const std::uint8_t* p = bgr.data + t.offset[static_cast<std::size_t>(i)];
         const int v = std::max({p[0], p[1], p[2]});
-        const int s = ((v - std::min({p[0], p[1], p[2]})) * sdiv[v] + (1 << 11)) >> 12;
-        cur_carpet = cur_carpet || (s >= fr.sat_min && v >= vmin && v <= vmax && hue_ok_[hues[hue_index(p)]]);
+        const int diff = v - std::min({p[0], p[1], p[2]});
+        const int s = (diff * sdiv[v] + (1 << 11)) >> 12;
+        cur_carpet = cur_carpet || (s >= fr.sat_min && v >= vmin && v <= vmax && hue_ok_[static_cast<std::size_t>(hue_of(p, v, diff, hdiv))]);
       }
       if (run >= x.carpet_resume_px) {
         ++rep.rays_ended_at_obstacle;
@@ -315,6 +359,33 @@ void LineExtractor::adapt(const Frame& fr) {
     } else {
       contrast_->val_step += x.light_follow * (seen.val_step - contrast_->val_step);
       contrast_->sat_step += x.light_follow * (seen.sat_step - contrast_->sat_step);
+    }
+  }
+}
+
+// An end well inside where the neighbouring rays end is an obstacle even when the carpet does not
+// resume behind it (a robot or a person hides the floor behind it up to the view's end).
+void LineExtractor::mark_tall_obstacles(const BearingScan& scan, ExtractionReport& rep) const {
+  const ExtractionParams& x = vision_.extraction;
+  const int n = static_cast<int>(scan.ray_end_px.size());
+  const int w = static_cast<int>(std::lround(x.obstacle_window_deg * scan.rays_per_degree));
+  auto reach = [&](int j) {
+    const int e = scan.ray_end_px[static_cast<std::size_t>((j % n + n) % n)];
+    return e == kRayToViewEnd ? k1_ + 1 : e;
+  };
+  std::vector<int> around;
+  for (int j = 0; j < n; ++j) {
+    std::uint8_t& ce = rep.carpet_end_px[static_cast<std::size_t>(j)];
+    const int e = scan.ray_end_px[static_cast<std::size_t>(j)];
+    if (e == kRayHidden || e == kRayToViewEnd || ce == 255) continue;  // hidden, open or already an obstacle
+    around.clear();
+    for (int d = -w; d <= w; ++d)
+      if (scan.ray_end_px[static_cast<std::size_t>(((j + d) % n + n) % n)] != kRayHidden) around.push_back(reach(j + d));
+    std::nth_element(around.begin(), around.begin() + static_cast<std::ptrdiff_t>(around.size() / 2), around.end());
+    if (e + x.obstacle_step_px <= around[around.size() / 2]) {
+      ce = 255;
+      --rep.rays_ended_at_carpet_edge;
+      ++rep.rays_ended_at_obstacle;
     }
   }
 }
@@ -383,6 +454,7 @@ BearingScan LineExtractor::extract(const cv::Mat& bgr, int rpd, ExtractionReport
     }
   }
   rep.carpet = *carpet_;
+  mark_tall_obstacles(scan, rep);
   // Obstacle blobs: neighbouring rays ended on the carpet at similar radii.
   for (int j = 0; j < n; ++j) {
     const auto e = scan.ray_end_px[static_cast<std::size_t>(j)];

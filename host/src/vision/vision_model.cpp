@@ -52,6 +52,7 @@ const KeyTable<ExtractionParams>& extraction_keys() {
   using E = ExtractionParams;
   static const KeyTable<E> t = {
       key("end_run_px", &E::end_run_px), key("carpet_resume_px", &E::carpet_resume_px),
+      key("obstacle_window_deg", &E::obstacle_window_deg), key("obstacle_step_px", &E::obstacle_step_px),
       key("carpet_mean_px", &E::carpet_mean_px), key("sectors", &E::sectors),
       key("light_follow", &E::light_follow), key("light_range", &E::light_range),
       key("val_sigmas", &E::val_sigmas), key("sat_sigmas", &E::sat_sigmas),
@@ -133,6 +134,9 @@ void VisionModel::validate(const config::Origin& at) const {
   const config::Origin x = at / "extraction";
   require(e.end_run_px >= 1 && e.end_run_px <= 64, x / "end_run_px", "must be 1..64", e.end_run_px);
   require(e.carpet_resume_px >= 1 && e.carpet_resume_px <= 64, x / "carpet_resume_px", "must be 1..64", e.carpet_resume_px);
+  require(e.obstacle_window_deg >= 0.0 && e.obstacle_window_deg <= 90.0, x / "obstacle_window_deg", "must be in [0, 90]",
+          e.obstacle_window_deg);
+  require(e.obstacle_step_px >= 1 && e.obstacle_step_px <= 254, x / "obstacle_step_px", "must be 1..254", e.obstacle_step_px);
   require(e.carpet_mean_px >= 1 && e.carpet_mean_px <= 128, x / "carpet_mean_px", "must be 1..128", e.carpet_mean_px);
   require(e.sectors >= 1 && e.sectors <= 360, x / "sectors", "must be 1..360", e.sectors);
   require(e.light_follow >= 0.0 && e.light_follow <= 1.0, x / "light_follow", "must be in [0, 1]", e.light_follow);
