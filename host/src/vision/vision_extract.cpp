@@ -202,6 +202,13 @@ void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& sca
     const int vmin = fr.vmin[static_cast<std::size_t>(sec)], vmax = fr.vmax[static_cast<std::size_t>(sec)];
     float vref = static_cast<float>(sector_val_[static_cast<std::size_t>(sec)]);
     float sref = static_cast<float>(sector_sat_[static_cast<std::size_t>(sec)]);
+    // The line test as two integer bounds, recomputed when the running carpet mean moves.
+    int v_line_min = 0, s_line_max = 0;
+    auto set_bounds = [&]() {
+      v_line_min = static_cast<int>(std::ceil(vref + static_cast<float>(fr.val_step)));
+      s_line_max = static_cast<int>(std::floor(sref - static_cast<float>(fr.sat_step)));
+    };
+    set_bounds();
     int found = 0, gap = 0, other_run = 0, carpet_bins = 0, end = -1;
     int bin = -1;
     bool b_line = false, b_carpet = false;
@@ -256,10 +263,12 @@ void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& sca
         other_run = 0;
         ++carpet_bins;
         ++bins_carpet;
-        ++fr.dev_v[static_cast<std::size_t>(std::clamp(static_cast<int>(std::lround(b_v - vref)), -255, 255) + 255)];
-        ++fr.dev_s[static_cast<std::size_t>(std::clamp(static_cast<int>(std::lround(b_s - sref)), -255, 255) + 255)];
+        // +255.5 then truncation: rounding of a value known to be >= 0.
+        ++fr.dev_v[static_cast<std::size_t>(std::clamp(static_cast<int>(static_cast<float>(b_v) - vref + 255.5f), 0, 510))];
+        ++fr.dev_s[static_cast<std::size_t>(std::clamp(static_cast<int>(static_cast<float>(b_s) - sref + 255.5f), 0, 510))];
         vref += alpha * (static_cast<float>(b_v) - vref);
         sref += alpha * (static_cast<float>(b_s) - sref);
+        set_bounds();
         fr.sum_v[static_cast<std::size_t>(sec)] += b_v;
         fr.sum_s[static_cast<std::size_t>(sec)] += b_s;
         ++fr.count[static_cast<std::size_t>(sec)];
@@ -287,8 +296,7 @@ void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& sca
       const int diff = v - std::min({p[0], p[1], p[2]});
       const int s = (diff * sdiv[v] + (1 << 11)) >> 12;
       b_any_v = std::max(b_any_v, v);
-      if (static_cast<float>(v) - vref >= static_cast<float>(fr.val_step) &&
-          sref - static_cast<float>(s) >= static_cast<float>(fr.sat_step)) {
+      if (v >= v_line_min && s <= s_line_max) {
         b_line = true;
         b_line_v = std::max(b_line_v, v);
       } else if (s >= fr.sat_min && v >= vmin && v <= vmax && hue_ok_[static_cast<std::size_t>(hue_of(p, v, diff, hdiv))]) {
@@ -379,7 +387,7 @@ void LineExtractor::mark_tall_obstacles(const BearingScan& scan, ExtractionRepor
     const int e = scan.ray_end_px[static_cast<std::size_t>(j)];
     if (e == kRayHidden || e == kRayToViewEnd || ce == 255) continue;  // hidden, open or already an obstacle
     around.clear();
-    for (int d = -w; d <= w; ++d)
+    for (int d = -w; d <= w; d += scan.rays_per_degree)  // one ray per degree is enough for a median
       if (scan.ray_end_px[static_cast<std::size_t>(((j + d) % n + n) % n)] != kRayHidden) around.push_back(reach(j + d));
     std::nth_element(around.begin(), around.begin() + static_cast<std::ptrdiff_t>(around.size() / 2), around.end());
     if (e + x.obstacle_step_px <= around[around.size() / 2]) {
