@@ -61,6 +61,7 @@ struct GoalHsv {
 struct ExtractionParams {
   int end_run_px = 4;             ///< this many "other" bins in a row end the ray (a line's fringe is 1-2 px)
   int carpet_resume_px = 4;       ///< carpet bins in a row behind an end: an obstacle, not the carpet's end
+  int resume_within_px = 40;      ///< ... looked for this far behind the end (a ball, a low robot)
   double obstacle_window_deg = 30.0;  ///< an end this far inside the median end of the rays within
   int obstacle_step_px = 8;           ///< +- window is an obstacle (a tall one hides the carpet behind it)
   int carpet_mean_px = 8;         ///< length (px) of the running carpet mean along a ray

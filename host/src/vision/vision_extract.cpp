@@ -186,7 +186,8 @@ void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& sca
   const int* sdiv = sat_table().div;
   const int* hdiv = hue_div_table().div;
   const int min_gap = ScanParams{}.min_gap_px;  // the database's gap rule (expected_features)
-  const float alpha = 1.0f / static_cast<float>(x.carpet_mean_px);
+  const int alpha_q = std::max(1, static_cast<int>(std::lround(256.0 / x.carpet_mean_px)));
+  const int val_step_q = fr.val_step << 8, sat_step_q = fr.sat_step << 8;
   const int n = static_cast<int>(t.hidden.size());
   long bins_seen = 0, bins_carpet = 0;
   for (int j = 0; j < n; ++j) {
@@ -200,13 +201,15 @@ void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& sca
     ++rep.rays;
     const int sec = t.sector[static_cast<std::size_t>(j)];
     const int vmin = fr.vmin[static_cast<std::size_t>(sec)], vmax = fr.vmax[static_cast<std::size_t>(sec)];
-    float vref = static_cast<float>(sector_val_[static_cast<std::size_t>(sec)]);
-    float sref = static_cast<float>(sector_sat_[static_cast<std::size_t>(sec)]);
+    // Running carpet means in 8-bit fixed point (Q8): integer arithmetic on every carpet bin.
+    int vref_q = static_cast<int>(std::lround(256.0 * sector_val_[static_cast<std::size_t>(sec)]));
+    int sref_q = static_cast<int>(std::lround(256.0 * sector_sat_[static_cast<std::size_t>(sec)]));
+    long ray_sum_v = 0, ray_sum_s = 0, ray_count = 0;
     // The line test as two integer bounds, recomputed when the running carpet mean moves.
     int v_line_min = 0, s_line_max = 0;
     auto set_bounds = [&]() {
-      v_line_min = static_cast<int>(std::ceil(vref + static_cast<float>(fr.val_step)));
-      s_line_max = static_cast<int>(std::floor(sref - static_cast<float>(fr.sat_step)));
+      v_line_min = (vref_q + val_step_q + 255) >> 8;  // ceil
+      s_line_max = (sref_q - sat_step_q) >> 8;        // floor (arithmetic shift)
     };
     set_bounds();
     int found = 0, gap = 0, other_run = 0, carpet_bins = 0, end = -1;
@@ -247,7 +250,7 @@ void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& sca
           run_start = bin;
           run_n = 0;
           run_peak = 0;
-          run_floor = vref;
+          run_floor = static_cast<float>(vref_q) / 256.0f;
         }
         if (run_n < static_cast<int>(run_v.size())) run_v[static_cast<std::size_t>(run_n++)] = static_cast<std::uint8_t>(b_line_v);
         run_peak = std::max(run_peak, b_line_v);
@@ -263,15 +266,15 @@ void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& sca
         other_run = 0;
         ++carpet_bins;
         ++bins_carpet;
-        // +255.5 then truncation: rounding of a value known to be >= 0.
-        ++fr.dev_v[static_cast<std::size_t>(std::clamp(static_cast<int>(static_cast<float>(b_v) - vref + 255.5f), 0, 510))];
-        ++fr.dev_s[static_cast<std::size_t>(std::clamp(static_cast<int>(static_cast<float>(b_s) - sref + 255.5f), 0, 510))];
-        vref += alpha * (static_cast<float>(b_v) - vref);
-        sref += alpha * (static_cast<float>(b_s) - sref);
+        const int dv_q = (b_v << 8) - vref_q, ds_q = (b_s << 8) - sref_q;
+        ++fr.dev_v[static_cast<std::size_t>(std::clamp(((dv_q + 128) >> 8) + 255, 0, 510))];
+        ++fr.dev_s[static_cast<std::size_t>(std::clamp(((ds_q + 128) >> 8) + 255, 0, 510))];
+        vref_q += (dv_q * alpha_q) >> 8;
+        sref_q += (ds_q * alpha_q) >> 8;
         set_bounds();
-        fr.sum_v[static_cast<std::size_t>(sec)] += b_v;
-        fr.sum_s[static_cast<std::size_t>(sec)] += b_s;
-        ++fr.count[static_cast<std::size_t>(sec)];
+        ray_sum_v += b_v;
+        ray_sum_s += b_s;
+        ++ray_count;
       } else {
         ++gap;
         if (++other_run >= x.end_run_px) end = bin - other_run + 1;
@@ -307,6 +310,9 @@ void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& sca
     }
     if (end < 0 && bin >= 0) close_bin();
     finish_run();
+    fr.sum_v[static_cast<std::size_t>(sec)] += static_cast<double>(ray_sum_v);
+    fr.sum_s[static_cast<std::size_t>(sec)] += static_cast<double>(ray_sum_s);
+    fr.count[static_cast<std::size_t>(sec)] += ray_count;
     std::uint8_t& ray_end = scan.ray_end_px[static_cast<std::size_t>(j)];
     std::uint8_t& carpet_end = rep.carpet_end_px[static_cast<std::size_t>(j)];
     if (carpet_bins >= x.carpet_resume_px) ++rep.rays_seen;
@@ -319,8 +325,10 @@ void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& sca
       int run = 0;
       int cur = -1;
       bool cur_carpet = false;
+      const int look_to = end + x.resume_within_px;
       for (; i < i1 && run < x.carpet_resume_px; ++i) {
         const int bi = t.bin[static_cast<std::size_t>(i)];
+        if (bi > look_to) break;
         if (bi != cur) {
           if (cur >= 0) run = cur_carpet ? run + 1 : 0;
           cur = bi;
