@@ -20,6 +20,7 @@
 
 #include "omniloc/calibration.hpp"
 #include "omniloc/camera.hpp"
+#include "test_data_path.hpp"
 #include "omniloc/conventions.hpp"
 #include "omniloc/field.hpp"
 #include "omniloc_sim/renderer.hpp"
@@ -27,15 +28,6 @@
 namespace omniloc {
 namespace {
 
-// tests/data/ found from the working directory (the build directory) upwards.
-std::filesystem::path test_data(const std::string& name) {
-  for (auto dir = std::filesystem::current_path(); !dir.empty(); dir = dir.parent_path()) {
-    const auto p = dir / "tests" / "data" / name;
-    if (std::filesystem::exists(p)) return p;
-    if (dir == dir.parent_path()) break;
-  }
-  return {};
-}
 
 // The default camera with its centre a few px off, distances scaled, a yaw offset and a mast.
 CameraModel test_camera(double scale) {

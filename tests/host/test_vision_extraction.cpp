@@ -20,6 +20,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "omniloc/camera.hpp"
+#include "test_data_path.hpp"
 #include "omniloc/config_reader.hpp"
 #include "omniloc/line_scan.hpp"
 #include "omniloc/recording.hpp"
@@ -29,14 +30,6 @@
 namespace omniloc {
 namespace {
 
-std::filesystem::path test_data(const std::string& name) {
-  for (auto dir = std::filesystem::current_path(); !dir.empty(); dir = dir.parent_path()) {
-    const auto p = dir / "tests" / "data" / name;
-    if (std::filesystem::exists(p)) return p;
-    if (dir == dir.parent_path()) break;
-  }
-  return {};
-}
 
 // Crossing agreement of a field-frame scan with the geometric truth, on the rays it saw, below
 // each ray's end: recall (truth crossings found within tol) and precision (found crossings that

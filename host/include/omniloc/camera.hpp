@@ -81,7 +81,7 @@ struct CameraModel {
 /// Reads and validates a camera from a parsed JSON object (a camera file's root or meta.json's
 /// "camera" block): width, height, center_px [u, v], radius_lut [[r_px, d_cm], ...],
 /// yaw_offset_deg, mirrored, optional "mask" {body_radius_px, masts: [{bearing_deg,
-/// half_width_deg}]}, optional "description" (a note, not kept).
+/// half_width_deg}]}, optional "vision" (vision.hpp), optional "description" (a note, not kept).
 [[nodiscard]] CameraModel camera_from_json(const config::Node& node);
 
 /// The key table (config_reader.hpp) of a camera block.

@@ -6,6 +6,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "hsv_tables.hpp"
 #include "omniloc/camera.hpp"
 #include "omniloc/conventions.hpp"
 #include "omniloc/line_scan.hpp"
@@ -16,33 +17,6 @@ namespace omniloc {
 namespace {
 
 constexpr int kMaxRaysPerDegree = 20;
-
-// OpenCV's 8-bit saturation divisor table (as line_scan.cpp): s = (diff * div[v] + 2^11) >> 12.
-struct SatTable {
-  int div[256];
-  SatTable() {
-    div[0] = 0;
-    for (int i = 1; i < 256; ++i) div[i] = static_cast<int>(std::lround((255 << 12) / static_cast<double>(i)));
-  }
-};
-const SatTable& sat_table() {
-  static const SatTable t;  // immutable lookup table, built once
-  return t;
-}
-
-// OpenCV's 8-bit BGR->HSV hue divisor table (color_hsv: hdiv_table180), so that the hue is one
-// multiplication and equals cvtColor's bit for bit (a coarser lookup is too coarse for dark carpet).
-struct HueDivTable {
-  int div[256];
-  HueDivTable() {
-    div[0] = 0;
-    for (int i = 1; i < 256; ++i) div[i] = static_cast<int>(std::lround((180 << 12) / (6.0 * i)));
-  }
-};
-const HueDivTable& hue_div_table() {
-  static const HueDivTable t;  // immutable lookup table, built once
-  return t;
-}
 
 // OpenCV 8-bit hue (0..179) of BGR p with max v and max - min diff.
 inline int hue_of(const std::uint8_t* p, int v, int diff, const int* hdiv) {
@@ -183,8 +157,8 @@ bool LineExtractor::ensure_carpet(const cv::Mat& bgr, std::string* why) {
 
 void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const {
   const ExtractionParams& x = vision_.extraction;
-  const int* sdiv = sat_table().div;
-  const int* hdiv = hue_div_table().div;
+  const int* sdiv = detail::hsv_tables().sat_div;
+  const int* hdiv = detail::hsv_tables().hue_div;
   const int min_gap = ScanParams{}.min_gap_px;  // the database's gap rule (expected_features)
   const int alpha_q = std::max(1, static_cast<int>(std::lround(256.0 / x.carpet_mean_px)));
   const int val_step_q = fr.val_step << 8, sat_step_q = fr.sat_step << 8;
