@@ -332,9 +332,8 @@ TEST_F(VisionRendered, CrossingsMatchTheGeometryAndAreNoWorseThanFixedThresholds
     EXPECT_GT(c.fresh.recall(), 0.9) << name;
     EXPECT_GT(c.fresh.precision(), 0.9) << name;
     // Against the fixed thresholds on the frames they were made for. Measured: recall equal or
-    // better except at 135 % light (-3 points), precision 2-3 points lower (the 4-connected walk
-    // also sees lines grazing a ray between the integer samples the truth uses). Bounded here so
-    // that it cannot get worse unnoticed; docs/VISION.md states the gap.
+    // better except at 135 % light (-3 points), precision 2-3 points lower (cause not found yet,
+    // docs/VISION.md). Bounded here so that it cannot get worse unnoticed.
     EXPECT_GE(c.fresh.recall(), c.old.recall() - 0.04) << name;
     EXPECT_GE(c.fresh.precision(), c.old.precision() - 0.035) << name;
   }

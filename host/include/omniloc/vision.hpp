@@ -64,6 +64,7 @@ struct ExtractionParams {
   int resume_within_px = 40;      ///< ... looked for this far behind the end (a ball, a low robot)
   double obstacle_window_deg = 30.0;  ///< an end this far inside the median end of the rays within
   int obstacle_step_px = 8;           ///< +- window is an obstacle (a tall one hides the carpet behind it)
+  double edge_fraction = 0.5;     ///< a line's edge: where it first reaches this fraction from carpet to peak
   int carpet_mean_px = 8;         ///< length (px) of the running carpet mean along a ray
   int sectors = 16;               ///< light-following sectors around the image centre
   double light_follow = 0.5;      ///< per frame, each sector's level moves this fraction towards what it saw

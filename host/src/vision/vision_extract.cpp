@@ -202,7 +202,7 @@ void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& sca
       if (!in_run) return;
       in_run = false;
       if (!run_counts || found >= kCrossingsPerRay) return;
-      const float half = 0.5f * (run_floor + static_cast<float>(run_peak));
+      const float half = run_floor + static_cast<float>(x.edge_fraction) * (static_cast<float>(run_peak) - run_floor);
       // The bin before the run may already be half-way (its pixel failed the saturation step).
       if (static_cast<float>(run_before_v) >= half && run_start - 1 >= k0_ && gap_before_run > min_gap) {
         out[found++] = static_cast<std::uint8_t>(run_start - 1);

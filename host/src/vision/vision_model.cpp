@@ -54,7 +54,7 @@ const KeyTable<ExtractionParams>& extraction_keys() {
       key("end_run_px", &E::end_run_px), key("carpet_resume_px", &E::carpet_resume_px),
       key("resume_within_px", &E::resume_within_px),
       key("obstacle_window_deg", &E::obstacle_window_deg), key("obstacle_step_px", &E::obstacle_step_px),
-      key("carpet_mean_px", &E::carpet_mean_px), key("sectors", &E::sectors),
+      key("edge_fraction", &E::edge_fraction), key("carpet_mean_px", &E::carpet_mean_px), key("sectors", &E::sectors),
       key("light_follow", &E::light_follow), key("light_range", &E::light_range),
       key("val_sigmas", &E::val_sigmas), key("sat_sigmas", &E::sat_sigmas),
       key("min_val_step", &E::min_val_step), key("min_sat_step", &E::min_sat_step),
@@ -139,6 +139,7 @@ void VisionModel::validate(const config::Origin& at) const {
           e.obstacle_window_deg);
   require(e.obstacle_step_px >= 1 && e.obstacle_step_px <= 254, x / "obstacle_step_px", "must be 1..254", e.obstacle_step_px);
   require(e.resume_within_px >= 1 && e.resume_within_px <= 254, x / "resume_within_px", "must be 1..254", e.resume_within_px);
+  require(e.edge_fraction > 0.0 && e.edge_fraction < 1.0, x / "edge_fraction", "must be in (0, 1)", e.edge_fraction);
   require(e.carpet_mean_px >= 1 && e.carpet_mean_px <= 128, x / "carpet_mean_px", "must be 1..128", e.carpet_mean_px);
   require(e.sectors >= 1 && e.sectors <= 360, x / "sectors", "must be 1..360", e.sectors);
   require(e.light_follow >= 0.0 && e.light_follow <= 1.0, x / "light_follow", "must be in [0, 1]", e.light_follow);
