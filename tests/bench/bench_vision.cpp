@@ -171,7 +171,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
     auto show = [&](const char* name, const char* label, double target_us) {
       const auto it = times_.find(name);
       if (it == times_.end()) return;
-      std::printf("  %-44s %8.3f ms  (target < %.0f ms: %s)\n", label, it->second / 1000.0, target_us / 1000.0,
+      std::printf("  %-44s %8.3f ms  (target < %.1f ms: %s)\n", label, it->second / 1000.0, target_us / 1000.0,
                   it->second < target_us ? "met" : "NOT met");
     };
     std::printf("\ntargets:\n");
