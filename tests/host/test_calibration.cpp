@@ -22,6 +22,7 @@
 
 #include "omniloc/calibration.hpp"
 #include "omniloc/camera.hpp"
+#include "test_data_path.hpp"
 #include "omniloc/conventions.hpp"
 #include "omniloc/field.hpp"
 #include "omniloc_sim/renderer.hpp"

@@ -23,6 +23,7 @@
 #include "omniloc/config_reader.hpp"
 #include "omniloc/goals.hpp"
 #include "omniloc/locate.hpp"
+#include "omniloc/vision.hpp"
 #include "omniloc/localizer.hpp"
 #include "omniloc/robot_config.hpp"
 #include "omniloc_sim/renderer.hpp"
@@ -61,7 +62,7 @@ HsvRange model_of(const cv::Vec3b& bgr) {
   cv::Mat3b px(1, 1, bgr), hsv;
   cv::cvtColor(px, hsv, cv::COLOR_BGR2HSV);
   const cv::Vec3b h = hsv(0, 0);
-  return {h[0], 10, std::max(0, h[1] - 80), std::max(0, h[2] - 90)};
+  return {static_cast<double>(h[0]), 10.0, std::max(0.0, h[1] - 80.0), std::max(0.0, h[2] - 90.0)};
 }
 
 GoalColourModels models(GoalColour at_x_max) {
@@ -118,18 +119,19 @@ double distance_to(const nlohmann::json& j, const Pose2& p) {
   return std::hypot(j["x_cm"].get<double>() - p.x_cm, j["y_cm"].get<double>() - p.y_cm);
 }
 
-/// The JSON object of the brief: exactly these keys (plus goal_cue) with these types.
+/// The JSON object of the brief: exactly these keys (plus goal_cue and heading_ambiguous) with these types.
 void expect_schema(const nlohmann::json& j) {
   ASSERT_TRUE(j.is_object()) << j;
   for (const char* k : {"x_cm", "y_cm", "yaw_deg", "match_error", "time_ms"}) EXPECT_TRUE(j.at(k).is_number()) << k << ": " << j;
   EXPECT_TRUE(j.at("accepted").is_boolean()) << j;
   EXPECT_TRUE(j.at("ambiguous").is_boolean()) << j;
+  EXPECT_TRUE(j.at("heading_ambiguous").is_boolean()) << j;
   EXPECT_TRUE(j.at("rays_used").is_number_integer()) << j;
   EXPECT_TRUE(j.at("goal_cue").is_string()) << j;
   const auto& t = j.at("twin");
   EXPECT_TRUE(t.is_null() || (t.is_object() && t.at("x_cm").is_number() && t.at("y_cm").is_number() && t.at("yaw_deg").is_number()))
       << j;
-  EXPECT_EQ(j.size(), 10u) << j;
+  EXPECT_EQ(j.size(), 11u) << j;
 }
 
 class LocateProgram : public ::testing::Test {
@@ -325,7 +327,8 @@ TEST_F(LocateProgram, LocalizerGlobalSearchIsLocateFrame) {
     w.gyro_yaw_deg = truth.yaw_deg;
     (void)loc.on_window(w);
     const FrameReport r = loc.on_image(5.0, img);
-    const BearingScan bearings = scan_image_bearings(img, renderer_->camera(), config.scan_rays_per_degree);
+    // The same line extraction the Localizer runs on its first frame.
+    const BearingScan bearings = LineExtractor(renderer_->camera()).extract(img, config.scan_rays_per_degree);
     const SingleFrameResult s = locate_frame(config, *field_, renderer_->camera(), *db_, bearings,
                                              yaw_known ? std::optional<double>(truth.yaw_deg) : std::nullopt, nullptr);
     EXPECT_TRUE(r.global);
@@ -342,32 +345,40 @@ TEST(GoalColours, HsvRangeWrapsTheHueAndTheVisionBlockIsValidated) {
   EXPECT_TRUE(red.contains(170, 200, 200));
   EXPECT_FALSE(red.contains(20, 200, 200));
   EXPECT_FALSE(red.contains(175, 99, 200));
-  const auto doc = config::parse_json_text(
-      R"({"goals": {"blue": {"hue": 110, "hue_half_width": 12, "sat_min": 90, "val_min": 40}}, "goal_colour_at_x_max": "blue",
-          "carpet_hsv": {"hue": 60}})",
-      "cam.json");
-  const GoalColourModels m = goal_colour_models_from_vision(doc.root());
+  // The camera's "vision" block as the camera reader reads it, seen through goal_colour_models.
+  auto read_vision = [](const std::string& text) {
+    const auto doc = config::parse_json_text(text, "cam.json");
+    VisionModel v;
+    config::read_keys(doc.root(), vision_keys(), v);
+    v.validate(doc.root().origin());
+    return goal_colour_models(v);
+  };
+  const GoalColourModels m = read_vision(
+      R"({"goals": {"blue": {"hue": 110, "hue_half_width": 12, "sat_min": 90, "val_min": 40}}, "goal_colour_at_x_max": "blue"})");
   ASSERT_TRUE(m.blue.has_value());
   EXPECT_EQ(m.blue->hue, 110);
+  EXPECT_EQ(m.blue->sat_min, 90);
   EXPECT_FALSE(m.yellow.has_value());
   EXPECT_EQ(m.colour_at_x_max, GoalColour::kBlue);
   EXPECT_EQ(m.cue, GoalCueConfig{});
-  auto error_of = [](const std::string& text) {
+  EXPECT_EQ(read_vision(R"({"goal_cue": {"min_pixels": 12}})").cue.min_pixels, 12);
+  auto error_of = [&](const std::string& text) {
     try {
-      (void)goal_colour_models_from_vision(config::parse_json_text(text, "cam.json").root());
+      (void)read_vision(text);
     } catch (const ConfigError& e) {
       return std::string(e.what());
     }
     return std::string("no error");
   };
   EXPECT_NE(error_of(R"({"goals": {"blue": {"hue": 200, "hue_half_width": 12, "sat_min": 90, "val_min": 40}}})")
-                .find("cam.json:goals.blue.hue: must be an OpenCV hue 0..179 (got 200)"),
-            std::string::npos);
-  EXPECT_NE(error_of(R"({"goals": {"red": {}}})").find("cam.json:goals.red: unknown key"), std::string::npos);
-  EXPECT_NE(error_of(R"({"goal_colour_at_x_max": "green"})").find("cam.json:goal_colour_at_x_max: must be one of"),
-            std::string::npos);
+                .find("cam.json:goals.blue.hue: must be an OpenCV hue in [0, 180) (got 200)"),
+            std::string::npos) << error_of(R"({"goals": {"blue": {"hue": 200}}})");
+  EXPECT_NE(error_of(R"({"goals": {"red": {}}})").find("cam.json:goals.red"), std::string::npos)
+      << error_of(R"({"goals": {"red": {}}})");
+  EXPECT_NE(error_of(R"({"goal_colour_at_x_max": "green"})").find("cam.json:goal_colour_at_x_max"), std::string::npos)
+      << error_of(R"({"goal_colour_at_x_max": "green"})");
   EXPECT_NE(error_of(R"({"goal_cue": {"min_margin": 0}})").find("cam.json:goal_cue.min_margin: must be in (0, 1]"),
-            std::string::npos);
+            std::string::npos) << error_of(R"({"goal_cue": {"min_margin": 0}})");
 }
 
 TEST(GoalColours, FieldFileWinsOverTheCamerasLearntColour) {
@@ -409,6 +420,12 @@ TEST(LocateRealFrame, TkuCentreSpotCalibratedThenLocated) {
   expect_schema(j);
   EXPECT_LT(distance_to(j, {375.0, 275.0, 0.0}), 10.0) << j;
   EXPECT_TRUE(j["accepted"].get<bool>()) << j;
+  // On the centre spot the twin stands on the same spot, facing the other way: the position is
+  // known, the heading only up to 180 deg (no side is known for this frame).
+  EXPECT_FALSE(j["ambiguous"].get<bool>()) << j;
+  if (j["heading_ambiguous"].get<bool>()) {
+    EXPECT_LT(distance_to(j["twin"], {375.0, 275.0, 0.0}), 10.0) << j;
+  }
   fs::remove_all(dir);
 }
 

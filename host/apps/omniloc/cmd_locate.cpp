@@ -15,6 +15,7 @@
 #include "omniloc/field.hpp"
 #include "omniloc/goals.hpp"
 #include "omniloc/locate.hpp"
+#include "omniloc/vision.hpp"
 #include "omniloc/recording.hpp"
 
 namespace omniloc::cli {
@@ -124,6 +125,7 @@ nlohmann::ordered_json result_json(const SingleFrameResult& r, double time_ms) {
   out["match_error"] = number_or_null(r.match.error);
   out["accepted"] = r.accepted;
   out["ambiguous"] = r.ambiguous;
+  out["heading_ambiguous"] = r.heading_ambiguous;
   out["twin"] = r.twin ? nlohmann::ordered_json{{"x_cm", r.twin->x_cm}, {"y_cm", r.twin->y_cm}, {"yaw_deg", r.twin->yaw_deg}}
                        : nlohmann::ordered_json(nullptr);
   out["rays_used"] = r.match.rays_used;
@@ -157,7 +159,11 @@ int cmd_locate(std::span<const std::string_view> args) {
     std::fprintf(stderr, "omniloc locate: error: cannot read image '%s'\n", a.image.c_str());
     return 1;
   }
-  const CameraWithGoals cam = load_camera_with_goals(a.camera);
+  struct {
+    CameraModel camera;
+    GoalColourModels goals;
+  } cam{load_camera(a.camera), {}};
+  cam.goals = goal_colour_models(cam.camera.vision);
   if (bgr.cols != cam.camera.width_px || bgr.rows != cam.camera.height_px) {
     std::fprintf(stderr, "omniloc locate: error: image '%s' is %d x %d px but camera '%s' is for %d x %d px\n",
                  a.image.c_str(), bgr.cols, bgr.rows, a.camera.c_str(), cam.camera.width_px, cam.camera.height_px);
@@ -168,14 +174,22 @@ int cmd_locate(std::span<const std::string_view> args) {
   const FeatureDb db = feature_db_for(a, field, cam.camera);
 
   const auto t0 = std::chrono::steady_clock::now();
-  // The frame as Localizer::on_image takes it: the robot-frame scan and the goal observation.
-  const BearingScan bearings = scan_image_bearings(bgr, cam.camera, config.scan_rays_per_degree);
+  // The frame as Localizer::on_image takes it: the line extraction (a frame with nothing usable is
+  // "no measurement", never a pose), the goal observation, then the shared global search.
+  LineExtractor extractor(cam.camera);
+  ExtractionReport extraction;
+  const BearingScan bearings = extractor.extract(bgr, config.scan_rays_per_degree, &extraction);
   const GoalObservation goals = observe_goals(bgr, cam.camera, field, cam.goals);
-  const SingleFrameResult r = locate_frame(config, field, cam.camera, db, bearings, a.yaw_deg, &goals);
+  SingleFrameResult r;
+  if (extraction.usable) r = locate_frame(config, field, cam.camera, db, bearings, a.yaw_deg, &goals);
   const double time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 
   if (a.json) {
-    std::printf("%s\n", result_json(r, time_ms).dump().c_str());
+    nlohmann::ordered_json j = result_json(r, time_ms);
+    if (!extraction.usable) j["no_measurement"] = extraction.reason;
+    std::printf("%s\n", j.dump().c_str());
+  } else if (!extraction.usable) {
+    std::printf("no measurement: %s\n", extraction.reason.c_str());
   } else {
     print_text(r, config.e_th, time_ms);
   }

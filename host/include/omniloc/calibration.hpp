@@ -24,6 +24,7 @@
 
 #include "omniloc/camera.hpp"
 #include "omniloc/field.hpp"
+#include "omniloc/vision.hpp"
 
 namespace omniloc {
 
@@ -51,14 +52,8 @@ struct RimCircle {
   int rays_on_circle = 0;  // of 360
 };
 
-/// Colour statistics of the carpet (OpenCV 8-bit HSV: H 0..179) and the thresholds derived from it.
-struct CarpetColour {
-  double hue = 0.0, hue_half_width = 0.0;
-  double sat_min = 0.0, val_min = 0.0, val_max = 255.0;
-  double median_sat = 0.0, median_val = 0.0;
-  double line_val_step = 0.0;  // a line pixel is at least this much brighter than the carpet around it
-  double line_sat_step = 0.0;  // ... and at least this much less saturated
-};
+// CarpetColour (the carpet colour statistics and line steps) lives in vision.hpp: the robot
+// library estimates it too.
 
 /// Per-frame image analysis: what calibrate_camera measured before fitting.
 struct FrameAnalysis {

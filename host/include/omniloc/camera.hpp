@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 
 #include "omniloc/config.hpp"
+#include "omniloc/vision.hpp"
 
 namespace omniloc {
 
@@ -45,8 +46,13 @@ struct CameraModel {
   double body_radius_px = 0.0;  // everything closer to the centre is the robot itself
   std::vector<MastSector> masts;
 
-  /// Largest radius whose full circle is inside the image and the table (at most 254 px, the
-  /// largest radius the uint8 feature format stores).
+  /// How the line extraction sees the floor (the "vision" block; not part of fingerprint()).
+  VisionModel vision;
+
+  /// The largest view radius the uint8 feature format stores (255 is "no crossing").
+  static constexpr double kMaxViewRadiusPx = 254.0;
+  /// Largest radius whose full circle is inside the image and the table; validate() refuses a
+  /// camera where it exceeds kMaxViewRadiusPx.
   [[nodiscard]] double view_radius_px() const;
   /// Smallest radius at which the floor is visible (body radius or the table's first row).
   [[nodiscard]] double min_radius_px() const;
@@ -66,7 +72,7 @@ struct CameraModel {
   [[nodiscard]] std::uint64_t fingerprint() const;
 
   /// Throws ConfigError "<at>.<field>: <why> (got <value>)": size not in 1..16384, centre outside
-  /// the image, fewer than two table rows, a table not strictly increasing in both columns or with
+  /// the image, fewer than two table rows, a view beyond kMaxViewRadiusPx, a bad "vision" block, a table not strictly increasing in both columns or with
   /// negative values, a mast half width outside [0, 90), no visible floor ring.
   void validate(const config::Origin& at) const;
   bool operator==(const CameraModel&) const = default;
@@ -75,7 +81,7 @@ struct CameraModel {
 /// Reads and validates a camera from a parsed JSON object (a camera file's root or meta.json's
 /// "camera" block): width, height, center_px [u, v], radius_lut [[r_px, d_cm], ...],
 /// yaw_offset_deg, mirrored, optional "mask" {body_radius_px, masts: [{bearing_deg,
-/// half_width_deg}]}, optional "description" (a note, not kept).
+/// half_width_deg}]}, optional "vision" (vision.hpp), optional "description" (a note, not kept).
 [[nodiscard]] CameraModel camera_from_json(const config::Node& node);
 
 /// The key table (config_reader.hpp) of a camera block.

@@ -8,9 +8,8 @@
 // picks one of two candidates only when the evidence is strong and one-sided; otherwise the result
 // stays ambiguous.
 //
-// Interim: HsvRange and the "vision" reader here are the minimum this cue needs until the vision
-// engineer's VisionModel (omniloc/vision.hpp, CameraModel::vision) lands; at the merge
-// GoalColourModels becomes a view of camera.vision.goals and load_camera_with_goals goes away.
+// The colour models and the cue's thresholds come from the camera's "vision" block
+// (CameraModel::vision, omniloc/vision.hpp); goal_colour_models() is the view of it this cue uses.
 #pragma once
 
 #include <optional>
@@ -20,6 +19,7 @@
 #include <opencv2/core/mat.hpp>
 
 #include "omniloc/camera.hpp"
+#include "omniloc/vision.hpp"
 #include "omniloc/config.hpp"
 #include "omniloc/conventions.hpp"
 #include "omniloc/field.hpp"
@@ -39,22 +39,6 @@ struct HsvRange {
   bool operator==(const HsvRange&) const = default;
 };
 
-/// How the goal evidence is judged (camera "vision.goal_cue", every key optional; these
-/// initialisers are the defaults, documented in docs/LOCALIZER.md).
-struct GoalCueConfig {
-  /// Fewer goal-coloured pixels than this beyond the goal lines (at the pixel step): too weak to
-  /// choose. 40 samples at step 2 are ~160 image pixels, a goal 3 m away shows ~10x that.
-  int min_pixels = 40;
-  /// (score of one candidate - score of the other) / (2 * pixels considered), in [-1, 1]: a
-  /// choice needs at least this (0.5: three quarters of the pixels on one side).
-  double min_margin = 0.5;
-  /// The goal mouth's wedge is widened by this each side (posts, calibration and pose error).
-  double post_margin_cm = 15.0;
-  /// Every n-th pixel in each direction is examined (the goals are large; 2 -> a quarter).
-  int pixel_step = 2;
-  void validate(const config::Origin& at) const;
-  bool operator==(const GoalCueConfig&) const = default;
-};
 
 /// The goal colour models a camera carries: either colour may be unknown (not learnt).
 struct GoalColourModels {
@@ -65,17 +49,8 @@ struct GoalColourModels {
   bool operator==(const GoalColourModels&) const = default;
 };
 
-/// Reads "goals" {"blue", "yellow"}, "goal_colour_at_x_max" and "goal_cue" from a camera's
-/// "vision" object (other keys there belong to the line extraction and are left alone).
-[[nodiscard]] GoalColourModels goal_colour_models_from_vision(const config::Node& vision);
-
-/// A camera file with its goal colour models: the "vision" block is read here and the rest by
-/// camera_from_json (which does not know "vision" yet; see the header comment).
-struct CameraWithGoals {
-  CameraModel camera;
-  GoalColourModels goals;
-};
-[[nodiscard]] CameraWithGoals load_camera_with_goals(const std::string& name_or_path);
+/// The camera's goal colour models and cue thresholds (its "vision" block, learnt at calibration).
+[[nodiscard]] GoalColourModels goal_colour_models(const VisionModel& vision);
 
 /// Which colour stands at x = max: the field file's if it says, else the camera's learnt one.
 [[nodiscard]] GoalColour goal_colour_at_x_max(const FieldGeometry& field, const GoalColourModels& models);

@@ -43,6 +43,7 @@
 #include "omniloc/matcher.hpp"
 #include "omniloc/odometry.hpp"
 #include "omniloc/robot_config.hpp"
+#include "omniloc/vision.hpp"
 
 namespace omniloc {
 
@@ -178,6 +179,9 @@ struct FrameReport {
   double search_range_cm = 0.0;
   double speed_cm_per_s = 0.0;
   double predicted_offset_cm = 0.0;  ///< |image - odometry prediction|
+  /// Non-empty: the frame showed nothing usable (no carpet, too few rays or crossings), so it was
+  /// not matched (outcome kRejected; odometry stands); says why.
+  std::string no_measurement;
 };
 
 struct LocalizerStats {
@@ -203,7 +207,8 @@ class Localizer {
   /// it covers, and returns the pose at the window's end.
   LocalizedPose on_window(const EncoderWindow& window);
 
-  /// A camera frame taken at t_ms (same time base as the windows). Processed now if a window at
+  /// A camera frame taken at t_ms (same time base as the windows). Its lines are extracted now
+  /// (LineExtractor); a frame with no measurement is reported kRejected at once, not matched. Processed now if a window at
   /// or after t_ms has been seen, else kept until one arrives (the report then says kPending).
   FrameReport on_image(double t_ms, const cv::Mat& bgr);
   /// Same with a robot-frame scan already made (scan_image_bearings); `goals` is the frame's goal
@@ -308,6 +313,7 @@ class Localizer {
   MatchOptions match_options_;
   GoalColourModels goal_colours_;
   Odometry odometry_;
+  LineExtractor extractor_;  ///< on_image(): this camera's line extraction (adapts frame to frame)
   std::deque<HistoryEntry> history_;
   std::deque<PendingFrame> pending_;
   std::vector<FrameReport> reports_;

@@ -7,14 +7,12 @@
 
 #include "omniloc/calibration.hpp"
 #include "omniloc/conventions.hpp"
-#include "robust_stats.hpp"
+#include "omniloc/vision.hpp"
 
 namespace omniloc {
 
 namespace {
 
-using calibration_detail::percentile;
-using calibration_detail::robust_sigma;
 
 // Largest opened connected region of `band` pixels, and its colour class.
 std::optional<GoalRegion> largest_region(const cv::Mat& hsv, const cv::Mat& band, double min_pixels) {

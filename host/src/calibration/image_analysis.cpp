@@ -11,7 +11,6 @@
 
 #include "omniloc/calibration.hpp"
 #include "omniloc/conventions.hpp"
-#include "robust_stats.hpp"
 
 namespace omniloc {
 
@@ -19,9 +18,6 @@ namespace {
 
 constexpr int kRimRays = 360;
 constexpr int kPolarAngles = 720;  // 0.5 deg: a 3 px rod at 40 px spans 4 deg = 8 bins
-
-using calibration_detail::percentile;
-using calibration_detail::robust_sigma;
 
 float bilinear(const cv::Mat1f& img, double x, double y) {
   const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
@@ -238,58 +234,22 @@ RimCircle find_mirror_rim(const cv::Mat& bgr, const std::string& ctx) {
 
 namespace {
 
-// Carpet = the most frequent colour (a 3-D H x S x V histogram) in the ring just outside the body:
-// the robot stands on the carpet, so the floor next to it is carpet (walls and furniture, which
-// may share its hue under a colour cast, are farther out). Thresholds from the robust spread of
-// the pixels in and next to that histogram bin.
+// Carpet: the ring just outside the body (the robot stands on the carpet, so the floor next to it
+// is carpet; walls and furniture, which may share its hue under a colour cast, are farther out),
+// classified by the robot library's estimate (vision.hpp).
 CarpetColour carpet_colour(const cv::Mat& hsv, const RimCircle& rim, const std::string& ctx) {
-  constexpr int kHb = 45, kSb = 16, kVb = 16;  // 8 deg hue, 16 levels of S and V
-  std::vector<int> hist(kHb * kSb * kVb, 0);
   std::vector<cv::Vec3b> samples;
   const double r_in = 0.15 * rim.radius_px, r_out = 0.5 * rim.radius_px;
   for (int v = 0; v < hsv.rows; ++v) {
     for (int u = 0; u < hsv.cols; ++u) {
       const double r = std::hypot(u - rim.centre_px.x(), v - rim.centre_px.y());
-      if (r < r_in || r > r_out) continue;
-      const auto& p = hsv.at<cv::Vec3b>(v, u);
-      ++hist[static_cast<std::size_t>((p[0] / 4) * kSb * kVb + (p[1] / 16) * kVb + p[2] / 16)];
-      samples.push_back(p);
+      if (r >= r_in && r <= r_out) samples.push_back(hsv.at<cv::Vec3b>(v, u));
     }
   }
-  if (samples.empty()) throw std::runtime_error(ctx + ": no carpet: the mirror's disc is empty");
-  const auto peak = static_cast<int>(std::max_element(hist.begin(), hist.end()) - hist.begin());
-  const int ph = peak / (kSb * kVb), ps = (peak / kVb) % kSb, pv = peak % kVb;
-  std::vector<double> hs, ss, vs;
-  for (const auto& p : samples) {
-    const int dh = std::abs(p[0] / 4 - ph);
-    if (std::min(dh, kHb - dh) <= 1 && std::abs(p[1] / 16 - ps) <= 1 && std::abs(p[2] / 16 - pv) <= 1) {
-      double h = p[0];
-      if (h - ph * 4 > 90) h -= 180;  // unwrap around the peak
-      if (ph * 4 - h > 90) h += 180;
-      hs.push_back(h);
-      ss.push_back(p[1]);
-      vs.push_back(p[2]);
-    }
-  }
-  CarpetColour c;
-  c.hue = std::fmod(percentile(hs, 0.5) + 180.0, 180.0);
-  c.median_sat = percentile(ss, 0.5);
-  c.median_val = percentile(vs, 0.5);
-  // Hue: three robust sigmas, 4..20 units (8..40 deg). Saturation: down to three sigmas or a
-  // quarter below the median. Value: half to 1.5 times the median (the renderer's +-20 % light
-  // and the real frame's vignetting stay inside; the black floor beyond the carpet and bright
-  // walls of the same hue do not).
-  c.hue_half_width = std::clamp(3.0 * robust_sigma(hs), 4.0, 20.0);
-  c.sat_min = c.median_sat - std::max(3.0 * robust_sigma(ss), 0.25 * c.median_sat);
-  c.val_min = 0.5 * c.median_val;
-  c.val_max = 1.5 * c.median_val;
-  if (static_cast<double>(hs.size()) < 0.05 * static_cast<double>(samples.size()) || c.median_sat < 20.0) {
-    throw std::runtime_error(ctx + ": no carpet: no dominant colour around the robot (hue " +
-                             std::to_string(static_cast<int>(2 * c.hue)) + " deg on " + std::to_string(hs.size()) +
-                             " of " + std::to_string(samples.size()) + " pixels, median saturation " +
-                             std::to_string(static_cast<int>(c.median_sat)) + ")");
-  }
-  return c;
+  std::string why;
+  const auto c = carpet_colour_from_samples(samples, &why);
+  if (!c) throw std::runtime_error(ctx + ": " + why);
+  return *c;
 }
 
 cv::Mat1f normalised_box(const cv::Mat1f& value, const cv::Mat1f& weight, int k) {

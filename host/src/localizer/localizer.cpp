@@ -81,7 +81,9 @@ Localizer::Localizer(const LocalizerConfig& config, const RobotConfig& robot, co
       field_(field),
       camera_(camera),
       db_(db),
+      goal_colours_(goal_colour_models(camera.vision)),
       odometry_(robot),
+      extractor_(camera),
       heading_filter_(heading_filter_config(config)) {
   validate_localizer_config(config_, "localizer config");
   if (db.field_fingerprint != field.fingerprint() || db.camera_fingerprint != camera.fingerprint())
@@ -199,7 +201,18 @@ LocalizedPose Localizer::on_window(const EncoderWindow& window) {
 }
 
 FrameReport Localizer::on_image(double t_ms, const cv::Mat& bgr) {
-  BearingScan bearings = scan_image_bearings(bgr, camera_, config_.scan_rays_per_degree);
+  ExtractionReport er;
+  BearingScan bearings = extractor_.extract(bgr, config_.scan_rays_per_degree, &er);
+  if (!er.usable) {
+    FrameReport r;
+    r.t_ms = t_ms;
+    r.outcome = FrameOutcome::kRejected;
+    r.no_measurement = er.reason;
+    ++stats_.frames;
+    ++stats_.rejected;
+    reports_.push_back(r);
+    return r;
+  }
   return on_bearings(t_ms, std::move(bearings), observe_goals(bgr, camera_, field_, goal_colours_));
 }
 
@@ -285,7 +298,8 @@ void Localizer::search(const Frame& frame, FrameReport& rep) {
   const SingleFrameResult g = global_match(frame, rep);
   note_global(rep, g);
   const bool good = g.match.error < config_.e_th;
-  if (g.accepted) {
+  // Without a heading, one known only up to 180 deg would turn every wheel displacement around.
+  if (g.accepted && !(g.heading_ambiguous && config_.refuse_ambiguous)) {
     relocalize(frame.t_ms, g, rep);
   } else if (good) {
     rep.outcome = FrameOutcome::kAmbiguous;

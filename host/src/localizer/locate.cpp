@@ -105,6 +105,11 @@ SingleFrameResult locate_frame(const LocalizerConfig& config, const FieldGeometr
   } else {
     r.goal_choice.reason = "not needed (the lines alone are not ambiguous)";
   }
+  if (r.ambiguous && r.twin &&
+      (r.twin->position_cm() - best.pose.position_cm()).norm() < MatchOptions{}.ambiguity_separation_cm) {
+    r.ambiguous = false;
+    r.heading_ambiguous = true;
+  }
   best.match.ambiguous = r.ambiguous;
   r.pose = best.pose;
   r.match = best.match;

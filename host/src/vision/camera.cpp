@@ -30,8 +30,8 @@ double interp(const std::vector<RadiusMark>& lut, double x, GetX gx, GetY gy) {
 double CameraModel::view_radius_px() const {
   const double image_r = std::min({center_px.x(), center_px.y(), width_px - 1.0 - center_px.x(),
                                    height_px - 1.0 - center_px.y()});
-  // 254 px: crossing radii are stored as uint8 with 255 reserved for "no crossing".
-  return std::min({image_r, radius_lut.empty() ? 0.0 : radius_lut.back().radius_px, 254.0});
+  // No cap here: validate() refuses a view beyond what the uint8 feature format stores.
+  return std::min(image_r, radius_lut.empty() ? 0.0 : radius_lut.back().radius_px);
 }
 
 double CameraModel::min_radius_px() const {
@@ -117,6 +117,14 @@ void CameraModel::validate(const config::Origin& at) const {
     require(masts[i].half_width_deg >= 0.0 && masts[i].half_width_deg < 90.0, m / "half_width_deg",
             "must be in [0, 90)", masts[i].half_width_deg);
   }
+  // Crossing radii are stored as uint8 with 255 reserved for "no crossing": a larger view would
+  // need a different feature format, so such a camera is refused rather than silently cropped.
+  require(view_radius_px() <= kMaxViewRadiusPx, at / "radius_lut",
+          "the view reaches beyond the " + config::show(kMaxViewRadiusPx) +
+              " px the uint8 feature format stores: end the table at <= " + config::show(kMaxViewRadiusPx) +
+              " px (or use a smaller image)",
+          config::show(view_radius_px()) + " px");
+  vision.validate(at / "vision");
   require(view_radius_px() > min_radius_px() + 2.0, at,
           "no visible floor ring: the image or 'radius_lut' ends inside the body radius " +
               config::show(min_radius_px()) + " px",
@@ -164,7 +172,6 @@ const config::KeyTable<CameraModel>& camera_keys() {
   static const config::KeyTable<CameraModel> table = {
       config::note<C>("description"),
       config::record<C>("calibration"),  // written by `omniloc calibrate` (docs/CALIBRATION.md)
-      config::record<C>("vision"),       // colour model written by `omniloc calibrate`; its reader is separate
       key("width", &C::width_px, Need::kRequired),
       key("height", &C::height_px, Need::kRequired),
       key("center_px", &C::center_px, Need::kRequired),
@@ -176,6 +183,7 @@ const config::KeyTable<CameraModel>& camera_keys() {
                            key("body_radius_px", &C::body_radius_px, Need::kRequired),
                            key("masts", &C::masts),
                        }),
+      config::nested("vision", &C::vision, vision_keys()),  // optional; not in fingerprint()
   };
   return table;
 }

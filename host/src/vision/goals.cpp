@@ -25,80 +25,18 @@ void HsvRange::validate(const config::Origin& at) const {
   config::require(val_min >= 0 && val_min <= 255, at / "val_min", "must be in 0..255", val_min);
 }
 
-void GoalCueConfig::validate(const config::Origin& at) const {
-  config::require(min_pixels >= 1, at / "min_pixels", "must be >= 1", min_pixels);
-  config::require(min_margin > 0.0 && min_margin <= 1.0, at / "min_margin", "must be in (0, 1]", min_margin);
-  config::require(post_margin_cm >= 0.0, at / "post_margin_cm", "must be >= 0", post_margin_cm);
-  config::require(pixel_step >= 1 && pixel_step <= 16, at / "pixel_step", "must be in 1..16", pixel_step);
-}
-
-namespace {
-
-const config::KeyTable<HsvRange>& hsv_keys() {
-  using config::key;
-  using config::Need;
-  static const config::KeyTable<HsvRange> table = {
-      key("hue", &HsvRange::hue, Need::kRequired),
-      key("hue_half_width", &HsvRange::hue_half_width, Need::kRequired),
-      key("sat_min", &HsvRange::sat_min, Need::kRequired),
-      key("val_min", &HsvRange::val_min, Need::kRequired),
+GoalColourModels goal_colour_models(const VisionModel& vision) {
+  auto range = [](const std::optional<GoalHsv>& g) -> std::optional<HsvRange> {
+    if (!g) return std::nullopt;
+    return HsvRange{g->hue, g->hue_half_width, g->sat_min, g->val_min};
   };
-  return table;
-}
-
-const config::KeyTable<GoalCueConfig>& goal_cue_keys() {
-  using config::key;
-  static const config::KeyTable<GoalCueConfig> table = {
-      key("min_pixels", &GoalCueConfig::min_pixels),
-      key("min_margin", &GoalCueConfig::min_margin),
-      key("post_margin_cm", &GoalCueConfig::post_margin_cm),
-      key("pixel_step", &GoalCueConfig::pixel_step),
-  };
-  return table;
-}
-
-std::optional<HsvRange> read_hsv(const config::Node& goals, std::string_view name) {
-  if (!goals.has(name)) return std::nullopt;
-  const config::Node n = goals / name;
-  HsvRange r;
-  config::read_keys(n, hsv_keys(), r);
-  r.validate(n.origin());
-  return r;
-}
-
-}  // namespace
-
-GoalColourModels goal_colour_models_from_vision(const config::Node& vision) {
-  vision.expect_object();
   GoalColourModels m;
-  if (vision.has("goals")) {
-    const config::Node goals = vision / "goals";
-    goals.expect_object();
-    for (auto it = goals.json().begin(); it != goals.json().end(); ++it)
-      if (it.key() != "blue" && it.key() != "yellow") (goals / it.key()).fail("unknown key (known keys: blue, yellow)");
-    m.blue = read_hsv(goals, "blue");
-    m.yellow = read_hsv(goals, "yellow");
-  }
-  if (vision.has("goal_colour_at_x_max"))
-    m.colour_at_x_max = config::read_choice(vision / "goal_colour_at_x_max",
-                                            config::Choices<GoalColour>{{"blue", GoalColour::kBlue}, {"yellow", GoalColour::kYellow}});
-  if (vision.has("goal_cue")) {
-    const config::Node cue = vision / "goal_cue";
-    config::read_keys(cue, goal_cue_keys(), m.cue);
-    m.cue.validate(cue.origin());
-  }
+  m.blue = range(vision.goal_blue);
+  m.yellow = range(vision.goal_yellow);
+  if (vision.goal_colour_at_x_max == "blue") m.colour_at_x_max = GoalColour::kBlue;
+  if (vision.goal_colour_at_x_max == "yellow") m.colour_at_x_max = GoalColour::kYellow;
+  m.cue = vision.goal_cue;
   return m;
-}
-
-CameraWithGoals load_camera_with_goals(const std::string& name_or_path) {
-  config::Document doc = config::parse_json_file(resolve_data_file("cameras", name_or_path));
-  CameraWithGoals out;
-  if (doc.json.is_object() && doc.json.contains("vision")) {
-    out.goals = goal_colour_models_from_vision(doc.root() / "vision");
-    doc.json.erase("vision");
-  }
-  out.camera = camera_from_json(doc.root());
-  return out;
 }
 
 GoalColour goal_colour_at_x_max(const FieldGeometry& field, const GoalColourModels& models) {

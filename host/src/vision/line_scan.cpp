@@ -7,6 +7,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "hsv_tables.hpp"
 #include "omniloc/conventions.hpp"
 
 namespace omniloc {
@@ -14,20 +15,6 @@ namespace omniloc {
 namespace {
 
 enum class Px : std::uint8_t { kOther = 0, kWhite = 1, kDark = 2 };
-
-// OpenCV's 8-bit BGR->HSV saturation, bit for bit (color_hsv: hsv_shift 12, rounded table), so that
-// the per-ray classification equals cvtColor + inRange.
-struct SatTable {
-  int div[256];
-  SatTable() {
-    div[0] = 0;
-    for (int i = 1; i < 256; ++i) div[i] = static_cast<int>(std::lround((255 << 12) / static_cast<double>(i)));
-  }
-};
-const SatTable& sat_table() {
-  static const SatTable t;  // immutable lookup table, built once
-  return t;
-}
 
 inline Px classify(const std::uint8_t* bgr, const ScanParams& p, const int* sdiv) {
   const int b = bgr[0], g = bgr[1], r = bgr[2];
@@ -124,7 +111,7 @@ int Scan::rays_valid() const {
 
 Scan scan_image(const cv::Mat& bgr, const CameraModel& cam, double yaw_deg, const ScanParams& p) {
   check_image(bgr, cam);
-  const int* sdiv = sat_table().div;
+  const int* sdiv = detail::hsv_tables().sat_div;
   return scan_with(cam, yaw_deg, p, [&](int u, int v) { return classify(bgr.ptr<std::uint8_t>(v) + 3 * u, p, sdiv); });
 }
 
@@ -145,7 +132,7 @@ BearingScan scan_image_bearings(const cv::Mat& bgr, const CameraModel& cam, int 
   if (rays_per_degree < 1 || rays_per_degree > 20) {
     throw std::invalid_argument("scan_image_bearings: rays_per_degree must be 1..20, got " + std::to_string(rays_per_degree));
   }
-  const int* sdiv = sat_table().div;
+  const int* sdiv = detail::hsv_tables().sat_div;
   BearingScan s;
   s.rays_per_degree = rays_per_degree;
   const int n = kScanRays * rays_per_degree;

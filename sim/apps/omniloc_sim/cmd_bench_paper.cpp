@@ -15,6 +15,7 @@
 #include "omniloc/localizer.hpp"
 #include "omniloc/odometry.hpp"
 #include "omniloc/recording.hpp"
+#include "omniloc/vision.hpp"
 #include "omniloc_sim/record_sim.hpp"
 
 namespace omniloc::cli {
@@ -133,8 +134,9 @@ Ours integrated(Bench& b, const PaperRow& p, int i, const LocalizerConfig& cfg, 
     // ray-cast refinement.
     const auto t1 = std::chrono::steady_clock::now();
     const int frame_reps = 20;
+    LineExtractor extractor(b.renderer.camera());  // as the Localizer's on_image
     for (int k = 0; k < frame_reps; ++k) {
-      const BearingScan bs = scan_image_bearings(img, b.renderer.camera(), cfg.scan_rays_per_degree);
+      const BearingScan bs = extractor.extract(img, cfg.scan_rays_per_degree);
       const FieldScan s = make_field_scan(bs, t.yaw_deg);  // rotated and prepared once, as the localizer does
       MatchResult m = local_search(b.db, s, {t.x_cm, t.y_cm}, 20.0);
       interpolate_match(b.db, s, m);

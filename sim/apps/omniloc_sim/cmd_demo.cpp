@@ -32,6 +32,7 @@
 #include "omniloc/localizer.hpp"
 #include "omniloc/matcher.hpp"
 #include "omniloc/odometry.hpp"
+#include "omniloc/vision.hpp"
 #include "omniloc_sim/demo_drive.hpp"
 #include "omniloc_sim/sim_daemon.hpp"
 
@@ -176,7 +177,10 @@ class DemoObserver {
     const auto truth = robot_.truth().truth(f.t_ms);
     if (!truth) return;
     const double gyro_yaw = robot_.truth().gyro_yaw_at(f.t_ms);
-    const BearingScan bearings = scan_image_bearings(f.bgr, m_.camera, m_.localizer.scan_rays_per_degree);
+    if (!extractor_) extractor_.emplace(m_.camera);
+    ExtractionReport er;
+    const BearingScan bearings = extractor_->extract(f.bgr, m_.localizer.scan_rays_per_degree, &er);
+    if (!er.usable) return;  // no measurement: nothing to match
     const FieldScan scan = make_field_scan(bearings, gyro_yaw);  // rotated and prepared once
     MatchOptions mo;
     mo.refinement = Refinement::kInterpolate;
@@ -263,6 +267,7 @@ class DemoObserver {
   double e_odo_ = NAN;
   Series p_int_, p_odo_, p_img_;  // per table period
   int frames_ = 0;
+  std::optional<LineExtractor> extractor_;  // the paper path extracts its own lines (adapts per frame)
   double kidnap_ms_;
   double recovered_ms_ = -1;
   double below_since_ms_ = -1;

@@ -1,0 +1,487 @@
+// LineExtractor: carpet-relative white-line crossings along precomputed pixel rays (vision.hpp).
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/imgproc.hpp>
+
+#include "hsv_tables.hpp"
+#include "omniloc/camera.hpp"
+#include "omniloc/conventions.hpp"
+#include "omniloc/line_scan.hpp"
+#include "omniloc/vision.hpp"
+
+namespace omniloc {
+
+namespace {
+
+constexpr int kMaxRaysPerDegree = 20;
+
+// OpenCV 8-bit hue (0..179) of BGR p with max v and max - min diff.
+inline int hue_of(const std::uint8_t* p, int v, int diff, const int* hdiv) {
+  const int b = p[0], g = p[1], r = p[2];
+  int h;
+  if (v == r) h = g - b;
+  else if (v == g) h = b - r + 2 * diff;
+  else h = r - g + 4 * diff;
+  h = (h * hdiv[diff] + (1 << 11)) >> 12;
+  return h < 0 ? h + 180 : (h >= 180 ? h - 180 : h);
+}
+
+// Robust sigma (1.4826 MAD) of a histogram of integer deviations offset by 255.
+double hist_sigma(const std::array<int, 511>& h) {
+  long n = 0;
+  for (int c : h) n += c;
+  if (n == 0) return 0.0;
+  auto quantile_bin = [&](const std::array<int, 511>& hh, long total) {
+    long acc = 0;
+    for (int i = 0; i < 511; ++i) {
+      acc += hh[static_cast<std::size_t>(i)];
+      if (2 * acc >= total) return i;
+    }
+    return 510;
+  };
+  const int med = quantile_bin(h, n);
+  std::array<int, 511> dev{};
+  for (int i = 0; i < 511; ++i) dev[static_cast<std::size_t>(std::abs(i - med))] += h[static_cast<std::size_t>(i)];
+  return 1.4826 * quantile_bin(dev, n);
+}
+
+}  // namespace
+
+// Per-frame working state: the thresholds used and what the walk measured for the adaptation.
+struct LineExtractor::Frame {
+  std::vector<int> vmin, vmax;       // per sector carpet value window
+  std::vector<double> sum_v, sum_s;  // per sector, carpet bins
+  std::vector<long> count;
+  std::array<int, 511> dev_v{}, dev_s{};  // carpet bin minus the running carpet mean
+  int sat_min = 0;
+  int val_step = 0, sat_step = 0;
+};
+
+LineExtractor::LineExtractor(const CameraModel& cam)
+    : width_px_(cam.width_px),
+      height_px_(cam.height_px),
+      cx_(cam.center_px.x()),
+      cy_(cam.center_px.y()),
+      yaw_offset_deg_(cam.yaw_offset_deg),
+      mirrored_(cam.mirrored),
+      k0_(static_cast<int>(std::ceil(cam.min_radius_px()))),
+      k1_(static_cast<int>(std::floor(std::min(cam.view_radius_px(), CameraModel::kMaxViewRadiusPx)))),
+      vision_(cam.vision),
+      tables_(kMaxRaysPerDegree + 1),
+      carpet_(cam.vision.carpet_hsv),
+      contrast_(cam.vision.line_contrast) {
+  for (const auto& m : cam.masts) masts_.emplace_back(m.bearing_deg, m.half_width_deg);
+  if (carpet_) ref_val_ = 0.5 * (carpet_->val_min + carpet_->val_max);
+}
+
+// The pixels each ray touches, in order: a 4-connected path (a diagonal step gets the neighbour
+// nearer the ray inserted), so that no 1 px line, whatever its direction, lies between two
+// consecutive pixels. Each pixel is binned at the integer nearest its centre's distance along the ray.
+const LineExtractor::RayTable& LineExtractor::table(int rpd, std::size_t step_bytes) {
+  RayTable& t = tables_[static_cast<std::size_t>(rpd)];
+  if (!t.begin.empty() && t.step_bytes == static_cast<int>(step_bytes)) return t;
+  t = RayTable{};
+  t.step_bytes = static_cast<int>(step_bytes);
+  const int n = kScanRays * rpd;
+  const int sectors = vision_.extraction.sectors;
+  t.begin.reserve(static_cast<std::size_t>(n) + 1);
+  for (int j = 0; j < n; ++j) {
+    t.begin.push_back(static_cast<std::int32_t>(t.offset.size()));
+    const double bearing = static_cast<double>(j) / rpd;
+    bool hidden = false;
+    for (const auto& [b, w] : masts_) hidden = hidden || std::abs(angle_diff_deg(bearing, b)) <= w;
+    t.hidden.push_back(hidden);
+    t.sector.push_back(static_cast<std::uint8_t>(std::min(sectors - 1, j * sectors / n)));
+    if (hidden) continue;
+    const double phi = deg_to_rad(bearing + yaw_offset_deg_);
+    const double du = std::cos(phi) * (mirrored_ ? -1.0 : 1.0), dv = -std::sin(phi);
+    int pu = -1, pv = -1;
+    auto emit = [&](int u, int v) {
+      if (u < 0 || v < 0 || u >= width_px_ || v >= height_px_) return;
+      const double along = (u - cx_) * du + (v - cy_) * dv;
+      // The sample convention of the database (expected_features): a crossing at the first integer
+      // radius at or beyond the line's edge, so a pixel counts at the integer at or above its centre.
+      const int bin = static_cast<int>(std::ceil(along - 1e-9));
+      if (bin < k0_ || bin > k1_) return;
+      t.offset.push_back(static_cast<std::int32_t>(v * static_cast<long>(step_bytes) + 3L * u));
+      t.bin.push_back(static_cast<std::uint8_t>(bin));
+    };
+    for (double r = k0_ - 0.5; r <= k1_ + 0.5; r += 0.05) {
+      const int u = static_cast<int>(std::floor(cx_ + r * du + 0.5)), v = static_cast<int>(std::floor(cy_ + r * dv + 0.5));
+      if (u == pu && v == pv) continue;
+      if (pu >= 0 && u != pu && v != pv) {
+        // Diagonal step: the corner pixel whose centre is nearer the ray line.
+        const double da = std::abs((u - cx_) * dv - (pv - cy_) * du), db = std::abs((pu - cx_) * dv - (v - cy_) * du);
+        if (da <= db) emit(u, pv);
+        else emit(pu, v);
+      }
+      emit(u, v);
+      pu = u;
+      pv = v;
+    }
+  }
+  t.begin.push_back(static_cast<std::int32_t>(t.offset.size()));
+  return t;
+}
+
+// The carpet colour from the frame when the camera has none: the pixels of the inner half of the
+// visible ring (the robot stands on the carpet), classified by carpet_colour_from_samples.
+bool LineExtractor::ensure_carpet(const cv::Mat& bgr, std::string* why) {
+  if (carpet_) return true;
+  const RayTable& t = table(1, bgr.step[0]);
+  const int r_hi = k0_ + (k1_ - k0_) / 2;
+  cv::Mat px(1, 0, CV_8UC3);
+  std::vector<cv::Vec3b> bgr_samples;
+  for (std::size_t i = 0; i < t.offset.size(); i += 2) {
+    if (t.bin[i] > r_hi) continue;
+    const std::uint8_t* p = bgr.data + t.offset[i];
+    bgr_samples.emplace_back(p[0], p[1], p[2]);
+  }
+  if (bgr_samples.empty()) {
+    *why = "no carpet: no pixels in the view";
+    return false;
+  }
+  cv::Mat in(1, static_cast<int>(bgr_samples.size()), CV_8UC3, bgr_samples.data()), hsv;
+  cv::cvtColor(in, hsv, cv::COLOR_BGR2HSV);
+  std::vector<cv::Vec3b> samples(hsv.begin<cv::Vec3b>(), hsv.end<cv::Vec3b>());
+  const auto c = carpet_colour_from_samples(samples, why);
+  if (!c) return false;
+  carpet_ = CarpetHsv{c->hue, c->hue_half_width, c->sat_min, c->val_min, c->val_max};
+  ref_val_ = c->median_val;
+  sector_val_.clear();
+  return true;
+}
+
+void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const {
+  const ExtractionParams& x = vision_.extraction;
+  const int* sdiv = detail::hsv_tables().sat_div;
+  const int* hdiv = detail::hsv_tables().hue_div;
+  const int min_gap = ScanParams{}.min_gap_px;  // the database's gap rule (expected_features)
+  const int alpha_q = std::max(1, static_cast<int>(std::lround(256.0 / x.carpet_mean_px)));
+  const int val_step_q = fr.val_step << 8, sat_step_q = fr.sat_step << 8;
+  const int n = static_cast<int>(t.hidden.size());
+  long bins_seen = 0, bins_carpet = 0;
+  for (int j = 0; j < n; ++j) {
+    std::uint8_t* out = scan.radii_px.data() + static_cast<std::size_t>(j) * kCrossingsPerRay;
+    std::fill(out, out + kCrossingsPerRay, kNoCrossing);
+    if (t.hidden[static_cast<std::size_t>(j)]) {
+      scan.ray_end_px[static_cast<std::size_t>(j)] = kRayHidden;
+      rep.carpet_end_px[static_cast<std::size_t>(j)] = 0;
+      continue;
+    }
+    ++rep.rays;
+    const int sec = t.sector[static_cast<std::size_t>(j)];
+    const int vmin = fr.vmin[static_cast<std::size_t>(sec)], vmax = fr.vmax[static_cast<std::size_t>(sec)];
+    // Running carpet means in 8-bit fixed point (Q8): integer arithmetic on every carpet bin.
+    int vref_q = static_cast<int>(std::lround(256.0 * sector_val_[static_cast<std::size_t>(sec)]));
+    int sref_q = static_cast<int>(std::lround(256.0 * sector_sat_[static_cast<std::size_t>(sec)]));
+    long ray_sum_v = 0, ray_sum_s = 0, ray_count = 0;
+    // The line test as two integer bounds, recomputed when the running carpet mean moves.
+    int v_line_min = 0, s_line_max = 0;
+    auto set_bounds = [&]() {
+      v_line_min = (vref_q + val_step_q + 255) >> 8;  // ceil
+      s_line_max = (sref_q - sat_step_q) >> 8;        // floor (arithmetic shift)
+    };
+    set_bounds();
+    int found = 0, gap = 0, other_run = 0, carpet_bins = 0, end = -1;
+    int bin = -1;
+    bool b_line = false, b_carpet = false;
+    int b_v = 0, b_s = 0, b_line_v = 0, b_any_v = 0;
+    int prev_bin = -1, prev_v = 0;  // the last closed bin that was not line, and its brightest pixel
+    // The current white run: its edge is placed where it first reaches half-way from the carpet to
+    // its peak (a blurred edge's foot is brighter than the carpet but is not yet the line).
+    bool in_run = false, run_counts = false;
+    int run_start = 0, run_n = 0, run_peak = 0, run_before_v = 0;
+    float run_floor = 0.0f;
+    int gap_before_run = 0;
+    std::array<std::uint8_t, 32> run_v{};
+    auto finish_run = [&]() {
+      if (!in_run) return;
+      in_run = false;
+      if (!run_counts || found >= kCrossingsPerRay) return;
+      const float half = run_floor + static_cast<float>(x.edge_fraction) * (static_cast<float>(run_peak) - run_floor);
+      // The bin before the run may already be half-way (its pixel failed the saturation step).
+      if (static_cast<float>(run_before_v) >= half && run_start - 1 >= k0_ && gap_before_run > min_gap) {
+        out[found++] = static_cast<std::uint8_t>(run_start - 1);
+        return;
+      }
+      int k = 0;
+      while (k + 1 < run_n && static_cast<float>(run_v[static_cast<std::size_t>(k)]) < half) ++k;
+      out[found++] = static_cast<std::uint8_t>(run_start + k);
+    };
+    // One bin decided: crossing (line entry after the gap), carpet (updates the running mean), or other.
+    auto close_bin = [&]() {
+      ++bins_seen;
+      if (b_line) {
+        if (!in_run) {
+          in_run = true;
+          run_counts = gap >= min_gap;
+          gap_before_run = gap;
+          run_before_v = prev_bin == bin - 1 ? prev_v : 0;
+          run_start = bin;
+          run_n = 0;
+          run_peak = 0;
+          run_floor = static_cast<float>(vref_q) / 256.0f;
+        }
+        if (run_n < static_cast<int>(run_v.size())) run_v[static_cast<std::size_t>(run_n++)] = static_cast<std::uint8_t>(b_line_v);
+        run_peak = std::max(run_peak, b_line_v);
+        gap = 0;
+        other_run = 0;
+        return;
+      }
+      finish_run();
+      prev_bin = bin;
+      prev_v = b_any_v;
+      if (b_carpet) {
+        ++gap;
+        other_run = 0;
+        ++carpet_bins;
+        ++bins_carpet;
+        const int dv_q = (b_v << 8) - vref_q, ds_q = (b_s << 8) - sref_q;
+        ++fr.dev_v[static_cast<std::size_t>(std::clamp(((dv_q + 128) >> 8) + 255, 0, 510))];
+        ++fr.dev_s[static_cast<std::size_t>(std::clamp(((ds_q + 128) >> 8) + 255, 0, 510))];
+        vref_q += (dv_q * alpha_q) >> 8;
+        sref_q += (ds_q * alpha_q) >> 8;
+        set_bounds();
+        ray_sum_v += b_v;
+        ray_sum_s += b_s;
+        ++ray_count;
+      } else {
+        ++gap;
+        if (++other_run >= x.end_run_px) end = bin - other_run + 1;
+      }
+    };
+    const std::int32_t i1 = t.begin[static_cast<std::size_t>(j) + 1];
+    std::int32_t i = t.begin[static_cast<std::size_t>(j)];
+    for (; i < i1; ++i) {
+      const int bi = t.bin[static_cast<std::size_t>(i)];
+      if (bi != bin) {
+        if (bin >= 0) {
+          close_bin();
+          if (end >= 0) break;
+        }
+        bin = bi;
+        b_line = b_carpet = false;
+        b_line_v = 0;
+        b_any_v = 0;
+      }
+      const std::uint8_t* p = bgr.data + t.offset[static_cast<std::size_t>(i)];
+      const int v = std::max({p[0], p[1], p[2]});
+      const int diff = v - std::min({p[0], p[1], p[2]});
+      const int s = (diff * sdiv[v] + (1 << 11)) >> 12;
+      b_any_v = std::max(b_any_v, v);
+      if (v >= v_line_min && s <= s_line_max) {
+        b_line = true;
+        b_line_v = std::max(b_line_v, v);
+      } else if (s >= fr.sat_min && v >= vmin && v <= vmax && hue_ok_[static_cast<std::size_t>(hue_of(p, v, diff, hdiv))]) {
+        b_carpet = true;
+        b_v = v;
+        b_s = s;
+      }
+    }
+    if (end < 0 && bin >= 0) close_bin();
+    finish_run();
+    fr.sum_v[static_cast<std::size_t>(sec)] += static_cast<double>(ray_sum_v);
+    fr.sum_s[static_cast<std::size_t>(sec)] += static_cast<double>(ray_sum_s);
+    fr.count[static_cast<std::size_t>(sec)] += ray_count;
+    std::uint8_t& ray_end = scan.ray_end_px[static_cast<std::size_t>(j)];
+    std::uint8_t& carpet_end = rep.carpet_end_px[static_cast<std::size_t>(j)];
+    if (carpet_bins >= x.carpet_resume_px) ++rep.rays_seen;
+    if (end < 0) {
+      ray_end = kRayToViewEnd;
+      carpet_end = 255;
+    } else {
+      ray_end = end <= k0_ ? kRayHidden : static_cast<std::uint8_t>(end);
+      // Obstacle or the carpet's end: does the carpet resume behind the blob?
+      int run = 0;
+      int cur = -1;
+      bool cur_carpet = false;
+      const int look_to = end + x.resume_within_px;
+      for (; i < i1 && run < x.carpet_resume_px; ++i) {
+        const int bi = t.bin[static_cast<std::size_t>(i)];
+        if (bi > look_to) break;
+        if (bi != cur) {
+          if (cur >= 0) run = cur_carpet ? run + 1 : 0;
+          cur = bi;
+          cur_carpet = false;
+        }
+        const std::uint8_t* p = bgr.data + t.offset[static_cast<std::size_t>(i)];
+        const int v = std::max({p[0], p[1], p[2]});
+        const int diff = v - std::min({p[0], p[1], p[2]});
+        const int s = (diff * sdiv[v] + (1 << 11)) >> 12;
+        cur_carpet = cur_carpet || (s >= fr.sat_min && v >= vmin && v <= vmax && hue_ok_[static_cast<std::size_t>(hue_of(p, v, diff, hdiv))]);
+      }
+      if (run >= x.carpet_resume_px) {
+        ++rep.rays_ended_at_obstacle;
+        carpet_end = 255;
+      } else {
+        ++rep.rays_ended_at_carpet_edge;
+        carpet_end = static_cast<std::uint8_t>(std::max(end, 1));
+      }
+    }
+    // Crossings at or beyond the end are not kept (the end is exclusive).
+    for (int c = 0; c < kCrossingsPerRay; ++c)
+      if (out[c] != kNoCrossing && out[c] >= ray_end) out[c] = kNoCrossing;
+    for (int c = 0; c < kCrossingsPerRay; ++c) rep.crossings += out[c] != kNoCrossing;
+  }
+  rep.carpet_fraction = bins_seen > 0 ? static_cast<double>(bins_carpet) / static_cast<double>(bins_seen) : 0.0;
+}
+
+// Follows the light: each sector's carpet level moves light_follow of the way to this frame's mean
+// (bounded to light_range of the reference), and estimated line steps follow the carpet's spread.
+void LineExtractor::adapt(const Frame& fr) {
+  const ExtractionParams& x = vision_.extraction;
+  for (std::size_t k = 0; k < sector_val_.size(); ++k) {
+    if (fr.count[k] == 0) continue;
+    const double v = fr.sum_v[k] / static_cast<double>(fr.count[k]), s = fr.sum_s[k] / static_cast<double>(fr.count[k]);
+    sector_val_[k] = std::clamp(sector_val_[k] + x.light_follow * (v - sector_val_[k]), ref_val_ / x.light_range,
+                                ref_val_ * x.light_range);
+    sector_sat_[k] += x.light_follow * (s - sector_sat_[k]);
+  }
+  if (!vision_.line_contrast) {
+    const LineContrast seen{std::max(x.val_sigmas * hist_sigma(fr.dev_v), x.min_val_step),
+                            std::max(x.sat_sigmas * hist_sigma(fr.dev_s), x.min_sat_step)};
+    if (!contrast_) {
+      contrast_ = seen;
+    } else {
+      contrast_->val_step += x.light_follow * (seen.val_step - contrast_->val_step);
+      contrast_->sat_step += x.light_follow * (seen.sat_step - contrast_->sat_step);
+    }
+  }
+}
+
+// An end well inside where the neighbouring rays end is an obstacle even when the carpet does not
+// resume behind it (a robot or a person hides the floor behind it up to the view's end).
+void LineExtractor::mark_tall_obstacles(const BearingScan& scan, ExtractionReport& rep) const {
+  const ExtractionParams& x = vision_.extraction;
+  const int n = static_cast<int>(scan.ray_end_px.size());
+  const int w = static_cast<int>(std::lround(x.obstacle_window_deg * scan.rays_per_degree));
+  auto reach = [&](int j) {
+    const int e = scan.ray_end_px[static_cast<std::size_t>((j % n + n) % n)];
+    return e == kRayToViewEnd ? k1_ + 1 : e;
+  };
+  std::vector<int> around;
+  for (int j = 0; j < n; ++j) {
+    std::uint8_t& ce = rep.carpet_end_px[static_cast<std::size_t>(j)];
+    const int e = scan.ray_end_px[static_cast<std::size_t>(j)];
+    if (e == kRayHidden || e == kRayToViewEnd || ce == 255) continue;  // hidden, open or already an obstacle
+    around.clear();
+    for (int d = -w; d <= w; d += scan.rays_per_degree)  // one ray per degree is enough for a median
+      if (scan.ray_end_px[static_cast<std::size_t>(((j + d) % n + n) % n)] != kRayHidden) around.push_back(reach(j + d));
+    std::nth_element(around.begin(), around.begin() + static_cast<std::ptrdiff_t>(around.size() / 2), around.end());
+    if (e + x.obstacle_step_px <= around[around.size() / 2]) {
+      ce = 255;
+      --rep.rays_ended_at_carpet_edge;
+      ++rep.rays_ended_at_obstacle;
+    }
+  }
+}
+
+BearingScan LineExtractor::extract(const cv::Mat& bgr, int rpd, ExtractionReport* report) {
+  if (bgr.empty()) throw std::invalid_argument("extract: empty image");
+  if (bgr.type() != CV_8UC3) throw std::invalid_argument("extract: image must be 8-bit BGR (CV_8UC3), got type " + std::to_string(bgr.type()));
+  if (bgr.cols != width_px_ || bgr.rows != height_px_) {
+    throw std::invalid_argument("extract: image is " + std::to_string(bgr.cols) + " x " + std::to_string(bgr.rows) +
+                                " but the camera model expects " + std::to_string(width_px_) + " x " + std::to_string(height_px_));
+  }
+  if (rpd < 1 || rpd > kMaxRaysPerDegree) throw std::invalid_argument("extract: rays_per_degree must be 1..20, got " + std::to_string(rpd));
+  ExtractionReport local;
+  ExtractionReport& rep = report != nullptr ? *report : local;
+  rep = ExtractionReport{};
+  const int n = kScanRays * rpd;
+  BearingScan scan;
+  scan.rays_per_degree = rpd;
+  scan.radii_px.assign(static_cast<std::size_t>(n) * kCrossingsPerRay, kNoCrossing);
+  scan.ray_end_px.assign(static_cast<std::size_t>(n), kRayHidden);
+  rep.carpet_end_px.assign(static_cast<std::size_t>(n), 0);
+  rep.carpet_estimated = !vision_.carpet_hsv;
+  if (!ensure_carpet(bgr, &rep.reason)) return scan;
+  const ExtractionParams& x = vision_.extraction;
+  const auto sectors = static_cast<std::size_t>(x.sectors);
+  const bool first = sector_val_.size() != sectors;
+  if (first) {
+    sector_val_.assign(sectors, ref_val_);
+    // Before any frame: the middle of the saturation range above sat_min (measured by pass one).
+    sector_sat_.assign(sectors, 0.5 * (carpet_->sat_min + 255.0));
+  }
+  for (int i = 0; i < 180; ++i) {
+    const double dh = std::abs(i - carpet_->hue);
+    hue_ok_[static_cast<std::size_t>(i)] = std::min(dh, 180.0 - dh) <= carpet_->hue_half_width;
+  }
+  const RayTable& t = table(rpd, bgr.step[0]);
+  // The first frame is walked twice: once to measure the light and the carpet's spread, then with them.
+  for (int pass = first ? 0 : 1; pass < 2; ++pass) {
+    Frame fr;
+    fr.vmin.resize(sectors);
+    fr.vmax.resize(sectors);
+    for (std::size_t k = 0; k < sectors; ++k) {
+      const double f = sector_val_[k] / ref_val_;
+      fr.vmin[k] = static_cast<int>(std::floor(carpet_->val_min * f));
+      fr.vmax[k] = static_cast<int>(std::ceil(std::min(255.0, carpet_->val_max * f)));
+    }
+    fr.sum_v.assign(sectors, 0.0);
+    fr.sum_s.assign(sectors, 0.0);
+    fr.count.assign(sectors, 0);
+    fr.sat_min = static_cast<int>(std::ceil(carpet_->sat_min));
+    const LineContrast c = contrast_.value_or(LineContrast{});
+    fr.val_step = std::max(1, static_cast<int>(std::lround(c.val_step)));
+    fr.sat_step = static_cast<int>(std::lround(c.sat_step));
+    rep = ExtractionReport{};
+    rep.carpet_end_px.assign(static_cast<std::size_t>(n), 0);
+    rep.carpet_estimated = !vision_.carpet_hsv;
+    rep.contrast = c;
+    walk(bgr, t, scan, rep, fr);
+    if (pass == 0) {
+      const double keep = vision_.extraction.light_follow;
+      vision_.extraction.light_follow = 1.0;  // the first measurement is taken whole
+      adapt(fr);
+      vision_.extraction.light_follow = keep;
+    } else {
+      adapt(fr);
+    }
+  }
+  rep.carpet = *carpet_;
+  mark_tall_obstacles(scan, rep);
+  // Obstacle blobs: neighbouring rays ended on the carpet at similar radii.
+  for (int j = 0; j < n; ++j) {
+    const auto e = scan.ray_end_px[static_cast<std::size_t>(j)];
+    const bool obstacle = e != kRayHidden && e != kRayToViewEnd && rep.carpet_end_px[static_cast<std::size_t>(j)] == 255;
+    if (!obstacle) continue;
+    if (!rep.obstacles.empty()) {
+      ObstacleBlob& b = rep.obstacles.back();
+      const int prev = (b.last_ray + 1) % n;
+      const auto pe = scan.ray_end_px[static_cast<std::size_t>(b.last_ray)];
+      if (prev == j && std::abs(static_cast<int>(e) - static_cast<int>(pe)) <= std::max(4, e / 8)) {
+        b.last_ray = j;
+        b.near_radius_px = std::min(b.near_radius_px, static_cast<int>(e));
+        continue;
+      }
+    }
+    rep.obstacles.push_back({j, j, static_cast<int>(e)});
+  }
+  if (rep.obstacles.size() > 1 && rep.obstacles.back().last_ray == n - 1 && rep.obstacles.front().first_ray == 0) {
+    rep.obstacles.front().first_ray = rep.obstacles.back().first_ray;  // wraps through ray 0
+    rep.obstacles.front().near_radius_px = std::min(rep.obstacles.front().near_radius_px, rep.obstacles.back().near_radius_px);
+    rep.obstacles.pop_back();
+  }
+  const int total = n - static_cast<int>(std::count(t.hidden.begin(), t.hidden.end(), true));
+  if (rep.carpet_fraction < x.min_carpet_fraction) {
+    rep.reason = "no carpet: " + std::to_string(static_cast<int>(std::lround(100 * rep.carpet_fraction))) +
+                 " % of the view is carpet (at least " + std::to_string(static_cast<int>(std::lround(100 * x.min_carpet_fraction))) + " % needed)";
+    if (rep.carpet_estimated) {
+      carpet_.reset();  // estimated from something else: estimate again on the next frame
+      sector_val_.clear();
+    }
+  } else if (rep.rays_seen < x.min_rays_seen * total) {
+    rep.reason = "too few rays see the carpet: " + std::to_string(rep.rays_seen) + " of " + std::to_string(total);
+  } else if (rep.crossings < x.min_crossings) {
+    rep.reason = "too few line crossings: " + std::to_string(rep.crossings) + " (at least " + std::to_string(x.min_crossings) + ")";
+  }
+  rep.usable = rep.reason.empty();
+  return scan;
+}
+
+}  // namespace omniloc
