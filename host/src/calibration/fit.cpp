@@ -14,6 +14,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "omniloc/calibration.hpp"
+#include "omniloc/line_scan.hpp"
+#include "omniloc/matcher.hpp"
 #include "omniloc/conventions.hpp"
 
 namespace omniloc {
@@ -459,8 +461,15 @@ void build_camera(const FitState& st, const std::vector<FrameState>& fs, double 
     FrameFit& ff = res.fits[i];
     ff.yaw_deg = fs[i].frame->yaw_deg ? *fs[i].frame->yaw_deg : wrap_deg(cam.yaw_offset_deg - ff.image_angle_of_field_x_deg);
   }
-  for (double r = 0.0; r < res.view_radius_px; r += 4.0) cam.radius_lut.push_back({r, res.radial.ground_cm(r)});
-  cam.radius_lut.push_back({res.view_radius_px, res.radial.ground_cm(res.view_radius_px)});
+  // The table reaches as far as the lines measured the mapping, not only to where the carpet ends
+  // all round: the line extraction ends each ray at the carpet's edge or an obstacle frame by frame,
+  // so a robot or a goal near the calibration spot no longer shrinks the view of every later frame.
+  // (At most the 254 px the feature format stores.)
+  const double lut_end = std::min(
+      std::max(res.view_radius_px, res.radial.monotonic_up_to(res.measured_max_px) ? res.measured_max_px : 0.0),
+      static_cast<double>(kNoCrossing - 1));
+  for (double r = 0.0; r < lut_end; r += 4.0) cam.radius_lut.push_back({r, res.radial.ground_cm(r)});
+  cam.radius_lut.push_back({lut_end, res.radial.ground_cm(lut_end)});
   cam.body_radius_px = a0.body_radius_px;
   for (const auto& m : a0.masts_image) {
     const double image_angle = st.mirrored ? 180.0 - m.bearing_deg : m.bearing_deg;
@@ -477,7 +486,7 @@ namespace {
 void measure_venue_goals(const std::vector<CalibrationFrame>& frames, const FieldGeometry& field,
                          const GoalColourOptions& options, CalibrationResult& res) {
   GoalColour at_max = GoalColour::kUnknown;
-  bool conflict = false;
+  bool conflict = res.yaw_offset_ambiguous;  // the offset may be the twin's: the ends cannot be told
   for (std::size_t i = 0; i < frames.size(); ++i) {
     const GoalColours g = measure_goal_colours(frames[i].image, res.analyses[i], options);
     for (const auto& [mine, best] : {std::pair{&g.blue, &res.goals.blue}, std::pair{&g.yellow, &res.goals.yellow}})
@@ -586,6 +595,12 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, 
     f0.twin_score = sc[static_cast<std::size_t>(k)];
     f0.twin_yaw_deg = wrap_deg(f0.yaw_deg + f0.image_angle_of_field_x_deg - a_deg);
   }
+  // The field is point-symmetric about its centre: from there (within the localizer's ambiguity
+  // separation) the lines look the same at the offset 180 deg away, whatever the scores say. One
+  // frame elsewhere tells them apart (the offset is shared).
+  res.yaw_offset_ambiguous = std::all_of(frames.begin(), frames.end(), [&](const CalibrationFrame& f) {
+    return (f.position_cm - field.centre_cm()).norm() < MatchOptions{}.ambiguity_separation_cm;
+  });
   res.rim = a0.rim;
   res.carpet = a0.carpet;
   measure_venue_goals(frames, field, options.goal_colours, res);
@@ -642,6 +657,7 @@ std::string calibrated_camera_json(const CalibrationResult& r, const std::vector
                        {"median_sat", r.carpet.median_sat}, {"median_val", r.carpet.median_val},
                        {"line_val_step", r.carpet.line_val_step}, {"line_sat_step", r.carpet.line_sat_step}};
   cal["mirrored_ambiguous"] = r.mirrored_ambiguous;
+  cal["yaw_offset_ambiguous"] = r.yaw_offset_ambiguous;
   cal["residual"] = {{"rms_px", r.rms_px}, {"rms_cm", r.rms_cm}, {"median_px", r.median_px},
                      {"inlier_fraction", r.inlier_fraction}, {"inlier_threshold_px", r.inlier_threshold_px}};
   nlohmann::ordered_json fr = nlohmann::ordered_json::array();
