@@ -5,6 +5,8 @@
 // same things with the same messages; flags override the file whatever their order.
 #pragma once
 
+#include <cstdio>
+#include <exception>
 #include <optional>
 #include <string>
 #include <vector>
@@ -67,6 +69,27 @@ inline daemon::DaemonConfig daemon_config_from(const DaemonCommandLine& cl) {
 inline int exit_code_of(const CLI::App& app, const CLI::ParseError& e) {
   const int rc = app.exit(e);
   return rc == 0 ? 0 : 2;
+}
+
+/// Parses the command line into `app`'s options, then calls run() (which returns the exit code):
+/// 0 / 2 from the parse (help, version, bad usage), 2 for a ConfigError (a bad value or file), 1
+/// for any other failure, each with "PROGRAM: error: ..." on stderr.
+template <class Run>
+int parse_and_run(CLI::App& app, int argc, char** argv, const char* program, Run run) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return exit_code_of(app, e);
+  }
+  try {
+    return run();
+  } catch (const ConfigError& e) {
+    std::fprintf(stderr, "%s: error: %s\n", program, e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: error: %s\n", program, e.what());
+    return 1;
+  }
 }
 
 }  // namespace omniloc::cli

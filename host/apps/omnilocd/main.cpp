@@ -65,18 +65,5 @@ int main(int argc, char** argv) {
   app.footer("SIGINT / SIGTERM stop it cleanly (recording closed, board streaming switched off).");
   omniloc::cli::DaemonCommandLine cl;
   omniloc::cli::add_daemon_options(app, cl);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return omniloc::cli::exit_code_of(app, e);
-  }
-  try {
-    return run(omniloc::cli::daemon_config_from(cl));
-  } catch (const omniloc::ConfigError& e) {
-    std::fprintf(stderr, "omnilocd: error: %s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "omnilocd: error: %s\n", e.what());
-    return 1;
-  }
+  return omniloc::cli::parse_and_run(app, argc, argv, "omnilocd", [&] { return run(omniloc::cli::daemon_config_from(cl)); });
 }

@@ -77,19 +77,8 @@ int main(int argc, char** argv) {
   app.add_option("--seed", seed_text, "world and sensor noise seed, 0 .. 2^64-1")->default_str("1");
   omniloc::cli::DaemonCommandLine cl;
   omniloc::cli::add_daemon_options(app, cl);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return omniloc::cli::exit_code_of(app, e);
-  }
-  try {
+  return omniloc::cli::parse_and_run(app, argc, argv, "omnilocd-sim", [&] {
     if (!seed_text.empty()) sim_args.seed = parse_seed(seed_text);
     return run(omniloc::cli::daemon_config_from(cl), sim_args);
-  } catch (const omniloc::ConfigError& e) {
-    std::fprintf(stderr, "omnilocd-sim: error: %s\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "omnilocd-sim: error: %s\n", e.what());
-    return 1;
-  }
+  });
 }
