@@ -85,6 +85,8 @@ const LineExtractor::RayTable& LineExtractor::table(int rpd, std::size_t step_by
   if (!t.begin.empty() && t.step_bytes == static_cast<int>(step_bytes)) return t;
   t = RayTable{};
   t.step_bytes = static_cast<int>(step_bytes);
+  t.row_u0.assign(static_cast<std::size_t>(height_px_), width_px_);
+  t.row_u1.assign(static_cast<std::size_t>(height_px_), -1);
   const int n = kScanRays * rpd;
   const int sectors = vision_.extraction.sectors;
   t.begin.reserve(static_cast<std::size_t>(n) + 1);
@@ -108,6 +110,9 @@ const LineExtractor::RayTable& LineExtractor::table(int rpd, std::size_t step_by
       if (bin < k0_ || bin > k1_) return;
       t.offset.push_back(static_cast<std::int32_t>(v * static_cast<long>(step_bytes) + 3L * u));
       t.bin.push_back(static_cast<std::uint8_t>(bin));
+      t.pixel.push_back(v * width_px_ + u);
+      t.row_u0[static_cast<std::size_t>(v)] = std::min(t.row_u0[static_cast<std::size_t>(v)], u);
+      t.row_u1[static_cast<std::size_t>(v)] = std::max(t.row_u1[static_cast<std::size_t>(v)], u);
     };
     for (double r = k0_ - 0.5; r <= k1_ + 0.5; r += 0.05) {
       const int u = static_cast<int>(std::floor(cx_ + r * du + 0.5)), v = static_cast<int>(std::floor(cy_ + r * dv + 0.5));
@@ -155,10 +160,11 @@ bool LineExtractor::ensure_carpet(const cv::Mat& bgr, std::string* why) {
   return true;
 }
 
-void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const {
+// The walk of every ray, whatever gives each pixel's values: px(i, vmin, vmax, v, s) sets table
+// entry i's V and S and says whether it has the carpet's colour within the value window [vmin, vmax].
+template <class Pixel>
+void LineExtractor::walk_rays(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr, Pixel px) const {
   const ExtractionParams& x = vision_.extraction;
-  const int* sdiv = detail::hsv_tables().sat_div;
-  const int* hdiv = detail::hsv_tables().hue_div;
   const int min_gap = ScanParams{}.min_gap_px;  // the database's gap rule (expected_features)
   const int alpha_q = std::max(1, static_cast<int>(std::lround(256.0 / x.carpet_mean_px)));
   const int val_step_q = fr.val_step << 8, sat_step_q = fr.sat_step << 8;
@@ -268,15 +274,13 @@ void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& sca
         b_line_v = 0;
         b_any_v = 0;
       }
-      const std::uint8_t* p = bgr.data + t.offset[static_cast<std::size_t>(i)];
-      const int v = std::max({p[0], p[1], p[2]});
-      const int diff = v - std::min({p[0], p[1], p[2]});
-      const int s = (diff * sdiv[v] + (1 << 11)) >> 12;
+      int v, s;
+      const bool carpet = px(i, vmin, vmax, v, s);
       b_any_v = std::max(b_any_v, v);
       if (v >= v_line_min && s <= s_line_max) {
         b_line = true;
         b_line_v = std::max(b_line_v, v);
-      } else if (s >= fr.sat_min && v >= vmin && v <= vmax && hue_ok_[static_cast<std::size_t>(hue_of(p, v, diff, hdiv))]) {
+      } else if (carpet) {
         b_carpet = true;
         b_v = v;
         b_s = s;
@@ -308,11 +312,8 @@ void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& sca
           cur = bi;
           cur_carpet = false;
         }
-        const std::uint8_t* p = bgr.data + t.offset[static_cast<std::size_t>(i)];
-        const int v = std::max({p[0], p[1], p[2]});
-        const int diff = v - std::min({p[0], p[1], p[2]});
-        const int s = (diff * sdiv[v] + (1 << 11)) >> 12;
-        cur_carpet = cur_carpet || (s >= fr.sat_min && v >= vmin && v <= vmax && hue_ok_[static_cast<std::size_t>(hue_of(p, v, diff, hdiv))]);
+        int v, s;
+        cur_carpet = px(i, vmin, vmax, v, s) || cur_carpet;
       }
       if (run >= x.carpet_resume_px) {
         ++rep.rays_ended_at_obstacle;
@@ -328,6 +329,51 @@ void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& sca
     for (int c = 0; c < kCrossingsPerRay; ++c) rep.crossings += out[c] != kNoCrossing;
   }
   rep.carpet_fraction = bins_seen > 0 ? static_cast<double>(bins_carpet) / static_cast<double>(bins_seen) : 0.0;
+}
+
+// Reference: every pixel converted from BGR on every ray that touches it (OpenCV's integer HSV).
+void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const {
+  const int* sdiv = detail::hsv_tables().sat_div;
+  const int* hdiv = detail::hsv_tables().hue_div;
+  const int sat_min = fr.sat_min;
+  walk_rays(t, scan, rep, fr, [&](std::int32_t i, int vmin, int vmax, int& v, int& s) {
+    const std::uint8_t* p = bgr.data + t.offset[static_cast<std::size_t>(i)];
+    v = std::max({p[0], p[1], p[2]});
+    const int diff = v - std::min({p[0], p[1], p[2]});
+    s = (diff * sdiv[v] + (1 << 11)) >> 12;
+    return s >= sat_min && v >= vmin && v <= vmax && hue_ok_[static_cast<std::size_t>(hue_of(p, v, diff, hdiv))];
+  });
+}
+
+// Each pixel any ray touches, converted once per frame into code_ (rows in memory order): near the
+// centre several rays share a pixel, and the walk then reads one word instead of three bytes and a hue.
+void LineExtractor::code_pixels(const cv::Mat& bgr, const RayTable& t, int sat_min) {
+  const int* sdiv = detail::hsv_tables().sat_div;
+  const int* hdiv = detail::hsv_tables().hue_div;
+  code_.resize(static_cast<std::size_t>(width_px_) * static_cast<std::size_t>(height_px_));
+  for (int row = 0; row < height_px_; ++row) {
+    const int u0 = t.row_u0[static_cast<std::size_t>(row)], u1 = t.row_u1[static_cast<std::size_t>(row)];
+    const std::uint8_t* p = bgr.ptr<std::uint8_t>(row) + 3 * u0;
+    std::uint32_t* out = code_.data() + static_cast<std::size_t>(row) * static_cast<std::size_t>(width_px_);
+    for (int u = u0; u <= u1; ++u, p += 3) {
+      const int v = std::max({p[0], p[1], p[2]});
+      const int diff = v - std::min({p[0], p[1], p[2]});
+      const int s = (diff * sdiv[v] + (1 << 11)) >> 12;
+      const bool carpet_hue = s >= sat_min && hue_ok_[static_cast<std::size_t>(hue_of(p, v, diff, hdiv))];
+      out[u] = static_cast<std::uint32_t>(v) | static_cast<std::uint32_t>(s) << 8 | static_cast<std::uint32_t>(carpet_hue) << 16;
+    }
+  }
+}
+
+void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const {
+  const std::uint32_t* code = code_.data();
+  const std::int32_t* pixel = t.pixel.data();
+  walk_rays(t, scan, rep, fr, [=](std::int32_t i, int vmin, int vmax, int& v, int& s) {
+    const std::uint32_t c = code[pixel[i]];
+    v = static_cast<int>(c & 255u);
+    s = static_cast<int>((c >> 8) & 255u);
+    return (c >> 16) != 0 && v >= vmin && v <= vmax;
+  });
 }
 
 // Follows the light: each sector's carpet level moves light_follow of the way to this frame's mean
@@ -381,6 +427,14 @@ void LineExtractor::mark_tall_obstacles(const BearingScan& scan, ExtractionRepor
 }
 
 BearingScan LineExtractor::extract(const cv::Mat& bgr, int rpd, ExtractionReport* report) {
+  return extract_impl(bgr, rpd, report, true);
+}
+
+BearingScan LineExtractor::extract_reference(const cv::Mat& bgr, int rpd, ExtractionReport* report) {
+  return extract_impl(bgr, rpd, report, false);
+}
+
+BearingScan LineExtractor::extract_impl(const cv::Mat& bgr, int rpd, ExtractionReport* report, bool fast) {
   if (bgr.empty()) throw std::invalid_argument("extract: empty image");
   if (bgr.type() != CV_8UC3) throw std::invalid_argument("extract: image must be 8-bit BGR (CV_8UC3), got type " + std::to_string(bgr.type()));
   if (bgr.cols != width_px_ || bgr.rows != height_px_) {
@@ -412,6 +466,7 @@ BearingScan LineExtractor::extract(const cv::Mat& bgr, int rpd, ExtractionReport
     hue_ok_[static_cast<std::size_t>(i)] = std::min(dh, 180.0 - dh) <= carpet_->hue_half_width;
   }
   const RayTable& t = table(rpd, bgr.step[0]);
+  if (fast) code_pixels(bgr, t, static_cast<int>(std::ceil(carpet_->sat_min)));
   // The first frame is walked twice: once to measure the light and the carpet's spread, then with them.
   for (int pass = first ? 0 : 1; pass < 2; ++pass) {
     Frame fr;
@@ -433,7 +488,8 @@ BearingScan LineExtractor::extract(const cv::Mat& bgr, int rpd, ExtractionReport
     rep.carpet_end_px.assign(static_cast<std::size_t>(n), 0);
     rep.carpet_estimated = !vision_.carpet_hsv;
     rep.contrast = c;
-    walk(bgr, t, scan, rep, fr);
+    if (fast) walk_fast(t, scan, rep, fr);
+    else walk(bgr, t, scan, rep, fr);
     if (pass == 0) {
       const double keep = vision_.extraction.light_follow;
       vision_.extraction.light_follow = 1.0;  // the first measurement is taken whole
