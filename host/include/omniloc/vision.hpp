@@ -179,6 +179,12 @@ class LineExtractor {
     // per-frame code plane, and per image row the columns [row_u0, row_u1] any ray touches.
     std::vector<std::int32_t> pixel;
     std::vector<std::int32_t> row_u0, row_u1;
+    // ... and bin by bin: ray j's bins are [bin_begin[j], bin_begin[j + 1]), the first numbered
+    // first_bin[j] and the others following; a bin's pixels are bin_pixel and bin_pixel + bin_second.
+    bool bins_ok = false;
+    std::vector<std::int32_t> bin_begin, bin_pixel;
+    std::vector<std::int16_t> bin_second;  // 0, +-1 or +-width: a 4-connected neighbour
+    std::vector<std::uint8_t> first_bin;
   };
 
  private:
@@ -189,10 +195,12 @@ class LineExtractor {
   template <class Pixel>
   void walk_rays(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr, Pixel px) const;
   void walk(const cv::Mat& bgr, const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const;
+  void bin_layout(RayTable& t, int n) const;
   void code_pixels(const cv::Mat& bgr, const RayTable& t, int sat_min);
   void walk_fast(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const;
   void adapt(const Frame& fr);
   void mark_tall_obstacles(const BearingScan& scan, ExtractionReport& rep) const;
+  void mark_tall_obstacles_fast(const BearingScan& scan, ExtractionReport& rep) const;
 
   // The camera's geometry, copied (the extractor may outlive the camera).
   int width_px_, height_px_;

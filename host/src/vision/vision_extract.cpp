@@ -129,7 +129,34 @@ const LineExtractor::RayTable& LineExtractor::table(int rpd, std::size_t step_by
     }
   }
   t.begin.push_back(static_cast<std::int32_t>(t.offset.size()));
+  bin_layout(t, n);
   return t;
+}
+
+// The fast walk's layout: a ray's bins are consecutive integers of one or two pixels each (a
+// 4-connected step advances at most 1 px along the ray, two steps at least 1 px), so each bin is
+// stored as its first pixel and the offset to its second (0 when it has one: reading a pixel twice
+// changes neither a maximum, nor "any", nor "the last one"). A table where that does not hold
+// (none is known) keeps the per-pixel walk.
+void LineExtractor::bin_layout(RayTable& t, int n) const {
+  t.bins_ok = true;
+  t.bin_begin.assign(1, 0);
+  t.first_bin.assign(static_cast<std::size_t>(n), 0);
+  for (int j = 0; j < n && t.bins_ok; ++j) {
+    const std::int32_t i0 = t.begin[static_cast<std::size_t>(j)], i1 = t.begin[static_cast<std::size_t>(j) + 1];
+    if (i0 < i1) t.first_bin[static_cast<std::size_t>(j)] = t.bin[static_cast<std::size_t>(i0)];
+    for (std::int32_t i = i0; i < i1;) {
+      const auto k = static_cast<std::size_t>(i);
+      const bool pair = i + 1 < i1 && t.bin[k + 1] == t.bin[k];
+      const int next = i + (pair ? 2 : 1);
+      if (next < i1 && t.bin[static_cast<std::size_t>(next)] != t.bin[k] + 1) t.bins_ok = false;  // three in a bin or a gap
+      if (pair && std::abs(t.pixel[k + 1] - t.pixel[k]) > 32767) t.bins_ok = false;  // a row wider than int16
+      t.bin_pixel.push_back(t.pixel[k]);
+      t.bin_second.push_back(static_cast<std::int16_t>(pair ? t.pixel[k + 1] - t.pixel[k] : 0));
+      i = next;
+    }
+    t.bin_begin.push_back(static_cast<std::int32_t>(t.bin_pixel.size()));
+  }
 }
 
 // The carpet colour from the frame when the camera has none: the pixels of the inner half of the
@@ -365,15 +392,158 @@ void LineExtractor::code_pixels(const cv::Mat& bgr, const RayTable& t, int sat_m
   }
 }
 
+// As walk_rays, bin by bin: both pixels of a bin read and combined without branches, the same
+// decisions in the same order (close_bin, finish_run and the look behind an end as in walk_rays).
 void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const {
+  const ExtractionParams& x = vision_.extraction;
   const std::uint32_t* code = code_.data();
-  const std::int32_t* pixel = t.pixel.data();
-  walk_rays(t, scan, rep, fr, [=](std::int32_t i, int vmin, int vmax, int& v, int& s) {
-    const std::uint32_t c = code[pixel[i]];
-    v = static_cast<int>(c & 255u);
-    s = static_cast<int>((c >> 8) & 255u);
-    return (c >> 16) != 0 && v >= vmin && v <= vmax;
-  });
+  const int min_gap = ScanParams{}.min_gap_px;
+  const int alpha_q = std::max(1, static_cast<int>(std::lround(256.0 / x.carpet_mean_px)));
+  const int val_step_q = fr.val_step << 8, sat_step_q = fr.sat_step << 8;
+  const int n = static_cast<int>(t.hidden.size());
+  long bins_seen = 0, bins_carpet = 0;
+  // The deviation histograms in four interleaved copies, summed at the end: neighbouring carpet
+  // bins mostly deviate alike, and one counter incremented back to back stalls on its own store.
+  std::array<std::array<int, 512>, 4> hist_v{}, hist_s{};
+  // The running mean's weight alpha_q / 256 is 1/8 for the default carpet_mean_px: a shift then
+  // replaces the multiply on the walk's serial chain (floor((d * 2^a) / 256) = d >> (8 - a)).
+  int alpha_shift = -1;
+  for (int a = 0; a <= 8; ++a)
+    if (alpha_q == 1 << a) alpha_shift = 8 - a;
+  auto step_mean = [alpha_q, alpha_shift](int d_q) { return alpha_shift >= 0 ? d_q >> alpha_shift : (d_q * alpha_q) >> 8; };
+  for (int j = 0; j < n; ++j) {
+    std::uint8_t* out = scan.radii_px.data() + static_cast<std::size_t>(j) * kCrossingsPerRay;
+    std::fill(out, out + kCrossingsPerRay, kNoCrossing);
+    if (t.hidden[static_cast<std::size_t>(j)]) {
+      scan.ray_end_px[static_cast<std::size_t>(j)] = kRayHidden;
+      rep.carpet_end_px[static_cast<std::size_t>(j)] = 0;
+      continue;
+    }
+    ++rep.rays;
+    const int sec = t.sector[static_cast<std::size_t>(j)];
+    const int vmin = fr.vmin[static_cast<std::size_t>(sec)], vmax = fr.vmax[static_cast<std::size_t>(sec)];
+    int vref_q = static_cast<int>(std::lround(256.0 * sector_val_[static_cast<std::size_t>(sec)]));
+    int sref_q = static_cast<int>(std::lround(256.0 * sector_sat_[static_cast<std::size_t>(sec)]));
+    long ray_sum_v = 0, ray_sum_s = 0, ray_count = 0;
+    int v_line_min = (vref_q + val_step_q + 255) >> 8, s_line_max = (sref_q - sat_step_q) >> 8;
+    int found = 0, gap = 0, other_run = 0, carpet_bins = 0, end = -1;
+    int prev_bin = -1, prev_v = 0;
+    bool in_run = false, run_counts = false;
+    int run_start = 0, run_n = 0, run_peak = 0, run_before_v = 0;
+    float run_floor = 0.0f;
+    int gap_before_run = 0;
+    std::array<std::uint8_t, 32> run_v{};
+    auto finish_run = [&]() {
+      if (!in_run) return;
+      in_run = false;
+      if (!run_counts || found >= kCrossingsPerRay) return;
+      const float half = run_floor + static_cast<float>(x.edge_fraction) * (static_cast<float>(run_peak) - run_floor);
+      if (static_cast<float>(run_before_v) >= half && run_start - 1 >= k0_ && gap_before_run > min_gap) {
+        out[found++] = static_cast<std::uint8_t>(run_start - 1);
+        return;
+      }
+      int k = 0;
+      while (k + 1 < run_n && static_cast<float>(run_v[static_cast<std::size_t>(k)]) < half) ++k;
+      out[found++] = static_cast<std::uint8_t>(run_start + k);
+    };
+    const std::int32_t b0 = t.bin_begin[static_cast<std::size_t>(j)], b1 = t.bin_begin[static_cast<std::size_t>(j) + 1];
+    const int first_bin = t.first_bin[static_cast<std::size_t>(j)];
+    const std::int32_t* bp = t.bin_pixel.data();
+    const std::int16_t* bs = t.bin_second.data();
+    std::int32_t k = b0;
+    for (; k < b1; ++k) {
+      const int bin = first_bin + (k - b0);
+      const std::uint32_t c0 = code[bp[k]], c1 = code[bp[k] + bs[k]];
+      const int v0 = static_cast<int>(c0 & 255u), s0 = static_cast<int>((c0 >> 8) & 255u);
+      const int v1 = static_cast<int>(c1 & 255u), s1 = static_cast<int>((c1 >> 8) & 255u);
+      const bool line0 = v0 >= v_line_min && s0 <= s_line_max, line1 = v1 >= v_line_min && s1 <= s_line_max;
+      const bool carpet1 = !line1 && (c1 >> 16) != 0 && v1 >= vmin && v1 <= vmax;
+      const bool carpet0 = !line0 && (c0 >> 16) != 0 && v0 >= vmin && v0 <= vmax;
+      ++bins_seen;
+      if (line0 || line1) {
+        const int b_line_v = std::max(line0 ? v0 : 0, line1 ? v1 : 0);
+        if (!in_run) {
+          in_run = true;
+          run_counts = gap >= min_gap;
+          gap_before_run = gap;
+          run_before_v = prev_bin == bin - 1 ? prev_v : 0;
+          run_start = bin;
+          run_n = 0;
+          run_peak = 0;
+          run_floor = static_cast<float>(vref_q) / 256.0f;
+        }
+        if (run_n < static_cast<int>(run_v.size())) run_v[static_cast<std::size_t>(run_n++)] = static_cast<std::uint8_t>(b_line_v);
+        run_peak = std::max(run_peak, b_line_v);
+        gap = 0;
+        other_run = 0;
+        continue;
+      }
+      finish_run();
+      prev_bin = bin;
+      prev_v = std::max(v0, v1);
+      ++gap;
+      if (carpet0 || carpet1) {
+        const int b_v = carpet1 ? v1 : v0, b_s = carpet1 ? s1 : s0;  // the bin's last carpet pixel
+        other_run = 0;
+        ++carpet_bins;
+        ++bins_carpet;
+        const int dv_q = (b_v << 8) - vref_q, ds_q = (b_s << 8) - sref_q;
+        const auto copy = static_cast<std::size_t>(bin & 3);
+        ++hist_v[copy][static_cast<std::size_t>(std::clamp(((dv_q + 128) >> 8) + 255, 0, 510))];
+        ++hist_s[copy][static_cast<std::size_t>(std::clamp(((ds_q + 128) >> 8) + 255, 0, 510))];
+        vref_q += step_mean(dv_q);
+        sref_q += step_mean(ds_q);
+        v_line_min = (vref_q + val_step_q + 255) >> 8;
+        s_line_max = (sref_q - sat_step_q) >> 8;
+        ray_sum_v += b_v;
+        ray_sum_s += b_s;
+        ++ray_count;
+      } else if (++other_run >= x.end_run_px) {
+        end = bin - other_run + 1;
+        ++k;
+        break;
+      }
+    }
+    finish_run();
+    fr.sum_v[static_cast<std::size_t>(sec)] += static_cast<double>(ray_sum_v);
+    fr.sum_s[static_cast<std::size_t>(sec)] += static_cast<double>(ray_sum_s);
+    fr.count[static_cast<std::size_t>(sec)] += ray_count;
+    std::uint8_t& ray_end = scan.ray_end_px[static_cast<std::size_t>(j)];
+    std::uint8_t& carpet_end = rep.carpet_end_px[static_cast<std::size_t>(j)];
+    if (carpet_bins >= x.carpet_resume_px) ++rep.rays_seen;
+    if (end < 0) {
+      ray_end = kRayToViewEnd;
+      carpet_end = 255;
+    } else {
+      ray_end = end <= k0_ ? kRayHidden : static_cast<std::uint8_t>(end);
+      // Behind the end: a bin counts once the next one is reached within resume_within_px (as the
+      // per-pixel walk commits a bin at its successor's first pixel); any carpet pixel makes it carpet.
+      int run = 0;
+      const int look_to = end + x.resume_within_px;
+      for (; k + 1 < b1 && run < x.carpet_resume_px; ++k) {
+        if (first_bin + (k + 1 - b0) > look_to) break;
+        const std::uint32_t c0 = code[bp[k]], c1 = code[bp[k] + bs[k]];
+        const int v0 = static_cast<int>(c0 & 255u), v1 = static_cast<int>(c1 & 255u);
+        const bool carpet = ((c0 >> 16) != 0 && v0 >= vmin && v0 <= vmax) || ((c1 >> 16) != 0 && v1 >= vmin && v1 <= vmax);
+        run = carpet ? run + 1 : 0;
+      }
+      if (run >= x.carpet_resume_px) {
+        ++rep.rays_ended_at_obstacle;
+        carpet_end = 255;
+      } else {
+        ++rep.rays_ended_at_carpet_edge;
+        carpet_end = static_cast<std::uint8_t>(std::max(end, 1));
+      }
+    }
+    for (int c = 0; c < kCrossingsPerRay; ++c)
+      if (out[c] != kNoCrossing && out[c] >= ray_end) out[c] = kNoCrossing;
+    for (int c = 0; c < kCrossingsPerRay; ++c) rep.crossings += out[c] != kNoCrossing;
+  }
+  for (std::size_t b = 0; b < 511; ++b) {
+    fr.dev_v[b] += hist_v[0][b] + hist_v[1][b] + hist_v[2][b] + hist_v[3][b];
+    fr.dev_s[b] += hist_s[0][b] + hist_s[1][b] + hist_s[2][b] + hist_s[3][b];
+  }
+  rep.carpet_fraction = bins_seen > 0 ? static_cast<double>(bins_carpet) / static_cast<double>(bins_seen) : 0.0;
 }
 
 // Follows the light: each sector's carpet level moves light_follow of the way to this frame's mean
@@ -422,6 +592,51 @@ void LineExtractor::mark_tall_obstacles(const BearingScan& scan, ExtractionRepor
       ce = 255;
       --rep.rays_ended_at_carpet_edge;
       ++rep.rays_ended_at_obstacle;
+    }
+  }
+}
+
+// As mark_tall_obstacles, with the window's median kept in a sliding histogram per ray residue
+// (the window of ray j + rays_per_degree is ray j's shifted by one ray per degree) instead of
+// collected and partially sorted per ray: the median is at least e + obstacle_step_px exactly when
+// fewer than half (index size / 2) of the window's reaches are below that.
+void LineExtractor::mark_tall_obstacles_fast(const BearingScan& scan, ExtractionReport& rep) const {
+  const ExtractionParams& x = vision_.extraction;
+  const int n = static_cast<int>(scan.ray_end_px.size()), rpd = scan.rays_per_degree;
+  const int w = static_cast<int>(std::lround(x.obstacle_window_deg * rpd));
+  const int m = 2 * w / rpd + 1;  // window rays: j - w + i * rpd, i = 0 .. m - 1
+  const std::uint8_t* end = scan.ray_end_px.data();
+  auto at = [&](int j) { return ((j % n) + n) % n; };
+  for (int r = 0; r < rpd; ++r) {
+    std::array<int, 256> fine{};
+    std::array<int, 16> coarse{};
+    int size = 0;
+    auto add = [&](int j, int delta) {
+      const int e = end[at(j)];
+      if (e == kRayHidden) return;
+      const int reach = e == kRayToViewEnd ? k1_ + 1 : e;
+      fine[static_cast<std::size_t>(reach)] += delta;
+      coarse[static_cast<std::size_t>(reach >> 4)] += delta;
+      size += delta;
+    };
+    for (int i = 0; i < m; ++i) add(r - w + i * rpd, 1);
+    for (int j = r; j < n; j += rpd) {
+      if (j > r) {
+        add(j - rpd - w, -1);
+        add(j - w + (m - 1) * rpd, 1);
+      }
+      std::uint8_t& ce = rep.carpet_end_px[static_cast<std::size_t>(j)];
+      const int e = end[j];
+      if (e == kRayHidden || e == kRayToViewEnd || ce == 255 || size == 0) continue;
+      const int limit = std::min(e + x.obstacle_step_px, 256);
+      int below = 0;
+      for (int c = 0; c < limit >> 4; ++c) below += coarse[static_cast<std::size_t>(c)];
+      for (int v = limit & ~15; v < limit; ++v) below += fine[static_cast<std::size_t>(v)];
+      if (below <= size / 2) {
+        ce = 255;
+        --rep.rays_ended_at_carpet_edge;
+        ++rep.rays_ended_at_obstacle;
+      }
     }
   }
 }
@@ -488,7 +703,13 @@ BearingScan LineExtractor::extract_impl(const cv::Mat& bgr, int rpd, ExtractionR
     rep.carpet_end_px.assign(static_cast<std::size_t>(n), 0);
     rep.carpet_estimated = !vision_.carpet_hsv;
     rep.contrast = c;
-    if (fast) walk_fast(t, scan, rep, fr);
+    if (fast && t.bins_ok) walk_fast(t, scan, rep, fr);
+    else if (fast) walk_rays(t, scan, rep, fr, [code = code_.data(), pixel = t.pixel.data()](std::int32_t i, int vmin, int vmax, int& v, int& s) {
+      const std::uint32_t c = code[pixel[i]];
+      v = static_cast<int>(c & 255u);
+      s = static_cast<int>((c >> 8) & 255u);
+      return (c >> 16) != 0 && v >= vmin && v <= vmax;
+    });
     else walk(bgr, t, scan, rep, fr);
     if (pass == 0) {
       const double keep = vision_.extraction.light_follow;
@@ -500,7 +721,8 @@ BearingScan LineExtractor::extract_impl(const cv::Mat& bgr, int rpd, ExtractionR
     }
   }
   rep.carpet = *carpet_;
-  mark_tall_obstacles(scan, rep);
+  if (fast) mark_tall_obstacles_fast(scan, rep);
+  else mark_tall_obstacles(scan, rep);
   // Obstacle blobs: neighbouring rays ended on the carpet at similar radii.
   for (int j = 0; j < n; ++j) {
     const auto e = scan.ray_end_px[static_cast<std::size_t>(j)];
