@@ -411,6 +411,9 @@ void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionRe
   for (int a = 0; a <= 8; ++a)
     if (alpha_q == 1 << a) alpha_shift = 8 - a;
   auto step_mean = [alpha_q, alpha_shift](int d_q) { return alpha_shift >= 0 ? d_q >> alpha_shift : (d_q * alpha_q) >> 8; };
+  // Read once: the histograms' int stores could alias the parameters' ints, forcing reloads.
+  const int end_run_px = x.end_run_px, k0 = k0_;
+  const float edge_fraction = static_cast<float>(x.edge_fraction);
   for (int j = 0; j < n; ++j) {
     std::uint8_t* out = scan.radii_px.data() + static_cast<std::size_t>(j) * kCrossingsPerRay;
     std::fill(out, out + kCrossingsPerRay, kNoCrossing);
@@ -437,8 +440,8 @@ void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionRe
       if (!in_run) return;
       in_run = false;
       if (!run_counts || found >= kCrossingsPerRay) return;
-      const float half = run_floor + static_cast<float>(x.edge_fraction) * (static_cast<float>(run_peak) - run_floor);
-      if (static_cast<float>(run_before_v) >= half && run_start - 1 >= k0_ && gap_before_run > min_gap) {
+      const float half = run_floor + edge_fraction * (static_cast<float>(run_peak) - run_floor);
+      if (static_cast<float>(run_before_v) >= half && run_start - 1 >= k0 && gap_before_run > min_gap) {
         out[found++] = static_cast<std::uint8_t>(run_start - 1);
         return;
       }
@@ -498,7 +501,7 @@ void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionRe
         ray_sum_v += b_v;
         ray_sum_s += b_s;
         ++ray_count;
-      } else if (++other_run >= x.end_run_px) {
+      } else if (++other_run >= end_run_px) {
         end = bin - other_run + 1;
         ++k;
         break;
