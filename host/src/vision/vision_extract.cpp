@@ -48,6 +48,83 @@ double hist_sigma(const std::array<int, 511>& h) {
   return 1.4826 * quantile_bin(dev, n);
 }
 
+// A white run along a ray (consecutive "line" bins): its crossing is placed where it first reaches
+// edge_fraction of the way from the carpet to its peak (a blurred edge's foot is brighter than the
+// carpet but is not yet the line).
+struct WhiteRun {
+  bool open = false, counts = false;
+  int start = 0, n = 0, peak = 0, before_v = 0, gap_before = 0;
+  float floor = 0.0f;
+  std::array<std::uint8_t, 32> v{};
+  // Bin `bin` is line: opens a run (after `gap` non-line bins) or extends the open one.
+  void add(int bin, int line_v, int gap, int min_gap, int prev_bin, int prev_v, int vref_q) {
+    if (!open) {
+      open = true;
+      counts = gap >= min_gap;
+      gap_before = gap;
+      before_v = prev_bin == bin - 1 ? prev_v : 0;
+      start = bin;
+      n = 0;
+      peak = 0;
+      floor = static_cast<float>(vref_q) / 256.0f;
+    }
+    if (n < static_cast<int>(v.size())) v[static_cast<std::size_t>(n++)] = static_cast<std::uint8_t>(line_v);
+    peak = std::max(peak, line_v);
+  }
+  // Closes an open run, writing its crossing to out[found++] when it counts.
+  void finish(std::uint8_t* out, int& found, float edge_fraction, int k0, int min_gap) {
+    if (!open) return;
+    open = false;
+    if (!counts || found >= kCrossingsPerRay) return;
+    const float half = floor + edge_fraction * (static_cast<float>(peak) - floor);
+    // The bin before the run may already be half-way (its pixel failed the saturation step).
+    if (static_cast<float>(before_v) >= half && start - 1 >= k0 && gap_before > min_gap) {
+      out[found++] = static_cast<std::uint8_t>(start - 1);
+      return;
+    }
+    int k = 0;
+    while (k + 1 < n && static_cast<float>(v[static_cast<std::size_t>(k)]) < half) ++k;
+    out[found++] = static_cast<std::uint8_t>(start + k);
+  }
+};
+
+// Ray j's crossings cleared; nullptr for a hidden ray (marked hidden), else where they go.
+std::uint8_t* start_ray(bool hidden, int j, BearingScan& scan, ExtractionReport& rep) {
+  std::uint8_t* out = scan.radii_px.data() + static_cast<std::size_t>(j) * kCrossingsPerRay;
+  std::fill(out, out + kCrossingsPerRay, kNoCrossing);
+  if (hidden) {
+    scan.ray_end_px[static_cast<std::size_t>(j)] = kRayHidden;
+    rep.carpet_end_px[static_cast<std::size_t>(j)] = 0;
+    return nullptr;
+  }
+  ++rep.rays;
+  return out;
+}
+
+// A walked ray's outcome: where it ends (its first "other" bin of the end run, end < 0: none),
+// whether that is an obstacle (the carpet resumes behind it) or the carpet's end, and its crossings
+// below the end (the end is exclusive).
+void finish_ray(int end, bool carpet_resumes, int carpet_bins, int k0, const ExtractionParams& x, std::uint8_t* out,
+                std::uint8_t& ray_end, std::uint8_t& carpet_end, ExtractionReport& rep) {
+  if (carpet_bins >= x.carpet_resume_px) ++rep.rays_seen;
+  if (end < 0) {
+    ray_end = kRayToViewEnd;
+    carpet_end = 255;
+  } else {
+    ray_end = end <= k0 ? kRayHidden : static_cast<std::uint8_t>(end);
+    if (carpet_resumes) {
+      ++rep.rays_ended_at_obstacle;
+      carpet_end = 255;
+    } else {
+      ++rep.rays_ended_at_carpet_edge;
+      carpet_end = static_cast<std::uint8_t>(std::max(end, 1));
+    }
+  }
+  for (int c = 0; c < kCrossingsPerRay; ++c)
+    if (out[c] != kNoCrossing && out[c] >= ray_end) out[c] = kNoCrossing;
+  for (int c = 0; c < kCrossingsPerRay; ++c) rep.crossings += out[c] != kNoCrossing;
+}
+
 }  // namespace
 
 // Per-frame working state: the thresholds used and what the walk measured for the adaptation.
@@ -198,14 +275,8 @@ void LineExtractor::walk_rays(const RayTable& t, BearingScan& scan, ExtractionRe
   const int n = static_cast<int>(t.hidden.size());
   long bins_seen = 0, bins_carpet = 0;
   for (int j = 0; j < n; ++j) {
-    std::uint8_t* out = scan.radii_px.data() + static_cast<std::size_t>(j) * kCrossingsPerRay;
-    std::fill(out, out + kCrossingsPerRay, kNoCrossing);
-    if (t.hidden[static_cast<std::size_t>(j)]) {
-      scan.ray_end_px[static_cast<std::size_t>(j)] = kRayHidden;
-      rep.carpet_end_px[static_cast<std::size_t>(j)] = 0;
-      continue;
-    }
-    ++rep.rays;
+    std::uint8_t* out = start_ray(t.hidden[static_cast<std::size_t>(j)], j, scan, rep);
+    if (out == nullptr) continue;
     const int sec = t.sector[static_cast<std::size_t>(j)];
     const int vmin = fr.vmin[static_cast<std::size_t>(sec)], vmax = fr.vmax[static_cast<std::size_t>(sec)];
     // Running carpet means in 8-bit fixed point (Q8): integer arithmetic on every carpet bin.
@@ -224,48 +295,18 @@ void LineExtractor::walk_rays(const RayTable& t, BearingScan& scan, ExtractionRe
     bool b_line = false, b_carpet = false;
     int b_v = 0, b_s = 0, b_line_v = 0, b_any_v = 0;
     int prev_bin = -1, prev_v = 0;  // the last closed bin that was not line, and its brightest pixel
-    // The current white run: its edge is placed where it first reaches half-way from the carpet to
-    // its peak (a blurred edge's foot is brighter than the carpet but is not yet the line).
-    bool in_run = false, run_counts = false;
-    int run_start = 0, run_n = 0, run_peak = 0, run_before_v = 0;
-    float run_floor = 0.0f;
-    int gap_before_run = 0;
-    std::array<std::uint8_t, 32> run_v{};
-    auto finish_run = [&]() {
-      if (!in_run) return;
-      in_run = false;
-      if (!run_counts || found >= kCrossingsPerRay) return;
-      const float half = run_floor + static_cast<float>(x.edge_fraction) * (static_cast<float>(run_peak) - run_floor);
-      // The bin before the run may already be half-way (its pixel failed the saturation step).
-      if (static_cast<float>(run_before_v) >= half && run_start - 1 >= k0_ && gap_before_run > min_gap) {
-        out[found++] = static_cast<std::uint8_t>(run_start - 1);
-        return;
-      }
-      int k = 0;
-      while (k + 1 < run_n && static_cast<float>(run_v[static_cast<std::size_t>(k)]) < half) ++k;
-      out[found++] = static_cast<std::uint8_t>(run_start + k);
-    };
+    WhiteRun run;
+    const auto edge_fraction = static_cast<float>(x.edge_fraction);
     // One bin decided: crossing (line entry after the gap), carpet (updates the running mean), or other.
     auto close_bin = [&]() {
       ++bins_seen;
       if (b_line) {
-        if (!in_run) {
-          in_run = true;
-          run_counts = gap >= min_gap;
-          gap_before_run = gap;
-          run_before_v = prev_bin == bin - 1 ? prev_v : 0;
-          run_start = bin;
-          run_n = 0;
-          run_peak = 0;
-          run_floor = static_cast<float>(vref_q) / 256.0f;
-        }
-        if (run_n < static_cast<int>(run_v.size())) run_v[static_cast<std::size_t>(run_n++)] = static_cast<std::uint8_t>(b_line_v);
-        run_peak = std::max(run_peak, b_line_v);
+        run.add(bin, b_line_v, gap, min_gap, prev_bin, prev_v, vref_q);
         gap = 0;
         other_run = 0;
         return;
       }
-      finish_run();
+      run.finish(out, found, edge_fraction, k0_, min_gap);
       prev_bin = bin;
       prev_v = b_any_v;
       if (b_carpet) {
@@ -314,46 +355,30 @@ void LineExtractor::walk_rays(const RayTable& t, BearingScan& scan, ExtractionRe
       }
     }
     if (end < 0 && bin >= 0) close_bin();
-    finish_run();
+    run.finish(out, found, edge_fraction, k0_, min_gap);
     fr.sum_v[static_cast<std::size_t>(sec)] += static_cast<double>(ray_sum_v);
     fr.sum_s[static_cast<std::size_t>(sec)] += static_cast<double>(ray_sum_s);
     fr.count[static_cast<std::size_t>(sec)] += ray_count;
-    std::uint8_t& ray_end = scan.ray_end_px[static_cast<std::size_t>(j)];
-    std::uint8_t& carpet_end = rep.carpet_end_px[static_cast<std::size_t>(j)];
-    if (carpet_bins >= x.carpet_resume_px) ++rep.rays_seen;
-    if (end < 0) {
-      ray_end = kRayToViewEnd;
-      carpet_end = 255;
-    } else {
-      ray_end = end <= k0_ ? kRayHidden : static_cast<std::uint8_t>(end);
-      // Obstacle or the carpet's end: does the carpet resume behind the blob?
-      int run = 0;
+    // Obstacle or the carpet's end: does the carpet resume behind the blob?
+    int resume = 0;
+    if (end >= 0) {
       int cur = -1;
       bool cur_carpet = false;
       const int look_to = end + x.resume_within_px;
-      for (; i < i1 && run < x.carpet_resume_px; ++i) {
+      for (; i < i1 && resume < x.carpet_resume_px; ++i) {
         const int bi = t.bin[static_cast<std::size_t>(i)];
         if (bi > look_to) break;
         if (bi != cur) {
-          if (cur >= 0) run = cur_carpet ? run + 1 : 0;
+          if (cur >= 0) resume = cur_carpet ? resume + 1 : 0;
           cur = bi;
           cur_carpet = false;
         }
         int v, s;
         cur_carpet = px(i, vmin, vmax, v, s) || cur_carpet;
       }
-      if (run >= x.carpet_resume_px) {
-        ++rep.rays_ended_at_obstacle;
-        carpet_end = 255;
-      } else {
-        ++rep.rays_ended_at_carpet_edge;
-        carpet_end = static_cast<std::uint8_t>(std::max(end, 1));
-      }
     }
-    // Crossings at or beyond the end are not kept (the end is exclusive).
-    for (int c = 0; c < kCrossingsPerRay; ++c)
-      if (out[c] != kNoCrossing && out[c] >= ray_end) out[c] = kNoCrossing;
-    for (int c = 0; c < kCrossingsPerRay; ++c) rep.crossings += out[c] != kNoCrossing;
+    finish_ray(end, resume >= x.carpet_resume_px, carpet_bins, k0_, x, out, scan.ray_end_px[static_cast<std::size_t>(j)],
+               rep.carpet_end_px[static_cast<std::size_t>(j)], rep);
   }
   rep.carpet_fraction = bins_seen > 0 ? static_cast<double>(bins_carpet) / static_cast<double>(bins_seen) : 0.0;
 }
@@ -393,7 +418,7 @@ void LineExtractor::code_pixels(const cv::Mat& bgr, const RayTable& t, int sat_m
 }
 
 // As walk_rays, bin by bin: both pixels of a bin read and combined without branches, the same
-// decisions in the same order (close_bin, finish_run and the look behind an end as in walk_rays).
+// decisions in the same order (WhiteRun, the look behind an end and finish_ray as in walk_rays).
 void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const {
   const ExtractionParams& x = vision_.extraction;
   const std::uint32_t* code = code_.data();
@@ -415,14 +440,8 @@ void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionRe
   const int end_run_px = x.end_run_px, k0 = k0_;
   const float edge_fraction = static_cast<float>(x.edge_fraction);
   for (int j = 0; j < n; ++j) {
-    std::uint8_t* out = scan.radii_px.data() + static_cast<std::size_t>(j) * kCrossingsPerRay;
-    std::fill(out, out + kCrossingsPerRay, kNoCrossing);
-    if (t.hidden[static_cast<std::size_t>(j)]) {
-      scan.ray_end_px[static_cast<std::size_t>(j)] = kRayHidden;
-      rep.carpet_end_px[static_cast<std::size_t>(j)] = 0;
-      continue;
-    }
-    ++rep.rays;
+    std::uint8_t* out = start_ray(t.hidden[static_cast<std::size_t>(j)], j, scan, rep);
+    if (out == nullptr) continue;
     const int sec = t.sector[static_cast<std::size_t>(j)];
     const int vmin = fr.vmin[static_cast<std::size_t>(sec)], vmax = fr.vmax[static_cast<std::size_t>(sec)];
     int vref_q = static_cast<int>(std::lround(256.0 * sector_val_[static_cast<std::size_t>(sec)]));
@@ -431,24 +450,7 @@ void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionRe
     int v_line_min = (vref_q + val_step_q + 255) >> 8, s_line_max = (sref_q - sat_step_q) >> 8;
     int found = 0, gap = 0, other_run = 0, carpet_bins = 0, end = -1;
     int prev_bin = -1, prev_v = 0;
-    bool in_run = false, run_counts = false;
-    int run_start = 0, run_n = 0, run_peak = 0, run_before_v = 0;
-    float run_floor = 0.0f;
-    int gap_before_run = 0;
-    std::array<std::uint8_t, 32> run_v{};
-    auto finish_run = [&]() {
-      if (!in_run) return;
-      in_run = false;
-      if (!run_counts || found >= kCrossingsPerRay) return;
-      const float half = run_floor + edge_fraction * (static_cast<float>(run_peak) - run_floor);
-      if (static_cast<float>(run_before_v) >= half && run_start - 1 >= k0 && gap_before_run > min_gap) {
-        out[found++] = static_cast<std::uint8_t>(run_start - 1);
-        return;
-      }
-      int k = 0;
-      while (k + 1 < run_n && static_cast<float>(run_v[static_cast<std::size_t>(k)]) < half) ++k;
-      out[found++] = static_cast<std::uint8_t>(run_start + k);
-    };
+    WhiteRun run;
     const std::int32_t b0 = t.bin_begin[static_cast<std::size_t>(j)], b1 = t.bin_begin[static_cast<std::size_t>(j) + 1];
     const int first_bin = t.first_bin[static_cast<std::size_t>(j)];
     const std::int32_t* bp = t.bin_pixel.data();
@@ -464,24 +466,12 @@ void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionRe
       const bool carpet0 = !line0 && (c0 >> 16) != 0 && v0 >= vmin && v0 <= vmax;
       ++bins_seen;
       if (line0 || line1) {
-        const int b_line_v = std::max(line0 ? v0 : 0, line1 ? v1 : 0);
-        if (!in_run) {
-          in_run = true;
-          run_counts = gap >= min_gap;
-          gap_before_run = gap;
-          run_before_v = prev_bin == bin - 1 ? prev_v : 0;
-          run_start = bin;
-          run_n = 0;
-          run_peak = 0;
-          run_floor = static_cast<float>(vref_q) / 256.0f;
-        }
-        if (run_n < static_cast<int>(run_v.size())) run_v[static_cast<std::size_t>(run_n++)] = static_cast<std::uint8_t>(b_line_v);
-        run_peak = std::max(run_peak, b_line_v);
+        run.add(bin, std::max(line0 ? v0 : 0, line1 ? v1 : 0), gap, min_gap, prev_bin, prev_v, vref_q);
         gap = 0;
         other_run = 0;
         continue;
       }
-      finish_run();
+      run.finish(out, found, edge_fraction, k0, min_gap);
       prev_bin = bin;
       prev_v = std::max(v0, v1);
       ++gap;
@@ -507,40 +497,25 @@ void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionRe
         break;
       }
     }
-    finish_run();
+    run.finish(out, found, edge_fraction, k0, min_gap);
     fr.sum_v[static_cast<std::size_t>(sec)] += static_cast<double>(ray_sum_v);
     fr.sum_s[static_cast<std::size_t>(sec)] += static_cast<double>(ray_sum_s);
     fr.count[static_cast<std::size_t>(sec)] += ray_count;
-    std::uint8_t& ray_end = scan.ray_end_px[static_cast<std::size_t>(j)];
-    std::uint8_t& carpet_end = rep.carpet_end_px[static_cast<std::size_t>(j)];
-    if (carpet_bins >= x.carpet_resume_px) ++rep.rays_seen;
-    if (end < 0) {
-      ray_end = kRayToViewEnd;
-      carpet_end = 255;
-    } else {
-      ray_end = end <= k0_ ? kRayHidden : static_cast<std::uint8_t>(end);
-      // Behind the end: a bin counts once the next one is reached within resume_within_px (as the
-      // per-pixel walk commits a bin at its successor's first pixel); any carpet pixel makes it carpet.
-      int run = 0;
+    // Behind the end: a bin counts once the next one is reached within resume_within_px (as the
+    // per-pixel walk commits a bin at its successor's first pixel); any carpet pixel makes it carpet.
+    int resume = 0;
+    if (end >= 0) {
       const int look_to = end + x.resume_within_px;
-      for (; k + 1 < b1 && run < x.carpet_resume_px; ++k) {
+      for (; k + 1 < b1 && resume < x.carpet_resume_px; ++k) {
         if (first_bin + (k + 1 - b0) > look_to) break;
         const std::uint32_t c0 = code[bp[k]], c1 = code[bp[k] + bs[k]];
         const int v0 = static_cast<int>(c0 & 255u), v1 = static_cast<int>(c1 & 255u);
         const bool carpet = ((c0 >> 16) != 0 && v0 >= vmin && v0 <= vmax) || ((c1 >> 16) != 0 && v1 >= vmin && v1 <= vmax);
-        run = carpet ? run + 1 : 0;
-      }
-      if (run >= x.carpet_resume_px) {
-        ++rep.rays_ended_at_obstacle;
-        carpet_end = 255;
-      } else {
-        ++rep.rays_ended_at_carpet_edge;
-        carpet_end = static_cast<std::uint8_t>(std::max(end, 1));
+        resume = carpet ? resume + 1 : 0;
       }
     }
-    for (int c = 0; c < kCrossingsPerRay; ++c)
-      if (out[c] != kNoCrossing && out[c] >= ray_end) out[c] = kNoCrossing;
-    for (int c = 0; c < kCrossingsPerRay; ++c) rep.crossings += out[c] != kNoCrossing;
+    finish_ray(end, resume >= x.carpet_resume_px, carpet_bins, k0, x, out, scan.ray_end_px[static_cast<std::size_t>(j)],
+               rep.carpet_end_px[static_cast<std::size_t>(j)], rep);
   }
   for (std::size_t b = 0; b < 511; ++b) {
     fr.dev_v[b] += hist_v[0][b] + hist_v[1][b] + hist_v[2][b] + hist_v[3][b];
