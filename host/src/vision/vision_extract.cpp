@@ -659,7 +659,12 @@ BearingScan LineExtractor::extract_impl(const cv::Mat& bgr, int rpd, ExtractionR
     hue_ok_[static_cast<std::size_t>(i)] = std::min(dh, 180.0 - dh) <= carpet_->hue_half_width;
   }
   const RayTable& t = table(rpd, bgr.step[0]);
-  if (fast) code_pixels(bgr, t, static_cast<int>(std::ceil(carpet_->sat_min)));
+  // The code plane pays when the rays touch more pixels than it converts (4 rays per degree: 2x;
+  // at 1 ray per degree the rays skip most pixels beyond ~60 px and the per-pixel walk is cheaper).
+  long plane_px = 0;
+  for (std::size_t row = 0; row < t.row_u0.size(); ++row) plane_px += std::max(0, t.row_u1[row] - t.row_u0[row] + 1);
+  const bool coded = fast && t.bins_ok && static_cast<long>(t.pixel.size()) >= plane_px;
+  if (coded) code_pixels(bgr, t, static_cast<int>(std::ceil(carpet_->sat_min)));
   // The first frame is walked twice: once to measure the light and the carpet's spread, then with them.
   for (int pass = first ? 0 : 1; pass < 2; ++pass) {
     Frame fr;
@@ -681,13 +686,7 @@ BearingScan LineExtractor::extract_impl(const cv::Mat& bgr, int rpd, ExtractionR
     rep.carpet_end_px.assign(static_cast<std::size_t>(n), 0);
     rep.carpet_estimated = !vision_.carpet_hsv;
     rep.contrast = c;
-    if (fast && t.bins_ok) walk_fast(t, scan, rep, fr);
-    else if (fast) walk_rays(t, scan, rep, fr, [code = code_.data(), pixel = t.pixel.data()](std::int32_t i, int vmin, int vmax, int& v, int& s) {
-      const std::uint32_t c = code[pixel[i]];
-      v = static_cast<int>(c & 255u);
-      s = static_cast<int>((c >> 8) & 255u);
-      return (c >> 16) != 0 && v >= vmin && v <= vmax;
-    });
+    if (coded) walk_fast(t, scan, rep, fr);
     else walk(bgr, t, scan, rep, fr);
     if (pass == 0) {
       const double keep = vision_.extraction.light_follow;
