@@ -17,15 +17,17 @@
 
 #include "omniloc/fuzzy.hpp"
 #include "omniloc/localizer.hpp"
+#include "omniloc/vision.hpp"
 #include "omniloc_sim/renderer.hpp"
 
 namespace omniloc {
 namespace {
 
-// The scan step. The vision engineer's LineExtractor replaces it: one line,
-//   return LineExtractor(camera).extract(bgr, rays_per_degree);
-BearingScan scan_step(const cv::Mat& bgr, const CameraModel& camera, int rays_per_degree) {
-  return scan_image_bearings(bgr, camera, rays_per_degree);
+// The scan step as the daemon runs it: one LineExtractor per camera, kept from frame to frame (its
+// ray tables are built once and its light adaptation carries over). Switch to the older
+// fixed-threshold scan here for comparison: return scan_image_bearings(bgr, camera, rays_per_degree);
+BearingScan scan_step(LineExtractor& extractor, const cv::Mat& bgr, int rays_per_degree) {
+  return extractor.extract(bgr, rays_per_degree);
 }
 
 CameraModel scaled_camera(const CameraModel& base, double factor, int width_px, int height_px) {
@@ -46,6 +48,7 @@ struct Setup {
   Eigen::Vector2d predicted_cm{371.4, 367.7};  // the odometry's prediction, 5 cm off
   double range_cm = 0.0;
   LocalizerConfig config;  // the shipped defaults: rays per degree, cost, refinement
+  std::unique_ptr<LineExtractor> extractor;  // the daemon's: one per camera, across frames
 };
 
 const Setup& setup(int size) {
@@ -62,6 +65,8 @@ const Setup& setup(int size) {
   opt.obstacles = sim::random_obstacles(s->renderer->field(), s->truth, 2, opt.seed);
   s->image = s->renderer->render(s->truth, opt);
   s->range_cm = fuzzy_search_range(s->config.fuzzy, 100.0).snapped_cm;  // 100 cm/s: 20 cm, 5 x 5 points
+  s->extractor = std::make_unique<LineExtractor>(camera);
+  (void)s->extractor->extract(s->image, s->config.scan_rays_per_degree);  // the first frame is walked twice
   return *s;
 }
 
@@ -77,7 +82,7 @@ MatchOptions options(const Setup& s, bool reference) {
 MatchResult frame(const Setup& s, bool reference) {
   const CameraModel& cam = s.renderer->camera();
   const MatchOptions mo = options(s, reference);
-  const FieldScan scan = make_field_scan(scan_step(s.image, cam, s.config.scan_rays_per_degree), s.truth.yaw_deg);
+  const FieldScan scan = make_field_scan(scan_step(*s.extractor, s.image, s.config.scan_rays_per_degree), s.truth.yaw_deg);
   MatchResult m = local_search(s.db, scan, s.predicted_cm, s.range_cm, mo);
   interpolate_match(s.db, scan, m, mo);
   if (reference) {
@@ -102,14 +107,14 @@ void BM_FramePathReference(benchmark::State& state) {
 // The steps alone, for the breakdown.
 void BM_ScanStep(benchmark::State& state) {
   const Setup& s = setup(static_cast<int>(state.range(0)));
-  for (auto _ : state) benchmark::DoNotOptimize(scan_step(s.image, s.renderer->camera(), s.config.scan_rays_per_degree));
+  for (auto _ : state) benchmark::DoNotOptimize(scan_step(*s.extractor, s.image, s.config.scan_rays_per_degree));
   state.SetItemsProcessed(state.iterations());
 }
 void refine_step(benchmark::State& state, bool reference) {
   const Setup& s = setup(static_cast<int>(state.range(0)));
   const MatchOptions mo = options(s, reference);
   const FieldScan scan =
-      make_field_scan(scan_step(s.image, s.renderer->camera(), s.config.scan_rays_per_degree), s.truth.yaw_deg);
+      make_field_scan(scan_step(*s.extractor, s.image, s.config.scan_rays_per_degree), s.truth.yaw_deg);
   MatchResult start = local_search(s.db, scan, s.predicted_cm, s.range_cm, mo);
   interpolate_match(s.db, scan, start, mo);
   for (auto _ : state) {

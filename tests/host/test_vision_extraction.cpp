@@ -481,5 +481,94 @@ TEST(VisionModelConfig, ViewBeyondTheFormatIsRefused) {
   }
 }
 
+// ---------------------------------------------------------------------------------------------
+// The fast walk (LineExtractor::extract) against its reference (extract_reference: every pixel's
+// HSV recomputed on every ray): byte-identical scans and identical reports, frame after frame (the
+// adaptation state must evolve the same), on rendered frames (plain, dark, bright, robots), the real
+// frame with its calibrated camera and extended to the rim (walls, the ball), with the carpet
+// estimated and given, at several ray densities.
+
+void expect_same(const BearingScan& a, const ExtractionReport& ra, const BearingScan& b, const ExtractionReport& rb,
+                 const std::string& what) {
+  SCOPED_TRACE(what);
+  EXPECT_EQ(a.rays_per_degree, b.rays_per_degree);
+  EXPECT_TRUE(a.radii_px == b.radii_px);
+  EXPECT_TRUE(a.ray_end_px == b.ray_end_px);
+  EXPECT_EQ(ra.usable, rb.usable);
+  EXPECT_EQ(ra.reason, rb.reason);
+  EXPECT_EQ(ra.rays, rb.rays);
+  EXPECT_EQ(ra.rays_seen, rb.rays_seen);
+  EXPECT_EQ(ra.crossings, rb.crossings);
+  EXPECT_EQ(ra.rays_ended_at_carpet_edge, rb.rays_ended_at_carpet_edge);
+  EXPECT_EQ(ra.rays_ended_at_obstacle, rb.rays_ended_at_obstacle);
+  EXPECT_EQ(ra.carpet_fraction, rb.carpet_fraction);  // bit-exact, not near
+  EXPECT_TRUE(ra.carpet_end_px == rb.carpet_end_px);
+  ASSERT_EQ(ra.obstacles.size(), rb.obstacles.size());
+  for (std::size_t k = 0; k < ra.obstacles.size(); ++k) {
+    EXPECT_EQ(ra.obstacles[k].first_ray, rb.obstacles[k].first_ray);
+    EXPECT_EQ(ra.obstacles[k].last_ray, rb.obstacles[k].last_ray);
+    EXPECT_EQ(ra.obstacles[k].near_radius_px, rb.obstacles[k].near_radius_px);
+  }
+  EXPECT_EQ(ra.carpet, rb.carpet);
+  EXPECT_EQ(ra.contrast, rb.contrast);
+  EXPECT_EQ(ra.carpet_estimated, rb.carpet_estimated);
+}
+
+// Two extractors of one camera, one fast and one reference, fed the same frames in order.
+int expect_same_sequence(const CameraModel& cam, const std::vector<cv::Mat>& frames, int rpd, const std::string& what) {
+  LineExtractor fast(cam), ref(cam);
+  int crossings = 0;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    ExtractionReport rf, rr;
+    const BearingScan bf = fast.extract(frames[i], rpd, &rf);
+    const BearingScan br = ref.extract_reference(frames[i], rpd, &rr);
+    expect_same(bf, rf, br, rr, what + ", frame " + std::to_string(i) + ", " + std::to_string(rpd) + " rays/deg");
+    crossings += rr.crossings;
+  }
+  return crossings;
+}
+
+TEST_F(VisionRendered, FastExtractionEqualsTheReferenceByteForByte) {
+  const std::uint64_t seed = 1313;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> ux(60, 690), uy(60, 490), uyaw(-180, 180);
+  std::vector<cv::Mat> frames;
+  const Perturb kinds[] = {Perturb::kNone, Perturb::kRobots, Perturb::kDark, Perturb::kBright, Perturb::kRobots, Perturb::kNone};
+  for (std::size_t i = 0; i < std::size(kinds); ++i) {
+    const Pose2 pose{ux(rng), uy(rng), uyaw(rng)};
+    sim::RenderOptions opt;
+    opt.seed = seed + i;
+    opt.gradient_direction_deg = 41.0 * static_cast<double>(i);
+    if (kinds[i] == Perturb::kRobots) opt.obstacles = sim::random_obstacles(renderer_->field(), pose, 4, opt.seed);
+    frames.push_back(perturb(renderer_->render(pose, opt), kinds[i]));
+  }
+  frames.push_back(cv::Mat(frames[0].size(), CV_8UC3, cv::Scalar(0, 0, 0)));  // no carpet: estimated again next frame
+  frames.push_back(frames[1]);
+  const CameraModel& cam = renderer_->camera();
+  int crossings = 0;
+  for (int rpd : {4, 1, 3}) crossings += expect_same_sequence(cam, frames, rpd, "rendered, carpet estimated");
+  // The carpet and the steps given by the camera (no estimation, the value window per sector).
+  CameraModel given = cam;
+  {
+    LineExtractor ex(cam);
+    ExtractionReport rep;
+    (void)ex.extract_reference(frames[0], 4, &rep);
+    given.vision.carpet_hsv = rep.carpet;
+    given.vision.line_contrast = rep.contrast;
+  }
+  crossings += expect_same_sequence(given, frames, 4, "rendered, carpet given");
+  EXPECT_GT(crossings, 1000);  // the frames do have lines in them
+}
+
+TEST(VisionRealFrame, FastExtractionEqualsTheReferenceByteForByte) {
+  const RealFrame f = real_frame();
+  ASSERT_FALSE(f.image.empty());
+  const std::vector<cv::Mat> frames{f.image, f.image, f.image};
+  EXPECT_GT(expect_same_sequence(f.camera, frames, 4, "real frame"), 100);
+  EXPECT_GT(expect_same_sequence(extended_to_rim(f), frames, 4, "real frame extended to the rim"), 100);
+  EXPECT_GT(expect_same_sequence(f.camera, frames, 2, "real frame"), 50);
+}
+
 }  // namespace
 }  // namespace omniloc

@@ -164,6 +164,9 @@ class LineExtractor {
   /// Throws std::invalid_argument for an image that does not match the camera, or rays_per_degree
   /// outside 1..20.
   [[nodiscard]] BearingScan extract(const cv::Mat& bgr, int rays_per_degree, ExtractionReport* report = nullptr);
+  /// The straightforward walk (every pixel's H, S, V computed on every ray that touches it): the
+  /// reference extract() must equal byte for byte (tests) and is measured against (bench_vision).
+  [[nodiscard]] BearingScan extract_reference(const cv::Mat& bgr, int rays_per_degree, ExtractionReport* report = nullptr);
 
   struct RayTable {
     std::vector<std::int32_t> offset;  // byte offset of each pixel in the image
@@ -172,15 +175,32 @@ class LineExtractor {
     std::vector<std::uint8_t> sector;  // per ray
     std::vector<bool> hidden;          // per ray: in a mast sector
     int step_bytes = 0;                // image row size the offsets assume
+    // The fast walk's view of the same pixels: each pixel's index (row * width + column) in the
+    // per-frame code plane, and per image row the columns [row_u0, row_u1] any ray touches.
+    std::vector<std::int32_t> pixel;
+    std::vector<std::int32_t> row_u0, row_u1;
+    // ... and bin by bin: ray j's bins are [bin_begin[j], bin_begin[j + 1]), the first numbered
+    // first_bin[j] and the others following; a bin's pixels are bin_pixel and bin_pixel + bin_second.
+    bool bins_ok = false;
+    std::vector<std::int32_t> bin_begin, bin_pixel;
+    std::vector<std::int16_t> bin_second;  // 0, +-1 or +-width: a 4-connected neighbour
+    std::vector<std::uint8_t> first_bin;
   };
 
  private:
   struct Frame;
   const RayTable& table(int rays_per_degree, std::size_t step_bytes);
   bool ensure_carpet(const cv::Mat& bgr, std::string* why);
+  BearingScan extract_impl(const cv::Mat& bgr, int rays_per_degree, ExtractionReport* report, bool fast);
+  template <class Pixel>
+  void walk_rays(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr, Pixel px) const;
   void walk(const cv::Mat& bgr, const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const;
+  void bin_layout(RayTable& t, int n) const;
+  void code_pixels(const cv::Mat& bgr, const RayTable& t, int sat_min);
+  void walk_fast(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const;
   void adapt(const Frame& fr);
   void mark_tall_obstacles(const BearingScan& scan, ExtractionReport& rep) const;
+  void mark_tall_obstacles_fast(const BearingScan& scan, ExtractionReport& rep) const;
 
   // The camera's geometry, copied (the extractor may outlive the camera).
   int width_px_, height_px_;
@@ -196,6 +216,9 @@ class LineExtractor {
   double ref_val_ = 0.0;
   std::vector<double> sector_val_, sector_sat_;
   std::array<bool, 180> hue_ok_{};
+  // Per frame, per pixel any ray touches: V | S << 8 | (S >= sat_min and carpet hue) << 16, so
+  // that a pixel several rays share is converted once (the fast walk).
+  std::vector<std::uint32_t> code_;
 };
 
 }  // namespace omniloc

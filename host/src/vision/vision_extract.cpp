@@ -48,6 +48,83 @@ double hist_sigma(const std::array<int, 511>& h) {
   return 1.4826 * quantile_bin(dev, n);
 }
 
+// A white run along a ray (consecutive "line" bins): its crossing is placed where it first reaches
+// edge_fraction of the way from the carpet to its peak (a blurred edge's foot is brighter than the
+// carpet but is not yet the line).
+struct WhiteRun {
+  bool open = false, counts = false;
+  int start = 0, n = 0, peak = 0, before_v = 0, gap_before = 0;
+  float floor = 0.0f;
+  std::array<std::uint8_t, 32> v{};
+  // Bin `bin` is line: opens a run (after `gap` non-line bins) or extends the open one.
+  void add(int bin, int line_v, int gap, int min_gap, int prev_bin, int prev_v, int vref_q) {
+    if (!open) {
+      open = true;
+      counts = gap >= min_gap;
+      gap_before = gap;
+      before_v = prev_bin == bin - 1 ? prev_v : 0;
+      start = bin;
+      n = 0;
+      peak = 0;
+      floor = static_cast<float>(vref_q) / 256.0f;
+    }
+    if (n < static_cast<int>(v.size())) v[static_cast<std::size_t>(n++)] = static_cast<std::uint8_t>(line_v);
+    peak = std::max(peak, line_v);
+  }
+  // Closes an open run, writing its crossing to out[found++] when it counts.
+  void finish(std::uint8_t* out, int& found, float edge_fraction, int k0, int min_gap) {
+    if (!open) return;
+    open = false;
+    if (!counts || found >= kCrossingsPerRay) return;
+    const float half = floor + edge_fraction * (static_cast<float>(peak) - floor);
+    // The bin before the run may already be half-way (its pixel failed the saturation step).
+    if (static_cast<float>(before_v) >= half && start - 1 >= k0 && gap_before > min_gap) {
+      out[found++] = static_cast<std::uint8_t>(start - 1);
+      return;
+    }
+    int k = 0;
+    while (k + 1 < n && static_cast<float>(v[static_cast<std::size_t>(k)]) < half) ++k;
+    out[found++] = static_cast<std::uint8_t>(start + k);
+  }
+};
+
+// Ray j's crossings cleared; nullptr for a hidden ray (marked hidden), else where they go.
+std::uint8_t* start_ray(bool hidden, int j, BearingScan& scan, ExtractionReport& rep) {
+  std::uint8_t* out = scan.radii_px.data() + static_cast<std::size_t>(j) * kCrossingsPerRay;
+  std::fill(out, out + kCrossingsPerRay, kNoCrossing);
+  if (hidden) {
+    scan.ray_end_px[static_cast<std::size_t>(j)] = kRayHidden;
+    rep.carpet_end_px[static_cast<std::size_t>(j)] = 0;
+    return nullptr;
+  }
+  ++rep.rays;
+  return out;
+}
+
+// A walked ray's outcome: where it ends (its first "other" bin of the end run, end < 0: none),
+// whether that is an obstacle (the carpet resumes behind it) or the carpet's end, and its crossings
+// below the end (the end is exclusive).
+void finish_ray(int end, bool carpet_resumes, int carpet_bins, int k0, const ExtractionParams& x, std::uint8_t* out,
+                std::uint8_t& ray_end, std::uint8_t& carpet_end, ExtractionReport& rep) {
+  if (carpet_bins >= x.carpet_resume_px) ++rep.rays_seen;
+  if (end < 0) {
+    ray_end = kRayToViewEnd;
+    carpet_end = 255;
+  } else {
+    ray_end = end <= k0 ? kRayHidden : static_cast<std::uint8_t>(end);
+    if (carpet_resumes) {
+      ++rep.rays_ended_at_obstacle;
+      carpet_end = 255;
+    } else {
+      ++rep.rays_ended_at_carpet_edge;
+      carpet_end = static_cast<std::uint8_t>(std::max(end, 1));
+    }
+  }
+  for (int c = 0; c < kCrossingsPerRay; ++c)
+    if (out[c] != kNoCrossing && out[c] >= ray_end) out[c] = kNoCrossing;
+  for (int c = 0; c < kCrossingsPerRay; ++c) rep.crossings += out[c] != kNoCrossing;
+}
+
 }  // namespace
 
 // Per-frame working state: the thresholds used and what the walk measured for the adaptation.
@@ -85,6 +162,8 @@ const LineExtractor::RayTable& LineExtractor::table(int rpd, std::size_t step_by
   if (!t.begin.empty() && t.step_bytes == static_cast<int>(step_bytes)) return t;
   t = RayTable{};
   t.step_bytes = static_cast<int>(step_bytes);
+  t.row_u0.assign(static_cast<std::size_t>(height_px_), width_px_);
+  t.row_u1.assign(static_cast<std::size_t>(height_px_), -1);
   const int n = kScanRays * rpd;
   const int sectors = vision_.extraction.sectors;
   t.begin.reserve(static_cast<std::size_t>(n) + 1);
@@ -108,6 +187,9 @@ const LineExtractor::RayTable& LineExtractor::table(int rpd, std::size_t step_by
       if (bin < k0_ || bin > k1_) return;
       t.offset.push_back(static_cast<std::int32_t>(v * static_cast<long>(step_bytes) + 3L * u));
       t.bin.push_back(static_cast<std::uint8_t>(bin));
+      t.pixel.push_back(v * width_px_ + u);
+      t.row_u0[static_cast<std::size_t>(v)] = std::min(t.row_u0[static_cast<std::size_t>(v)], u);
+      t.row_u1[static_cast<std::size_t>(v)] = std::max(t.row_u1[static_cast<std::size_t>(v)], u);
     };
     for (double r = k0_ - 0.5; r <= k1_ + 0.5; r += 0.05) {
       const int u = static_cast<int>(std::floor(cx_ + r * du + 0.5)), v = static_cast<int>(std::floor(cy_ + r * dv + 0.5));
@@ -124,7 +206,34 @@ const LineExtractor::RayTable& LineExtractor::table(int rpd, std::size_t step_by
     }
   }
   t.begin.push_back(static_cast<std::int32_t>(t.offset.size()));
+  bin_layout(t, n);
   return t;
+}
+
+// The fast walk's layout: a ray's bins are consecutive integers of one or two pixels each (a
+// 4-connected step advances at most 1 px along the ray, two steps at least 1 px), so each bin is
+// stored as its first pixel and the offset to its second (0 when it has one: reading a pixel twice
+// changes neither a maximum, nor "any", nor "the last one"). A table where that does not hold
+// (none is known) keeps the per-pixel walk.
+void LineExtractor::bin_layout(RayTable& t, int n) const {
+  t.bins_ok = true;
+  t.bin_begin.assign(1, 0);
+  t.first_bin.assign(static_cast<std::size_t>(n), 0);
+  for (int j = 0; j < n && t.bins_ok; ++j) {
+    const std::int32_t i0 = t.begin[static_cast<std::size_t>(j)], i1 = t.begin[static_cast<std::size_t>(j) + 1];
+    if (i0 < i1) t.first_bin[static_cast<std::size_t>(j)] = t.bin[static_cast<std::size_t>(i0)];
+    for (std::int32_t i = i0; i < i1;) {
+      const auto k = static_cast<std::size_t>(i);
+      const bool pair = i + 1 < i1 && t.bin[k + 1] == t.bin[k];
+      const int next = i + (pair ? 2 : 1);
+      if (next < i1 && t.bin[static_cast<std::size_t>(next)] != t.bin[k] + 1) t.bins_ok = false;  // three in a bin or a gap
+      if (pair && std::abs(t.pixel[k + 1] - t.pixel[k]) > 32767) t.bins_ok = false;  // a row wider than int16
+      t.bin_pixel.push_back(t.pixel[k]);
+      t.bin_second.push_back(static_cast<std::int16_t>(pair ? t.pixel[k + 1] - t.pixel[k] : 0));
+      i = next;
+    }
+    t.bin_begin.push_back(static_cast<std::int32_t>(t.bin_pixel.size()));
+  }
 }
 
 // The carpet colour from the frame when the camera has none: the pixels of the inner half of the
@@ -155,24 +264,19 @@ bool LineExtractor::ensure_carpet(const cv::Mat& bgr, std::string* why) {
   return true;
 }
 
-void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const {
+// The walk of every ray, whatever gives each pixel's values: px(i, vmin, vmax, v, s) sets table
+// entry i's V and S and says whether it has the carpet's colour within the value window [vmin, vmax].
+template <class Pixel>
+void LineExtractor::walk_rays(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr, Pixel px) const {
   const ExtractionParams& x = vision_.extraction;
-  const int* sdiv = detail::hsv_tables().sat_div;
-  const int* hdiv = detail::hsv_tables().hue_div;
   const int min_gap = ScanParams{}.min_gap_px;  // the database's gap rule (expected_features)
   const int alpha_q = std::max(1, static_cast<int>(std::lround(256.0 / x.carpet_mean_px)));
   const int val_step_q = fr.val_step << 8, sat_step_q = fr.sat_step << 8;
   const int n = static_cast<int>(t.hidden.size());
   long bins_seen = 0, bins_carpet = 0;
   for (int j = 0; j < n; ++j) {
-    std::uint8_t* out = scan.radii_px.data() + static_cast<std::size_t>(j) * kCrossingsPerRay;
-    std::fill(out, out + kCrossingsPerRay, kNoCrossing);
-    if (t.hidden[static_cast<std::size_t>(j)]) {
-      scan.ray_end_px[static_cast<std::size_t>(j)] = kRayHidden;
-      rep.carpet_end_px[static_cast<std::size_t>(j)] = 0;
-      continue;
-    }
-    ++rep.rays;
+    std::uint8_t* out = start_ray(t.hidden[static_cast<std::size_t>(j)], j, scan, rep);
+    if (out == nullptr) continue;
     const int sec = t.sector[static_cast<std::size_t>(j)];
     const int vmin = fr.vmin[static_cast<std::size_t>(sec)], vmax = fr.vmax[static_cast<std::size_t>(sec)];
     // Running carpet means in 8-bit fixed point (Q8): integer arithmetic on every carpet bin.
@@ -191,48 +295,18 @@ void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& sca
     bool b_line = false, b_carpet = false;
     int b_v = 0, b_s = 0, b_line_v = 0, b_any_v = 0;
     int prev_bin = -1, prev_v = 0;  // the last closed bin that was not line, and its brightest pixel
-    // The current white run: its edge is placed where it first reaches half-way from the carpet to
-    // its peak (a blurred edge's foot is brighter than the carpet but is not yet the line).
-    bool in_run = false, run_counts = false;
-    int run_start = 0, run_n = 0, run_peak = 0, run_before_v = 0;
-    float run_floor = 0.0f;
-    int gap_before_run = 0;
-    std::array<std::uint8_t, 32> run_v{};
-    auto finish_run = [&]() {
-      if (!in_run) return;
-      in_run = false;
-      if (!run_counts || found >= kCrossingsPerRay) return;
-      const float half = run_floor + static_cast<float>(x.edge_fraction) * (static_cast<float>(run_peak) - run_floor);
-      // The bin before the run may already be half-way (its pixel failed the saturation step).
-      if (static_cast<float>(run_before_v) >= half && run_start - 1 >= k0_ && gap_before_run > min_gap) {
-        out[found++] = static_cast<std::uint8_t>(run_start - 1);
-        return;
-      }
-      int k = 0;
-      while (k + 1 < run_n && static_cast<float>(run_v[static_cast<std::size_t>(k)]) < half) ++k;
-      out[found++] = static_cast<std::uint8_t>(run_start + k);
-    };
+    WhiteRun run;
+    const auto edge_fraction = static_cast<float>(x.edge_fraction);
     // One bin decided: crossing (line entry after the gap), carpet (updates the running mean), or other.
     auto close_bin = [&]() {
       ++bins_seen;
       if (b_line) {
-        if (!in_run) {
-          in_run = true;
-          run_counts = gap >= min_gap;
-          gap_before_run = gap;
-          run_before_v = prev_bin == bin - 1 ? prev_v : 0;
-          run_start = bin;
-          run_n = 0;
-          run_peak = 0;
-          run_floor = static_cast<float>(vref_q) / 256.0f;
-        }
-        if (run_n < static_cast<int>(run_v.size())) run_v[static_cast<std::size_t>(run_n++)] = static_cast<std::uint8_t>(b_line_v);
-        run_peak = std::max(run_peak, b_line_v);
+        run.add(bin, b_line_v, gap, min_gap, prev_bin, prev_v, vref_q);
         gap = 0;
         other_run = 0;
         return;
       }
-      finish_run();
+      run.finish(out, found, edge_fraction, k0_, min_gap);
       prev_bin = bin;
       prev_v = b_any_v;
       if (b_carpet) {
@@ -268,64 +342,184 @@ void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& sca
         b_line_v = 0;
         b_any_v = 0;
       }
-      const std::uint8_t* p = bgr.data + t.offset[static_cast<std::size_t>(i)];
-      const int v = std::max({p[0], p[1], p[2]});
-      const int diff = v - std::min({p[0], p[1], p[2]});
-      const int s = (diff * sdiv[v] + (1 << 11)) >> 12;
+      int v, s;
+      const bool carpet = px(i, vmin, vmax, v, s);
       b_any_v = std::max(b_any_v, v);
       if (v >= v_line_min && s <= s_line_max) {
         b_line = true;
         b_line_v = std::max(b_line_v, v);
-      } else if (s >= fr.sat_min && v >= vmin && v <= vmax && hue_ok_[static_cast<std::size_t>(hue_of(p, v, diff, hdiv))]) {
+      } else if (carpet) {
         b_carpet = true;
         b_v = v;
         b_s = s;
       }
     }
     if (end < 0 && bin >= 0) close_bin();
-    finish_run();
+    run.finish(out, found, edge_fraction, k0_, min_gap);
     fr.sum_v[static_cast<std::size_t>(sec)] += static_cast<double>(ray_sum_v);
     fr.sum_s[static_cast<std::size_t>(sec)] += static_cast<double>(ray_sum_s);
     fr.count[static_cast<std::size_t>(sec)] += ray_count;
-    std::uint8_t& ray_end = scan.ray_end_px[static_cast<std::size_t>(j)];
-    std::uint8_t& carpet_end = rep.carpet_end_px[static_cast<std::size_t>(j)];
-    if (carpet_bins >= x.carpet_resume_px) ++rep.rays_seen;
-    if (end < 0) {
-      ray_end = kRayToViewEnd;
-      carpet_end = 255;
-    } else {
-      ray_end = end <= k0_ ? kRayHidden : static_cast<std::uint8_t>(end);
-      // Obstacle or the carpet's end: does the carpet resume behind the blob?
-      int run = 0;
+    // Obstacle or the carpet's end: does the carpet resume behind the blob?
+    int resume = 0;
+    if (end >= 0) {
       int cur = -1;
       bool cur_carpet = false;
       const int look_to = end + x.resume_within_px;
-      for (; i < i1 && run < x.carpet_resume_px; ++i) {
+      for (; i < i1 && resume < x.carpet_resume_px; ++i) {
         const int bi = t.bin[static_cast<std::size_t>(i)];
         if (bi > look_to) break;
         if (bi != cur) {
-          if (cur >= 0) run = cur_carpet ? run + 1 : 0;
+          if (cur >= 0) resume = cur_carpet ? resume + 1 : 0;
           cur = bi;
           cur_carpet = false;
         }
-        const std::uint8_t* p = bgr.data + t.offset[static_cast<std::size_t>(i)];
-        const int v = std::max({p[0], p[1], p[2]});
-        const int diff = v - std::min({p[0], p[1], p[2]});
-        const int s = (diff * sdiv[v] + (1 << 11)) >> 12;
-        cur_carpet = cur_carpet || (s >= fr.sat_min && v >= vmin && v <= vmax && hue_ok_[static_cast<std::size_t>(hue_of(p, v, diff, hdiv))]);
-      }
-      if (run >= x.carpet_resume_px) {
-        ++rep.rays_ended_at_obstacle;
-        carpet_end = 255;
-      } else {
-        ++rep.rays_ended_at_carpet_edge;
-        carpet_end = static_cast<std::uint8_t>(std::max(end, 1));
+        int v, s;
+        cur_carpet = px(i, vmin, vmax, v, s) || cur_carpet;
       }
     }
-    // Crossings at or beyond the end are not kept (the end is exclusive).
-    for (int c = 0; c < kCrossingsPerRay; ++c)
-      if (out[c] != kNoCrossing && out[c] >= ray_end) out[c] = kNoCrossing;
-    for (int c = 0; c < kCrossingsPerRay; ++c) rep.crossings += out[c] != kNoCrossing;
+    finish_ray(end, resume >= x.carpet_resume_px, carpet_bins, k0_, x, out, scan.ray_end_px[static_cast<std::size_t>(j)],
+               rep.carpet_end_px[static_cast<std::size_t>(j)], rep);
+  }
+  rep.carpet_fraction = bins_seen > 0 ? static_cast<double>(bins_carpet) / static_cast<double>(bins_seen) : 0.0;
+}
+
+// Reference: every pixel converted from BGR on every ray that touches it (OpenCV's integer HSV).
+void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const {
+  const int* sdiv = detail::hsv_tables().sat_div;
+  const int* hdiv = detail::hsv_tables().hue_div;
+  const int sat_min = fr.sat_min;
+  walk_rays(t, scan, rep, fr, [&](std::int32_t i, int vmin, int vmax, int& v, int& s) {
+    const std::uint8_t* p = bgr.data + t.offset[static_cast<std::size_t>(i)];
+    v = std::max({p[0], p[1], p[2]});
+    const int diff = v - std::min({p[0], p[1], p[2]});
+    s = (diff * sdiv[v] + (1 << 11)) >> 12;
+    return s >= sat_min && v >= vmin && v <= vmax && hue_ok_[static_cast<std::size_t>(hue_of(p, v, diff, hdiv))];
+  });
+}
+
+// Each pixel any ray touches, converted once per frame into code_ (rows in memory order): near the
+// centre several rays share a pixel, and the walk then reads one word instead of three bytes and a hue.
+void LineExtractor::code_pixels(const cv::Mat& bgr, const RayTable& t, int sat_min) {
+  const int* sdiv = detail::hsv_tables().sat_div;
+  const int* hdiv = detail::hsv_tables().hue_div;
+  code_.resize(static_cast<std::size_t>(width_px_) * static_cast<std::size_t>(height_px_));
+  for (int row = 0; row < height_px_; ++row) {
+    const int u0 = t.row_u0[static_cast<std::size_t>(row)], u1 = t.row_u1[static_cast<std::size_t>(row)];
+    const std::uint8_t* p = bgr.ptr<std::uint8_t>(row) + 3 * u0;
+    std::uint32_t* out = code_.data() + static_cast<std::size_t>(row) * static_cast<std::size_t>(width_px_);
+    for (int u = u0; u <= u1; ++u, p += 3) {
+      const int v = std::max({p[0], p[1], p[2]});
+      const int diff = v - std::min({p[0], p[1], p[2]});
+      const int s = (diff * sdiv[v] + (1 << 11)) >> 12;
+      const bool carpet_hue = s >= sat_min && hue_ok_[static_cast<std::size_t>(hue_of(p, v, diff, hdiv))];
+      out[u] = static_cast<std::uint32_t>(v) | static_cast<std::uint32_t>(s) << 8 | static_cast<std::uint32_t>(carpet_hue) << 16;
+    }
+  }
+}
+
+// As walk_rays, bin by bin: both pixels of a bin read and combined without branches, the same
+// decisions in the same order (WhiteRun, the look behind an end and finish_ray as in walk_rays).
+void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const {
+  const ExtractionParams& x = vision_.extraction;
+  const std::uint32_t* code = code_.data();
+  const int min_gap = ScanParams{}.min_gap_px;
+  const int alpha_q = std::max(1, static_cast<int>(std::lround(256.0 / x.carpet_mean_px)));
+  const int val_step_q = fr.val_step << 8, sat_step_q = fr.sat_step << 8;
+  const int n = static_cast<int>(t.hidden.size());
+  long bins_seen = 0, bins_carpet = 0;
+  // The deviation histograms in four interleaved copies, summed at the end: neighbouring carpet
+  // bins mostly deviate alike, and one counter incremented back to back stalls on its own store.
+  std::array<std::array<int, 512>, 4> hist_v{}, hist_s{};
+  // The running mean's weight alpha_q / 256 is 1/8 for the default carpet_mean_px: a shift then
+  // replaces the multiply on the walk's serial chain (floor((d * 2^a) / 256) = d >> (8 - a)).
+  int alpha_shift = -1;
+  for (int a = 0; a <= 8; ++a)
+    if (alpha_q == 1 << a) alpha_shift = 8 - a;
+  auto step_mean = [alpha_q, alpha_shift](int d_q) { return alpha_shift >= 0 ? d_q >> alpha_shift : (d_q * alpha_q) >> 8; };
+  // Read once: the histograms' int stores could alias the parameters' ints, forcing reloads.
+  const int end_run_px = x.end_run_px, k0 = k0_;
+  const float edge_fraction = static_cast<float>(x.edge_fraction);
+  for (int j = 0; j < n; ++j) {
+    std::uint8_t* out = start_ray(t.hidden[static_cast<std::size_t>(j)], j, scan, rep);
+    if (out == nullptr) continue;
+    const int sec = t.sector[static_cast<std::size_t>(j)];
+    const int vmin = fr.vmin[static_cast<std::size_t>(sec)], vmax = fr.vmax[static_cast<std::size_t>(sec)];
+    int vref_q = static_cast<int>(std::lround(256.0 * sector_val_[static_cast<std::size_t>(sec)]));
+    int sref_q = static_cast<int>(std::lround(256.0 * sector_sat_[static_cast<std::size_t>(sec)]));
+    long ray_sum_v = 0, ray_sum_s = 0, ray_count = 0;
+    int v_line_min = (vref_q + val_step_q + 255) >> 8, s_line_max = (sref_q - sat_step_q) >> 8;
+    int found = 0, gap = 0, other_run = 0, carpet_bins = 0, end = -1;
+    int prev_bin = -1, prev_v = 0;
+    WhiteRun run;
+    const std::int32_t b0 = t.bin_begin[static_cast<std::size_t>(j)], b1 = t.bin_begin[static_cast<std::size_t>(j) + 1];
+    const int first_bin = t.first_bin[static_cast<std::size_t>(j)];
+    const std::int32_t* bp = t.bin_pixel.data();
+    const std::int16_t* bs = t.bin_second.data();
+    std::int32_t k = b0;
+    for (; k < b1; ++k) {
+      const int bin = first_bin + (k - b0);
+      const std::uint32_t c0 = code[bp[k]], c1 = code[bp[k] + bs[k]];
+      const int v0 = static_cast<int>(c0 & 255u), s0 = static_cast<int>((c0 >> 8) & 255u);
+      const int v1 = static_cast<int>(c1 & 255u), s1 = static_cast<int>((c1 >> 8) & 255u);
+      const bool line0 = v0 >= v_line_min && s0 <= s_line_max, line1 = v1 >= v_line_min && s1 <= s_line_max;
+      const bool carpet1 = !line1 && (c1 >> 16) != 0 && v1 >= vmin && v1 <= vmax;
+      const bool carpet0 = !line0 && (c0 >> 16) != 0 && v0 >= vmin && v0 <= vmax;
+      ++bins_seen;
+      if (line0 || line1) {
+        run.add(bin, std::max(line0 ? v0 : 0, line1 ? v1 : 0), gap, min_gap, prev_bin, prev_v, vref_q);
+        gap = 0;
+        other_run = 0;
+        continue;
+      }
+      run.finish(out, found, edge_fraction, k0, min_gap);
+      prev_bin = bin;
+      prev_v = std::max(v0, v1);
+      ++gap;
+      if (carpet0 || carpet1) {
+        const int b_v = carpet1 ? v1 : v0, b_s = carpet1 ? s1 : s0;  // the bin's last carpet pixel
+        other_run = 0;
+        ++carpet_bins;
+        ++bins_carpet;
+        const int dv_q = (b_v << 8) - vref_q, ds_q = (b_s << 8) - sref_q;
+        const auto copy = static_cast<std::size_t>(bin & 3);
+        ++hist_v[copy][static_cast<std::size_t>(std::clamp(((dv_q + 128) >> 8) + 255, 0, 510))];
+        ++hist_s[copy][static_cast<std::size_t>(std::clamp(((ds_q + 128) >> 8) + 255, 0, 510))];
+        vref_q += step_mean(dv_q);
+        sref_q += step_mean(ds_q);
+        v_line_min = (vref_q + val_step_q + 255) >> 8;
+        s_line_max = (sref_q - sat_step_q) >> 8;
+        ray_sum_v += b_v;
+        ray_sum_s += b_s;
+        ++ray_count;
+      } else if (++other_run >= end_run_px) {
+        end = bin - other_run + 1;
+        ++k;
+        break;
+      }
+    }
+    run.finish(out, found, edge_fraction, k0, min_gap);
+    fr.sum_v[static_cast<std::size_t>(sec)] += static_cast<double>(ray_sum_v);
+    fr.sum_s[static_cast<std::size_t>(sec)] += static_cast<double>(ray_sum_s);
+    fr.count[static_cast<std::size_t>(sec)] += ray_count;
+    // Behind the end: a bin counts once the next one is reached within resume_within_px (as the
+    // per-pixel walk commits a bin at its successor's first pixel); any carpet pixel makes it carpet.
+    int resume = 0;
+    if (end >= 0) {
+      const int look_to = end + x.resume_within_px;
+      for (; k + 1 < b1 && resume < x.carpet_resume_px; ++k) {
+        if (first_bin + (k + 1 - b0) > look_to) break;
+        const std::uint32_t c0 = code[bp[k]], c1 = code[bp[k] + bs[k]];
+        const int v0 = static_cast<int>(c0 & 255u), v1 = static_cast<int>(c1 & 255u);
+        const bool carpet = ((c0 >> 16) != 0 && v0 >= vmin && v0 <= vmax) || ((c1 >> 16) != 0 && v1 >= vmin && v1 <= vmax);
+        resume = carpet ? resume + 1 : 0;
+      }
+    }
+    finish_ray(end, resume >= x.carpet_resume_px, carpet_bins, k0, x, out, scan.ray_end_px[static_cast<std::size_t>(j)],
+               rep.carpet_end_px[static_cast<std::size_t>(j)], rep);
+  }
+  for (std::size_t b = 0; b < 511; ++b) {
+    fr.dev_v[b] += hist_v[0][b] + hist_v[1][b] + hist_v[2][b] + hist_v[3][b];
+    fr.dev_s[b] += hist_s[0][b] + hist_s[1][b] + hist_s[2][b] + hist_s[3][b];
   }
   rep.carpet_fraction = bins_seen > 0 ? static_cast<double>(bins_carpet) / static_cast<double>(bins_seen) : 0.0;
 }
@@ -380,7 +574,60 @@ void LineExtractor::mark_tall_obstacles(const BearingScan& scan, ExtractionRepor
   }
 }
 
+// As mark_tall_obstacles, with the window's median kept in a sliding histogram per ray residue
+// (the window of ray j + rays_per_degree is ray j's shifted by one ray per degree) instead of
+// collected and partially sorted per ray: the median is at least e + obstacle_step_px exactly when
+// fewer than half (index size / 2) of the window's reaches are below that.
+void LineExtractor::mark_tall_obstacles_fast(const BearingScan& scan, ExtractionReport& rep) const {
+  const ExtractionParams& x = vision_.extraction;
+  const int n = static_cast<int>(scan.ray_end_px.size()), rpd = scan.rays_per_degree;
+  const int w = static_cast<int>(std::lround(x.obstacle_window_deg * rpd));
+  const int m = 2 * w / rpd + 1;  // window rays: j - w + i * rpd, i = 0 .. m - 1
+  const std::uint8_t* end = scan.ray_end_px.data();
+  auto at = [&](int j) { return ((j % n) + n) % n; };
+  for (int r = 0; r < rpd; ++r) {
+    std::array<int, 256> fine{};
+    std::array<int, 16> coarse{};
+    int size = 0;
+    auto add = [&](int j, int delta) {
+      const int e = end[at(j)];
+      if (e == kRayHidden) return;
+      const int reach = e == kRayToViewEnd ? k1_ + 1 : e;
+      fine[static_cast<std::size_t>(reach)] += delta;
+      coarse[static_cast<std::size_t>(reach >> 4)] += delta;
+      size += delta;
+    };
+    for (int i = 0; i < m; ++i) add(r - w + i * rpd, 1);
+    for (int j = r; j < n; j += rpd) {
+      if (j > r) {
+        add(j - rpd - w, -1);
+        add(j - w + (m - 1) * rpd, 1);
+      }
+      std::uint8_t& ce = rep.carpet_end_px[static_cast<std::size_t>(j)];
+      const int e = end[j];
+      if (e == kRayHidden || e == kRayToViewEnd || ce == 255 || size == 0) continue;
+      const int limit = std::min(e + x.obstacle_step_px, 256);
+      int below = 0;
+      for (int c = 0; c < limit >> 4; ++c) below += coarse[static_cast<std::size_t>(c)];
+      for (int v = limit & ~15; v < limit; ++v) below += fine[static_cast<std::size_t>(v)];
+      if (below <= size / 2) {
+        ce = 255;
+        --rep.rays_ended_at_carpet_edge;
+        ++rep.rays_ended_at_obstacle;
+      }
+    }
+  }
+}
+
 BearingScan LineExtractor::extract(const cv::Mat& bgr, int rpd, ExtractionReport* report) {
+  return extract_impl(bgr, rpd, report, true);
+}
+
+BearingScan LineExtractor::extract_reference(const cv::Mat& bgr, int rpd, ExtractionReport* report) {
+  return extract_impl(bgr, rpd, report, false);
+}
+
+BearingScan LineExtractor::extract_impl(const cv::Mat& bgr, int rpd, ExtractionReport* report, bool fast) {
   if (bgr.empty()) throw std::invalid_argument("extract: empty image");
   if (bgr.type() != CV_8UC3) throw std::invalid_argument("extract: image must be 8-bit BGR (CV_8UC3), got type " + std::to_string(bgr.type()));
   if (bgr.cols != width_px_ || bgr.rows != height_px_) {
@@ -412,6 +659,12 @@ BearingScan LineExtractor::extract(const cv::Mat& bgr, int rpd, ExtractionReport
     hue_ok_[static_cast<std::size_t>(i)] = std::min(dh, 180.0 - dh) <= carpet_->hue_half_width;
   }
   const RayTable& t = table(rpd, bgr.step[0]);
+  // The code plane pays when the rays touch more pixels than it converts (4 rays per degree: 2x;
+  // at 1 ray per degree the rays skip most pixels beyond ~60 px and the per-pixel walk is cheaper).
+  long plane_px = 0;
+  for (std::size_t row = 0; row < t.row_u0.size(); ++row) plane_px += std::max(0, t.row_u1[row] - t.row_u0[row] + 1);
+  const bool coded = fast && t.bins_ok && static_cast<long>(t.pixel.size()) >= plane_px;
+  if (coded) code_pixels(bgr, t, static_cast<int>(std::ceil(carpet_->sat_min)));
   // The first frame is walked twice: once to measure the light and the carpet's spread, then with them.
   for (int pass = first ? 0 : 1; pass < 2; ++pass) {
     Frame fr;
@@ -433,7 +686,8 @@ BearingScan LineExtractor::extract(const cv::Mat& bgr, int rpd, ExtractionReport
     rep.carpet_end_px.assign(static_cast<std::size_t>(n), 0);
     rep.carpet_estimated = !vision_.carpet_hsv;
     rep.contrast = c;
-    walk(bgr, t, scan, rep, fr);
+    if (coded) walk_fast(t, scan, rep, fr);
+    else walk(bgr, t, scan, rep, fr);
     if (pass == 0) {
       const double keep = vision_.extraction.light_follow;
       vision_.extraction.light_follow = 1.0;  // the first measurement is taken whole
@@ -444,7 +698,8 @@ BearingScan LineExtractor::extract(const cv::Mat& bgr, int rpd, ExtractionReport
     }
   }
   rep.carpet = *carpet_;
-  mark_tall_obstacles(scan, rep);
+  if (fast) mark_tall_obstacles_fast(scan, rep);
+  else mark_tall_obstacles(scan, rep);
   // Obstacle blobs: neighbouring rays ended on the carpet at similar radii.
   for (int j = 0; j < n; ++j) {
     const auto e = scan.ray_end_px[static_cast<std::size_t>(j)];
