@@ -27,20 +27,14 @@
 #include "omniloc/localizer.hpp"
 #include "omniloc/robot_config.hpp"
 #include "omniloc_sim/renderer.hpp"
+#include "test_data_path.hpp"
 
 namespace omniloc {
 namespace {
 
 namespace fs = std::filesystem;
 
-fs::path test_data(const std::string& name) {
-  for (auto dir = fs::current_path(); !dir.empty(); dir = dir.parent_path()) {
-    const auto p = dir / "tests" / "data" / name;
-    if (fs::exists(p)) return p;
-    if (dir == dir.parent_path()) break;
-  }
-  return {};
-}
+using test::test_data;
 
 /// Runs a command line; returns the exit status, stdout in `out` and stderr in `err`.
 int run(const std::string& cmd, const fs::path& dir, std::string& out, std::string& err) {
@@ -58,7 +52,7 @@ int run(const std::string& cmd, const fs::path& dir, std::string& out, std::stri
 const cv::Vec3b kBlueBgr{190, 70, 20};
 const cv::Vec3b kYellowBgr{20, 205, 225};
 
-HsvRange model_of(const cv::Vec3b& bgr) {
+GoalHsv model_of(const cv::Vec3b& bgr) {
   cv::Mat3b px(1, 1, bgr), hsv;
   cv::cvtColor(px, hsv, cv::COLOR_BGR2HSV);
   const cv::Vec3b h = hsv(0, 0);
@@ -99,7 +93,7 @@ void write_camera(const fs::path& path, const std::optional<GoalColourModels>& g
   nlohmann::ordered_json j = nlohmann::ordered_json::parse(in);
   if (width > 0) j["width"] = width;
   if (goals) {
-    auto hsv = [](const HsvRange& r) {
+    auto hsv = [](const GoalHsv& r) {
       return nlohmann::ordered_json{{"hue", r.hue}, {"hue_half_width", r.hue_half_width}, {"sat_min", r.sat_min}, {"val_min", r.val_min}};
     };
     j["vision"]["goals"]["blue"] = hsv(*goals->blue);
@@ -339,8 +333,8 @@ TEST_F(LocateProgram, LocalizerGlobalSearchIsLocateFrame) {
   }
 }
 
-TEST(GoalColours, HsvRangeWrapsTheHueAndTheVisionBlockIsValidated) {
-  const HsvRange red{175, 10, 100, 50};
+TEST(GoalColours, GoalHsvWrapsTheHueAndTheVisionBlockIsValidated) {
+  const GoalHsv red{175, 10, 100, 50};
   EXPECT_TRUE(red.contains(3, 200, 200));
   EXPECT_TRUE(red.contains(170, 200, 200));
   EXPECT_FALSE(red.contains(20, 200, 200));

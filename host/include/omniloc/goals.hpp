@@ -26,24 +26,12 @@
 
 namespace omniloc {
 
-/// A colour class in OpenCV 8-bit HSV (H 0..179, S/V 0..255): hue within +- hue_half_width
-/// (circular), saturation and value at least their minima. The camera "vision" block's shape.
-struct HsvRange {
-  double hue = 0.0;  // calibration writes measured (fractional) values
-  double hue_half_width = 0.0;
-  double sat_min = 0.0;
-  double val_min = 0.0;
-  [[nodiscard]] bool contains(int h, int s, int v) const;
-  /// Throws ConfigError "<at>.<field>: <why> (got <value>)".
-  void validate(const config::Origin& at) const;
-  bool operator==(const HsvRange&) const = default;
-};
 
 
 /// The goal colour models a camera carries: either colour may be unknown (not learnt).
 struct GoalColourModels {
-  std::optional<HsvRange> blue;
-  std::optional<HsvRange> yellow;
+  std::optional<GoalHsv> blue;
+  std::optional<GoalHsv> yellow;
   GoalColour colour_at_x_max = GoalColour::kUnknown;  ///< camera's learnt "goal_colour_at_x_max"
   GoalCueConfig cue;
   bool operator==(const GoalColourModels&) const = default;

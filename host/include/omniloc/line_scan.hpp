@@ -12,7 +12,9 @@
 // runs nearly along a ray from producing a zig-zag of crossings out of pixel rounding.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -81,6 +83,26 @@ struct BearingScan {
 /// camera's radius table (no obstacles, no mast: every ray seen to the end). This is a database entry.
 [[nodiscard]] Scan expected_scan(const FieldGeometry& field, const CameraModel& camera,
                                  const Eigen::Vector2d& position_cm);
+
+/// One ray's crossings from its white runs, in order along the ray: radii_px(run) gives the run's
+/// (enter, exit) radii in px; the integer samples k0..k1 inside each run are what the image scan
+/// would visit, and an entry counts when at least min_gap_px non-white samples precede it (the gap
+/// rule above). Writes 4 radii, kNoCrossing-padded. Shared by expected_features and the matcher's
+/// linearised ray caster, so that both turn runs into crossings exactly as the image scan does.
+template <class Runs, class RadiiPx>
+void crossings_of_runs(int k0, int k1, int min_gap_px, const Runs& runs, RadiiPx radii_px, std::uint8_t* out) {
+  std::fill(out, out + kCrossingsPerRay, kNoCrossing);
+  int found = 0;
+  int last_white = k0 - 1;  // as if white just before the first sample: it cannot be an entry
+  for (const auto& run : runs) {
+    const auto [enter_px, exit_px] = radii_px(run);
+    const int ka = std::max(static_cast<int>(std::ceil(enter_px - 1e-9)), k0);
+    const int kb = std::min(static_cast<int>(std::floor(exit_px + 1e-9)), k1);
+    if (ka > kb) continue;
+    if (ka - last_white - 1 >= min_gap_px && found < kCrossingsPerRay) out[found++] = static_cast<std::uint8_t>(ka);
+    last_white = kb;
+  }
+}
 
 /// As expected_scan, writing the 1440 radii to `out`; `scratch` is reused between calls.
 void expected_features(const FieldGeometry& field, const CameraModel& camera, const Eigen::Vector2d& position_cm,

@@ -48,12 +48,14 @@ struct LineContrast {
   bool operator==(const LineContrast&) const = default;
 };
 
-/// A goal's colour (read, validated and kept for the goal detector; the line extraction ignores it).
+/// A goal's colour class (the goal cue's, goals.hpp; the line extraction ignores it): hue within
+/// +- hue_half_width (circular), saturation and value at least their minima.
 struct GoalHsv {
   double hue = 0.0;
   double hue_half_width = 10.0;
   double sat_min = 80.0;
   double val_min = 60.0;
+  [[nodiscard]] bool contains(int h, int s, int v) const;
   bool operator==(const GoalHsv&) const = default;
 };
 

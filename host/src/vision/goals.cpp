@@ -13,26 +13,10 @@
 
 namespace omniloc {
 
-bool HsvRange::contains(int h, int s, int v) const {
-  const double d = std::fmod(std::abs(h - hue), 180.0);
-  return std::min(d, 180.0 - d) <= hue_half_width && s >= sat_min && v >= val_min;
-}
-
-void HsvRange::validate(const config::Origin& at) const {
-  config::require(hue >= 0 && hue <= 179, at / "hue", "must be an OpenCV hue 0..179", hue);
-  config::require(hue_half_width >= 0 && hue_half_width < 90, at / "hue_half_width", "must be in 0..89", hue_half_width);
-  config::require(sat_min >= 0 && sat_min <= 255, at / "sat_min", "must be in 0..255", sat_min);
-  config::require(val_min >= 0 && val_min <= 255, at / "val_min", "must be in 0..255", val_min);
-}
-
 GoalColourModels goal_colour_models(const VisionModel& vision) {
-  auto range = [](const std::optional<GoalHsv>& g) -> std::optional<HsvRange> {
-    if (!g) return std::nullopt;
-    return HsvRange{g->hue, g->hue_half_width, g->sat_min, g->val_min};
-  };
   GoalColourModels m;
-  m.blue = range(vision.goal_blue);
-  m.yellow = range(vision.goal_yellow);
+  m.blue = vision.goal_blue;
+  m.yellow = vision.goal_yellow;
   if (vision.goal_colour_at_x_max == "blue") m.colour_at_x_max = GoalColour::kBlue;
   if (vision.goal_colour_at_x_max == "yellow") m.colour_at_x_max = GoalColour::kYellow;
   m.cue = vision.goal_cue;

@@ -172,20 +172,9 @@ void expected_features(const FieldGeometry& field, const CameraModel& cam, const
   const auto& dirs = ray_directions();
   for (int k = 0; k < kScanRays; ++k) {
     caster.intervals(pos, dirs[static_cast<std::size_t>(k)], t_lo, t_hi, iv);
-    std::uint8_t* o = out + k * kCrossingsPerRay;
-    std::fill(o, o + kCrossingsPerRay, kNoCrossing);
-    int found = 0;
-    int last_white = k0 - 1;  // as if white just before the first sample: it cannot be an entry
-    for (const auto& w : iv) {
-      // The integer samples inside this run, exactly as the image scan would visit them.
-      int ka = static_cast<int>(std::ceil(cam.radius_px_at_ground(w.enter_cm) - 1e-9));
-      int kb = static_cast<int>(std::floor(cam.radius_px_at_ground(w.exit_cm) + 1e-9));
-      ka = std::max(ka, k0);
-      kb = std::min(kb, k1);
-      if (ka > kb) continue;
-      if (ka - last_white - 1 >= min_gap_px && found < kCrossingsPerRay) o[found++] = static_cast<std::uint8_t>(ka);
-      last_white = kb;
-    }
+    crossings_of_runs(k0, k1, min_gap_px, iv, [&cam](const WhiteInterval& w) {
+      return std::pair{cam.radius_px_at_ground(w.enter_cm), cam.radius_px_at_ground(w.exit_cm)};
+    }, out + k * kCrossingsPerRay);
   }
 }
 

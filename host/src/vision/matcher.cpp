@@ -235,23 +235,6 @@ void refine_match_reference(const FieldGeometry& field, const CameraModel& camer
 
 namespace {
 
-// The radii of a ray's first crossings from its white runs (px from the image centre, continuous),
-// exactly as expected_features turns them into samples: the integer samples inside each run, an
-// entry counting when at least min_gap_px non-white samples precede it.
-template <class Runs>
-void crossings_of_runs(int k0, int k1, int min_gap_px, const Runs& runs, std::uint8_t* out) {
-  std::fill(out, out + kCrossingsPerRay, kNoCrossing);
-  int found = 0;
-  int last_white = k0 - 1;  // as if white just before the first sample: it cannot be an entry
-  for (const auto& [enter_px, exit_px] : runs) {
-    const int ka = std::max(static_cast<int>(std::ceil(enter_px - 1e-9)), k0);
-    const int kb = std::min(static_cast<int>(std::floor(exit_px + 1e-9)), k1);
-    if (ka > kb) continue;
-    if (ka - last_white - 1 >= min_gap_px && found < kCrossingsPerRay) out[found++] = static_cast<std::uint8_t>(ka);
-    last_white = kb;
-  }
-}
-
 // Ray casting is most of the refinement's cost (~0.1 ms a point). Within a few cm of a point,
 // every white run a ray crosses keeps its place on the ray to first order: where a ray from a
 // shifted origin enters a straight line moves exactly linearly with the shift, an arc's nearly
@@ -309,7 +292,7 @@ class LinearisedCaster {
           px_.push_back({r.enter_px + r.enter_g.dot(d), r.exit_px + r.exit_g.dot(d)});
         }
       }
-      crossings_of_runs(k0_, k1_, min_gap, px_, o);
+      crossings_of_runs(k0_, k1_, min_gap, px_, [](const auto& r) { return r; }, o);
     }
   }
 

@@ -126,6 +126,11 @@ void GoalCueConfig::validate(const config::Origin& at) const {
   config::require(pixel_step >= 1 && pixel_step <= 16, at / "pixel_step", "must be in 1..16", pixel_step);
 }
 
+bool GoalHsv::contains(int h, int s, int v) const {
+  const double d = std::fmod(std::abs(h - hue), 180.0);
+  return std::min(d, 180.0 - d) <= hue_half_width && s >= sat_min && v >= val_min;
+}
+
 void VisionModel::validate(const config::Origin& at) const {
   using config::require;
   goal_cue.validate(at / "goal_cue");
