@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "omniloc_sim/playing_area.hpp"
 
@@ -64,17 +65,22 @@ std::int64_t decoded_count(std::int64_t q, int decoding) {
 }
 
 World::World(const WorldConfig& config, Trajectory trajectory)
-    : config_(config),
+    : config_((validate_robot_config(config.robot, "WorldConfig.robot"), config)),
       trajectory_(std::move(trajectory)),
       rng_(config.seed),
-      jacobian_(wheel_jacobian(config.robot.motor_angle_deg, config.robot.center_to_wheel_cm)),
-      cm_per_quarter_(2.0 * kPi * config.robot.wheel_radius_cm /
-                      (4.0 * config.robot.counts_per_rev * config.robot.gear_ratio)),
+      wheels_(wheel_count(config.robot)),
+      jacobian_(padded_wheel_jacobian(config.robot)),
       pose_(trajectory_.start()),
       prev_pose_(pose_),
       gyro_(config.gyro, pose_.yaw_deg, rng_),
       next_window_end_(config.first_window_end_cycles) {
-  validate_robot_config(config.robot, "WorldConfig.robot");
+  const std::vector<Eigen::Vector2d> positions = wheel_positions_cm(config.robot);
+  const std::vector<WheelConfig> layout = wheel_layout(config.robot);
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    wheel_position_[i] = positions[i];
+    // The simulator counts X4 quarter-steps; the decoding is applied when a window is read.
+    cm_per_quarter_[i] = 2.0 * kPi * layout[i].wheel_radius_cm / (4.0 * layout[i].counts_per_rev * layout[i].gear_ratio);
+  }
   if (config.step_cycles <= 0 || config.window_cycles < config.step_cycles || config.first_window_end_cycles <= 0)
     throw std::invalid_argument("WorldConfig: need step_cycles > 0, window_cycles >= step_cycles (got " +
                                 std::to_string(config.step_cycles) + ", " + std::to_string(config.window_cycles) +
@@ -83,11 +89,13 @@ World::World(const WorldConfig& config, Trajectory trajectory)
     if (config_.kidnaps[k].at_s < config_.kidnaps[k - 1].at_s)
       throw std::invalid_argument("WorldConfig: kidnap events must be in time order");
   for (const SlipEvent& s : config.slips)
-    if (s.wheel < 1 || s.wheel > 4)
-      throw std::invalid_argument("WorldConfig: slip event wheel must be 1..4, got " + std::to_string(s.wheel));
+    if (s.wheel < 1 || s.wheel > wheels_)
+      throw std::invalid_argument("WorldConfig: slip event wheel must be 1.." + std::to_string(wheels_) +
+                                  " for this robot, got " + std::to_string(s.wheel));
   std::normal_distribution<double> n(0.0, 1.0);
   std::uniform_real_distribution<double> phase(0.0, 4.0);
-  for (std::size_t i = 0; i < 4; ++i) {
+  // Only the robot's wheels draw (a fourth, absent encoder stays at 0 and never moves).
+  for (std::size_t i = 0; i < static_cast<std::size_t>(wheels_); ++i) {
     wheel_scale_[i] = config.encoder.scale_sigma * n(rng_);
     quarters_[i] = config.random_encoder_phase ? phase(rng_) : 0.0;
     span_.end_pos[i] = std::llround(quarters_[i] * static_cast<double>(std::int64_t{1} << kFracBits));
@@ -101,12 +109,7 @@ double World::time_s() const { return static_cast<double>(span_.end_cycle) / con
 
 bool World::finished() const { return time_s() >= trajectory_.duration_s(); }
 
-Eigen::Vector2d World::wheel_position_cm(int w) const {
-  // Row i of eq. (9) is the wheel's drive direction u (first two columns) and R: the contact
-  // point p satisfies omega x p . u = omega R, i.e. p = R (u_y, -u_x).
-  const Eigen::Vector2d u = jacobian_.row(w).head<2>().transpose();
-  return config_.robot.center_to_wheel_cm * Eigen::Vector2d(u.y(), -u.x());
-}
+Eigen::Vector2d World::wheel_position_cm(int w) const { return wheel_position_.at(static_cast<std::size_t>(w)); }
 
 TrajectorySample World::reference(double t_s) const {
   TrajectorySample s = trajectory_.sample(t_s);
@@ -173,7 +176,7 @@ void World::step() {
   if (!config_.bumps.empty()) {
     const double mid_yaw = pose_.yaw_deg + 0.5 * rad_to_deg(dth);
     const Eigen::Vector2d centre = Eigen::Vector2d(pose_.x_cm, pose_.y_cm) + 0.5 * dp;
-    for (int w = 0; w < 4; ++w) {
+    for (int w = 0; w < wheels_; ++w) {
       const Eigen::Vector2d p_body = wheel_position_cm(w);
       const Eigen::Vector2d contact = centre + robot_to_field(p_body, mid_yaw);
       const Eigen::Vector2d v_contact =
@@ -193,12 +196,12 @@ void World::step() {
   span_.begin_cycle = c0;
   span_.end_cycle = c1;
   span_.begin_pos = span_.end_pos;
-  for (int w = 0; w < 4; ++w) {
+  for (int w = 0; w < wheels_; ++w) {
     const auto i = static_cast<std::size_t>(w);
     double meas = travel[w] * (1.0 + wheel_scale_[i]);
     if (config_.encoder.rolling_noise_cm_per_sqrt_cm > 0.0)
       meas += config_.encoder.rolling_noise_cm_per_sqrt_cm * std::sqrt(std::abs(ground[w])) * n(rng_);
-    quarters_[i] += meas / cm_per_quarter_;
+    quarters_[i] += meas / cm_per_quarter_[i];
     span_.end_pos[i] = std::llround(quarters_[i] * static_cast<double>(std::int64_t{1} << kFracBits));
   }
 

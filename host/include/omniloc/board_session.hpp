@@ -15,6 +15,7 @@
 #include "omniloc/board_client.hpp"
 #include "omniloc/odometry.hpp"
 #include "omniloc/protocol.hpp"
+#include "omniloc/regmap.hpp"
 #include "omniloc/transport.hpp"
 
 namespace omniloc {
@@ -33,6 +34,7 @@ struct BoardIdentity {
   std::uint32_t control = 0;  ///< CONTROL as found (before the session configured it)
   std::uint32_t period_cycles = 0;  ///< PERIOD: board cycles per window
   double clock_hz = 0.0;      ///< board clock derived from PERIOD and the robot's window period
+  int channels = regmap::kChannels;  ///< encoder channels the board counts (3 or 4)
 
   [[nodiscard]] std::string version_text() const;  ///< "1.0.0"
 };
@@ -52,6 +54,7 @@ struct BoardSessionOptions {
   int decoding = 4;                 ///< the robot's quadrature decoding (robot config)
   double window_period_ms = 10.0;   ///< the robot's window period, to turn PERIOD into the clock
   bool configure = true;            ///< write CONTROL (enable, decoding, streaming) at open
+  int wheels = 0;                   ///< the robot's wheel count (wheel_count); 0 = not checked
   BoardClientOptions client;
 };
 

@@ -4,15 +4,18 @@
 //    gives every wheel the same signs, so for any pure translation the four terms cancel
 //    (sum of eq. (9)'s first two columns is zero) and only rotation is "seen"; equation (11) uses
 //    R/2 where the arc of a wheel on radius R is R * angle. docs/ODOMETRY.md measures the result.
-//  * Odometry: least squares through the pseudo-inverse of eq. (9)'s 4x3 matrix, heading from the
+//  * Odometry: least squares through the pseudo-inverse of the robot's wheel Jacobian (eq. (9)
+//    generalised to 3 or 4 wheels in any full-rank layout, robot_config.hpp), heading from the
 //    gyroscope (wheel rotation kept as a cross-check), field-frame integration at the mid-window
-//    heading, time from window timestamps, slip detection and isolation from the LS residual with
-//    down-weighting, origin reset, and a per-pose uncertainty.
+//    heading, time from window timestamps, slip detection (SlipDetector: the wheels against the
+//    gyro's rotation) and isolation with down-weighting, origin reset, and a per-pose uncertainty.
+//    PaperOdometry accepts only the paper's symmetric four-wheel shorthand.
 #pragma once
 
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <optional>
 
 #include "omniloc/conventions.hpp"
 #include "omniloc/robot_config.hpp"
@@ -23,18 +26,22 @@ namespace omniloc {
 struct EncoderWindow {
   std::uint32_t seq = 0;
   double t_end_ms = 0.0;                 ///< end of the window (board time)
-  std::array<std::int32_t, 4> counts{};  ///< wheel 1..4 counts in this window (eq. (9) signs)
+  std::array<std::int32_t, 4> counts{};  ///< wheel 1..4 counts in this window (eq. (9) signs); a
+                                         ///< three-wheel robot leaves counts[3] unused (ignored)
   double gyro_yaw_deg = 0.0;             ///< gyro's integrated yaw, field frame, at t_end_ms
 };
 
 /// Per-wheel slip finding for one window.
 struct SlipReport {
   bool detected = false;
-  int wheel = 0;                  ///< 1..4 when detected, else 0
+  int wheel = 0;                  ///< 1..wheel count when detected, else 0
   double magnitude_cm = 0.0;      ///< wheel travel not explained by the robot's motion (signed)
   double magnitude_cm_per_s = 0.0;
-  double residual_cm_per_s = 0.0; ///< norm of the 4-wheel LS residual (gyro heading), per second
+  double residual_cm_per_s = 0.0; ///< norm of the wheels' LS residual with the gyro's rotation, per second
   double threshold_cm_per_s = 0.0;  ///< what the residual was compared with in this window
+  /// Wheel-only rotation rate (LS, no gyro) minus the gyro's yaw rate. With three wheels this is
+  /// all the check has: the residual is |n . J_theta| times it (n: the normal of the translation columns).
+  double wheel_minus_gyro_deg_per_s = 0.0;
 };
 
 struct OdometryEstimate {
@@ -49,17 +56,60 @@ struct OdometryEstimate {
   SlipReport slip;
 };
 
-/// Least-squares estimate of one window's motion from four wheel travels (cm):
-/// body-frame displacement dx, dy (cm) and rotation (rad), all from eq. (9)'s pseudo-inverse.
+/// Least-squares estimate of one window's motion from the wheel travels (cm, slot i = wheel i+1):
+/// body-frame displacement dx, dy (cm) and rotation (rad), all from the pseudo-inverse.
 [[nodiscard]] Eigen::Vector3d least_squares_motion(const Eigen::Matrix<double, 3, 4>& pinv,
                                                    const Eigen::Vector4d& wheel_travel_cm);
 
-/// The pseudo-inverse (J^T J)^-1 J^T of eq. (9)'s matrix for this robot.
+/// The wheel Jacobian (robot_config.hpp) in the four slots of EncoderWindow::counts: a three-wheel
+/// robot's fourth row is zero (that slot moves nothing and is never read).
+[[nodiscard]] Eigen::Matrix<double, 4, 3> padded_wheel_jacobian(const RobotConfig& config);
+
+/// The pseudo-inverse (J^T J)^-1 J^T of the robot's wheel Jacobian, in the four slots (a
+/// three-wheel robot's fourth column is zero, so counts[3] is ignored).
 [[nodiscard]] Eigen::Matrix<double, 3, 4> wheel_pseudo_inverse(const RobotConfig& config);
 
-/// Wheel travel in cm for a window's counts.
+/// Wheel travel in cm for a window's counts (each wheel its own cm per count; 0 in unused slots).
 [[nodiscard]] Eigen::Vector4d wheel_travel_cm(const RobotConfig& config,
                                               const std::array<std::int32_t, 4>& counts);
+
+/// What the slip detector decided for one window: the report and the weight of each wheel slot
+/// for the translation (1, or less for the wheel found slipping).
+struct SlipCheck {
+  SlipReport report;
+  Eigen::Vector4d weights = Eigen::Vector4d::Ones();
+};
+
+/// The slip detector. Its inputs are the wheel travels of a window and the gyro's yaw rate: the
+/// gyro fixes the rotation, the wheels' translation is fitted by least squares, and what the fit
+/// cannot explain is the residual. With four wheels two equations are redundant (a 2-D residual);
+/// with three wheels there is no redundancy among the wheels themselves, and the one redundant
+/// equation is the gyro: the residual is the wheels' rotation against the gyro's. A window is
+/// flagged when the residual exceeds max(slip_threshold_cm_per_s dt, 6 sigma of the wheel noise);
+/// the wheel is then named by leaving each out in turn, with a motion prior (the last velocity,
+/// good to max_accel dt^2) deciding between hypotheses the kinematics cannot tell apart (diagonal
+/// wheels of the symmetric four; every wheel of a three-wheel robot). docs/ODOMETRY.md.
+class SlipDetector {
+ public:
+  explicit SlipDetector(const RobotConfig& config);
+  /// `predicted_cm`: the body-frame translation the last velocity predicts for this window.
+  [[nodiscard]] SlipCheck check(const Eigen::Vector4d& travel_cm, double gyro_yaw_rate_deg_per_s, double dt_s,
+                                const Eigen::Vector2d& predicted_cm) const;
+  [[nodiscard]] int wheels() const { return wheels_; }
+
+ private:
+  RobotConfig config_;
+  int wheels_;
+  Eigen::Matrix<double, 4, 3> jacobian_;
+  Eigen::Matrix<double, 3, 4> pinv_;
+  double min_cm_per_count_;
+};
+
+/// Translation (cm) of one window with the rotation fixed, each wheel slot weighted by w (a zero
+/// weight drops the wheel); nullopt when the weighted wheels cannot determine it.
+[[nodiscard]] std::optional<Eigen::Vector2d> translation_with_rotation(const Eigen::Matrix<double, 4, 3>& jacobian,
+                                                                       const Eigen::Vector4d& travel_cm,
+                                                                       double rotation_rad, const Eigen::Vector4d& w);
 
 class Odometry {
  public:
@@ -81,7 +131,8 @@ class Odometry {
   RobotConfig config_;
   Eigen::Matrix<double, 4, 3> jacobian_;
   Eigen::Matrix<double, 3, 4> pinv_;
-  double cm_per_count_;
+  SlipDetector slip_;
+  double mean_distance_cm_;                  // mean centre-to-wheel distance, for the uncertainty
   OdometryEstimate est_;
   bool have_window_ = false;
   double last_t_ms_ = 0.0;
@@ -97,6 +148,8 @@ enum class PaperHeading { kGyroYaw, kGyroDifference };
 
 class PaperOdometry {
  public:
+  /// Throws std::invalid_argument for a robot that lists its wheels: equations (10)-(15) are
+  /// written for the paper's symmetric four-wheel layout only.
   explicit PaperOdometry(const RobotConfig& config, PaperHeading heading = PaperHeading::kGyroYaw);
   void reset(const Pose2& pose);
   const OdometryEstimate& update(const EncoderWindow& window);

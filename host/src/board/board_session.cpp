@@ -62,6 +62,9 @@ BoardSession::BoardSession(std::unique_ptr<Transport> transport, const BoardSess
   if (!transport_) throw std::invalid_argument("BoardSession: no transport");
   client_ = std::make_unique<BoardClient>(*transport_, options.client);
   identity_ = identify_board(*client_, options.window_period_ms, describe());
+  // A robot's wheels must match the board's encoder channels (robot_config.hpp).
+  if (options.wheels != 0)
+    if (auto why = board_channel_mismatch(identity_.channels, options.wheels)) throw BoardIdentityError(describe() + ": " + *why);
   if (options.configure) {
     std::uint32_t control = 0;
     control = regmap::kControlEnable.put(control, 1);

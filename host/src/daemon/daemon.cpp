@@ -117,6 +117,7 @@ struct Daemon::Impl {
     try {
       BoardSessionOptions o;
       o.decoding = models.robot.decoding;
+      o.wheels = wheel_count(models.robot);  // refuses a board whose encoder channels differ
       o.window_period_ms = models.robot.window_period_ms;
       client = std::make_unique<BoardSession>(io.open_board(), o);
       if (version_differs(client->identity()))

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <string>
 #include <stdexcept>
 
 namespace omniloc {
@@ -13,43 +14,34 @@ namespace {
 using Matrix43 = Eigen::Matrix<double, 4, 3>;
 using Matrix42 = Eigen::Matrix<double, 4, 2>;
 
-// Translation of one window with the rotation fixed to the gyro's, each wheel weighted by w.
-// Fixing the rotation leaves 4 equations for 2 unknowns: two redundant ones, which is what lets a
-// single bad wheel be isolated (with only the 4x3 system the residual is one number for all wheels).
-Eigen::Vector2d weighted_translation(const Matrix43& j, const Eigen::Vector4d& travel_cm,
-                                     double rotation_rad, const Eigen::Vector4d& w) {
-  const Matrix42 a = j.leftCols<2>();
-  const Eigen::Vector4d y = travel_cm - j.col(2) * rotation_rad;
-  const Eigen::Matrix2d m = a.transpose() * w.asDiagonal() * a;
-  return m.ldlt().solve(a.transpose() * w.asDiagonal() * y);
-}
-
-Eigen::Vector3d weighted_motion(const Matrix43& j, const Eigen::Vector4d& travel_cm,
-                                const Eigen::Vector4d& w) {
+Eigen::Vector3d weighted_motion(const Matrix43& j, const Eigen::Vector4d& travel_cm, const Eigen::Vector4d& w) {
   const Eigen::Matrix3d m = j.transpose() * w.asDiagonal() * j;
   return m.ldlt().solve(j.transpose() * w.asDiagonal() * travel_cm);
 }
 
 struct Isolation {
-  int wheel = 0;            // index 0..3
+  int wheel = 0;            // index 0..wheels-1
   double magnitude_cm = 0.0;
 };
 
-// Which wheel? Leaving out wheel k, the other three still over-determine the translation (the
-// rotation is the gyro's); the wheel whose removal leaves the smallest residual explains the
-// disagreement. Diagonal wheels (1,4) and (2,3) leave the same residual signature, so the motion
-// prior (`predicted` body translation from the last velocity, good to about a_max dt^2) decides.
-Isolation isolate_wheel(const Matrix43& j, const Eigen::Vector4d& travel, double rotation_rad,
+// Which wheel? Leaving out wheel k, the others determine the translation (the rotation is the
+// gyro's): with four wheels one equation is still redundant and the wheel whose removal leaves the
+// smallest residual explains the disagreement; with three, two wheels fit exactly and only the
+// motion prior (`predicted` body translation from the last velocity, good to about a_max dt^2)
+// decides. Diagonal wheels (1,4) and (2,3) of the symmetric four leave the same residual signature,
+// so there too the prior decides.
+Isolation isolate_wheel(const Matrix43& j, int wheels, const Eigen::Vector4d& travel, double rotation_rad,
                         const Eigen::Vector2d& predicted, double sigma_meas, double sigma_prior) {
   Isolation best;
   double best_score = std::numeric_limits<double>::infinity();
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < wheels; ++k) {
     Eigen::Vector4d w = Eigen::Vector4d::Ones();
     w[k] = 0.0;
-    const Eigen::Vector2d t = weighted_translation(j, travel, rotation_rad, w);
-    const Eigen::Vector4d r = travel - j * Eigen::Vector3d(t.x(), t.y(), rotation_rad);
+    const std::optional<Eigen::Vector2d> t = translation_with_rotation(j, travel, rotation_rad, w);
+    if (!t) continue;  // the other wheels alone cannot see some translation: not a hypothesis
+    const Eigen::Vector4d r = travel - j * Eigen::Vector3d(t->x(), t->y(), rotation_rad);
     const double others = r.squaredNorm() - r[k] * r[k];
-    const double score = others / (sigma_meas * sigma_meas) + (t - predicted).squaredNorm() / (sigma_prior * sigma_prior);
+    const double score = others / (sigma_meas * sigma_meas) + (*t - predicted).squaredNorm() / (sigma_prior * sigma_prior);
     if (score < best_score) {
       best_score = score;
       best = {k, r[k]};
@@ -70,10 +62,37 @@ void check_window(const EncoderWindow& w, const char* who) {
 // than the path the wheels measured.
 double sinc(double x) { return std::abs(x) < 1e-6 ? 1.0 - x * x / 6.0 : std::sin(x) / x; }
 
+double mean_distance_cm(const RobotConfig& c) {
+  if (c.wheels.empty()) return c.center_to_wheel_cm;
+  double sum = 0.0;
+  for (const WheelConfig& w : c.wheels) sum += w.distance_cm;
+  return sum / static_cast<double>(c.wheels.size());
+}
+
 }  // namespace
 
+std::optional<Eigen::Vector2d> translation_with_rotation(const Matrix43& j, const Eigen::Vector4d& travel_cm,
+                                                         double rotation_rad, const Eigen::Vector4d& w) {
+  const Matrix42 a = j.leftCols<2>();
+  const Eigen::Vector4d y = travel_cm - j.col(2) * rotation_rad;
+  const Eigen::Matrix2d m = a.transpose() * w.asDiagonal() * a;
+  // The translation columns are unit drive directions, so m's entries are O(sum of weights):
+  // a determinant this small means the weighted wheels all drive along one line.
+  if (!(std::abs(m.determinant()) > 1e-9 * m.trace() * m.trace())) return std::nullopt;
+  return Eigen::Vector2d(m.ldlt().solve(a.transpose() * w.asDiagonal() * y));
+}
+
+Matrix43 padded_wheel_jacobian(const RobotConfig& config) {
+  const Eigen::Matrix<double, Eigen::Dynamic, 3> j = wheel_jacobian(config);
+  if (j.rows() > 4)
+    throw std::invalid_argument("padded_wheel_jacobian: " + std::to_string(j.rows()) + " wheels, at most 4");
+  Matrix43 out = Matrix43::Zero();
+  out.topRows(j.rows()) = j;
+  return out;
+}
+
 Eigen::Matrix<double, 3, 4> wheel_pseudo_inverse(const RobotConfig& config) {
-  const Matrix43 j = wheel_jacobian(config.motor_angle_deg, config.center_to_wheel_cm);
+  const Matrix43 j = padded_wheel_jacobian(config);
   return (j.transpose() * j).inverse() * j.transpose();
 }
 
@@ -83,17 +102,58 @@ Eigen::Vector3d least_squares_motion(const Eigen::Matrix<double, 3, 4>& pinv,
 }
 
 Eigen::Vector4d wheel_travel_cm(const RobotConfig& config, const std::array<std::int32_t, 4>& counts) {
-  const double k = cm_per_count(config);
-  return Eigen::Vector4d(counts[0], counts[1], counts[2], counts[3]) * k;
+  Eigen::Vector4d out = Eigen::Vector4d::Zero();
+  const int n = wheel_count(config);
+  for (int i = 0; i < n; ++i) out[i] = counts[static_cast<std::size_t>(i)] * cm_per_count(config, i);
+  return out;
+}
+
+SlipDetector::SlipDetector(const RobotConfig& config)
+    : config_(config),
+      wheels_(wheel_count(config)),
+      jacobian_(padded_wheel_jacobian(config)),
+      pinv_(wheel_pseudo_inverse(config)),
+      min_cm_per_count_(std::numeric_limits<double>::infinity()) {
+  for (int i = 0; i < wheels_; ++i) min_cm_per_count_ = std::min(min_cm_per_count_, cm_per_count(config, i));
+}
+
+SlipCheck SlipDetector::check(const Eigen::Vector4d& travel, double gyro_yaw_rate_deg_per_s, double dt_s,
+                              const Eigen::Vector2d& predicted_cm) const {
+  SlipCheck out;
+  const double rotation_rad = deg_to_rad(gyro_yaw_rate_deg_per_s) * dt_s;
+  // Full column rank (validated) makes the translation columns independent: this always exists.
+  const Eigen::Vector2d t =
+      translation_with_rotation(jacobian_, travel, rotation_rad, Eigen::Vector4d::Ones()).value_or(Eigen::Vector2d::Zero());
+  const Eigen::Vector4d residual = travel - jacobian_ * Eigen::Vector3d(t.x(), t.y(), rotation_rad);
+  out.report.wheel_minus_gyro_deg_per_s = rad_to_deg((pinv_ * travel).z()) / dt_s - gyro_yaw_rate_deg_per_s;
+
+  // The threshold: the configured rate, raised to 6 sigma of the expected random wheel noise when
+  // the wheels travel fast (the residual's norm is Rayleigh-like: P(> 6 sigma) ~ 1e-8 per window).
+  const double noise_cm = config_.wheel_noise_cm_per_sqrt_cm * std::sqrt(travel.head(wheels_).cwiseAbs().mean());
+  const double thr_cm = std::max(config_.slip_threshold_cm_per_s * dt_s, 6.0 * noise_cm);
+  out.report.residual_cm_per_s = residual.norm() / dt_s;
+  out.report.threshold_cm_per_s = thr_cm / dt_s;
+  if (!(residual.norm() > thr_cm)) return out;
+
+  const double sigma_meas = std::max(0.25 * thr_cm, 2.0 * min_cm_per_count_);
+  const double sigma_prior = std::max(config_.max_accel_cm_per_s2 * dt_s * dt_s, 2.0 * min_cm_per_count_);
+  const Isolation iso = isolate_wheel(jacobian_, wheels_, travel, rotation_rad, predicted_cm, sigma_meas, sigma_prior);
+  out.report.detected = true;
+  out.report.wheel = iso.wheel + 1;
+  out.report.magnitude_cm = iso.magnitude_cm;
+  out.report.magnitude_cm_per_s = iso.magnitude_cm / dt_s;
+  // Down-weight rather than drop: a weight that shrinks with the square of the disagreement.
+  const double ratio = 0.1 * thr_cm / std::abs(iso.magnitude_cm);
+  out.weights[iso.wheel] = std::min(1.0, ratio * ratio);
+  return out;
 }
 
 Odometry::Odometry(const RobotConfig& config)
-    : config_(config),
-      jacobian_(wheel_jacobian(config.motor_angle_deg, config.center_to_wheel_cm)),
+    : config_((validate_robot_config(config, "Odometry config"), config)),
+      jacobian_(padded_wheel_jacobian(config)),
       pinv_(wheel_pseudo_inverse(config)),
-      cm_per_count_(cm_per_count(config)) {
-  validate_robot_config(config, "Odometry config");
-}
+      slip_(config),
+      mean_distance_cm_(mean_distance_cm(config)) {}
 
 void Odometry::reset(const Pose2& pose, double sigma_xy_cm, double sigma_yaw_deg) {
   if (!have_window_) last_gyro_deg_ = pose.yaw_deg;  // gyro aligned with the field at start-up
@@ -125,35 +185,18 @@ const OdometryEstimate& Odometry::update(const EncoderWindow& window) {
   const double yaw_start_deg = last_gyro_deg_ + yaw_offset_deg_;
   const double yaw_mid_deg = yaw_start_deg + 0.5 * dyaw_deg;
 
-  // Plain LS through the precomputed pseudo-inverse. Eq. (9)'s rotation column is orthogonal to
-  // the translation columns, so this translation equals the gyro-constrained LS one.
+  // Plain LS through the precomputed pseudo-inverse (the main path: eq. (9) generalised).
   const Eigen::Vector3d ls = least_squares_motion(pinv_, travel);
   Eigen::Vector2d body = ls.head<2>();
   double wheel_dyaw_rad = ls.z();
-  const Eigen::Vector4d residual = travel - jacobian_ * Eigen::Vector3d(ls.x(), ls.y(), dyaw_rad);
 
-  // The threshold: the configured rate, raised to 6 sigma of the expected random wheel noise when
-  // the wheels travel fast (the residual's norm is Rayleigh-like: P(> 6 sigma) ~ 1e-8 per window).
-  SlipReport slip;
-  const double noise_cm = config_.wheel_noise_cm_per_sqrt_cm * std::sqrt(travel.cwiseAbs().mean());
-  const double thr_cm = std::max(config_.slip_threshold_cm_per_s * dt_s, 6.0 * noise_cm);
-  slip.residual_cm_per_s = residual.norm() / dt_s;
-  slip.threshold_cm_per_s = thr_cm / dt_s;
-  if (residual.norm() > thr_cm) {
-    const Eigen::Vector2d predicted = field_to_robot(last_velocity_field_ * dt_s, yaw_mid_deg);
-    const double sigma_meas = std::max(0.25 * thr_cm, 2.0 * cm_per_count_);
-    const double sigma_prior = std::max(config_.max_accel_cm_per_s2 * dt_s * dt_s, 2.0 * cm_per_count_);
-    const Isolation iso = isolate_wheel(jacobian_, travel, dyaw_rad, predicted, sigma_meas, sigma_prior);
-    slip.detected = true;
-    slip.wheel = iso.wheel + 1;
-    slip.magnitude_cm = iso.magnitude_cm;
-    slip.magnitude_cm_per_s = iso.magnitude_cm / dt_s;
-    // Down-weight rather than drop: a weight that shrinks with the square of the disagreement.
-    Eigen::Vector4d w = Eigen::Vector4d::Ones();
-    const double ratio = 0.1 * thr_cm / std::abs(iso.magnitude_cm);
-    w[iso.wheel] = std::min(1.0, ratio * ratio);
-    body = weighted_translation(jacobian_, travel, dyaw_rad, w);
-    wheel_dyaw_rad = weighted_motion(jacobian_, travel, w).z();
+  // Slip: the wheels against the gyro's yaw rate over this window.
+  const Eigen::Vector2d predicted = field_to_robot(last_velocity_field_ * dt_s, yaw_mid_deg);
+  const SlipCheck check = slip_.check(travel, dyaw_deg / dt_s, dt_s, predicted);
+  const SlipReport& slip = check.report;
+  if (slip.detected) {
+    body = translation_with_rotation(jacobian_, travel, dyaw_rad, check.weights).value_or(body);
+    wheel_dyaw_rad = weighted_motion(jacobian_, travel, check.weights).z();
   }
 
   const Eigen::Vector2d delta_field = robot_to_field(body, yaw_mid_deg) * sinc(0.5 * dyaw_rad);
@@ -173,7 +216,7 @@ const OdometryEstimate& Odometry::update(const EncoderWindow& window) {
                                  config_.gyro_arw_deg_per_sqrt_s * config_.gyro_arw_deg_per_sqrt_s * dt_s);
   // Wheel errors also displace the centre while turning on the spot, so the growth uses the
   // wheels' rotational travel R * |dtheta| as well as the centre's path.
-  est_.sigma_xy_cm += config_.odometry_noise_fraction * (step_cm + config_.center_to_wheel_cm * std::abs(dyaw_rad)) +
+  est_.sigma_xy_cm += config_.odometry_noise_fraction * (step_cm + mean_distance_cm_ * std::abs(dyaw_rad)) +
                       deg_to_rad(est_.sigma_yaw_deg) * step_cm +
                       (slip.detected ? std::abs(slip.magnitude_cm) : 0.0);
   est_.slip = slip;

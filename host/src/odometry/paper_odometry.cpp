@@ -2,6 +2,8 @@
 // the only liberty taken is skipping a window whose eq. (14) length is zero, where
 // atan(0/0) is undefined and the term contributes nothing anyway.
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "omniloc/odometry.hpp"
 
@@ -10,6 +12,11 @@ namespace omniloc {
 PaperOdometry::PaperOdometry(const RobotConfig& config, PaperHeading heading)
     : config_(config), heading_(heading) {
   validate_robot_config(config, "PaperOdometry config");
+  if (!config.wheels.empty())
+    throw std::invalid_argument(
+        "PaperOdometry: equations (10)-(15) are written for the paper's symmetric four-wheel layout "
+        "(motor_angle_deg, center_to_wheel_cm); this robot lists its " +
+        std::to_string(config.wheels.size()) + " wheels one by one: use Odometry");
 }
 
 void PaperOdometry::reset(const Pose2& pose) {

@@ -1,4 +1,5 @@
-// The simulated robot: a four-wheel omni platform (equation (9)) tracking a Trajectory on the
+// The simulated robot: a three- or four-wheel omni platform (the wheel Jacobian of its RobotConfig:
+// equation (9) for the symmetric shorthand, any listed layout otherwise) tracking a Trajectory on the
 // FIRA field, with per-wheel slip, carpet bumps, encoder errors and a gyroscope. Time runs in
 // board clock cycles; the physics advances in fixed steps (1 ms by default) with a constant body
 // twist per step, so the wheel travel is exact for the integrated ground truth.
@@ -24,7 +25,7 @@
 
 namespace omniloc::sim {
 
-/// Wheel `wheel` (1..4) spins `extra_speed_cm_per_s` faster than the ground under it, in its
+/// Wheel `wheel` (1..wheel count) spins `extra_speed_cm_per_s` faster than the ground under it, in its
 /// direction of travel, from start_s for duration_s: the wheel turns, the robot does not follow.
 struct SlipEvent {
   int wheel = 1;
@@ -87,7 +88,8 @@ struct SimWindow {
   bool kidnapped = false;         ///< the robot was carried during this window
 };
 
-/// Quarter-step positions of the four encoders over the last physics step.
+/// Quarter-step positions of the four encoder slots over the last physics step (a three-wheel
+/// robot's fourth slot never moves).
 struct StepSpan {
   std::int64_t begin_cycle = 0;
   std::int64_t end_cycle = 0;
@@ -130,15 +132,19 @@ class World {
   [[nodiscard]] const WorldConfig& config() const { return config_; }
   [[nodiscard]] const Trajectory& trajectory() const { return trajectory_; }
   [[nodiscard]] const Gyro& gyro() const { return gyro_; }
-  /// Wheel i's contact point in the robot frame (from eq. (9)'s rows).
+  /// Wheel i's contact point in the robot frame (wheel_positions_cm of the robot config).
   [[nodiscard]] Eigen::Vector2d wheel_position_cm(int wheel_index) const;
+  /// The robot's number of wheels (3 or 4).
+  [[nodiscard]] int wheels() const { return wheels_; }
 
  private:
   WorldConfig config_;
   Trajectory trajectory_;
   std::mt19937_64 rng_;
-  Eigen::Matrix<double, 4, 3> jacobian_;
-  double cm_per_quarter_;
+  int wheels_;
+  Eigen::Matrix<double, 4, 3> jacobian_;  // padded: a three-wheel robot's fourth row is zero
+  std::array<double, 4> cm_per_quarter_{};
+  std::array<Eigen::Vector2d, 4> wheel_position_{};
   std::array<double, 4> wheel_scale_{};
   std::array<double, 4> quarters_{};  // exact encoder position, quarter-steps
   Pose2 pose_;                        // truth, yaw unwrapped
