@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "omniloc/daemon.hpp"
 #include "omniloc/odometry.hpp"
 #include "omniloc_sim/world.hpp"
 
@@ -253,6 +254,36 @@ TEST(OdometryWheels, SlipDetectionPerRobot) {
     EXPECT_LE(static_cast<double>(false_alarms) / clean, 0.001) << name;
     EXPECT_LT(worst_pct, kNoisyMaxPct) << name;
   }
+}
+
+// Without a gyro the daemon takes the heading from the wheels (WheelYawHeading): on a three-wheel
+// robot the slip check then compares the wheels with themselves and can never fire, while the same
+// slip with the simulated gyro is caught. (A four-wheel robot keeps one redundant wheel equation.)
+TEST(OdometryWheels, ThreeWheelWithoutAGyroSeesNoSlip) {
+  const RobotConfig robot = load_named_robot_config("three-wheel");
+  WorldConfig cfg = WorldConfig::noise_free(robot, 5);
+  cfg.slips.push_back({2, 2.0, 0.5, 40.0});
+  World world(cfg, make_trajectory("straight"));
+  Odometry with_gyro(robot), wheels_only(robot);
+  WheelYawHeading heading(robot);
+  with_gyro.reset(world.truth());
+  wheels_only.reset(world.truth());
+  int flags_gyro = 0, flags_wheels = 0;
+  double max_disagreement = 0.0;
+  while (!world.finished()) {
+    const SimWindow sw = world.next_window();
+    flags_gyro += with_gyro.update(sw.window).slip.detected ? 1 : 0;
+    EncoderWindow w = sw.window;
+    w.gyro_yaw_deg = heading.gyro_yaw_deg(w) + world.trajectory().start().yaw_deg;
+    const auto& e = wheels_only.update(w);
+    flags_wheels += e.slip.detected ? 1 : 0;
+    max_disagreement = std::max(max_disagreement, std::abs(e.slip.wheel_minus_gyro_deg_per_s));
+  }
+  std::printf("three wheels, 0.5 s slip of 40 cm/s on wheel 2: %d windows flagged with the gyro, %d with the "
+              "wheels' own heading (largest wheel-minus-heading rate %.2g deg/s)\n",
+              flags_gyro, flags_wheels, max_disagreement);
+  EXPECT_GE(flags_gyro, 40);
+  EXPECT_EQ(flags_wheels, 0);
 }
 
 // The simulator's fourth encoder slot of a three-wheel robot never counts (no edges, no counts), and

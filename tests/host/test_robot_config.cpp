@@ -3,6 +3,9 @@
 // error (file, field path, why, value) for each kind of bad input.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -342,6 +345,22 @@ TEST(WheelLayout, BoardChannelsMustMatchTheWheels) {
   EXPECT_NE(err.find("the board counts 4 encoder channels but the robot config has 3 wheels"), std::string::npos) << err;
   o.wheels = wheel_count(load_named_robot_config("four-wheel-asymmetric"));
   EXPECT_NO_THROW(BoardSession(std::make_unique<sim::UartSideTransport>(board), o));
+}
+
+// docs/HOWTO.md shows the three-wheel file: the snippet must be that file (one source of truth).
+TEST(WheelLayout, HowtoSnippetIsTheShippedThreeWheelFile) {
+  const auto file = resolve_data_file("robots", "three-wheel");
+  const auto howto = file.parent_path().parent_path().parent_path() / "docs" / "HOWTO.md";
+  if (!std::filesystem::exists(howto)) GTEST_SKIP() << "no docs/HOWTO.md beside " << file;
+  std::ifstream in(howto);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto section = text.find("## Describe your robot");
+  ASSERT_NE(section, std::string::npos);
+  const auto begin = text.find("```json\n", section);
+  ASSERT_NE(begin, std::string::npos);
+  const auto end = text.find("```", begin + 8);
+  const config::Document doc = config::parse_json_text(text.substr(begin + 8, end - begin - 8), howto.string());
+  EXPECT_TRUE(parse_robot_config(doc.root()) == load_robot_config(file));
 }
 
 }  // namespace
