@@ -265,7 +265,7 @@ TEST(OdometryWheels, ThreeWheelWithoutAGyroSeesNoSlip) {
   cfg.slips.push_back({2, 2.0, 0.5, 40.0});
   World world(cfg, make_trajectory("straight"));
   Odometry with_gyro(robot), wheels_only(robot);
-  WheelYawHeading heading(robot);
+  daemon::WheelYawHeading heading(robot);
   with_gyro.reset(world.truth());
   wheels_only.reset(world.truth());
   int flags_gyro = 0, flags_wheels = 0;
