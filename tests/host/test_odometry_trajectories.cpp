@@ -10,6 +10,7 @@
 
 #include "omniloc/odometry.hpp"
 #include "omniloc_sim/world.hpp"
+#include "slip_drive.hpp"
 
 namespace omniloc::sim {
 namespace {
@@ -110,76 +111,35 @@ TEST(OdometryTrajectories, SlipDetectionAndFalseAlarmRates) {
   const std::uint64_t seed = 20261122;
   std::printf("slip test seed %llu\n", static_cast<unsigned long long>(seed));
   std::mt19937_64 rng(seed);
-  std::uniform_int_distribution<int> uwheel(1, 4);
-  std::uniform_real_distribution<double> ustart(1.0, 20.0), udur(0.1, 0.6), uspeed(15.0, 60.0);
   int events = 0, detected = 0, right_wheel_first = 0, clean_windows = 0, false_alarms = 0;
   int bump_windows = 0, bump_flags = 0, slip_windows = 0, slip_windows_flagged_right = 0;
   double worst_pct_with_slip = 0.0, worst_pct_blind = 0.0, max_clean_residual = 0.0;
   for (int run_i = 0; run_i < 24; ++run_i) {
     WorldConfig cfg = WorldConfig::default_noise(robot, seed + static_cast<std::uint64_t>(run_i));
-    const int n_slips = 3;
-    for (int k = 0; k < n_slips; ++k) cfg.slips.push_back({uwheel(rng), ustart(rng) + 0.0 * k, udur(rng), uspeed(rng)});
-    // Keep events apart so each can be scored on its own.
-    std::sort(cfg.slips.begin(), cfg.slips.end(), [](const SlipEvent& a, const SlipEvent& b) { return a.start_s < b.start_s; });
-    for (std::size_t k = 1; k < cfg.slips.size(); ++k)
-      cfg.slips[k].start_s = std::max(cfg.slips[k].start_s, cfg.slips[k - 1].start_s + cfg.slips[k - 1].duration_s + 0.5);
+    cfg.slips = random_slips(rng, 4, 3);
     const std::string traj = run_i % 2 ? "boundary_tour" : "random_walk";
-    World world(cfg, make_trajectory(traj, static_cast<std::uint64_t>(run_i) + 1));
-    Odometry odo(robot);
-    odo.reset(world.truth());
-    RobotConfig blind_robot = robot;  // the same LS without slip handling, for comparison
-    blind_robot.slip_threshold_cm_per_s = 1e9;
-    Odometry blind(blind_robot);
-    blind.reset(world.truth());
-    std::vector<int> first_window(cfg.slips.size(), -1), detect_window(cfg.slips.size(), -1);
-    std::vector<int> detected_wheel(cfg.slips.size(), 0);
-    int window_index = 0, since_slip = 100;
-    SimWindow sw;
-    while (!world.finished()) {
-      sw = world.next_window();
-      const auto& e = odo.update(sw.window);
-      (void)blind.update(sw.window);
-      // Which event (if any) touches this window.
-      int active = -1;
-      const double t1 = sw.window.t_end_ms / 1000.0, t0 = t1 - 0.01;
-      for (std::size_t k = 0; k < cfg.slips.size(); ++k)
-        if (cfg.slips[k].start_s < t1 && cfg.slips[k].start_s + cfg.slips[k].duration_s > t0) active = static_cast<int>(k);
-      if (active >= 0) {
-        const auto k = static_cast<std::size_t>(active);
-        if (first_window[k] < 0) first_window[k] = window_index;
-        if (e.slip.detected && detect_window[k] < 0) {
-          detect_window[k] = window_index;
-          detected_wheel[k] = e.slip.wheel;
-        }
-        ++slip_windows;
-        slip_windows_flagged_right += e.slip.detected && e.slip.wheel == cfg.slips[k].wheel ? 1 : 0;
-        since_slip = 0;
-      } else if (++since_slip > 2) {
-        ++clean_windows;
-        max_clean_residual = std::max(max_clean_residual, e.slip.residual_cm_per_s / e.slip.threshold_cm_per_s);
-        false_alarms += e.slip.detected ? 1 : 0;
-        if (sw.bump_wheels) {
-          ++bump_windows;
-          bump_flags += e.slip.detected ? 1 : 0;
-        }
-      }
-      ++window_index;
-    }
+    const SlipDriveResult r = slip_drive(robot, cfg, traj, static_cast<std::uint64_t>(run_i) + 1);
+    clean_windows += r.clean_windows;
+    false_alarms += r.false_alarms;
+    bump_windows += r.bump_windows;
+    bump_flags += r.bump_flags;
+    slip_windows += r.slip_windows;
+    slip_windows_flagged_right += r.slip_windows_flagged_right;
+    max_clean_residual = std::max(max_clean_residual, r.max_clean_residual);
     for (std::size_t k = 0; k < cfg.slips.size(); ++k) {
-      if (first_window[k] < 0) continue;  // trajectory ended before the event
+      const SlipEventScore& e = r.events[k];
+      if (!e.seen()) continue;  // trajectory ended before the event
       ++events;
-      const bool in_time = detect_window[k] >= 0 && detect_window[k] - first_window[k] <= 1;
-      if (in_time && detected_wheel[k] == cfg.slips[k].wheel) ++detected;
-      if (detected_wheel[k] == cfg.slips[k].wheel) ++right_wheel_first;
-      if (!(in_time && detected_wheel[k] == cfg.slips[k].wheel))
+      const bool right_wheel = e.detected_wheel == cfg.slips[k].wheel;
+      if (e.in_time() && right_wheel) ++detected;
+      if (right_wheel) ++right_wheel_first;
+      if (!(e.in_time() && right_wheel))
         std::printf("  missed: run %d %s wheel %d at %.2f s for %.2f s, %.1f cm/s: first flag window %+d wheel %d\n", run_i,
                     traj.c_str(), cfg.slips[k].wheel, cfg.slips[k].start_s, cfg.slips[k].duration_s,
-                    cfg.slips[k].extra_speed_cm_per_s, detect_window[k] - first_window[k], detected_wheel[k]);
+                    cfg.slips[k].extra_speed_cm_per_s, e.detect_window - e.first_window, e.detected_wheel);
     }
-    const double err = std::hypot(odo.estimate().pose.x_cm - sw.truth.x_cm, odo.estimate().pose.y_cm - sw.truth.y_cm);
-    worst_pct_with_slip = std::max(worst_pct_with_slip, pct(err, sw.truth_distance_cm));
-    const double blind_err = std::hypot(blind.estimate().pose.x_cm - sw.truth.x_cm, blind.estimate().pose.y_cm - sw.truth.y_cm);
-    worst_pct_blind = std::max(worst_pct_blind, pct(blind_err, sw.truth_distance_cm));
+    worst_pct_with_slip = std::max(worst_pct_with_slip, pct(r.final_err_cm, r.distance_cm));
+    worst_pct_blind = std::max(worst_pct_blind, pct(r.blind_final_err_cm, r.distance_cm));
   }
   const double det_rate = static_cast<double>(detected) / events;
   const double fa_rate = static_cast<double>(false_alarms) / clean_windows;

@@ -18,6 +18,7 @@
 #include "omniloc/daemon.hpp"
 #include "omniloc/odometry.hpp"
 #include "omniloc_sim/world.hpp"
+#include "slip_drive.hpp"
 
 namespace omniloc::sim {
 namespace {
@@ -190,60 +191,24 @@ TEST(OdometryWheels, SlipDetectionPerRobot) {
     const RobotConfig robot = load_named_robot_config(name);
     const int n = wheel_count(robot);
     std::mt19937_64 rng(seed);
-    std::uniform_int_distribution<int> uwheel(1, n);
-    std::uniform_real_distribution<double> ustart(1.0, 20.0), udur(0.1, 0.6), uspeed(15.0, 60.0);
     int events = 0, flagged = 0, right = 0, clean = 0, false_alarms = 0;
     double worst_pct = 0.0, worst_blind_pct = 0.0;
     for (int run_i = 0; run_i < 12; ++run_i) {
       WorldConfig cfg = WorldConfig::default_noise(robot, seed + static_cast<std::uint64_t>(run_i));
-      for (int k = 0; k < 3; ++k) cfg.slips.push_back({uwheel(rng), ustart(rng), udur(rng), uspeed(rng)});
-      std::sort(cfg.slips.begin(), cfg.slips.end(), [](const SlipEvent& a, const SlipEvent& b) { return a.start_s < b.start_s; });
-      for (std::size_t k = 1; k < cfg.slips.size(); ++k)
-        cfg.slips[k].start_s = std::max(cfg.slips[k].start_s, cfg.slips[k - 1].start_s + cfg.slips[k - 1].duration_s + 0.5);
-      World world(cfg, make_trajectory(run_i % 2 ? "boundary_tour" : "random_walk", static_cast<std::uint64_t>(run_i) + 1));
-      Odometry odo(robot);
-      RobotConfig blind_robot = robot;
-      blind_robot.slip_threshold_cm_per_s = 1e9;
-      Odometry blind(blind_robot);
-      odo.reset(world.truth());
-      blind.reset(world.truth());
-      std::vector<int> first(cfg.slips.size(), -1), detect(cfg.slips.size(), -1), wheel(cfg.slips.size(), 0);
-      int w_i = 0, since = 100;
-      SimWindow sw;
-      while (!world.finished()) {
-        sw = world.next_window();
-        const auto& e = odo.update(sw.window);
-        (void)blind.update(sw.window);
-        int active = -1;
-        const double t1 = sw.window.t_end_ms / 1000.0, t0 = t1 - 0.01;
-        for (std::size_t k = 0; k < cfg.slips.size(); ++k)
-          if (cfg.slips[k].start_s < t1 && cfg.slips[k].start_s + cfg.slips[k].duration_s > t0) active = static_cast<int>(k);
-        if (active >= 0) {
-          const auto k = static_cast<std::size_t>(active);
-          if (first[k] < 0) first[k] = w_i;
-          if (e.slip.detected && detect[k] < 0) {
-            detect[k] = w_i;
-            wheel[k] = e.slip.wheel;
-          }
-          since = 0;
-        } else if (++since > 2) {
-          ++clean;
-          false_alarms += e.slip.detected ? 1 : 0;
-        }
-        ++w_i;
-      }
+      cfg.slips = random_slips(rng, n, 3);
+      const SlipDriveResult r = slip_drive(robot, cfg, run_i % 2 ? "boundary_tour" : "random_walk",
+                                           static_cast<std::uint64_t>(run_i) + 1);
+      clean += r.clean_windows;
+      false_alarms += r.false_alarms;
       for (std::size_t k = 0; k < cfg.slips.size(); ++k) {
-        if (first[k] < 0) continue;
+        const SlipEventScore& e = r.events[k];
+        if (!e.seen()) continue;
         ++events;
-        const bool in_time = detect[k] >= 0 && detect[k] - first[k] <= 1;
-        flagged += in_time ? 1 : 0;
-        right += in_time && wheel[k] == cfg.slips[k].wheel ? 1 : 0;
+        flagged += e.in_time() ? 1 : 0;
+        right += e.in_time() && e.detected_wheel == cfg.slips[k].wheel ? 1 : 0;
       }
-      const auto err = [&](const Odometry& o) {
-        return std::hypot(o.estimate().pose.x_cm - sw.truth.x_cm, o.estimate().pose.y_cm - sw.truth.y_cm);
-      };
-      worst_pct = std::max(worst_pct, pct(err(odo), sw.truth_distance_cm));
-      worst_blind_pct = std::max(worst_blind_pct, pct(err(blind), sw.truth_distance_cm));
+      worst_pct = std::max(worst_pct, pct(r.final_err_cm, r.distance_cm));
+      worst_blind_pct = std::max(worst_blind_pct, pct(r.blind_final_err_cm, r.distance_cm));
     }
     std::printf("%-22s slip events %d: flagged within two windows %d (%.1f %%), on the right wheel %d (%.1f %%); "
                 "false alarms %d of %d clean windows; worst final drift %.3f %% with slip handling, %.3f %% without\n",
