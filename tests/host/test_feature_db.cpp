@@ -297,7 +297,7 @@ TEST_F(FeatureDbTest, RefusesTruncatedCorruptAndForeignFiles) {
   EXPECT_NO_THROW((void)load_feature_db(path_, *field_, other));
 
   fs::remove(path_);
-  expect_refused("cannot open", *field_, *camera_);
+  expect_refused("no such file", *field_, *camera_);
 }
 
 TEST(FeatureDbSmall, MslFieldBuildsOnACoarseGrid) {

@@ -257,6 +257,45 @@ TEST_F(Matcher, LocalSearchWindows) {
   EXPECT_THROW((void)local_search(*db_, s, {376, 273}, -1.0), std::invalid_argument);
 }
 
+// Issue 16 item 1: every search and the refinement end, without undefined behaviour, on any input
+// (the checks load_feature_db makes on a file are repeated for a database made in memory).
+TEST_F(Matcher, SearchesAndRefinementAreBoundedOnHostileInput) {
+  const Scan s = db_scan(27 * 75 + 40);
+  // A finite but huge centre used to convert 1e300 / 10 to int (undefined): clamped to the corner.
+  const MatchResult far = local_search(*db_, s, {1e300, -1e300}, 10.0);
+  EXPECT_EQ(far.cells_searched, 4);
+  EXPECT_EQ(local_search(*db_, s, {376, 273}, 1e300).cells_searched, db_->grid.cells()) << "range beyond the grid";
+  EXPECT_EQ(local_search(*db_, s, {376, 273}, INFINITY).cells_searched, db_->grid.cells());
+  EXPECT_THROW((void)local_search(*db_, s, {NAN, 273}, 10.0), std::invalid_argument);
+  // A grid that is not one: refused before any cell is indexed.
+  for (const auto& bad : {GridSpec{NAN, 5, 10, 75, 55}, GridSpec{5, INFINITY, 10, 75, 55}, GridSpec{5, 5, 0.0, 75, 55},
+                          GridSpec{5, 5, -10, 75, 55}, GridSpec{5, 5, 10, 0, 55}, GridSpec{5, 5, 10, 75, -1},
+                          GridSpec{5, 5, 10, 65536, 65536}}) {
+    FeatureDb db = *db_;
+    db.grid = bad;
+    EXPECT_THROW((void)global_search(db, s), std::invalid_argument) << bad.x0_cm << " " << bad.step_cm << " " << bad.nx;
+    EXPECT_THROW((void)local_search(db, s, {376, 273}, 10.0), std::invalid_argument);
+  }
+  // refine_match from a non-finite start (what a NaN grid origin gave) returns at once, unchanged.
+  MatchResult m = global_search(*db_, s);
+  ASSERT_GE(m.cell, 0);
+  m.position_cm = {NAN, 100.0};
+  refine_match(renderer_->field(), renderer_->camera(), s, m);
+  EXPECT_TRUE(std::isnan(m.position_cm.x()));
+  EXPECT_EQ(m.refine_probes, 0);
+  // Absurd options end too: a NaN step never starts, a minimum step of 1e-300 or below zero stops
+  // at the move cap; the position stays within the reach of the grid point.
+  for (const auto& [start, min] : {std::pair{std::nan(""), 0.625}, std::pair{2.5, 1e-300}, std::pair{2.5, -1.0}}) {
+    MatchOptions opt;
+    opt.refine_start_step_cm = start;
+    opt.refine_min_step_cm = min;
+    MatchResult r = global_search(*db_, s);
+    refine_match(renderer_->field(), renderer_->camera(), s, r, opt);
+    EXPECT_TRUE(r.position_cm.allFinite());
+    EXPECT_LE((r.position_cm - r.grid_position_cm).cwiseAbs().maxCoeff(), opt.refine_reach_cm + 1e-9);
+  }
+}
+
 TEST_F(Matcher, RightCellOnNoiseFreeImagesEverywhereEvenEven) { every_grid_point(0, 0); }
 TEST_F(Matcher, RightCellOnNoiseFreeImagesEverywhereOddEven) { every_grid_point(1, 0); }
 TEST_F(Matcher, RightCellOnNoiseFreeImagesEverywhereEvenOdd) { every_grid_point(0, 1); }

@@ -133,7 +133,7 @@ TEST_F(RecordingFiles, CsvErrorsNameFileAndLine) {
   write("encoders.csv", "");
   expect_error("encoders.csv", 1, "empty file");
   fs::remove(dir_ / "encoders.csv");
-  expect_error("encoders.csv", 0, "cannot open");
+  expect_error("encoders.csv", 0, "no such file");
 }
 
 TEST_F(RecordingFiles, CameraAndTruthErrors) {

@@ -32,6 +32,8 @@ fs::path resolve_data_file(const std::string& kind, const std::string& name_or_p
   if (name_or_path.find('/') != std::string::npos || name_or_path.ends_with(".json")) {
     // A path, not a name: it must be a file.
     if (fs::is_directory(name_or_path, ec)) throw ConfigError(name_or_path + ": is a directory, not a JSON file");
+    if (fs::exists(name_or_path, ec))
+      throw ConfigError(name_or_path + ": not a regular file (a device or a pipe?), not a JSON file");
     throw ConfigError(name_or_path + ": no such file");
   }
   std::vector<fs::path> roots;

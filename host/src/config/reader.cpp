@@ -1,10 +1,9 @@
 // The JSON reader: parsing with duplicate-key detection and typed access to values.
 #include <cmath>
-#include <fstream>
 #include <set>
-#include <sstream>
 
 #include "omniloc/config_reader.hpp"
+#include "omniloc/file_read.hpp"
 
 namespace omniloc::config {
 
@@ -104,15 +103,13 @@ Document parse_json_text(std::string_view text, const std::string& source) {
 }
 
 Document parse_json_file(const std::filesystem::path& path) {
-  const std::string source = path.string();
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw ConfigError(source + ": is a directory, not a JSON file");
-  if (!std::filesystem::exists(path, ec)) throw ConfigError(source + ": no such file");
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (!in && !in.eof()) throw ConfigError(source + ": cannot be read");
-  return parse_json_text(text.str(), source);
+  std::string text;
+  try {
+    text = read_file_bounded(path, kMaxJsonFileBytes, "JSON file");
+  } catch (const FileReadError& e) {
+    throw ConfigError(e.what());
+  }
+  return parse_json_text(text, path.string());
 }
 
 // --- Node -----------------------------------------------------------------------------------------

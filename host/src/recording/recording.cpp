@@ -12,6 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "omniloc/config_reader.hpp"
+#include "omniloc/file_read.hpp"
 
 namespace omniloc {
 
@@ -63,8 +64,13 @@ long long parse_int(const std::string& s, const fs::path& file, int line, const 
 /// Reads a CSV with exactly the given header; calls row(fields, line) for each data line.
 template <typename RowFn>
 void read_csv(const fs::path& file, const std::vector<std::string>& header, RowFn row) {
-  std::ifstream in(file);
-  if (!in) throw RecordingError(file.string() + ": cannot open (missing file?)");
+  std::string content;
+  try {
+    content = read_file_bounded(file, kMaxCsvFileBytes, "CSV file");
+  } catch (const FileReadError& e) {
+    throw RecordingError(e.what());
+  }
+  std::istringstream in(content);
   std::string text;
   int line = 0;
   bool seen_header = false;
@@ -246,8 +252,9 @@ Recording load_recording(const fs::path& dir) {
   r.windows = read_encoders_csv(dir / "encoders.csv");
   r.frames = read_camera_csv(dir / "camera.csv");
   for (std::size_t i = 0; i < r.frames.size(); ++i)
-    if (!fs::exists(dir / r.frames[i].file))
-      fail_at(dir / "camera.csv", static_cast<int>(i) + 2, "image '" + r.frames[i].file + "' does not exist");
+    if (!fs::is_regular_file(dir / r.frames[i].file))  // a device there would be read without end
+      fail_at(dir / "camera.csv", static_cast<int>(i) + 2,
+              "image '" + r.frames[i].file + "' does not exist or is not a regular file");
   if (fs::exists(dir / "truth.csv")) r.truth = read_truth_csv(dir / "truth.csv");
   return r;
 }

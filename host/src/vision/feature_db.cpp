@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "fnv.hpp"
+#include "omniloc/file_read.hpp"
 
 namespace omniloc {
 
@@ -126,15 +127,17 @@ namespace {
 /// The file as bytes, refusing what is not a regular file of the size its header announces before
 /// reading more than the header (a directory, /dev/zero or a huge file never reaches the reader).
 std::vector<char> read_database_file(const std::string& path, const std::string& where, Header& h) {
-  std::error_code ec;
-  const auto status = std::filesystem::status(path, ec);
-  if (ec || !std::filesystem::exists(status)) throw std::runtime_error(where + "cannot open feature database (no such file)");
-  if (std::filesystem::is_directory(status)) throw std::runtime_error(where + "is a directory, not a feature database");
-  if (!std::filesystem::is_regular_file(status))
-    throw std::runtime_error(where + "not a regular file (a device or pipe?), not a feature database");
-  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  // The largest grid the header check below lets through; the size is checked exactly against the
+  // header once it is read.
+  constexpr std::uintmax_t kMaxDatabaseBytes = std::uintmax_t{4} << 30;
+  std::uintmax_t size = 0;
+  try {
+    size = regular_file_size(path, kMaxDatabaseBytes, "feature database");
+  } catch (const FileReadError& e) {
+    throw std::runtime_error(e.what());
+  }
   std::ifstream in(path, std::ios::binary);
-  if (ec || !in) throw std::runtime_error(where + "cannot open feature database");
+  if (!in) throw std::runtime_error(where + "cannot open feature database");
   if (size < sizeof(Header)) {
     throw std::runtime_error(where + "truncated feature database (" + std::to_string(size) +
                              " bytes, shorter than its header)");

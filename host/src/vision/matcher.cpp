@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <utility>
@@ -81,9 +83,24 @@ MatchResult search_window(const FeatureDb& db, const Window& w, int rays_used, c
 
 Window full_window(const FeatureDb& db) { return {0, db.grid.nx - 1, 0, db.grid.ny - 1}; }
 
+/// The grid index nearest to `v_cm`, clamped to [0, n - 1] before the conversion to int (a centre
+/// of 1e300 cm is finite, and converting it unclamped is undefined behaviour).
+int nearest_index(double v_cm, double origin_cm, double step_cm, int n) {
+  const double k = std::clamp(std::round((v_cm - origin_cm) / step_cm), 0.0, static_cast<double>(n - 1));
+  return static_cast<int>(k);
+}
+
+// load_feature_db checks a file's grid against the field; this guards a database made in memory:
+// every search below indexes cells and converts positions with the grid, so it must be sane.
 void check_db(const FeatureDb& db) {
-  if (db.grid.cells() <= 0 || db.features.size() != static_cast<std::size_t>(db.grid.cells()) * kFeatureBytes) {
-    throw std::invalid_argument("matcher: feature database is empty or does not match its grid");
+  const GridSpec& g = db.grid;
+  constexpr int kMaxSide = 100000;  // as the file format's limit
+  const bool grid_ok = g.nx >= 1 && g.ny >= 1 && g.nx <= kMaxSide && g.ny <= kMaxSide && std::isfinite(g.x0_cm) &&
+                       std::isfinite(g.y0_cm) && std::isfinite(g.step_cm) && g.step_cm > 0.0 &&
+                       static_cast<std::int64_t>(g.nx) * g.ny <= std::numeric_limits<int>::max() / 2;
+  if (!grid_ok || db.features.size() != static_cast<std::size_t>(g.nx) * static_cast<std::size_t>(g.ny) * kFeatureBytes) {
+    throw std::invalid_argument("matcher: feature database is empty, has a non-finite or non-positive grid, or does "
+                                "not match its grid");
   }
 }
 
@@ -133,9 +150,11 @@ MatchResult local_search(const FeatureDb& db, const FieldScan& scan, const Eigen
     throw std::invalid_argument("local_search: range must be >= 0 cm and the centre finite");
   }
   const GridSpec& g = db.grid;
-  const int ci = std::clamp(static_cast<int>(std::lround((centre.x() - g.x0_cm) / g.step_cm)), 0, g.nx - 1);
-  const int cj = std::clamp(static_cast<int>(std::lround((centre.y() - g.y0_cm) / g.step_cm)), 0, g.ny - 1);
-  const int reach = local_search_reach_cells(range_cm, g.step_cm);
+  const int ci = nearest_index(centre.x(), g.x0_cm, g.step_cm, g.nx);
+  const int cj = nearest_index(centre.y(), g.y0_cm, g.step_cm, g.ny);
+  // A range beyond the grid is the whole grid (and keeps ci + reach within int).
+  const int reach = range_cm >= g.step_cm * std::max(g.nx, g.ny) ? std::max(g.nx, g.ny)
+                                                                  : local_search_reach_cells(range_cm, g.step_cm);
   const Window w{std::max(0, ci - reach), std::min(g.nx - 1, ci + reach), std::max(0, cj - reach),
                  std::min(g.ny - 1, cj + reach)};
   const PreparedScan& p = scan.prepared;
