@@ -208,6 +208,15 @@ TEST(FieldFile, ErrorsNameFileAndFieldPath) {
       [](const std::string& f) { (void)load_field(f); },
       {
           {replaced(v, "\"line_width_cm\": 5", "\"line_width_cm\": -5"), "line_width_cm", "must be > 0 (got -5)"},
+          // Issue 16 item 6: a line 10 m wide was accepted; a length of 1e7 cm ended in std::bad_alloc
+          // (with no file named) when the database was laid over it.
+          {replaced(v, "\"line_width_cm\": 5", "\"line_width_cm\": 1000"), "line_width_cm",
+           "must be at most 50 cm (got 1000)"},
+          {replaced(v, "\"field_length_cm\": 600", "\"field_length_cm\": 1e7"), "field_length_cm",
+           "must be at most 5000 cm (50 m) (got 10000000)"},
+          {replaced(v, "\"field_width_cm\": 400", "\"field_width_cm\": 1e7"), "field_width_cm",
+           "must be at most 5000 cm (50 m)"},
+          {replaced(v, "\"border_cm\": 75", "\"border_cm\": 1e6"), "border_cm", "must be at most 1000 cm"},
           {replaced(v, "\"field_length_cm\": 600,", ""), "field_length_cm", "missing (required)"},
           {replaced(v, "\"centre_circle_radius_cm\": 60", "\"centre_circle_radius_cm\": \"big\""),
            "centre_circle_radius_cm", "must be a number, not a string (got \"big\")"},

@@ -324,6 +324,11 @@ TEST(LocalizerConfigFile, ClearErrorsNameTheFileAndField) {
   };
   expect_error("\"yaw_gain\": 0, ", "yaw_gain", "must be in (0, 1] (got 0)");
   expect_error("\"yaw_gain\": 1.5, ", "yaw_gain", "(got 1.5)");
+  // Upper bounds (issue 16 item 6): the history is kept in memory, periods are not 1e-300 ms.
+  expect_error("\"history_ms\": 1e12, ", "history_ms", "must be at most 60000 ms");
+  expect_error("\"reset_period_ms\": 1e-300, ", "reset_period_ms", "must be at least 1 ms (got 1e-300)");
+  expect_error("\"min_range_cm\": 1e9, ", "min_range_cm", "must be at most 10000 cm (got 1000000000)");
+  expect_error("\"image_sigma_yaw_deg\": 1000, ", "image_sigma_yaw_deg", "must be at most 180 degrees");
   expect_error("\"yaw_rate_gain\": 1, ", "yaw_rate_gain", "[0, 1)");
   expect_error("\"yaw_search_deg\": 45, ", "yaw_search_deg", "(0, 30]");
   expect_error("\"yaw_rate_max_deg_per_s\": -1, ", "yaw_rate_max_deg_per_s", ">= 0 (got -1)");

@@ -116,7 +116,7 @@ TEST(OdometryWheels, WrongLayoutFailsTheBounds) {
   RobotConfig wrong = robot;
   wrong.wheels[2].drive_angle_deg = -45.0;
   RobotConfig wrong_blind = wrong;
-  wrong_blind.slip_threshold_cm_per_s = 1e9;
+  wrong_blind.slip_threshold_cm_per_s = 10000.0;  // the config's upper bound: no slip reaches it
   World world(WorldConfig::noise_free(robot, 1), make_trajectory("random_walk", 1));
   Odometry odo(wrong), blind(wrong_blind);
   odo.reset(world.truth());

@@ -36,9 +36,16 @@ void LocalizerConfig::validate(const config::Origin& at) const {
   }
   require(std::isfinite(ambiguity_ratio) && ambiguity_ratio >= 1.0, at / "ambiguity_ratio", "must be a number >= 1",
           ambiguity_ratio);
+  // Upper bounds: the history is kept in memory, and periods beyond a day are typos.
+  const auto at_most = [&](double v, const char* field, double hi, const char* why) {
+    require(v <= hi, at / field, why, v);
+  };
   positive(reset_period_ms, "reset_period_ms");
+  require(reset_period_ms >= 1.0, at / "reset_period_ms", "must be at least 1 ms", reset_period_ms);
+  at_most(reset_period_ms, "reset_period_ms", 8.64e7, "must be at most a day (8.64e7 ms)");
   require(std::isfinite(history_ms) && history_ms >= 100.0, at / "history_ms",
           "must be at least 100 ms (frames arrive up to ~50 ms late)", history_ms);
+  at_most(history_ms, "history_ms", 60000.0, "must be at most 60000 ms (the history is kept in memory)");
   require(scan_rays_per_degree >= 1 && scan_rays_per_degree <= 16, at / "scan_rays_per_degree", "must be 1..16",
           scan_rays_per_degree);
   non_negative(min_range_cm, "min_range_cm");
@@ -46,6 +53,10 @@ void LocalizerConfig::validate(const config::Origin& at) const {
   positive(image_sigma_yaw_deg, "image_sigma_yaw_deg");
   require(lost_after_bad_frames >= 1, at / "lost_after_bad_frames", "must be >= 1", lost_after_bad_frames);
   positive(check_period_ms, "check_period_ms");
+  at_most(min_range_cm, "min_range_cm", 10000.0, "must be at most 10000 cm");
+  at_most(image_sigma_cm, "image_sigma_cm", 10000.0, "must be at most 10000 cm");
+  at_most(image_sigma_yaw_deg, "image_sigma_yaw_deg", 180.0, "must be at most 180 degrees");
+  at_most(disagree_min_cm, "disagree_min_cm", 10000.0, "must be at most 10000 cm");
   non_negative(disagree_min_cm, "disagree_min_cm");
   positive(disagree_sigmas, "disagree_sigmas");
   require(disagree_error_ratio > 0.0 && disagree_error_ratio <= 1.0, at / "disagree_error_ratio", "must be in (0, 1]",

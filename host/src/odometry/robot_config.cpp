@@ -68,6 +68,13 @@ config::Key<RobotConfig> wheels_key() {
   return k;
 }
 
+// Upper bounds far beyond any robot, so that a typo (1e9) or garbage (1e-300) is refused before it
+// turns into a divided-by-nearly-zero window or an overflowing count.
+constexpr double kMaxRobotCm = 1000.0;
+constexpr double kMaxWheelRadiusCm = 100.0;
+constexpr double kMaxGearRatio = 10000.0;
+constexpr int kMaxCountsPerRev = 1000000;
+
 void validate_wheel(const WheelConfig& w, const config::Origin& at) {
   using config::require;
   const auto angle = [&](double v, const char* field) {
@@ -75,12 +82,17 @@ void validate_wheel(const WheelConfig& w, const config::Origin& at) {
   };
   angle(w.mount_angle_deg, "mount_angle_deg");
   require(std::isfinite(w.distance_cm) && w.distance_cm >= 0.0, at / "distance_cm", "must be >= 0", w.distance_cm);
+  require(w.distance_cm <= kMaxRobotCm, at / "distance_cm", "must be at most 1000 cm (a robot, not a field)",
+          w.distance_cm);
   angle(w.drive_angle_deg, "drive_angle_deg");
   require(std::isfinite(w.wheel_radius_cm) && w.wheel_radius_cm > 0.0, at / "wheel_radius_cm", "must be > 0",
           w.wheel_radius_cm);
+  require(w.wheel_radius_cm <= kMaxWheelRadiusCm, at / "wheel_radius_cm", "must be at most 100 cm", w.wheel_radius_cm);
   require(std::isfinite(w.gear_ratio) && w.gear_ratio > 0.0, at / "gear_ratio", "must be > 0", w.gear_ratio);
+  require(w.gear_ratio <= kMaxGearRatio, at / "gear_ratio", "must be at most 10000", w.gear_ratio);
   require(w.counts_per_rev > 0, at / "counts_per_rev", "must be a positive number of encoder cycles per motor turn",
           w.counts_per_rev);
+  require(w.counts_per_rev <= kMaxCountsPerRev, at / "counts_per_rev", "must be at most 1000000", w.counts_per_rev);
 }
 
 // Full column rank 3: every body motion (dx, dy, dtheta) moves some wheel. The columns are cm and
@@ -231,6 +243,11 @@ void RobotConfig::validate(const config::Origin& at) const {
     positive(gear_ratio, "gear_ratio");
     require(counts_per_rev > 0, at / "counts_per_rev", "must be a positive number of encoder cycles per motor turn",
             counts_per_rev);
+    require(wheel_radius_cm <= kMaxWheelRadiusCm, at / "wheel_radius_cm", "must be at most 100 cm", wheel_radius_cm);
+    require(center_to_wheel_cm <= kMaxRobotCm, at / "center_to_wheel_cm", "must be at most 1000 cm (a robot, not a field)",
+            center_to_wheel_cm);
+    require(gear_ratio <= kMaxGearRatio, at / "gear_ratio", "must be at most 10000", gear_ratio);
+    require(counts_per_rev <= kMaxCountsPerRev, at / "counts_per_rev", "must be at most 1000000", counts_per_rev);
   } else {
     const config::Origin list = at / "wheels";
     require(wheels.size() >= static_cast<std::size_t>(kMinWheels) && wheels.size() <= static_cast<std::size_t>(kMaxWheels),
@@ -241,13 +258,20 @@ void RobotConfig::validate(const config::Origin& at) const {
   }
   require(decoding == 1 || decoding == 2 || decoding == 4, at / "decoding",
           "unknown quadrature decoding mode: must be 1, 2 or 4", decoding);
-  positive(window_period_ms, "window_period_ms");
-  positive(clock_hz, "clock_hz");
+  const auto in_range = [&](double v, const char* field, double lo, double hi, const char* why) {
+    require(std::isfinite(v) && v >= lo && v <= hi, at / field, why, v);
+  };
+  // The board's window is 0.1 ms .. 1 s (a window of 1e-300 ms once turned every count into a
+  // speed of 1e300 cm/s); its clock 1 kHz .. 10 GHz.
+  in_range(window_period_ms, "window_period_ms", 0.1, 1000.0, "must be in [0.1, 1000] ms");
+  in_range(clock_hz, "clock_hz", 1e3, 1e10, "must be in [1e3, 1e10] Hz");
   positive(slip_threshold_cm_per_s, "slip_threshold_cm_per_s");
-  non_negative(wheel_noise_cm_per_sqrt_cm, "wheel_noise_cm_per_sqrt_cm");
+  in_range(slip_threshold_cm_per_s, "slip_threshold_cm_per_s", 0.0, 10000.0, "must be at most 10000 cm/s");
+  in_range(wheel_noise_cm_per_sqrt_cm, "wheel_noise_cm_per_sqrt_cm", 0.0, 10.0, "must be in [0, 10]");
   positive(max_accel_cm_per_s2, "max_accel_cm_per_s2");
-  non_negative(odometry_noise_fraction, "odometry_noise_fraction");
-  non_negative(gyro_arw_deg_per_sqrt_s, "gyro_arw_deg_per_sqrt_s");
+  in_range(max_accel_cm_per_s2, "max_accel_cm_per_s2", 0.0, 1e5, "must be at most 1e5 cm/s^2 (10 g)");
+  in_range(odometry_noise_fraction, "odometry_noise_fraction", 0.0, 1.0, "must be in [0, 1]");
+  in_range(gyro_arw_deg_per_sqrt_s, "gyro_arw_deg_per_sqrt_s", 0.0, 100.0, "must be in [0, 100]");
 }
 
 void validate_robot_config(const RobotConfig& c, const std::string& source) { c.validate(source); }

@@ -10,6 +10,12 @@
 
 namespace omniloc {
 
+namespace {
+constexpr double kMaxFieldSideCm = 5000.0;
+constexpr double kMaxBorderCm = 1000.0;
+constexpr double kMaxLineWidthCm = 50.0;
+}  // namespace
+
 void FieldSpec::validate(const config::Origin& at) const {
   using config::require;
   const auto positive = [&](double v, const config::Origin& f) { require(v > 0.0, f, "must be > 0", v); };
@@ -19,6 +25,13 @@ void FieldSpec::validate(const config::Origin& at) const {
   positive(field_width_cm, at / "field_width_cm");
   non_negative(border_cm, at / "border_cm");
   positive(line_width_cm, at / "line_width_cm");
+  // Bounds far beyond any robot-soccer field (MSL is 22 x 14 m), so that a typo cannot ask for a
+  // database of 10^6 x 10^6 points (a length of 1e7 cm ended in std::bad_alloc).
+  require(field_length_cm <= kMaxFieldSideCm, at / "field_length_cm", "must be at most 5000 cm (50 m)", field_length_cm);
+  require(field_width_cm <= kMaxFieldSideCm, at / "field_width_cm", "must be at most 5000 cm (50 m)", field_width_cm);
+  require(border_cm <= kMaxBorderCm, at / "border_cm", "must be at most 1000 cm", border_cm);
+  // A line is a few cm wide; 1000 cm would paint the whole field white.
+  require(line_width_cm <= kMaxLineWidthCm, at / "line_width_cm", "must be at most 50 cm", line_width_cm);
   const double L = field_length_cm, W = field_width_cm;
   non_negative(centre_circle_radius_cm, at / "centre_circle_radius_cm");
   require(centre_circle_radius_cm < W / 2.0, at / "centre_circle_radius_cm", "must be < field_width_cm / 2",
