@@ -43,6 +43,7 @@ void record_simulation(const std::filesystem::path& dir, World& world, const Omn
                        const std::optional<Pose2>& initial_pose) {
   RecordingMeta meta;
   meta.field = field_name;
+  meta.field_geometry = load_field(field_name).spec;
   meta.camera = renderer.camera();
   meta.robot = world.config().robot;
   meta.initial_pose = initial_pose;

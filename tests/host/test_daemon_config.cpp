@@ -21,7 +21,8 @@ using test::error_of;
 const std::vector<std::string> kEveryKey = {
     "board_serial", "reconnect_period_ms", "camera",     "camera_fps",  "camera_timeout_ms", "field",
     "camera_model", "robot",               "localizer",  "database",    "grid_step_cm",      "udp_address",
-    "udp_port",     "publish_hz",          "record_dir", "status_period_s", "duration_s"};
+    "udp_port",     "publish_hz",          "record_dir", "record_overwrite", "record_format",
+    "status_period_s", "duration_s"};
 
 // Every key set to a value that differs from its default (publish_hz has only one valid value).
 const std::string kEveryKeyJson = R"({
@@ -40,6 +41,8 @@ const std::string kEveryKeyJson = R"({
   "udp_port": 6001,
   "publish_hz": 100,
   "record_dir": "/data/run1",
+  "record_overwrite": true,
+  "record_format": "png",
   "status_period_s": 2.5,
   "duration_s": 12
 })";
@@ -74,6 +77,8 @@ TEST(DaemonConfig, EveryKeyReachesItsMember) {
   EXPECT_EQ(c.udp_port, 6001);
   EXPECT_EQ(c.publish_hz, 100.0);
   EXPECT_EQ(c.record_dir, "/data/run1");
+  EXPECT_TRUE(c.record_overwrite);
+  EXPECT_EQ(c.record_format, "png");
   EXPECT_EQ(c.status_period_s, 2.5);
   EXPECT_EQ(c.duration_s, 12.0);
 }

@@ -7,6 +7,9 @@
 #include <fstream>
 #include <string>
 #include <unistd.h>
+#include <csignal>
+#include <iterator>
+#include <sys/resource.h>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -31,7 +34,9 @@ class RecordingFiles : public ::testing::Test {
     meta_.robot = load_named_robot_config("default");
     meta_.robot.gear_ratio = 24.0;
     meta_.initial_pose = Pose2{123.5, 234.25, -45.5};
-    RecordingWriter w(dir_, meta_, true);
+    RecordingOptions png;  // lossless, so that the round trip compares pixels exactly
+    png.frame_format = FrameFormat::kPng;
+    RecordingWriter w(dir_, meta_, true, png);
     for (int i = 0; i < 5; ++i) {
       EncoderWindow e;
       e.seq = static_cast<std::uint32_t>(100 + i);
@@ -274,6 +279,116 @@ TEST_F(RecordingFiles, PosesCsvRoundTrip) {
   EXPECT_EQ(rows[1].pose.yaw_deg, -3.125);
   EXPECT_EQ(rows[1].match_error, 7.5);
   EXPECT_EQ(rows[1].search_range_cm, 20.0);
+}
+
+// Issue 16 item 4: reusing a record dir silently replaced the previous recording and left its old
+// PNGs behind. Now an existing recording is refused; with overwrite it is removed, frames included.
+TEST_F(RecordingFiles, AnExistingRecordingIsRefusedUnlessToldAndThenCleanedOut) {
+  const std::string e = test::error_of([&] { RecordingWriter w(dir_, meta_, false); });
+  EXPECT_EQ(e.rfind(dir_.string() + ": exists and is not empty", 0), 0u) << e;
+  EXPECT_TRUE(fs::exists(dir_ / "frames" / "000001.png")) << "the old recording was touched";
+  EXPECT_EQ(load_recording(dir_).frames.size(), 2u);
+  // A directory with someone's files and no meta.json is refused even with overwrite.
+  const fs::path other = dir_.string() + "_other";
+  fs::create_directories(other);
+  std::ofstream(other / "notes.txt") << "mine";
+  RecordingOptions over;
+  over.overwrite = true;
+  EXPECT_NE(test::error_of([&] { RecordingWriter w(other, meta_, false, over); }).find("holds no recording"),
+            std::string::npos);
+  EXPECT_TRUE(fs::exists(other / "notes.txt"));
+  fs::remove_all(other);
+  {
+    RecordingWriter w(dir_, meta_, false, over);
+    cv::Mat img(meta_.camera.height_px, meta_.camera.width_px, CV_8UC3, cv::Scalar(1, 2, 3));
+    w.add_frame(1.0, img);
+    w.close();
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "frames" / "000000.png")) << "old frames left behind";
+  EXPECT_FALSE(fs::exists(dir_ / "frames" / "000001.png"));
+  EXPECT_FALSE(fs::exists(dir_ / "truth.csv")) << "the old truth would score the new run";
+  EXPECT_TRUE(fs::exists(dir_ / "frames" / "000000.jpg"));
+  const Recording r = load_recording(dir_);
+  EXPECT_EQ(r.frames.size(), 1u);
+  EXPECT_TRUE(r.windows.empty());
+  // An empty directory is a new one.
+  const fs::path empty = dir_.string() + "_empty";
+  fs::create_directories(empty);
+  EXPECT_NO_THROW({ RecordingWriter w(empty, meta_, false); w.close(); });
+  fs::remove_all(empty);
+}
+
+// Issue 16 item 3: writes were unchecked (fprintf), "write failed" came only at the end and the CSV
+// was cut mid-row. With a file size limit (RLIMIT_FSIZE, SIGXFSZ ignored: write(2) then fails with
+// EFBIG, as on a full disk with ENOSPC) the failing write throws at once, naming the file and the
+// reason, the file keeps whole rows only, and the writer refuses further rows.
+TEST_F(RecordingFiles, AFailingWriteStopsTheRecordingWithWholeRowsOnly) {
+  fs::remove_all(dir_);
+  RecordingWriter w(dir_, meta_, false);
+  struct rlimit old {};
+  ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &old), 0);
+  const auto previous = std::signal(SIGXFSZ, SIG_IGN);
+  struct rlimit tiny = old;
+  tiny.rlim_cur = 1000;  // bytes per file: encoders.csv fills after ~20 rows
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &tiny), 0);
+  std::string error;
+  int rows = 0;
+  for (; rows < 1000 && error.empty(); ++rows) {
+    EncoderWindow e;
+    e.seq = static_cast<std::uint32_t>(rows);
+    e.t_end_ms = 10.0 * (rows + 1);
+    e.counts = {123456, -123456, 7, 8};
+    try {
+      w.add_window(e);
+    } catch (const RecordingError& x) {
+      error = x.what();
+    }
+  }
+  std::string frame_error = test::error_of([&] {
+    w.add_frame(1.0, cv::Mat(meta_.camera.height_px, meta_.camera.width_px, CV_8UC3, cv::Scalar(1, 2, 3)));
+  });
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &old), 0);
+  std::signal(SIGXFSZ, previous);
+  std::printf("stopped after %d rows: %s\n", rows, error.c_str());
+  EXPECT_EQ(error, (dir_ / "encoders.csv").string() + ": write failed (File too large)");
+  EXPECT_LT(rows, 1000);
+  EXPECT_NE(frame_error.find("recording stopped after an error"), std::string::npos) << frame_error;
+  // The file ends with a whole row and reads back: every row written before the failure.
+  std::ifstream in(dir_ / "encoders.csv", std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(text.empty());
+  EXPECT_EQ(text.back(), '\n');
+  EXPECT_EQ(read_encoders_csv(dir_ / "encoders.csv").size(), static_cast<std::size_t>(rows - 1));
+}
+
+// Issue 16 item 5: meta.json stored --field as given (a relative path broke replay from another
+// folder). It now embeds the geometry; recording_field uses it, and an older recording naming a
+// path relative to itself still replays. An initial pose of 1e9 cm is refused (item 6).
+TEST_F(RecordingFiles, MetaEmbedsTheFieldAndReplaysWithoutItsFile) {
+  fs::remove_all(dir_);
+  RecordingMeta m = meta_;
+  m.field = "fields/does-not-exist.json";
+  m.field_geometry = load_field("fira-robosot").spec;
+  { RecordingWriter w(dir_, m, false); w.close(); }
+  const Recording r = load_recording(dir_);
+  ASSERT_TRUE(r.meta.field_geometry.has_value());
+  EXPECT_TRUE(*r.meta.field_geometry == *m.field_geometry);
+  const FieldGeometry f = recording_field(r);
+  EXPECT_EQ(f.fingerprint(), load_field("fira-robosot").fingerprint());
+  // An old recording: a relative path, the file beside the recording, replay from elsewhere.
+  fs::remove_all(dir_);
+  RecordingMeta old = meta_;
+  old.field = "my-field.json";
+  { RecordingWriter w(dir_, old, false); w.close(); }
+  fs::copy_file(resolve_data_file("fields", "fira-robosot"), dir_ / "my-field.json");
+  EXPECT_EQ(recording_field(load_recording(dir_)).fingerprint(), f.fingerprint());
+  // The initial pose must be on the carpet (100 cm margin).
+  fs::remove_all(dir_);
+  RecordingMeta far = m;
+  far.initial_pose = Pose2{1e9, 100.0, 0.0};
+  { RecordingWriter w(dir_, far, false); w.close(); }
+  const std::string e = test::error_of([&] { (void)load_recording(dir_); });
+  EXPECT_NE(e.find("meta.json:initial_pose.x_cm: must lie on the carpet of field 'fira-robosot'"), std::string::npos) << e;
 }
 
 TEST(ErrorSummary, HandComputed) {

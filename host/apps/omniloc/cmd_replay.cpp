@@ -79,7 +79,7 @@ int cmd_replay(std::span<const std::string_view> args) {
   if (out.empty()) out = (std::filesystem::path(dir) / "poses.csv").string();
 
   const Recording rec = load_recording(dir);
-  const FieldGeometry field = load_field(rec.meta.field);
+  const FieldGeometry field = recording_field(rec);
   LocalizerConfig config = load_localizer_config(config_name);
   if (paper) {
     const FuzzyConfig fuzzy = config.fuzzy;

@@ -137,6 +137,8 @@ struct DaemonReport {
   std::uint64_t telemetry_gaps = 0;  ///< gaps in the telemetry sequence (all sessions)
   double run_ms = 0.0;               ///< daemon time from start to stop
   std::string stop_reason;           ///< "signal", "duration"
+  std::uint64_t recording_failures = 0;  ///< write errors (each stops the recording; poses go on)
+  std::string recording_error;           ///< the last one, naming the file and the reason
   LocalizerStats localizer;
 };
 

@@ -36,6 +36,8 @@ struct DaemonConfig {
   int udp_port = 5600;
   double publish_hz = 100.0;           ///< one datagram per board window; checked to be the window rate
   std::string record_dir;              ///< empty: no recording
+  bool record_overwrite = false;       ///< replace an old recording in record_dir (else refused)
+  std::string record_format = "jpeg";  ///< frame store: "jpeg" (compact) or "png" (lossless)
   double status_period_s = 1.0;        ///< status line on stderr; 0 disables it
   double duration_s = 0.0;             ///< stop after this much (daemon) time; 0: until SIGINT/SIGTERM
 

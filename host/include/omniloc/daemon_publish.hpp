@@ -78,6 +78,8 @@ struct StatusSnapshot {
   std::uint64_t send_failed = 0;
   std::string send_error;  ///< why the last failed send failed (shown when sends fail)
   std::uint64_t reconnects = 0;
+  std::string recording;                 ///< "" (none), "on" or "stopped" (a write failed: disk full...)
+  std::uint64_t recording_failures = 0;  ///< write errors that stopped the recording
 };
 
 /// One line, no newline, e.g.

@@ -100,6 +100,9 @@ struct FieldGeometry {
   std::vector<FieldSegment> segments;
   std::vector<FieldArc> arcs;
   std::vector<FieldDisc> discs;
+  /// The spec the lines were built from (a recording's meta.json embeds it, so that it replays
+  /// without the geometry file).
+  FieldSpec spec;
 
   /// Extent of the carpet (playing area plus border): the field frame spans [0, total].
   [[nodiscard]] double total_x_cm() const { return field_length_cm + 2.0 * border_cm; }

@@ -1,15 +1,18 @@
 // Recordings: the REC_DIR contract of issue 7, read and written exactly.
 //
-//   meta.json    {"field": name or path, "camera": {...camera block...}, "robot": {...robot block...},
+//   meta.json    {"field": name or path, "field_geometry": {...geometry file...} (optional; written by
+//                 every writer since issue 16, so that a recording replays without the field file),
+//                 "camera": {...camera block...}, "robot": {...robot block...},
 //                 "initial_pose": {"x_cm", "y_cm", "yaw_deg"} (optional)}
 //   encoders.csv t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg      one row per encoder window
-//   camera.csv   t_ms,file                              file: PNG relative to REC_DIR
+//   camera.csv   t_ms,file                              file: image (JPEG or PNG) relative to REC_DIR
 //   truth.csv    t_ms,x_cm,y_cm,yaw_deg                 optional
 //   poses.csv    t_ms,x_cm,y_cm,yaw_deg,source,match_error,search_range_cm   (output of replay)
 //
 // Every error (RecordingError) names the file and, for CSV files, the line (1-based, header = 1).
 #pragma once
 
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -38,6 +41,7 @@ class RecordingError : public std::runtime_error {
 
 struct RecordingMeta {
   std::string field = "fira-robosot";  ///< geometry name or path, as written in meta.json
+  std::optional<FieldSpec> field_geometry;  ///< the geometry itself (replay uses it before `field`)
   CameraModel camera;
   RobotConfig robot;
   std::optional<Pose2> initial_pose;
@@ -75,14 +79,54 @@ struct Recording {
 [[nodiscard]] std::vector<LocalizedPose> read_poses_csv(const std::filesystem::path& path);
 
 /// Reads meta.json, encoders.csv, camera.csv and truth.csv if present; checks that every listed
-/// PNG exists (images are loaded on demand with load_frame).
+/// image exists (images are loaded on demand with load_frame).
 [[nodiscard]] Recording load_recording(const std::filesystem::path& dir);
+/// The recording's field: the embedded geometry, else the file `field` names (a name in
+/// common/fields/, a path as given, or a relative path from the recording's directory: older
+/// recordings stored --field as typed). The initial pose, if any, must lie on the carpet (or
+/// within 100 cm of it); throws RecordingError / ConfigError naming meta.json otherwise.
+[[nodiscard]] FieldGeometry recording_field(const Recording& recording);
 /// Loads a frame's PNG as BGR; throws RecordingError naming the file (and camera.csv's line) if it
 /// cannot be read or its size differs from the camera's.
 [[nodiscard]] cv::Mat load_frame(const Recording& recording, std::size_t frame_index);
 
 /// Truth pose at t_ms, linear between samples (yaw the short way); nullopt outside the samples.
 [[nodiscard]] std::optional<Pose2> truth_at(const std::vector<TruthSample>& truth, double t_ms);
+
+/// How frames are stored: JPEG (default; ~5x smaller than PNG, replayed poses within 0.5 cm of the
+/// PNG recording's, docs/DAEMON.md "Recording") or PNG (lossless).
+enum class FrameFormat { kJpeg, kPng };
+
+struct RecordingOptions {
+  /// false: a directory that exists and is not empty is refused (nothing of an old recording is
+  /// replaced or mixed). true: an old recording there (a meta.json) is removed first, its frames
+  /// included; a non-empty directory without meta.json is still refused.
+  bool overwrite = false;
+  FrameFormat frame_format = FrameFormat::kJpeg;
+  int jpeg_quality = 95;  ///< 1..100
+};
+
+/// Streams CSV rows so that a crash loses at most the last second: each row goes to the kernel
+/// in one write(2) (a SIGKILL leaves whole rows only), the file is fdatasync'ed at least once a
+/// second (power loss), and a short write (disk full, file size limit) is cut back to the last
+/// whole row and reported as RecordingError naming the file and the reason.
+class CsvFile {
+ public:
+  CsvFile(const std::filesystem::path& path, const std::string& header);
+  ~CsvFile();
+  CsvFile(const CsvFile&) = delete;
+  CsvFile& operator=(const CsvFile&) = delete;
+  void write_row(const std::string& row_with_newline);
+  /// Syncs and closes; throws RecordingError if the data did not reach the file.
+  void close();
+  [[nodiscard]] const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+  int fd_ = -1;
+  long long bytes_ = 0;    // whole rows written so far
+  double last_sync_s_ = 0.0;
+};
 
 /// Streams truth.csv rows (t_ms,x_cm,y_cm,yaw_deg): the ground truth of a simulated run, written by
 /// the simulator beside the daemon's recording (the robot never knows its truth).
@@ -97,31 +141,40 @@ class TruthCsvWriter {
   void close();
 
  private:
-  std::filesystem::path path_;
-  std::FILE* file_ = nullptr;
+  CsvFile file_;
 };
 
-/// Writes a recording directory (created if needed; existing files are overwritten).
+/// Writes a recording directory (created if needed; see RecordingOptions for an existing one).
+/// Every write is checked: add_* throw RecordingError naming the file and the reason (a full disk:
+/// "No space left on device"); after one, the writer refuses further rows (the daemon stops the
+/// recording and goes on streaming poses). Rows reach the disk as CsvFile says; a frame's
+/// camera.csv row is written only after its image is complete.
 class RecordingWriter {
  public:
-  RecordingWriter(const std::filesystem::path& dir, const RecordingMeta& meta, bool with_truth);
+  RecordingWriter(const std::filesystem::path& dir, const RecordingMeta& meta, bool with_truth,
+                  const RecordingOptions& options = {});
   ~RecordingWriter();
   RecordingWriter(const RecordingWriter&) = delete;
   RecordingWriter& operator=(const RecordingWriter&) = delete;
 
   void add_window(const EncoderWindow& window);
-  /// Writes frames/NNNNNN.png and the camera.csv row.
+  /// Writes frames/NNNNNN.jpg (or .png) and the camera.csv row.
   void add_frame(double t_ms, const cv::Mat& bgr);
   void add_truth(double t_ms, const Pose2& pose);
   /// Flushes and closes (also done by the destructor, which cannot report errors).
   void close();
+  [[nodiscard]] std::uint64_t frame_bytes() const { return frame_bytes_; }
 
  private:
+  void check_usable() const;
   std::filesystem::path dir_;
-  std::FILE* encoders_ = nullptr;
-  std::FILE* camera_ = nullptr;
+  RecordingOptions options_;
+  std::unique_ptr<CsvFile> encoders_;
+  std::unique_ptr<CsvFile> camera_;
   std::unique_ptr<TruthCsvWriter> truth_;
   int frame_count_ = 0;
+  std::uint64_t frame_bytes_ = 0;
+  std::string failed_;  // the first write error; the writer is unusable after it
 };
 
 /// Writes meta.json with nlohmann-json (strings escaped, doubles exact): the camera block in the
@@ -139,8 +192,7 @@ class PosesCsvWriter {
   void close();
 
  private:
-  std::filesystem::path path_;
-  std::FILE* file_ = nullptr;
+  CsvFile file_;
 };
 
 /// The database for a field and camera from `cache_path` if it holds the right one, else built

@@ -64,10 +64,14 @@ struct Daemon::Impl {
     if (!config.record_dir.empty()) {
       RecordingMeta meta;
       meta.field = config.field;
+      meta.field_geometry = models.field.spec;  // self-contained: replays without the field file
       meta.camera = models.camera;
       meta.robot = models.robot;
       meta.initial_pose = models.initial_pose;
-      recorder = std::make_unique<RecordingWriter>(config.record_dir, meta, false);
+      RecordingOptions ro;
+      ro.overwrite = config.record_overwrite;
+      ro.frame_format = config.record_format == "png" ? FrameFormat::kPng : FrameFormat::kJpeg;
+      recorder = std::make_unique<RecordingWriter>(config.record_dir, meta, false, ro);
     }
   }
 
@@ -79,6 +83,20 @@ struct Daemon::Impl {
   }
 
   void log(const std::string& s) const { io.log(s); }
+
+  // A recording that cannot be written (disk full, file size limit) stops; the pose stream goes on.
+  template <class Write>
+  void record(Write write) {
+    if (!recorder) return;
+    try {
+      write();
+    } catch (const RecordingError& e) {
+      ++report.recording_failures;
+      report.recording_error = e.what();
+      recorder.reset();  // closes what is open; whole rows only are on disk
+      log(std::string("omnilocd: recording stopped: ") + e.what() + "; poses are still sent");
+    }
+  }
 
   DaemonStatus status(double now_ms) const {
     if (!ever_connected) return DaemonStatus::kNoBoard;
@@ -170,7 +188,7 @@ struct Daemon::Impl {
     const LocalizedPose lp = localizer.on_window(ew);
     ++report.windows;
     last_localized = lp;
-    if (recorder) recorder->add_window(ew);
+    record([&] { recorder->add_window(ew); });
     if (io.observer.on_window) io.observer.on_window(ew);
     publish(lp, status(now), ew.t_end_ms, true);
   }
@@ -181,7 +199,7 @@ struct Daemon::Impl {
     if (!board_gone && client) {
       if (auto f = io.camera->poll(now_ms)) {
         (void)localizer.on_image(f->t_ms, f->bgr);
-        if (recorder) recorder->add_frame(f->t_ms, f->bgr);
+        record([&] { recorder->add_frame(f->t_ms, f->bgr); });
         if (io.observer.on_frame) io.observer.on_frame(*f);
         last_frame_ms = f->t_ms;
         ++report.frames;
@@ -216,6 +234,8 @@ struct Daemon::Impl {
     s.send_failed = publisher.failed();
     s.send_error = publisher.last_error();
     s.reconnects = report.reconnects;
+    if (!config.record_dir.empty()) s.recording = recorder ? "on" : "stopped";
+    s.recording_failures = report.recording_failures;
     const std::string line = status_line(s);
     log(line);
     if (io.observer.on_status) io.observer.on_status(line);
@@ -276,7 +296,15 @@ struct Daemon::Impl {
       if (const auto err = client->stop_streaming()) log("omnilocd: could not switch streaming off: " + *err);
       count_link_errors();
     }
-    if (recorder) recorder->close();
+    if (recorder) {
+      try {
+        recorder->close();
+      } catch (const RecordingError& e) {
+        ++report.recording_failures;
+        report.recording_error = e.what();
+        log(std::string("omnilocd: recording could not be closed: ") + e.what());
+      }
+    }
     report.run_ms = clock.now_ms() - start;
     report.localizer = localizer.stats();
     report.published = publisher.sent();
@@ -289,12 +317,13 @@ std::string report_line(const DaemonReport& r) {
   char buf[320];
   std::snprintf(buf, sizeof buf,
                 "stopped (%s) after %.1f s: %llu windows, %llu frames, %llu poses sent (%llu failed), "
-                "board lost %llu x / back %llu x, camera lost %llu x, %llu bad CRC, %llu telemetry gaps",
+                "board lost %llu x / back %llu x, camera lost %llu x, %llu bad CRC, %llu telemetry gaps%s",
                 r.stop_reason.c_str(), r.run_ms / 1000.0, static_cast<unsigned long long>(r.windows),
                 static_cast<unsigned long long>(r.frames), static_cast<unsigned long long>(r.published),
                 static_cast<unsigned long long>(r.send_failed), static_cast<unsigned long long>(r.board_losses),
                 static_cast<unsigned long long>(r.reconnects), static_cast<unsigned long long>(r.camera_losses),
-                static_cast<unsigned long long>(r.bad_crc), static_cast<unsigned long long>(r.telemetry_gaps));
+                static_cast<unsigned long long>(r.bad_crc), static_cast<unsigned long long>(r.telemetry_gaps),
+                r.recording_failures > 0 ? ", recording stopped on a write error" : "");
   return buf;
 }
 

@@ -32,7 +32,10 @@ const config::KeyTable<DaemonConfig>& daemon_config_keys() {
       key("udp_address", &D::udp_address, opt, "IPv4 address the poses are sent to"),
       key("udp_port", &D::udp_port, opt, "UDP port the poses are sent to"),
       key("publish_hz", &D::publish_hz, opt, "pose rate (the board window rate, 100)"),
-      key("record_dir", &D::record_dir, opt, "record the session here; empty: no recording"),
+      key("record_dir", &D::record_dir, opt, "record the session here (a new or empty directory); empty: no recording"),
+      key("record_overwrite", &D::record_overwrite, opt, "replace an old recording in record_dir (its frames too)"),
+      config::choice<D, std::string>("record_format", &D::record_format, {{"jpeg", "jpeg"}, {"png", "png"}}, opt,
+                                     "recorded frames: jpeg (~2 MB/s at 30 Hz 640 x 480) or png (lossless, ~12 MB/s)"),
       key("status_period_s", &D::status_period_s, opt, "seconds between status lines; 0: none"),
       key("duration_s", &D::duration_s, opt, "stop after this many seconds; 0: run until SIGINT/SIGTERM"),
   };

@@ -144,7 +144,10 @@ std::string status_line(const StatusSnapshot& s) {
                 static_cast<unsigned long long>(s.published), static_cast<unsigned long long>(s.send_failed),
                 s.send_failed > 0 && !s.send_error.empty() ? " send_error=" : "",
                 s.send_failed > 0 ? s.send_error.c_str() : "", static_cast<unsigned long long>(s.reconnects));
-  return buf;
+  std::string line = buf;
+  if (!s.recording.empty())
+    line += " rec=" + s.recording + " rec_failures=" + std::to_string(s.recording_failures);
+  return line;
 }
 
 }  // namespace omniloc::daemon

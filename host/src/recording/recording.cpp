@@ -2,6 +2,11 @@
 #include "omniloc/recording.hpp"
 
 #include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <fcntl.h>
+#include <unistd.h>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -197,6 +202,13 @@ const config::KeyTable<RecordingMeta>& meta_keys() {
   using M = RecordingMeta;
   static const config::KeyTable<RecordingMeta> table = {
       config::key("field", &M::field, Need::kRequired),
+      config::Key<M>{"field_geometry", Need::kOptional, config::Kind::kOther,
+                     [](const config::Node& n, M& m) { m.field_geometry = parse_field_spec(n); },
+                     [](const M& m) -> std::optional<config::Json> {
+                       if (!m.field_geometry) return std::nullopt;
+                       return config::write_keys(*m.field_geometry, field_spec_keys());
+                     },
+                     {}},
       config::custom<M>(
           "camera", Need::kRequired, [](const config::Node& n, M& m) { m.camera = camera_from_json(n); },
           [](const M& m) { return config::write_keys(m.camera, camera_keys()); }),
@@ -220,6 +232,10 @@ const config::KeyTable<RecordingMeta>& meta_keys() {
 
 }  // namespace
 
+namespace {
+void check_initial_pose(const Pose2& pose, const FieldGeometry& field, const config::Origin& at);
+}  // namespace
+
 void RecordingMeta::validate(const config::Origin& at) const {
   config::require(!field.empty(), at / "field", "must name a geometry (a name or a path)", config::show(field));
   camera.validate(at / "camera");
@@ -229,6 +245,46 @@ void RecordingMeta::validate(const config::Origin& at) const {
     config::require(std::isfinite(initial_pose->y_cm), at / "initial_pose" / "y_cm", "must be finite", initial_pose->y_cm);
     config::require(std::isfinite(initial_pose->yaw_deg), at / "initial_pose" / "yaw_deg", "must be finite",
                     initial_pose->yaw_deg);
+    if (field_geometry) check_initial_pose(*initial_pose, build_field(*field_geometry, ""), at);
+  }
+}
+
+namespace {
+void check_initial_pose(const Pose2& pose, const FieldGeometry& field, const config::Origin& at) {
+  // On the carpet or near it (a robot put down just outside): 1e9 cm was accepted once.
+  constexpr double kMarginCm = 100.0;
+  const auto inside = [&](double v, double total) { return v >= -kMarginCm && v <= total + kMarginCm; };
+  config::require(inside(pose.x_cm, field.total_x_cm()), at / "initial_pose" / "x_cm",
+                  "must lie on the carpet of field '" + field.name + "' (0 .. " + config::show(field.total_x_cm()) +
+                      " cm, 100 cm margin)",
+                  pose.x_cm);
+  config::require(inside(pose.y_cm, field.total_y_cm()), at / "initial_pose" / "y_cm",
+                  "must lie on the carpet of field '" + field.name + "' (0 .. " + config::show(field.total_y_cm()) +
+                      " cm, 100 cm margin)",
+                  pose.y_cm);
+  config::require(std::abs(pose.yaw_deg) <= 3600.0, at / "initial_pose" / "yaw_deg", "must be within +-3600 degrees",
+                  pose.yaw_deg);
+}
+}  // namespace
+
+FieldGeometry recording_field(const Recording& rec) {
+  const fs::path meta = rec.dir / "meta.json";
+  try {
+    FieldGeometry field;
+    if (rec.meta.field_geometry) {
+      field = build_field(*rec.meta.field_geometry, meta.string() + ":field_geometry");
+    } else {
+      // Older recordings name the geometry; a relative path was stored as typed, so it is also
+      // looked for from the recording's directory.
+      const fs::path as_given(rec.meta.field);
+      std::error_code ec;
+      const bool beside = as_given.is_relative() && !fs::exists(as_given, ec) && fs::is_regular_file(rec.dir / as_given, ec);
+      field = load_field(beside ? (rec.dir / as_given).string() : rec.meta.field);
+    }
+    if (rec.meta.initial_pose) check_initial_pose(*rec.meta.initial_pose, field, meta.string());
+    return field;
+  } catch (const ConfigError& e) {
+    throw RecordingError(e.what());
   }
 }
 
@@ -289,63 +345,168 @@ std::optional<Pose2> truth_at(const std::vector<TruthSample>& truth, double t_ms
 
 namespace {
 
-std::FILE* open_write(const fs::path& p) {
-  std::FILE* f = std::fopen(p.string().c_str(), "w");
-  if (!f) throw RecordingError(p.string() + ": cannot create");
-  return f;
+std::string errno_text() { return std::strerror(errno); }
+
+double steady_s() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-void close_file(std::FILE*& f, const fs::path& p) {
-  if (!f) return;
-  const bool bad = std::ferror(f) != 0;
-  const int rc = std::fclose(f);
-  f = nullptr;
-  if (bad || rc != 0) throw RecordingError(p.string() + ": write failed");
+/// All of `data` to `fd`, or false with errno set (a short write is retried until it fails).
+bool write_all(int fd, const char* data, std::size_t n) {
+  while (n > 0) {
+    const ssize_t w = ::write(fd, data, n);
+    if (w < 0) {
+      if (errno == EINTR) continue;
+      return false;
+    }
+    if (w == 0) {
+      errno = ENOSPC;
+      return false;
+    }
+    data += w;
+    n -= static_cast<std::size_t>(w);
+  }
+  return true;
+}
+
+/// A whole file written and closed, or RecordingError naming it (the partial file is removed).
+void write_file(const fs::path& p, const char* data, std::size_t n) {
+  const int fd = ::open(p.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw RecordingError(p.string() + ": cannot create (" + errno_text() + ")");
+  const bool ok = write_all(fd, data, n);
+  const std::string why = ok ? "" : errno_text();
+  if (::close(fd) != 0 && ok) throw RecordingError(p.string() + ": write failed (" + errno_text() + ")");
+  if (!ok) {
+    std::error_code ec;
+    fs::remove(p, ec);
+    throw RecordingError(p.string() + ": write failed (" + why + ")");
+  }
+}
+
+// The files a recording consists of: what `overwrite` removes, and nothing else.
+const char* const kRecordingFiles[] = {"meta.json", "encoders.csv", "camera.csv", "truth.csv", "poses.csv"};
+
+/// A new recording directory: created, or existing and empty, or (overwrite) holding an old
+/// recording, which is removed first (its frames too, so none is left to mix with the new ones).
+void prepare_directory(const fs::path& dir, bool overwrite) {
+  std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+    throw RecordingError(dir.string() + ": exists and is not a directory");
+  if (fs::is_directory(dir, ec) && !fs::is_empty(dir, ec)) {
+    if (!overwrite) {
+      throw RecordingError(dir.string() + ": exists and is not empty (an earlier recording?): not overwriting it; "
+                           "record to a new directory, or set record_overwrite (--record-overwrite) to replace it");
+    }
+    if (!fs::exists(dir / "meta.json", ec))
+      throw RecordingError(dir.string() + ": not empty and holds no recording (no meta.json): not overwriting it");
+    for (const char* f : kRecordingFiles) fs::remove(dir / f, ec);
+    fs::remove_all(dir / "frames", ec);
+    if (ec) throw RecordingError(dir.string() + ": cannot remove the old recording (" + ec.message() + ")");
+  }
+  fs::create_directories(dir / "frames", ec);
+  if (ec) throw RecordingError(dir.string() + ": cannot create (" + ec.message() + ")");
 }
 
 }  // namespace
+
+CsvFile::CsvFile(const fs::path& path, const std::string& header) : path_(path) {
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw RecordingError(path.string() + ": cannot create (" + errno_text() + ")");
+  last_sync_s_ = steady_s();
+  write_row(header);
+}
+
+CsvFile::~CsvFile() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void CsvFile::write_row(const std::string& row) {
+  if (fd_ < 0) throw RecordingError(path_.string() + ": closed");
+  if (!write_all(fd_, row.data(), row.size())) {
+    const std::string why = errno_text();
+    // Whole rows only: cut back what part of this row got in, so the file still reads.
+    if (::ftruncate(fd_, bytes_) != 0) { /* the error below is the one that matters */ }
+    throw RecordingError(path_.string() + ": write failed (" + why + ")");
+  }
+  bytes_ += static_cast<long long>(row.size());
+  // Once a second to the disk itself, so that a power loss costs at most the last second.
+  const double now = steady_s();
+  if (now - last_sync_s_ >= 1.0) {
+    last_sync_s_ = now;
+    if (::fdatasync(fd_) != 0) throw RecordingError(path_.string() + ": sync failed (" + errno_text() + ")");
+  }
+}
+
+void CsvFile::close() {
+  if (fd_ < 0) return;
+  const bool synced = ::fdatasync(fd_) == 0;
+  const std::string why = synced ? "" : errno_text();
+  const bool closed = ::close(fd_) == 0;
+  fd_ = -1;
+  if (!synced || !closed) throw RecordingError(path_.string() + ": write failed (" + (synced ? errno_text() : why) + ")");
+}
 
 void write_meta(const fs::path& meta_json, const RecordingMeta& m) {
   // nlohmann escapes the strings (a field path with '\' or '"') and writes every double so that it
   // reads back to the same value.
   const std::string s = config::write_keys(m, meta_keys()).dump(2) + "\n";
-  std::FILE* f = open_write(meta_json);
-  std::fwrite(s.data(), 1, s.size(), f);
-  close_file(f, meta_json);
+  write_file(meta_json, s.data(), s.size());
 }
 
-RecordingWriter::RecordingWriter(const fs::path& dir, const RecordingMeta& meta, bool with_truth) : dir_(dir) {
-  std::error_code ec;
-  fs::create_directories(dir / "frames", ec);
-  if (ec) throw RecordingError(dir.string() + ": cannot create (" + ec.message() + ")");
+RecordingWriter::RecordingWriter(const fs::path& dir, const RecordingMeta& meta, bool with_truth,
+                                 const RecordingOptions& options)
+    : dir_(dir), options_(options) {
+  if (options.jpeg_quality < 1 || options.jpeg_quality > 100)
+    throw RecordingError(dir.string() + ": JPEG quality must be 1..100 (got " + std::to_string(options.jpeg_quality) + ")");
+  prepare_directory(dir, options.overwrite);
   write_meta(dir / "meta.json", meta);
-  encoders_ = open_write(dir / "encoders.csv");
-  std::fputs("t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n", encoders_);
-  camera_ = open_write(dir / "camera.csv");
-  std::fputs("t_ms,file\n", camera_);
-  if (with_truth) {
-    truth_ = std::make_unique<TruthCsvWriter>(dir / "truth.csv");
-  } else {
-    fs::remove(dir / "truth.csv", ec);
-  }
+  encoders_ = std::make_unique<CsvFile>(dir / "encoders.csv", "t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n");
+  camera_ = std::make_unique<CsvFile>(dir / "camera.csv", "t_ms,file\n");
+  if (with_truth) truth_ = std::make_unique<TruthCsvWriter>(dir / "truth.csv");
 }
 
-RecordingWriter::~RecordingWriter() {
-  for (std::FILE* f : {encoders_, camera_})
-    if (f) std::fclose(f);
+RecordingWriter::~RecordingWriter() = default;
+
+void RecordingWriter::check_usable() const {
+  if (!failed_.empty()) throw RecordingError("recording stopped after an error: " + failed_);
+  if (!encoders_) throw RecordingError(dir_.string() + ": recording closed");
 }
 
 void RecordingWriter::add_window(const EncoderWindow& w) {
-  std::fprintf(encoders_, "%.6f,%u,%d,%d,%d,%d,%.6f\n", w.t_end_ms, w.seq, w.counts[0], w.counts[1], w.counts[2],
-               w.counts[3], w.gyro_yaw_deg);
+  check_usable();
+  char row[160];
+  std::snprintf(row, sizeof row, "%.6f,%u,%d,%d,%d,%d,%.6f\n", w.t_end_ms, w.seq, w.counts[0], w.counts[1], w.counts[2],
+                w.counts[3], w.gyro_yaw_deg);
+  try {
+    encoders_->write_row(row);
+  } catch (const RecordingError& e) {
+    failed_ = e.what();
+    throw;
+  }
 }
 
 void RecordingWriter::add_frame(double t_ms, const cv::Mat& bgr) {
+  check_usable();
+  const bool jpeg = options_.frame_format == FrameFormat::kJpeg;
   char name[32];
-  std::snprintf(name, sizeof name, "frames/%06d.png", frame_count_++);
+  std::snprintf(name, sizeof name, "frames/%06d.%s", frame_count_, jpeg ? "jpg" : "png");
   const fs::path p = dir_ / name;
-  if (!cv::imwrite(p.string(), bgr)) throw RecordingError(p.string() + ": cannot write image");
-  std::fprintf(camera_, "%.6f,%s\n", t_ms, name);
+  try {
+    std::vector<std::uint8_t> bytes;
+    const std::vector<int> params =
+        jpeg ? std::vector<int>{cv::IMWRITE_JPEG_QUALITY, options_.jpeg_quality} : std::vector<int>{};
+    if (!cv::imencode(jpeg ? ".jpg" : ".png", bgr, bytes, params)) throw RecordingError(p.string() + ": cannot encode image");
+    // The image is complete before camera.csv names it: after a crash every listed frame reads.
+    write_file(p, reinterpret_cast<const char*>(bytes.data()), bytes.size());
+    frame_bytes_ += bytes.size();
+    ++frame_count_;
+    char row[64];
+    std::snprintf(row, sizeof row, "%.6f,%s\n", t_ms, name);
+    camera_->write_row(row);
+  } catch (const RecordingError& e) {
+    failed_ = e.what();
+    throw;
+  }
 }
 
 void RecordingWriter::add_truth(double t_ms, const Pose2& pose) {
@@ -354,32 +515,28 @@ void RecordingWriter::add_truth(double t_ms, const Pose2& pose) {
 }
 
 void RecordingWriter::close() {
-  close_file(encoders_, dir_ / "encoders.csv");
-  close_file(camera_, dir_ / "camera.csv");
+  if (!encoders_) return;
+  encoders_->close();
+  camera_->close();
   if (truth_) truth_->close();
 }
 
-TruthCsvWriter::TruthCsvWriter(const fs::path& path) : path_(path), file_(open_write(path)) {
-  std::fputs("t_ms,x_cm,y_cm,yaw_deg\n", file_);
-}
+TruthCsvWriter::TruthCsvWriter(const fs::path& path) : file_(path, "t_ms,x_cm,y_cm,yaw_deg\n") {}
 
-TruthCsvWriter::~TruthCsvWriter() {
-  if (file_) std::fclose(file_);
-}
+TruthCsvWriter::~TruthCsvWriter() = default;
 
 void TruthCsvWriter::add(double t_ms, const Pose2& pose) {
-  std::fprintf(file_, "%.6f,%.6f,%.6f,%.6f\n", t_ms, pose.x_cm, pose.y_cm, pose.yaw_deg);
+  char row[160];
+  std::snprintf(row, sizeof row, "%.6f,%.6f,%.6f,%.6f\n", t_ms, pose.x_cm, pose.y_cm, pose.yaw_deg);
+  file_.write_row(row);
 }
 
-void TruthCsvWriter::close() { close_file(file_, path_); }
+void TruthCsvWriter::close() { file_.close(); }
 
-PosesCsvWriter::PosesCsvWriter(const fs::path& path) : path_(path), file_(open_write(path)) {
-  std::fputs("t_ms,x_cm,y_cm,yaw_deg,source,match_error,search_range_cm\n", file_);
-}
+PosesCsvWriter::PosesCsvWriter(const fs::path& path)
+    : file_(path, "t_ms,x_cm,y_cm,yaw_deg,source,match_error,search_range_cm\n") {}
 
-PosesCsvWriter::~PosesCsvWriter() {
-  if (file_) std::fclose(file_);
-}
+PosesCsvWriter::~PosesCsvWriter() = default;
 
 void PosesCsvWriter::write(const LocalizedPose& p) {
   // inf/nan are spelled "inf"/"nan" (read_poses_csv accepts them): no image result yet.
@@ -388,13 +545,14 @@ void PosesCsvWriter::write(const LocalizedPose& p) {
     else if (std::isinf(v)) std::snprintf(buf, n, "inf");
     else std::snprintf(buf, n, "%.3f", v);
   };
-  char e[32], r[32];
+  char e[32], r[32], row[256];
   num(p.match_error, e, sizeof e);
   num(p.search_range_cm, r, sizeof r);
-  std::fprintf(file_, "%.3f,%.3f,%.3f,%.3f,%s,%s,%s\n", p.t_ms, p.pose.x_cm, p.pose.y_cm, p.pose.yaw_deg,
-               pose_source_name(p.source), e, r);
+  std::snprintf(row, sizeof row, "%.3f,%.3f,%.3f,%.3f,%s,%s,%s\n", p.t_ms, p.pose.x_cm, p.pose.y_cm, p.pose.yaw_deg,
+                pose_source_name(p.source), e, r);
+  file_.write_row(row);
 }
 
-void PosesCsvWriter::close() { close_file(file_, path_); }
+void PosesCsvWriter::close() { file_.close(); }
 
 }  // namespace omniloc

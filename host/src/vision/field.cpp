@@ -146,6 +146,7 @@ FieldSpec parse_field_spec(const config::Node& node) {
 FieldGeometry build_field(const FieldSpec& spec, const std::string& source) {
   FieldGeometry f;
   f.source = source;
+  f.spec = spec;
   f.name = spec.name;
   f.field_length_cm = spec.field_length_cm;
   f.field_width_cm = spec.field_width_cm;
