@@ -40,14 +40,14 @@ void run_simulation(World& world, const OmniRenderer& renderer, const SimRunOpti
 
 void record_simulation(const std::filesystem::path& dir, World& world, const OmniRenderer& renderer,
                        const SimRunOptions& options, const std::string& field_name,
-                       const std::optional<Pose2>& initial_pose) {
+                       const std::optional<Pose2>& initial_pose, const RecordingOptions& recording) {
   RecordingMeta meta;
   meta.field = field_name;
   meta.field_geometry = load_field(field_name).spec;
   meta.camera = renderer.camera();
   meta.robot = world.config().robot;
   meta.initial_pose = initial_pose;
-  RecordingWriter writer(dir, meta, true);
+  RecordingWriter writer(dir, meta, true, recording);
   run_simulation(
       world, renderer, options,
       [&](const SimWindow& w) {

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
+#include <csignal>
 #include <unistd.h>
 
 #include <cmath>
@@ -115,6 +116,81 @@ TEST(OmnilocdSim, PublishesPosesThatMatchTruthAndRecordsARunThatReplays) {
                             dir.path / "replay.log", out);
   ASSERT_EQ(replay_rc, 0) << out;
   EXPECT_EQ(read_csv(dir.path / "poses.csv").size(), recording.windows.size());
+}
+
+std::size_t lines_in(const fs::path& p) {
+  std::ifstream in(p);
+  std::size_t n = 0;
+  for (std::string line; std::getline(in, line);) ++n;
+  return n;
+}
+
+// Issue 16 item 4: after SIGKILL camera.csv was 0 bytes with 61 PNGs on disk and encoders.csv was
+// cut mid-line, so replay refused the whole recording. Rows now reach the kernel whole as they
+// are written: everything up to the kill replays.
+TEST(OmnilocdSim, SigkillLeavesAReplayableRecording) {
+  TempDir dir("omnilocd_sim_kill");
+  omniloc::test::UdpReceiver rx;
+  const fs::path rec = dir.path / "rec";
+  const fs::path pid_file = dir.path / "pid";
+  const std::string cmd = std::string(OMNILOCD_SIM_PATH) + " --trajectory circle --seed=5 --status-period-s 0 --udp-port " +
+                          std::to_string(rx.port()) + " --record-dir " + rec.string() + " >" +
+                          (dir.path / "daemon.log").string() + " 2>&1 & echo $! >" + pid_file.string();
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  pid_t pid = 0;
+  std::ifstream(pid_file) >> pid;
+  ASSERT_GT(pid, 0);
+  // Until a second of windows and some frames are on disk (simulated time runs at 0.2-0.4x).
+  std::size_t rows_before = 0;
+  for (int i = 0; i < 1200 && (rows_before < 101 || lines_in(rec / "camera.csv") < 20); ++i) {
+    ::usleep(50'000);
+    rows_before = lines_in(rec / "encoders.csv");
+  }
+  ASSERT_EQ(::kill(pid, SIGKILL), 0);
+  int status = 0;
+  ::waitpid(pid, &status, 0);  // not our child (the shell's): waitpid fails, the kill is enough
+  ::usleep(100'000);
+  ASSERT_GE(rows_before, 101u) << "the daemon did not record";
+  const Recording r = load_recording(rec);
+  std::printf("killed with %zu encoder rows seen; left: %zu windows, %zu frames, %zu truth rows\n", rows_before - 1,
+              r.windows.size(), r.frames.size(), r.truth.size());
+  EXPECT_GE(r.windows.size(), rows_before - 1) << "rows seen before the kill are gone";
+  EXPECT_GE(r.frames.size(), 19u);
+  for (std::size_t i = 0; i < r.frames.size(); ++i) EXPECT_FALSE(load_frame(r, i).empty());
+  std::string out;
+  const int replay_rc = run(std::string(OMNILOC_CLI_PATH) + " replay " + rec.string() + " --out " +
+                                (dir.path / "poses.csv").string() + " --db " + (dir.path / "features.db").string(),
+                            dir.path / "replay.log", out);
+  ASSERT_EQ(replay_rc, 0) << out;
+  EXPECT_EQ(read_csv(dir.path / "poses.csv").size(), r.windows.size());
+}
+
+// Issue 16 item 3: a write error (disk full) escaped Daemon::run, omnilocd exited and the pose
+// stream stopped. With a file size limit (SIGXFSZ ignored: writes fail with EFBIG as they fail
+// with ENOSPC on a full disk) the recording stops, says so, and the datagrams go on to the end.
+TEST(OmnilocdSim, FullDiskStopsTheRecordingNotThePoses) {
+  TempDir dir("omnilocd_sim_full");
+  omniloc::test::UdpReceiver rx;
+  const fs::path rec = dir.path / "rec";
+  std::string out;
+  // ulimit -f counts 512-byte blocks: 40 = 20 KB per file, less than one rendered JPEG frame.
+  const int rc = run("sh -c \"trap '' XFSZ; ulimit -f 40; exec " + std::string(OMNILOCD_SIM_PATH) +
+                         " --trajectory circle --seed=6 --duration-s 2 --status-period-s 1 --udp-port " +
+                         std::to_string(rx.port()) + " --record-dir " + rec.string() + "\"",
+                     dir.path / "daemon.log", out);
+  ASSERT_EQ(rc, 0) << out;
+  EXPECT_NE(out.find("omnilocd: recording stopped: "), std::string::npos) << out;
+  EXPECT_NE(out.find("write failed (File too large); poses are still sent"), std::string::npos) << out;
+  EXPECT_NE(out.find("rec=stopped rec_failures=1"), std::string::npos) << out;
+  EXPECT_NE(out.find("stopped (duration)"), std::string::npos) << out;
+  EXPECT_NE(out.find("recording stopped on a write error"), std::string::npos) << out;
+  const auto grams = parse_all(rx.drain());
+  EXPECT_GE(grams.size(), 190u) << "the pose stream went on for the whole 2 s";
+  // What was recorded before the stop still reads (whole rows only).
+  const Recording r = load_recording(rec);
+  std::printf("%zu datagrams; recording stopped with %zu windows, %zu frames\n", grams.size(), r.windows.size(),
+              r.frames.size());
+  EXPECT_LT(r.windows.size(), grams.size());
 }
 
 TEST(OmnilocdSim, RefusesABadSeedAndAnUnknownOption) {

@@ -13,6 +13,7 @@
 
 #include "omniloc/conventions.hpp"
 #include "omniloc/localizer.hpp"
+#include "omniloc/recording.hpp"
 #include "omniloc_sim/renderer.hpp"
 #include "omniloc_sim/world.hpp"
 
@@ -42,7 +43,7 @@ void run_simulation(World& world, const OmniRenderer& renderer, const SimRunOpti
 /// names `field_name`, the renderer's camera, the world's robot and, if given, initial_pose.
 void record_simulation(const std::filesystem::path& dir, World& world, const OmniRenderer& renderer,
                        const SimRunOptions& options, const std::string& field_name,
-                       const std::optional<Pose2>& initial_pose);
+                       const std::optional<Pose2>& initial_pose, const RecordingOptions& recording = {});
 
 /// A simulated run fed through a localizer: per window, the truth and the localizer's pose.
 struct LocalizedRun {
