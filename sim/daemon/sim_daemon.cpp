@@ -1,5 +1,6 @@
 // The simulated robot's wiring for the Daemon (sim_daemon.hpp).
 #include "omniloc_sim/sim_daemon.hpp"
+#include <cstdio>
 
 namespace omniloc::sim {
 namespace {
@@ -39,8 +40,15 @@ std::string SimulatedRobot::describe() const {
 }
 
 std::function<void(const EncoderWindow&)> truth_recorder(const SimTruthLog& truth, TruthCsvWriter& writer) {
-  return [&truth, &writer](const EncoderWindow& w) {
-    if (const auto pose = truth.truth(w.t_end_ms)) writer.add(w.t_end_ms, *pose);
+  // A full disk stops the truth file as it stops the daemon's recording: the run goes on.
+  return [&truth, &writer, failed = false](const EncoderWindow& w) mutable {
+    if (failed) return;
+    try {
+      if (const auto pose = truth.truth(w.t_end_ms)) writer.add(w.t_end_ms, *pose);
+    } catch (const RecordingError& e) {
+      failed = true;
+      std::fprintf(stderr, "omnilocd-sim: truth.csv stopped: %s\n", e.what());
+    }
   };
 }
 
