@@ -145,6 +145,10 @@ TEST(CameraFile, RejectsBadInputWithFileAndFieldPath) {
           {replaced(v, "[320, 240]", "[700, 240]"), "center_px", "outside the 640 x 480 image (got [700, 240])"},
           {replaced(v, ", \"mirrored\": false", ""), "mirrored", "missing (required)"},
           {replaced(v, "\"mirrored\": false", "\"mirrored\": 0"), "mirrored", "must be true or false, not a number"},
+          // Issue 16 item 6: 7 was once taken as true and every frame was then rejected silently.
+          {replaced(v, "\"mirrored\": false", "\"mirrored\": 7"), "mirrored", "must be true or false, not a number (got 7)"},
+          {replaced(v, "\"yaw_offset_deg\": 0", "\"yaw_offset_deg\": 1e9"), "yaw_offset_deg",
+           "must be an angle within [-360, 360] degrees (got 1000000000)"},
           {replaced(v, "\"width\": 640", "\"width\": 640.0"), "width", "must be an integer"},
           {replaced(v, "\"width\": 640", "\"width\": 20000"), "width", "1..16384 (got 20000)"},
           {replaced(v, "\"width\": 640", "\"width\": \"640\""), "width", "must be an integer, not a string"},

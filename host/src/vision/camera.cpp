@@ -108,7 +108,8 @@ void CameraModel::validate(const config::Origin& at) const {
       require(m.radius_px > radius_lut[i - 1].radius_px && m.ground_cm > radius_lut[i - 1].ground_cm,
               (at / "radius_lut")[i], "table must be strictly increasing in both radius and distance", row);
   }
-  require(std::isfinite(yaw_offset_deg), at / "yaw_offset_deg", "must be finite", yaw_offset_deg);
+  require(std::isfinite(yaw_offset_deg) && std::abs(yaw_offset_deg) <= 360.0, at / "yaw_offset_deg",
+          "must be an angle within [-360, 360] degrees", yaw_offset_deg);
   require(std::isfinite(body_radius_px) && body_radius_px >= 0.0, at / "mask" / "body_radius_px", "must be >= 0",
           body_radius_px);
   for (std::size_t i = 0; i < masts.size(); ++i) {
