@@ -126,7 +126,16 @@ TEST_F(RecordingFiles, WithoutOptionalParts) {
 
 TEST_F(RecordingFiles, CsvErrorsNameFileAndLine) {
   write("encoders.csv", "t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n10,0,1,2,3,4,0.5\n20,1,1,2,x3,4,0.5\n");
-  expect_error("encoders.csv", 3, "column 'c3': not an integer");
+  expect_error("encoders.csv", 3, "column 'c3': must be an integer in [-2147483648, 2147483647] (got 'x3')");
+  // Through the shared strict parser: a count beyond int32, 1.0 for a count, "-1" for seq.
+  write("encoders.csv", "t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n10,0,1,2,3,4,0.5\n20,1,1,2,3000000000,4,0.5\n");
+  expect_error("encoders.csv", 3, "column 'c3': must be an integer in [-2147483648, 2147483647] (got '3000000000')");
+  write("encoders.csv", "t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n10,0,1.0,2,3,4,0.5\n");
+  expect_error("encoders.csv", 2, "column 'c1': must be an integer");
+  write("encoders.csv", "t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n10,-1,1,2,3,4,0.5\n");
+  expect_error("encoders.csv", 2, "column 'seq': must be an integer in [0, 4294967295] (got '-1')");
+  write("encoders.csv", "t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n1e999,0,1,2,3,4,0.5\n");
+  expect_error("encoders.csv", 2, "column 't_ms': must be a finite number");
   write("encoders.csv", "t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n10,0,1,2,3,4,0.5\n20,1,1,2,3,4\n");
   expect_error("encoders.csv", 3, "expected 7 columns, got 6");
   write("encoders.csv", "t_ms,seq,c1,c2,c3,c4\n");
@@ -148,7 +157,7 @@ TEST_F(RecordingFiles, CameraAndTruthErrors) {
   expect_error("camera.csv", 2, "column 'file': empty");
   write("camera.csv", "t_ms,file\n5,frames/000000.png\n21.5,frames/000001.png\n");
   write("truth.csv", "t_ms,x_cm,y_cm,yaw_deg\n10,1,2,3\n20,1,2.5.0,3\n");
-  expect_error("truth.csv", 3, "column 'y_cm': not a number");
+  expect_error("truth.csv", 3, "column 'y_cm': must be a finite number");
   // A frame whose size is not the camera's.
   write("truth.csv", "t_ms,x_cm,y_cm,yaw_deg\n10,1,2,3\n");
   cv::imwrite((dir_ / "frames/000001.png").string(), cv::Mat(10, 20, CV_8UC3, cv::Scalar(0, 0, 0)));

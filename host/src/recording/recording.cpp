@@ -18,6 +18,7 @@
 
 #include "omniloc/config_reader.hpp"
 #include "omniloc/file_read.hpp"
+#include "omniloc/strict_number.hpp"
 
 namespace omniloc {
 
@@ -44,26 +45,25 @@ std::vector<std::string> split(const std::string& s) {
   return out;
 }
 
+// Numbers go through the shared strict parser (strict_number.hpp): the whole cell, finite, in
+// range; its message is kept after the file and line. poses.csv spells "no value" as nan/inf.
 double parse_double(const std::string& s, const fs::path& file, int line, const std::string& column) {
-  double v = 0.0;
-  const char* b = s.data();
-  const char* e = s.data() + s.size();
   if (s == "nan") return std::numeric_limits<double>::quiet_NaN();
   if (s == "inf") return std::numeric_limits<double>::infinity();
-  auto [p, ec] = std::from_chars(b, e, v);
-  if (s.empty() || ec != std::errc() || p != e)
-    fail_at(file, line, "column '" + column + "': not a number ('" + s + "')");
-  return v;
+  try {
+    return omniloc::parse_double(s, "column '" + column + "'");
+  } catch (const NumberError& e) {
+    fail_at(file, line, e.what());
+  }
 }
 
-long long parse_int(const std::string& s, const fs::path& file, int line, const std::string& column) {
-  long long v = 0;
-  const char* b = s.data();
-  const char* e = s.data() + s.size();
-  auto [p, ec] = std::from_chars(b, e, v);
-  if (s.empty() || ec != std::errc() || p != e)
-    fail_at(file, line, "column '" + column + "': not an integer ('" + s + "')");
-  return v;
+long long parse_int(const std::string& s, const fs::path& file, int line, const std::string& column, long long min,
+                    long long max) {
+  try {
+    return omniloc::parse_int(s, "column '" + column + "'", min, max);
+  } catch (const NumberError& e) {
+    fail_at(file, line, e.what());
+  }
 }
 
 /// Reads a CSV with exactly the given header; calls row(fields, line) for each data line.
@@ -120,13 +120,14 @@ std::vector<EncoderWindow> read_encoders_csv(const fs::path& path) {
     EncoderWindow w;
     w.t_end_ms = parse_double(f[0], path, line, "t_ms");
     check_time(w.t_end_ms, out.empty() ? 0.0 : out.back().t_end_ms, !out.empty(), path, line);
-    const long long seq = parse_int(f[1], path, line, "seq");
+    const long long seq = parse_int(f[1], path, line, "seq", 0, 0xFFFFFFFFLL);
     if (seq < 0 || seq > 0xFFFFFFFFLL) fail_at(path, line, "column 'seq': out of range");
     w.seq = static_cast<std::uint32_t>(seq);
     for (int i = 0; i < 4; ++i) {
       static const char* const kColumns[4] = {"c1", "c2", "c3", "c4"};
       const std::string col = kColumns[i];
-      const long long c = parse_int(f[2 + i], path, line, col);
+      const long long c = parse_int(f[2 + i], path, line, col, std::numeric_limits<std::int32_t>::min(),
+                                    std::numeric_limits<std::int32_t>::max());
       if (c < std::numeric_limits<std::int32_t>::min() || c > std::numeric_limits<std::int32_t>::max())
         fail_at(path, line, "column '" + col + "': out of range");
       w.counts[i] = static_cast<std::int32_t>(c);
