@@ -157,12 +157,20 @@ TEST(OmnilocdSim, SigkillLeavesAReplayableRecording) {
   EXPECT_GE(r.windows.size(), rows_before - 1) << "rows seen before the kill are gone";
   EXPECT_GE(r.frames.size(), 19u);
   for (std::size_t i = 0; i < r.frames.size(); ++i) EXPECT_FALSE(load_frame(r, i).empty());
+  // No --db: the database goes to the user's cache (issue 17.1), here a fresh XDG_CACHE_HOME, and
+  // nowhere near the build tree.
   std::string out;
-  const int replay_rc = run(std::string(OMNILOC_CLI_PATH) + " replay " + rec.string() + " --out " +
-                                (dir.path / "poses.csv").string() + " --db " + (dir.path / "features.db").string(),
+  const fs::path xdg = dir.path / "xdg-cache";
+  const int replay_rc = run("XDG_CACHE_HOME=" + xdg.string() + " " + std::string(OMNILOC_CLI_PATH) + " replay " +
+                                rec.string() + " --out " + (dir.path / "poses.csv").string(),
                             dir.path / "replay.log", out);
   ASSERT_EQ(replay_rc, 0) << out;
   EXPECT_EQ(read_csv(dir.path / "poses.csv").size(), r.windows.size());
+  std::size_t cached = 0;
+  for (const auto& e : fs::directory_iterator(xdg / "omniloc"))
+    cached += e.path().filename().string().starts_with("featuredb-") && e.path().extension() == ".bin";
+  EXPECT_EQ(cached, 1u) << "the database cache under $XDG_CACHE_HOME/omniloc";
+  EXPECT_NE(out.find((xdg / "omniloc").string()), std::string::npos) << "the log names where it was saved: " << out;
 }
 
 // Issue 16 item 3: a write error (disk full) escaped Daemon::run, omnilocd exited and the pose

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include "commands.hpp"
+#include "omniloc/cache_dir.hpp"
 #include "omniloc/field.hpp"
 #include "omniloc/localizer.hpp"
 #include "omniloc/recording.hpp"
@@ -19,17 +20,9 @@ void replay_usage(std::FILE* out) {
                "  --out     output poses (default REC_DIR/poses.csv)\n"
                "  --db      feature database file: used if it matches the recording's field and camera,\n"
                "            else built and written there; a file that is not a feature database is never\n"
-               "            overwritten (default: a cache file under the build directory)\n"
+               "            overwritten (default: $XDG_CACHE_HOME/omniloc/, else ~/.cache/omniloc/)\n"
                "  --config  localizer config, name in common/localizer/ or path (default: default)\n"
                "  --paper   the paper's algorithm exactly (no refinement, no lost detection)\n");
-}
-
-std::filesystem::path default_cache_dir() {
-  // <build>/bin/omniloc -> <build>/cache; fall back to the current directory.
-  std::error_code ec;
-  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  if (ec) return "omniloc-cache";
-  return exe.parent_path().parent_path() / "cache";
 }
 
 void print_summary(const char* what, const char* unit, const ErrorSummary& s) {
@@ -87,7 +80,7 @@ int cmd_replay(std::span<const std::string_view> args) {
     config.fuzzy = fuzzy;
   }
   const std::filesystem::path cache =
-      db_path.empty() ? default_cache_dir() / feature_db_cache_name(field, rec.meta.camera) : std::filesystem::path(db_path);
+      db_path.empty() ? user_cache_dir() / feature_db_cache_name(field, rec.meta.camera) : std::filesystem::path(db_path);
   const FeatureDb db = load_or_build_feature_db(field, rec.meta.camera, cache,
                                                 [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); });
   std::fprintf(stderr, "replaying %s: %zu windows, %zu frames%s, %s mode\n", dir.c_str(), rec.windows.size(),

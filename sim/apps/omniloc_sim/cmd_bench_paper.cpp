@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "omniloc/cache_dir.hpp"
 #include "omniloc/localizer.hpp"
 #include "omniloc/odometry.hpp"
 #include "omniloc/recording.hpp"
@@ -218,11 +219,7 @@ int cmd_bench(std::span<const std::string_view> args) {
   const auto t_start = std::chrono::steady_clock::now();
   const FieldGeometry field = load_field("fira-robosot");
   const CameraModel camera = load_camera("default");
-  std::error_code ec;
-  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  const std::filesystem::path cache =
-      (ec ? std::filesystem::path("omniloc-cache") : exe.parent_path().parent_path() / "cache") /
-      feature_db_cache_name(field, camera);
+  const std::filesystem::path cache = user_cache_dir() / feature_db_cache_name(field, camera);
   Bench b{sim::OmniRenderer(field, camera),
           load_or_build_feature_db(field, camera, cache, [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); }),
           load_named_robot_config("default"), seed, {}, {}};
