@@ -10,6 +10,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   umockdev libumockdev-dev libglib2.0-dev
   ftdi-eeprom
+  cyclonedds-dev cyclonedds-tools
 )
 
 missing=()

@@ -22,7 +22,7 @@ const std::vector<std::string> kEveryKey = {
     "board_serial", "reconnect_period_ms", "camera",     "camera_fps",  "camera_timeout_ms", "field",
     "camera_model", "robot",               "localizer",  "database",    "grid_step_cm",      "udp_address",
     "udp_port",     "publish_hz",          "record_dir", "record_overwrite", "record_format",
-    "status_period_s", "duration_s"};
+    "status_period_s", "duration_s", "ros2_domain_id", "ros2_namespace", "ros2_frame_id"};
 
 // Every key set to a value that differs from its default (publish_hz has only one valid value).
 const std::string kEveryKeyJson = R"({
@@ -44,7 +44,10 @@ const std::string kEveryKeyJson = R"({
   "record_overwrite": true,
   "record_format": "png",
   "status_period_s": 2.5,
-  "duration_s": 12
+  "duration_s": 12,
+  "ros2_domain_id": 7,
+  "ros2_namespace": "/robot2/omniloc",
+  "ros2_frame_id": "field"
 })";
 
 TEST(DaemonConfig, ShippedDefaultFileIsTheStructDefaultsEveryKey) {
@@ -81,6 +84,9 @@ TEST(DaemonConfig, EveryKeyReachesItsMember) {
   EXPECT_EQ(c.record_format, "png");
   EXPECT_EQ(c.status_period_s, 2.5);
   EXPECT_EQ(c.duration_s, 12.0);
+  EXPECT_EQ(c.ros2_domain_id, 7);
+  EXPECT_EQ(c.ros2_namespace, "/robot2/omniloc");
+  EXPECT_EQ(c.ros2_frame_id, "field");
 }
 
 TEST(DaemonConfig, EachKeyOfTheFullFileMatters) {
@@ -130,6 +136,9 @@ TEST(DaemonConfig, BadFilesNameTheFileAndTheField) {
                           {R"({"publish_hz": 50})", "publish_hz", "must be 100"},
                           {R"({"camera_timeout_ms": 0})", "camera_timeout_ms", "[10, 60000] (got 0)"},
                           {R"({"duration_s": -1})", "duration_s", ">= 0 (got -1)"},
+                          {R"({"ros2_domain_id": 233})", "ros2_domain_id", "must be -1 (off) or in [0, 232] (got 233)"},
+                          {R"({"ros2_namespace": "omniloc"})", "ros2_namespace", "absolute ROS 2 name"},
+                          {R"({"ros2_namespace": "/a//b"})", "ros2_namespace", "absolute ROS 2 name"},
                           {R"({"grid_step_cm": 1})", "grid_step_cm", "[2, 50] (got 1)"},
                           {R"({"camera": ""})", "camera", "must not be empty"},
                           {"{\"udp_port\" 5600}", "udp_port", "not valid JSON: parse error at line 1"},

@@ -40,6 +40,10 @@ struct DaemonConfig {
   std::string record_format = "jpeg";  ///< frame store: "jpeg" (compact) or "png" (lossless)
   double status_period_s = 1.0;        ///< status line on stderr; 0 disables it
   double duration_s = 0.0;             ///< stop after this much (daemon) time; 0: until SIGINT/SIGTERM
+  // --- ROS 2 topics (docs/ROS2.md; needs a build with Cyclone DDS) ---
+  int ros2_domain_id = -1;             ///< DDS domain (ROS_DOMAIN_ID) of the topics; -1: no ROS 2
+  std::string ros2_namespace = "/omniloc";  ///< topics <ns>/pose and <ns>/odom
+  std::string ros2_frame_id = "map";   ///< frame_id of the poses: the field frame, in metres
 
   /// Checks ranges; throws ConfigError "<at>.<key>: <why> (got <value>)".
   void validate(const config::Origin& at) const;

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "omniloc/config_reader.hpp"
+#include "omniloc/ros2_bridge.hpp"
 
 namespace omniloc::daemon {
 
@@ -38,6 +39,9 @@ const config::KeyTable<DaemonConfig>& daemon_config_keys() {
                                      "recorded frames: jpeg (~2 MB/s at 30 Hz 640 x 480) or png (lossless, ~12 MB/s)"),
       key("status_period_s", &D::status_period_s, opt, "seconds between status lines; 0: none"),
       key("duration_s", &D::duration_s, opt, "stop after this many seconds; 0: run until SIGINT/SIGTERM"),
+      key("ros2_domain_id", &D::ros2_domain_id, opt, "ROS 2 topics in this DDS domain (ROS_DOMAIN_ID); -1: off"),
+      key("ros2_namespace", &D::ros2_namespace, opt, "ROS 2 namespace of the topics: <ns>/pose, <ns>/odom"),
+      key("ros2_frame_id", &D::ros2_frame_id, opt, "frame_id of the published poses (the field frame)"),
   };
   return table;
 }
@@ -65,6 +69,14 @@ void DaemonConfig::validate(const config::Origin& at) const {
   require(status_period_s >= 0 && status_period_s <= 3600, at / "status_period_s", "must be in [0, 3600]",
           status_period_s);
   require(std::isfinite(duration_s) && duration_s >= 0, at / "duration_s", "must be >= 0", duration_s);
+  require(ros2_domain_id >= -1 && ros2_domain_id <= 232, at / "ros2_domain_id", "must be -1 (off) or in [0, 232]",
+          ros2_domain_id);
+  try {
+    (void)ros2::dds_topic_name(ros2_namespace + "/pose");
+  } catch (const std::invalid_argument&) {
+    require(false, at / "ros2_namespace", "must be an absolute ROS 2 name such as /omniloc", show(ros2_namespace));
+  }
+  require(!ros2_frame_id.empty(), at / "ros2_frame_id", "must not be empty", show(ros2_frame_id));
 }
 
 void validate_daemon_config(const DaemonConfig& c, const std::string& source) { c.validate(source); }

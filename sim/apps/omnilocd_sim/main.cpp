@@ -10,6 +10,7 @@
 #include <string_view>
 
 #include "daemon_cli.hpp"
+#include "ros2_attach.hpp"
 #include "omniloc/daemon.hpp"
 #include "omniloc/daemon_config.hpp"
 #include "omniloc/version.hpp"
@@ -47,15 +48,17 @@ int run(const omniloc::daemon::DaemonConfig& config, const SimArgs& sim_args) {
   daemon::DaemonIo io = robot.io();
   say("publishing poses to udp://" + config.udp_address + ":" + std::to_string(config.udp_port) +
       (config.record_dir.empty() ? "" : ", recording to " + config.record_dir));
+  omniloc::cli::Ros2Attachment ros2(config, say);
   daemon::Daemon d(config, models, io);
   // After the daemon has made the recording directory (and removed an old truth.csv).
   std::unique_ptr<TruthCsvWriter> truth_csv;
+  daemon::DaemonObserver observer;
   if (!config.record_dir.empty()) {
     truth_csv = std::make_unique<TruthCsvWriter>(std::filesystem::path(config.record_dir) / "truth.csv");
-    daemon::DaemonObserver observer;
     observer.on_window = sim::truth_recorder(robot.truth(), *truth_csv);
-    d.set_observer(std::move(observer));
   }
+  ros2.attach(observer);
+  d.set_observer(std::move(observer));
   omniloc::cli::install_stop_signal_handlers();
   const daemon::DaemonReport r = d.run(&omniloc::cli::g_stop_requested);
   if (truth_csv) truth_csv->close();

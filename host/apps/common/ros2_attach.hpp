@@ -1,0 +1,55 @@
+// The daemon's ROS 2 topics (docs/ROS2.md), shared by omnilocd and omnilocd-sim: with
+// `ros2_domain_id` >= 0 a Ros2Bridge publishes every pose the daemon sends as a datagram, from the
+// daemon's own observer callbacks (so the UDP stream and the topics carry the same poses).
+#pragma once
+
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <string>
+#include <utility>
+
+#include "omniloc/daemon.hpp"
+#include "omniloc/daemon_config.hpp"
+#include "omniloc/ros2_bridge.hpp"
+
+namespace omniloc::cli {
+
+class Ros2Attachment {
+ public:
+  /// Nothing when config.ros2_domain_id < 0; else the bridge, or std::runtime_error saying why not.
+  Ros2Attachment(const daemon::DaemonConfig& config, const std::function<void(const std::string&)>& say) {
+    if (config.ros2_domain_id < 0) return;
+    ros2::Ros2Config rc;
+    rc.domain_id = config.ros2_domain_id;
+    rc.topic_prefix = config.ros2_namespace;
+    rc.frame_id = config.ros2_frame_id;
+    bridge_ = std::make_unique<ros2::Ros2Bridge>(rc);
+    say("ROS 2 topics " + rc.topic_prefix + "/pose, " + rc.topic_prefix + "/odom (subscribed: " +
+        rc.initial_pose_topic + ") in DDS domain " + std::to_string(rc.domain_id));
+  }
+
+  /// Chains the publication onto `observer`'s on_pose (any callback there still runs first).
+  void attach(daemon::DaemonObserver& observer) {
+    if (!bridge_) return;
+    observer.on_pose = [bridge = bridge_.get(), next = std::move(observer.on_pose)](const daemon::PoseEvent& e) {
+      if (next) next(e);
+      if (e.message.status == daemon::DaemonStatus::kNoBoard || e.message.status == daemon::DaemonStatus::kStarting)
+        return;  // no pose yet: nothing to put on a pose topic
+      ros2::Ros2Pose p;
+      p.stamp_unix_ms =
+          std::chrono::duration<double, std::milli>(std::chrono::system_clock::now().time_since_epoch()).count();
+      p.pose = Pose2{e.message.x_cm, e.message.y_cm, e.message.yaw_deg};
+      p.sigma_xy_cm = e.message.uncertainty_cm;
+      p.sigma_yaw_deg = e.message.uncertainty_yaw_deg;
+      bridge->publish(p);
+    };
+  }
+
+  [[nodiscard]] ros2::Ros2Bridge* bridge() { return bridge_.get(); }
+
+ private:
+  std::unique_ptr<ros2::Ros2Bridge> bridge_;
+};
+
+}  // namespace omniloc::cli
