@@ -21,7 +21,7 @@ using test::error_of;
 const std::vector<std::string> kEveryKey = {
     "board_serial", "reconnect_period_ms", "camera",     "camera_fps",  "camera_timeout_ms", "field",
     "camera_model", "robot",               "localizer",  "database",    "grid_step_cm",      "udp_address",
-    "udp_port",     "publish_hz",          "record_dir", "record_overwrite", "record_format",
+    "udp_port",     "control_port",        "publish_hz",          "record_dir", "record_overwrite", "record_format",
     "status_period_s", "duration_s", "ros2_domain_id", "ros2_namespace", "ros2_frame_id"};
 
 // Every key set to a value that differs from its default (publish_hz has only one valid value).
@@ -39,6 +39,7 @@ const std::string kEveryKeyJson = R"({
   "grid_step_cm": 20,
   "udp_address": "192.168.1.20",
   "udp_port": 6001,
+  "control_port": 6101,
   "publish_hz": 100,
   "record_dir": "/data/run1",
   "record_overwrite": true,
@@ -84,6 +85,7 @@ TEST(DaemonConfig, EveryKeyReachesItsMember) {
   EXPECT_EQ(c.record_format, "png");
   EXPECT_EQ(c.status_period_s, 2.5);
   EXPECT_EQ(c.duration_s, 12.0);
+  EXPECT_EQ(c.control_port, 6101);
   EXPECT_EQ(c.ros2_domain_id, 7);
   EXPECT_EQ(c.ros2_namespace, "/robot2/omniloc");
   EXPECT_EQ(c.ros2_frame_id, "field");
@@ -136,6 +138,7 @@ TEST(DaemonConfig, BadFilesNameTheFileAndTheField) {
                           {R"({"publish_hz": 50})", "publish_hz", "must be 100"},
                           {R"({"camera_timeout_ms": 0})", "camera_timeout_ms", "[10, 60000] (got 0)"},
                           {R"({"duration_s": -1})", "duration_s", ">= 0 (got -1)"},
+                          {R"({"control_port": 70000})", "control_port", "must be 0 (off) or in [1, 65535] (got 70000)"},
                           {R"({"ros2_domain_id": 233})", "ros2_domain_id", "must be -1 (off) or in [0, 232] (got 233)"},
                           {R"({"ros2_namespace": "omniloc"})", "ros2_namespace", "absolute ROS 2 name"},
                           {R"({"ros2_namespace": "/a//b"})", "ros2_namespace", "absolute ROS 2 name"},

@@ -6,6 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
 #include <csignal>
 #include <unistd.h>
 
@@ -13,6 +17,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <regex>
 #include <string>
@@ -171,6 +176,136 @@ TEST(OmnilocdSim, SigkillLeavesAReplayableRecording) {
     cached += e.path().filename().string().starts_with("featuredb-") && e.path().extension() == ".bin";
   EXPECT_EQ(cached, 1u) << "the database cache under $XDG_CACHE_HOME/omniloc";
   EXPECT_NE(out.find((xdg / "omniloc").string()), std::string::npos) << "the log names where it was saved: " << out;
+}
+
+// Issue 15.3: the control channel, driven by `omniloc ctl` and by raw datagrams while the daemon
+// runs. Checked against what the daemon publishes (the datagram stream), not its replies alone.
+int free_udp_port() {
+  omniloc::test::UdpReceiver probe;  // bound to a free port, closed again at once
+  return probe.port();
+}
+
+std::string udp_request(int port, const std::string& request) {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(static_cast<std::uint16_t>(port));
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ::sendto(fd, request.data(), request.size(), 0, reinterpret_cast<sockaddr*>(&to), sizeof to);
+  pollfd p{fd, POLLIN, 0};
+  std::string reply;
+  char buf[8192];
+  if (::poll(&p, 1, 5000) > 0) {
+    const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
+    if (n > 0) reply.assign(buf, static_cast<std::size_t>(n));
+  }
+  ::close(fd);
+  return reply;
+}
+
+TEST(OmnilocdSim, ControlChannelServesCommandsWhileThePosesFlow) {
+  TempDir dir("omnilocd_ctl");
+  omniloc::test::UdpReceiver rx;
+  const int ctl_port = free_udp_port();
+  ASSERT_GT(rx.port(), 0);
+  ASSERT_GT(ctl_port, 0);
+  const std::string daemon = std::string(OMNILOCD_SIM_PATH) + " --duration-s 8 --status-period-s 0 --udp-port " +
+                             std::to_string(rx.port()) + " --control-port " + std::to_string(ctl_port) + " >" +
+                             (dir.path / "daemon.log").string() + " 2>&1 &";
+  ASSERT_EQ(std::system(daemon.c_str()), 0);
+  std::vector<nlohmann::json> grams;
+  const auto pump = [&] {
+    for (const auto& g : rx.drain()) grams.push_back(nlohmann::json::parse(g));
+  };
+  const auto wait_for = [&](const std::function<bool()>& done) {
+    for (int i = 0; i < 6000 && !done(); ++i) {
+      ::usleep(10'000);
+      pump();
+    }
+    return done();
+  };
+  const auto last_status = [&] { return grams.empty() ? std::string() : grams.back()["status"].get<std::string>(); };
+  ASSERT_TRUE(wait_for([&] { return last_status() == "ok"; })) << "no fix";
+  std::string out;
+  const auto ctl = [&](const std::string& args) {
+    return run(std::string(OMNILOC_CLI_PATH) + " ctl --port " + std::to_string(ctl_port) + " --timeout-ms 5000 " + args,
+               dir.path / "ctl.log", out);
+  };
+  const auto reply = [&] { return nlohmann::json::parse(out.substr(0, out.find('\n'))); };
+
+  ASSERT_EQ(ctl("status"), 0) << out;
+  EXPECT_EQ(reply()["status"], "ok");
+  EXPECT_GT(reply()["windows"].get<int>(), 0);
+  EXPECT_EQ(reply()["recording"], "off");
+
+  // set_pose: the very next datagram is there (one window of motion, <= 1.5 cm, away).
+  const double yaw = grams.back()["yaw_deg"].get<double>();
+  ASSERT_EQ(ctl("set_pose 200 150 " + std::to_string(yaw)), 0) << out;
+  const auto set_seq = reply()["last_seq"].get<std::uint64_t>();
+  ASSERT_TRUE(wait_for([&] { return !grams.empty() && grams.back()["seq"].get<std::uint64_t>() > set_seq; }));
+  for (const auto& g : grams)
+    if (g["seq"].get<std::uint64_t>() == set_seq + 1) {
+      std::printf("after set_pose: %s\n", g.dump().c_str());
+      EXPECT_LT(std::hypot(g["x_cm"].get<double>() - 200.0, g["y_cm"].get<double>() - 150.0), 3.0) << g.dump();
+    }
+
+  // relocalize: lost at once, then the global search finds the robot again.
+  ASSERT_EQ(ctl("relocalize"), 0) << out;
+  const auto reloc_seq = reply()["last_seq"].get<std::uint64_t>();
+  ASSERT_TRUE(wait_for([&] { return !grams.empty() && grams.back()["seq"].get<std::uint64_t>() > reloc_seq + 1; }));
+  for (const auto& g : grams)
+    if (g["seq"].get<std::uint64_t>() == reloc_seq + 1) EXPECT_EQ(g["status"], "lost") << g.dump();
+  EXPECT_TRUE(wait_for([&] { return last_status() == "ok"; })) << "no fix after relocalize";
+
+  // record start / stop: a recording that replays; a second start is refused, naming the first.
+  const fs::path rec = dir.path / "rec";
+  ASSERT_EQ(ctl("record start " + rec.string()), 0) << out;
+  EXPECT_EQ(ctl("record start " + (dir.path / "rec2").string()), 1) << out;
+  EXPECT_NE(out.find("already recording to " + rec.string()), std::string::npos) << out;
+  const std::size_t at_start = grams.size();
+  ASSERT_TRUE(wait_for([&] { return grams.size() >= at_start + 100; }));
+  ASSERT_EQ(ctl("record stop"), 0) << out;
+  EXPECT_EQ(ctl("record stop"), 1) << out;
+  EXPECT_NE(out.find("record: not recording"), std::string::npos) << out;
+  EXPECT_EQ(ctl("set_pose 5000 0 0"), 1) << out;
+  EXPECT_NE(out.find("is not on the carpet of field 'fira-robosot'"), std::string::npos) << out;
+  EXPECT_EQ(ctl("set_pose abc 0 0"), 2) << out;
+  EXPECT_NE(out.find("X_CM"), std::string::npos) << out;
+
+  // Raw requests the client would never send.
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"not json", "not valid JSON"},
+      {R"({"id": 5, "cmd": "fly"})", "unknown cmd 'fly'"},
+      {R"({"id": 6, "cmd": "set_pose", "x_cm": 1})", "set_pose: missing field 'y_cm'"},
+      {std::string(5000, '{'), "5000 bytes is larger than 4096"},
+  };
+  for (const auto& [request, says] : bad) {
+    const std::string r = udp_request(ctl_port, request);
+    ASSERT_FALSE(r.empty()) << "no reply to " << request.substr(0, 40);
+    const auto j = nlohmann::json::parse(r);
+    EXPECT_EQ(j["ok"], false) << r;
+    EXPECT_NE(j["error"].get<std::string>().find(says), std::string::npos) << r;
+  }
+  // The daemon finishes its run; the stream had no hole while it served all this.
+  ASSERT_TRUE(wait_for([&] {
+    std::ifstream in(dir.path / "daemon.log");
+    std::ostringstream os;
+    os << in.rdbuf();
+    return os.str().find("stopped (duration)") != std::string::npos;
+  }));
+  pump();
+  for (std::size_t i = 1; i < grams.size(); ++i) {
+    EXPECT_EQ(grams[i]["seq"].get<std::uint64_t>(), grams[i - 1]["seq"].get<std::uint64_t>() + 1) << "datagram lost";
+    EXPECT_LE(grams[i]["t_ms"].get<double>() - grams[i - 1]["t_ms"].get<double>(), 10.5) << "a window not published";
+  }
+  std::printf("%zu datagrams, none missing, while 14 requests were served (%.1f s of daemon time)\n", grams.size(),
+              grams.empty() ? 0.0 : grams.back()["t_ms"].get<double>() / 1000.0);
+  const Recording r = load_recording(rec);
+  EXPECT_GE(r.windows.size(), 100u);
+  EXPECT_EQ(run(std::string(OMNILOC_CLI_PATH) + " replay " + rec.string() + " --out " + (dir.path / "poses.csv").string(),
+                dir.path / "replay.log", out),
+            0)
+      << out;
 }
 
 // Issue 16 item 3: a write error (disk full) escaped Daemon::run, omnilocd exited and the pose

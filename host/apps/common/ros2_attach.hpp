@@ -25,13 +25,31 @@ class Ros2Attachment {
     rc.topic_prefix = config.ros2_namespace;
     rc.frame_id = config.ros2_frame_id;
     bridge_ = std::make_unique<ros2::Ros2Bridge>(rc);
+    frame_id_ = rc.frame_id;
+    say_ = say;
     say("ROS 2 topics " + rc.topic_prefix + "/pose, " + rc.topic_prefix + "/odom (subscribed: " +
         rc.initial_pose_topic + ") in DDS domain " + std::to_string(rc.domain_id));
   }
 
-  /// Chains the publication onto `observer`'s on_pose (any callback there still runs first).
-  void attach(daemon::DaemonObserver& observer) {
+  /// Chains the publication onto `observer`'s on_pose and the /initialpose subscription onto its
+  /// on_loop (any callbacks there still run first). An /initialpose in the poses' frame (or with no
+  /// frame) becomes a control-channel set_pose on `daemon`; others are refused in the log.
+  void attach(daemon::DaemonObserver& observer, daemon::Daemon& daemon) {
     if (!bridge_) return;
+    observer.on_loop = [this, &daemon, next = std::move(observer.on_loop)](double now_ms) {
+      if (next) next(now_ms);
+      const auto ip = bridge_->take_initial_pose();
+      if (!ip) return;
+      if (!ip->frame_id.empty() && ip->frame_id != frame_id_) {
+        say_("ROS 2: /initialpose in frame '" + ip->frame_id + "' ignored (poses are in '" + frame_id_ + "')");
+        return;
+      }
+      try {
+        (void)daemon.apply(control::SetPose{ip->pose.x_cm, ip->pose.y_cm, ip->pose.yaw_deg});
+      } catch (const control::ControlError& e) {
+        say_(std::string("ROS 2: /initialpose refused: ") + e.what());
+      }
+    };
     observer.on_pose = [bridge = bridge_.get(), next = std::move(observer.on_pose)](const daemon::PoseEvent& e) {
       if (next) next(e);
       if (e.message.status == daemon::DaemonStatus::kNoBoard || e.message.status == daemon::DaemonStatus::kStarting)
@@ -50,6 +68,8 @@ class Ros2Attachment {
 
  private:
   std::unique_ptr<ros2::Ros2Bridge> bridge_;
+  std::string frame_id_;
+  std::function<void(const std::string&)> say_;
 };
 
 }  // namespace omniloc::cli

@@ -18,6 +18,7 @@ int cmd_builddb(std::span<const std::string_view> args);
 int cmd_replay(std::span<const std::string_view> args);
 int cmd_calibrate(std::span<const std::string_view> args);
 int cmd_locate(std::span<const std::string_view> args);
+int cmd_ctl(std::span<const std::string_view> args);
 
 /// A whole argument as a finite number ("12", "-3.5", "1e2"); false for "", "12x", "nan", "inf".
 inline bool parse_number(std::string_view text, double& out) {

@@ -12,6 +12,7 @@ constexpr omniloc::cli::CommandEntry kCommands[] = {
     {"builddb", "build the vision feature database (field x camera x grid) with progress", omniloc::cli::cmd_builddb},
     {"replay", "run the localizer over a recording directory, write poses.csv, errors vs truth", omniloc::cli::cmd_replay},
     {"locate", "one frame to a pose: the localizer's global search and acceptance, JSON and overlay", omniloc::cli::cmd_locate},
+    {"ctl", "talk to a running omnilocd: status, set_pose, set_side, relocalize, record start|stop", omniloc::cli::cmd_ctl},
 #ifdef OMNILOC_WITH_CALIBRATION
     {"calibrate", "estimate the camera (centre, mapping, yaw, mask) from frames at known poses", omniloc::cli::cmd_calibrate},
 #endif

@@ -48,7 +48,7 @@ int run(const omniloc::daemon::DaemonConfig& config) {
   DaemonObserver observer;
   observer.on_loop = [&service](double now_ms) { service.loop(now_ms); };
   observer.on_status = [&service](const std::string& line) { service.status(line); };
-  ros2.attach(observer);
+  ros2.attach(observer, daemon);
   daemon.set_observer(std::move(observer));
   omniloc::cli::install_stop_signal_handlers();
   service.ready();

@@ -16,6 +16,7 @@
 #include <opencv2/core/mat.hpp>
 
 #include "omniloc/camera.hpp"
+#include "omniloc/control.hpp"
 #include "omniloc/conventions.hpp"
 #include "omniloc/daemon_config.hpp"
 #include "omniloc/daemon_publish.hpp"
@@ -169,6 +170,10 @@ class Daemon {
   DaemonReport run(const volatile std::sig_atomic_t* stop);
   /// Replaces the observer given in DaemonIo (before run()).
   void set_observer(DaemonObserver observer);
+  /// Carries out one control command (control.hpp) on the daemon's thread, as the control channel
+  /// does for a datagram: from an observer callback (on_loop) while run() runs, or before it.
+  /// Returns the reply's fields; throws control::ControlError saying why it cannot be done.
+  nlohmann::json apply(const control::Command& command);
 
  private:
   struct Impl;

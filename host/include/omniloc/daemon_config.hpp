@@ -34,6 +34,7 @@ struct DaemonConfig {
   // --- output ---
   std::string udp_address = "127.0.0.1";  ///< IPv4 address of the pose consumer
   int udp_port = 5600;
+  int control_port = 5601;             ///< control channel (control.hpp) on 127.0.0.1; 0: off
   double publish_hz = 100.0;           ///< one datagram per board window; checked to be the window rate
   std::string record_dir;              ///< empty: no recording
   bool record_overwrite = false;       ///< replace an old recording in record_dir (else refused)

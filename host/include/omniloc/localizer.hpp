@@ -224,6 +224,15 @@ class Localizer {
   /// time. The gyro is assumed to have kept its alignment with the field.
   void resync();
 
+  /// An operator's pose (the control channel's set_pose, ROS 2's /initialpose): from the last
+  /// window on, the robot is at `pose` with the given uncertainty, tracking; the next frames refine
+  /// it by local search as after an image fix. The gyro keeps its own alignment (the odometry's
+  /// yaw offset absorbs the new heading).
+  void set_pose(const Pose2& pose, double sigma_xy_cm, double sigma_yaw_deg);
+  /// Forgets the fix (the control channel's relocalize): lost, so the next usable frame makes a
+  /// global search; the odometry goes on meanwhile.
+  void force_global_search();
+
   /// The pose at the last window (source kNone before any).
   [[nodiscard]] const LocalizedPose& pose() const { return last_pose_; }
   [[nodiscard]] bool has_fix() const { return state_ != State::kSearching; }

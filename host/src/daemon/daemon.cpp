@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "omniloc/board_session.hpp"
+#include "omniloc/control.hpp"
 #include "omniloc/recording.hpp"
 
 namespace omniloc::daemon {
@@ -29,6 +30,9 @@ struct Daemon::Impl {
   UdpPublisher publisher;
   Localizer localizer;
   std::unique_ptr<RecordingWriter> recorder;
+  std::string record_dir;  // of the recording now open (config.record_dir, or one started by command)
+  std::unique_ptr<control::ControlSocket> control_socket;
+  std::uint64_t control_requests = 0, control_errors = 0;
 
   // Board connection.
   std::unique_ptr<BoardSession> client;
@@ -61,18 +65,41 @@ struct Daemon::Impl {
     if (!io.clock || !io.open_board || !io.heading)
       throw std::invalid_argument("Daemon: clock, open_board and heading are required");
     if (!io.log) io.log = [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); };
-    if (!config.record_dir.empty()) {
-      RecordingMeta meta;
-      meta.field = config.field;
-      meta.field_geometry = models.field.spec;  // self-contained: replays without the field file
-      meta.camera = models.camera;
-      meta.robot = models.robot;
-      meta.initial_pose = models.initial_pose;
-      RecordingOptions ro;
-      ro.overwrite = config.record_overwrite;
-      ro.frame_format = config.record_format == "png" ? FrameFormat::kPng : FrameFormat::kJpeg;
-      recorder = std::make_unique<RecordingWriter>(config.record_dir, meta, false, ro);
+    if (!config.record_dir.empty()) start_recording(config.record_dir, config.record_overwrite);
+    if (config.control_port > 0) {
+      try {
+        control_socket = std::make_unique<control::ControlSocket>("127.0.0.1", config.control_port);
+      } catch (const std::exception& e) {
+        // The poses matter more than the commands: the daemon runs on without them, and says so.
+        log(std::string("omnilocd: warning: control channel off: ") + e.what());
+      }
     }
+  }
+
+  void start_recording(const std::string& dir, bool overwrite) {
+    RecordingMeta meta;
+    meta.field = config.field;
+    meta.field_geometry = models.field.spec;  // self-contained: replays without the field file
+    meta.camera = models.camera;
+    meta.robot = models.robot;
+    meta.initial_pose = models.initial_pose;
+    RecordingOptions ro;
+    ro.overwrite = overwrite;
+    ro.frame_format = config.record_format == "png" ? FrameFormat::kPng : FrameFormat::kJpeg;
+    recorder = std::make_unique<RecordingWriter>(dir, meta, false, ro);
+    record_dir = dir;
+  }
+
+  void close_recording() {
+    if (!recorder) return;
+    try {
+      recorder->close();
+    } catch (const RecordingError& e) {
+      ++report.recording_failures;
+      report.recording_error = e.what();
+      log(std::string("omnilocd: recording could not be closed: ") + e.what());
+    }
+    recorder.reset();
   }
 
   static LocalizerConfig localizer_config(const DaemonConfig&, const DaemonModels& m, const DaemonIo& io) {
@@ -234,7 +261,7 @@ struct Daemon::Impl {
     s.send_failed = publisher.failed();
     s.send_error = publisher.last_error();
     s.reconnects = report.reconnects;
-    if (!config.record_dir.empty()) s.recording = recorder ? "on" : "stopped";
+    if (!record_dir.empty()) s.recording = recorder ? "on" : "stopped";
     s.recording_failures = report.recording_failures;
     const std::string line = status_line(s);
     log(line);
@@ -243,6 +270,95 @@ struct Daemon::Impl {
     frames_at_status = report.frames;
     status_from_ms = now_ms;
     next_status_ms = now_ms + config.status_period_s * 1000.0;
+  }
+
+  // --- control channel (control.hpp): requests are served between windows, a few per turn ---
+  nlohmann::json apply(const control::Command& command) {
+    using nlohmann::json;
+    const auto fail = [&](const std::string& why) {
+      return control::ControlError(std::nullopt, std::string(control::command_name(command)) + ": " + why);
+    };
+    if (std::holds_alternative<control::Status>(command)) return status_json();
+    if (const auto* p = std::get_if<control::SetPose>(&command)) {
+      const FieldGeometry& f = models.field;
+      const double margin = 100.0;  // as for an initial pose: on the carpet, or just off it
+      if (p->x_cm < -margin || p->x_cm > f.total_x_cm() + margin || p->y_cm < -margin ||
+          p->y_cm > f.total_y_cm() + margin)
+        throw fail("(" + json(p->x_cm).dump() + ", " + json(p->y_cm).dump() + ") cm is not on the carpet of field '" +
+                   f.name + "' (0 .. " + json(f.total_x_cm()).dump() + " x 0 .. " + json(f.total_y_cm()).dump() +
+                   " cm, 100 cm margin)");
+      const Pose2 pose{p->x_cm, p->y_cm, wrap_deg(p->yaw_deg)};
+      localizer.set_pose(pose, models.localizer.image_sigma_cm, models.localizer.image_sigma_yaw_deg);
+      last_localized = localizer.pose();
+      log("omnilocd: pose set by command to (" + json(pose.x_cm).dump() + ", " + json(pose.y_cm).dump() + ") cm, " +
+          json(pose.yaw_deg).dump() + " deg");
+      return {{"x_cm", pose.x_cm}, {"y_cm", pose.y_cm}, {"yaw_deg", pose.yaw_deg}, {"last_seq", seq}};
+    }
+    if (std::holds_alternative<control::SetSide>(command))
+      throw fail("not supported yet: the daemon has no notion of the team's side (issue 15.2)");
+    if (std::holds_alternative<control::Relocalize>(command)) {
+      localizer.force_global_search();
+      log("omnilocd: relocalizing by command: global search on the next frames");
+      return {{"status", std::string(to_string(DaemonStatus::kLost))}, {"last_seq", seq}};
+    }
+    if (const auto* r = std::get_if<control::RecordStart>(&command)) {
+      if (recorder) throw fail("already recording to " + record_dir);
+      try {
+        start_recording(r->dir, false);
+      } catch (const std::exception& e) {
+        throw fail(e.what());
+      }
+      log("omnilocd: recording to " + r->dir + " (by command)");
+      return {{"dir", r->dir}};
+    }
+    if (!recorder) throw fail("not recording");
+    const std::string dir = record_dir;
+    close_recording();
+    log("omnilocd: recording to " + dir + " stopped by command");
+    return {{"dir", dir}};
+  }
+
+  nlohmann::json status_json() const {
+    const double now = io.clock->now_ms();
+    nlohmann::json j = {{"status", std::string(to_string(status(now)))},
+                        {"x_cm", last_message.x_cm},
+                        {"y_cm", last_message.y_cm},
+                        {"yaw_deg", last_message.yaw_deg},
+                        {"source", last_message.source},
+                        {"uncertainty_cm", last_message.uncertainty_cm},
+                        {"windows", report.windows},
+                        {"frames", report.frames},
+                        {"published", publisher.sent()},
+                        {"recording", recorder ? "on" : record_dir.empty() ? "off" : "stopped"}};
+    if (!record_dir.empty()) j["record_dir"] = record_dir;
+    if (last_message.match_error >= 0) j["match_error"] = last_message.match_error;
+    return j;
+  }
+
+  void poll_control() {
+    if (!control_socket) return;
+    for (int i = 0; i < 8; ++i) {  // bounded: a flood of requests cannot starve the windows
+      const auto d = control_socket->receive();
+      if (!d) return;
+      ++control_requests;
+      std::string reply;
+      try {
+        if (d->truncated)
+          throw control::ControlError(std::nullopt, "request of " + std::to_string(d->size) +
+                                                        " bytes is larger than " +
+                                                        std::to_string(control::kMaxRequestBytes));
+        const control::Request q = control::parse_request(d->text);
+        try {
+          reply = control::ok_reply(q.id, apply(q.command));
+        } catch (const control::ControlError& e) {
+          throw control::ControlError(q.id, e.what());
+        }
+      } catch (const control::ControlError& e) {
+        ++control_errors;
+        reply = control::error_reply(e.id(), e.what());
+      }
+      control_socket->reply(*d, reply);
+    }
   }
 
   DaemonReport run(const volatile std::sig_atomic_t* stop) {
@@ -255,6 +371,7 @@ struct Daemon::Impl {
     for (;;) {
       const double now = clock.now_ms();
       if (io.observer.on_loop) io.observer.on_loop(now);
+      poll_control();
       if (stop && *stop) {
         report.stop_reason = "signal";
         break;
@@ -296,15 +413,7 @@ struct Daemon::Impl {
       if (const auto err = client->stop_streaming()) log("omnilocd: could not switch streaming off: " + *err);
       count_link_errors();
     }
-    if (recorder) {
-      try {
-        recorder->close();
-      } catch (const RecordingError& e) {
-        ++report.recording_failures;
-        report.recording_error = e.what();
-        log(std::string("omnilocd: recording could not be closed: ") + e.what());
-      }
-    }
+    close_recording();
     report.run_ms = clock.now_ms() - start;
     report.localizer = localizer.stats();
     report.published = publisher.sent();
@@ -337,5 +446,7 @@ Daemon::~Daemon() = default;
 DaemonReport Daemon::run(const volatile std::sig_atomic_t* stop) { return impl_->run(stop); }
 
 void Daemon::set_observer(DaemonObserver observer) { impl_->io.observer = std::move(observer); }
+
+nlohmann::json Daemon::apply(const control::Command& command) { return impl_->apply(command); }
 
 }  // namespace omniloc::daemon

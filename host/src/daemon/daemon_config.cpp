@@ -33,6 +33,7 @@ const config::KeyTable<DaemonConfig>& daemon_config_keys() {
       key("udp_address", &D::udp_address, opt, "IPv4 address the poses are sent to"),
       key("udp_port", &D::udp_port, opt, "UDP port the poses are sent to"),
       key("publish_hz", &D::publish_hz, opt, "pose rate (the board window rate, 100)"),
+      key("control_port", &D::control_port, opt, "UDP port of the control channel on 127.0.0.1; 0: off"),
       key("record_dir", &D::record_dir, opt, "record the session here (a new or empty directory); empty: no recording"),
       key("record_overwrite", &D::record_overwrite, opt, "replace an old recording in record_dir (its frames too)"),
       config::choice<D, std::string>("record_format", &D::record_format, {{"jpeg", "jpeg"}, {"png", "png"}}, opt,
@@ -64,6 +65,8 @@ void DaemonConfig::validate(const config::Origin& at) const {
   require(inet_pton(AF_INET, udp_address.c_str(), &addr) == 1, at / "udp_address", "must be a dotted IPv4 address",
           show(udp_address));
   require(udp_port >= 1 && udp_port <= 65535, at / "udp_port", "must be in [1, 65535]", udp_port);
+  require(control_port >= 0 && control_port <= 65535, at / "control_port", "must be 0 (off) or in [1, 65535]",
+          control_port);
   // One datagram per board window: the rate is the board's, so the only value accepted is 100.
   require(publish_hz == 100.0, at / "publish_hz", "must be 100 (one pose per 10 ms board window)", publish_hz);
   require(status_period_s >= 0 && status_period_s <= 3600, at / "status_period_s", "must be in [0, 3600]",

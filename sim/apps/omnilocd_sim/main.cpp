@@ -57,7 +57,7 @@ int run(const omniloc::daemon::DaemonConfig& config, const SimArgs& sim_args) {
     truth_csv = std::make_unique<TruthCsvWriter>(std::filesystem::path(config.record_dir) / "truth.csv");
     observer.on_window = sim::truth_recorder(robot.truth(), *truth_csv);
   }
-  ros2.attach(observer);
+  ros2.attach(observer, d);
   d.set_observer(std::move(observer));
   omniloc::cli::install_stop_signal_handlers();
   const daemon::DaemonReport r = d.run(&omniloc::cli::g_stop_requested);
