@@ -42,7 +42,7 @@ TEST(ControlRequest, BadRequestsSayWhatIsWrong) {
       {R"({"id": 18446744073709551615, "cmd": "status"})", std::nullopt, "field 'id' is out of range"},
       {R"({"id": 4})", 4, "missing field 'cmd'"},
       {R"({"id": 4, "cmd": 9})", 4, "field 'cmd' must be a string (got 9)"},
-      {R"({"id": 4, "cmd": "fly"})", 4, "unknown cmd 'fly'"},
+      {R"({"id": 4, "cmd": "fly"})", 4, "unknown cmd 'fly' (record, relocalize, set_pose, set_side, status)"},
       {R"({"id": 5, "cmd": "status", "verbose": true})", 5, "status: unknown field 'verbose'"},
       {R"({"id": 6, "cmd": "set_pose", "x_cm": 1, "y_cm": 2})", 6, "set_pose: missing field 'yaw_deg'"},
       {R"({"id": 6, "cmd": "set_pose", "x_cm": "1", "y_cm": 2, "yaw_deg": 0})", 6,

@@ -28,6 +28,7 @@
 #include "omniloc/regmap.hpp"
 
 #include "omniloc/recording.hpp"
+#include "temp_dir.hpp"
 #include "udp_receiver.hpp"
 
 namespace {
@@ -35,15 +36,7 @@ namespace {
 namespace fs = std::filesystem;
 using namespace omniloc;
 
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const std::string& name)
-      : path(fs::temp_directory_path() / ("omniloc_test_" + name + "_" + std::to_string(::getpid()))) {
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() { fs::remove_all(path); }
-};
+using omniloc::test::TempDir;
 
 /// Runs a command line; returns the exit status, its stdout+stderr in `output`.
 int run(const std::string& cmd, const fs::path& log, std::string& output) {

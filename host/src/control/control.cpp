@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <map>
 #include <set>
 
 namespace omniloc::control {
@@ -16,13 +17,23 @@ namespace {
 
 using nlohmann::json;
 
-// Fields each command takes besides "id" and "cmd" (anything else is refused by name).
-const std::set<std::string>& fields_of(std::string_view cmd) {
-  static const std::set<std::string> none, pose{"x_cm", "y_cm", "yaw_deg"}, side{"side"}, record{"action", "dir"};
-  if (cmd == "set_pose") return pose;
-  if (cmd == "set_side") return side;
-  if (cmd == "record") return record;
-  return none;
+// Every command and the fields it takes besides "id" and "cmd" (anything else is refused by name):
+// the one list the parser checks names, fields and its "unknown cmd" message against.
+const std::map<std::string, std::set<std::string>, std::less<>>& commands() {
+  static const std::map<std::string, std::set<std::string>, std::less<>> table = {
+      {"status", {}},
+      {"set_pose", {"x_cm", "y_cm", "yaw_deg"}},
+      {"set_side", {"side"}},
+      {"relocalize", {}},
+      {"record", {"action", "dir"}},
+  };
+  return table;
+}
+
+std::string command_list() {
+  std::string out;
+  for (const auto& [name, fields] : commands()) out += (out.empty() ? "" : ", ") + name;
+  return out;
 }
 
 struct Reader {
@@ -76,11 +87,10 @@ Request parse_request(std::string_view datagram) {
   if (!j.contains("cmd")) throw ControlError(r.id, "missing field 'cmd'");
   if (!j["cmd"].is_string()) throw ControlError(r.id, "field 'cmd' must be a string (got " + j["cmd"].dump() + ")");
   r.cmd = j["cmd"].get<std::string>();
-  static const std::set<std::string> known{"status", "set_pose", "set_side", "relocalize", "record"};
-  if (!known.contains(r.cmd))
-    throw ControlError(r.id, "unknown cmd '" + r.cmd + "' (status, set_pose, set_side, relocalize, record)");
+  const auto command = commands().find(r.cmd);
+  if (command == commands().end()) throw ControlError(r.id, "unknown cmd '" + r.cmd + "' (" + command_list() + ")");
   for (const auto& [key, value] : j.items())
-    if (key != "id" && key != "cmd" && !fields_of(r.cmd).contains(key)) r.fail("unknown field '" + key + "'");
+    if (key != "id" && key != "cmd" && !command->second.contains(key)) r.fail("unknown field '" + key + "'");
 
   Request q{r.id, Status{}};
   if (r.cmd == "set_pose") {

@@ -32,7 +32,6 @@ struct Daemon::Impl {
   std::unique_ptr<RecordingWriter> recorder;
   std::string record_dir;  // of the recording now open (config.record_dir, or one started by command)
   std::unique_ptr<control::ControlSocket> control_socket;
-  std::uint64_t control_requests = 0, control_errors = 0;
 
   // Board connection.
   std::unique_ptr<BoardSession> client;
@@ -281,9 +280,7 @@ struct Daemon::Impl {
     if (std::holds_alternative<control::Status>(command)) return status_json();
     if (const auto* p = std::get_if<control::SetPose>(&command)) {
       const FieldGeometry& f = models.field;
-      const double margin = 100.0;  // as for an initial pose: on the carpet, or just off it
-      if (p->x_cm < -margin || p->x_cm > f.total_x_cm() + margin || p->y_cm < -margin ||
-          p->y_cm > f.total_y_cm() + margin)
+      if (!placeable(f, {p->x_cm, p->y_cm}))  // as for an initial pose: on the carpet, or just off it
         throw fail("(" + json(p->x_cm).dump() + ", " + json(p->y_cm).dump() + ") cm is not on the carpet of field '" +
                    f.name + "' (0 .. " + json(f.total_x_cm()).dump() + " x 0 .. " + json(f.total_y_cm()).dump() +
                    " cm, 100 cm margin)");
@@ -340,7 +337,6 @@ struct Daemon::Impl {
     for (int i = 0; i < 8; ++i) {  // bounded: a flood of requests cannot starve the windows
       const auto d = control_socket->receive();
       if (!d) return;
-      ++control_requests;
       std::string reply;
       try {
         if (d->truncated)
@@ -354,7 +350,6 @@ struct Daemon::Impl {
           throw control::ControlError(q.id, e.what());
         }
       } catch (const control::ControlError& e) {
-        ++control_errors;
         reply = control::error_reply(e.id(), e.what());
       }
       control_socket->reply(*d, reply);
