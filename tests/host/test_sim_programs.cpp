@@ -13,6 +13,7 @@
 #include <csignal>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -27,6 +28,7 @@
 
 #include "omniloc/regmap.hpp"
 
+#include "omniloc/conventions.hpp"
 #include "omniloc/recording.hpp"
 #include "temp_dir.hpp"
 #include "udp_receiver.hpp"
@@ -107,6 +109,37 @@ TEST(OmnilocdSim, PublishesPosesThatMatchTruthAndRecordsARunThatReplays) {
               fixed, max_err_cm);
   EXPECT_GE(fixed, 150) << "a fix within the first half second";
   EXPECT_LT(max_err_cm, 10.0);
+
+  // Issue 15.5: the velocity (robot frame) and yaw rate against the simulator's truth, differenced
+  // over each window and turned into the robot frame at the window's mean heading.
+  std::vector<double> v_err, w_err;
+  for (std::size_t i = 1; i < recording.truth.size() && i < grams.size(); ++i) {
+    const auto& a = recording.truth[i - 1];
+    const auto& b = recording.truth[i];
+    const double dt_s = (b.t_ms - a.t_ms) / 1000.0;
+    const nlohmann::json* g = nullptr;
+    for (std::size_t k = i > 2 ? i - 2 : 0; k < std::min(grams.size(), i + 3); ++k)
+      if (std::fabs(grams[k]["t_ms"].get<double>() - b.t_ms) < 1e-3) g = &grams[k];
+    if (g == nullptr || dt_s <= 0) continue;
+    const double yaw = (a.pose.yaw_deg + angle_diff_deg(b.pose.yaw_deg, a.pose.yaw_deg) / 2.0) * kPi / 180.0;
+    const double vxf = (b.pose.x_cm - a.pose.x_cm) / dt_s, vyf = (b.pose.y_cm - a.pose.y_cm) / dt_s;
+    const double vx = std::cos(yaw) * vxf + std::sin(yaw) * vyf, vy = -std::sin(yaw) * vxf + std::cos(yaw) * vyf;
+    v_err.push_back(std::hypot((*g)["vx_cm_s"].get<double>() - vx, (*g)["vy_cm_s"].get<double>() - vy));
+    w_err.push_back(std::fabs((*g)["omega_deg_s"].get<double>() - angle_diff_deg(b.pose.yaw_deg, a.pose.yaw_deg) / dt_s));
+  }
+  ASSERT_GE(v_err.size(), 150u);
+  std::sort(v_err.begin(), v_err.end());
+  std::sort(w_err.begin(), w_err.end());
+  std::printf("velocity vs truth over %zu windows: median %.2f cm/s, p95 %.2f cm/s; yaw rate median %.2f deg/s, p95 %.2f\n",
+              v_err.size(), v_err[v_err.size() / 2], v_err[v_err.size() * 95 / 100], w_err[w_err.size() / 2],
+              w_err[w_err.size() * 95 / 100]);
+  EXPECT_LT(v_err[v_err.size() / 2], 5.0);
+  EXPECT_LT(w_err[w_err.size() / 2], 2.0);
+  // The host clocks: monotonic and wall time go forward with the datagrams.
+  for (std::size_t i = 1; i < grams.size(); ++i) {
+    EXPECT_GE(grams[i]["mono_ms"].get<double>(), grams[i - 1]["mono_ms"].get<double>());
+    EXPECT_GT(grams[i]["wall_ms"].get<double>(), 1.7e12) << "Unix time in ms (after 2023)";
+  }
 
   // The robot's own replay tool reads what the simulated daemon recorded, and scores it on truth.
   const int replay_rc = run(std::string(OMNILOC_CLI_PATH) + " replay " + rec.string() + " --out " +

@@ -31,7 +31,9 @@ def replay(rec: Path, out: Path, db: Path) -> list:
 
 class ParsePose(unittest.TestCase):
     GOOD = ('{"seq":42,"t_ms":1234.500,"x_cm":375.125,"y_cm":-2.500,"yaw_deg":179.750,"source":"integrated",'
-            '"match_error":7.250,"search_range_cm":20.0,"uncertainty_cm":1.500,"uncertainty_yaw_deg":0.250,"status":"ok"}')
+            '"match_error":7.250,"search_range_cm":20.0,"uncertainty_cm":1.500,"uncertainty_yaw_deg":0.250,'
+            '"vx_cm_s":120.50,"vy_cm_s":-3.25,"omega_deg_s":45.00,"mono_ms":98765.432,"wall_ms":1796280000123.500,'
+            '"status":"ok"}')
 
     def test_documented_example(self):
         p = parse_pose(self.GOOD)

@@ -131,6 +131,20 @@ TEST(Ros2Topics, ASubscriberBuiltFromTheIdlReceivesTheDatagramsPoses) {
     EXPECT_EQ(f[5], "base_link");
     EXPECT_EQ(x_of(f, 13), -1.0) << "twist covariance unknown: -1 (ROS convention)";
   }
+  // The stamp is the datagram's wall_ms and the twist its velocity (m/s, rad/s, robot frame).
+  std::size_t twists = 0;
+  for (const auto& o : odoms)
+    for (const auto& g : grams) {
+      const double wall_s = g["wall_ms"].get<double>() / 1000.0;
+      if (std::fabs(std::stoi(o[2]) + std::stoul(o[3]) * 1e-9 - wall_s) > 1e-6) continue;
+      EXPECT_NEAR(100.0 * x_of(o, 10), g["vx_cm_s"].get<double>(), 0.01);
+      EXPECT_NEAR(100.0 * x_of(o, 11), g["vy_cm_s"].get<double>(), 0.01);
+      EXPECT_NEAR(x_of(o, 12) * 180.0 / M_PI, g["omega_deg_s"].get<double>(), 0.01);
+      ++twists;
+      break;
+    }
+  std::printf("%zu odometry messages matched to their datagram by stamp, twist equal\n", twists);
+  EXPECT_GE(twists, odoms.size() * 9 / 10);
   // An odometry message carries the same pose as the pose message of the same datagram.
   bool found = false;
   for (const auto& o : odoms)

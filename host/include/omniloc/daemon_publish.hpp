@@ -32,6 +32,11 @@ struct PoseMessage {
   double search_range_cm = -1; ///< search range of that image result; < 0: none (key omitted)
   double uncertainty_cm = 0.0; ///< 1-sigma position uncertainty
   double uncertainty_yaw_deg = 0.0;
+  double vx_cm_s = 0.0;        ///< robot-frame velocity (+x forward, +y left) from the odometry
+  double vy_cm_s = 0.0;
+  double omega_deg_s = 0.0;    ///< yaw rate, counter-clockwise positive
+  double mono_ms = 0.0;        ///< CLOCK_MONOTONIC (steady_clock) of the host when sent, ms
+  double wall_ms = 0.0;        ///< the host's wall clock (Unix time) when sent, ms
   DaemonStatus status = DaemonStatus::kStarting;
 };
 

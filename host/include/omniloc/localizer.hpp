@@ -156,6 +156,9 @@ struct LocalizedPose {
   double sigma_yaw_deg = 0.0;
   double image_age_ms = 0.0;       ///< t_ms minus the time of the last image applied (inf: none)
   bool slip = false;               ///< the odometry saw a wheel slip in this window
+  double vx_cm_s = 0.0;            ///< robot-frame velocity from the odometry's last window
+  double vy_cm_s = 0.0;
+  double omega_deg_s = 0.0;        ///< yaw rate over the last window (the gyro's)
 };
 
 /// What happened to one frame.

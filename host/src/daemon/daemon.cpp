@@ -3,6 +3,7 @@
 // one loop keeps the order of windows and frames obvious.
 #include "omniloc/daemon.hpp"
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <utility>
@@ -147,6 +148,14 @@ struct Daemon::Impl {
     m.search_range_cm = std::isfinite(lp.match_error) ? lp.search_range_cm : -1.0;
     m.uncertainty_cm = lp.sigma_xy_cm;
     m.uncertainty_yaw_deg = lp.sigma_yaw_deg;
+    m.vx_cm_s = lp.vx_cm_s;
+    m.vy_cm_s = lp.vy_cm_s;
+    m.omega_deg_s = lp.omega_deg_s;
+    // The host's own clocks at the send (not the daemon clock, which is the simulator's in
+    // simulation): what a consumer on this host compares with its receive time.
+    using Ms = std::chrono::duration<double, std::milli>;
+    m.mono_ms = Ms(std::chrono::steady_clock::now().time_since_epoch()).count();
+    m.wall_ms = Ms(std::chrono::system_clock::now().time_since_epoch()).count();
     m.status = st;
     publisher.send(pose_json(m));
     last_message = m;

@@ -87,6 +87,16 @@ std::string pose_json(const PoseMessage& m) {
   put_number(out, m.uncertainty_cm, 3);
   out += ",\"uncertainty_yaw_deg\":";
   put_number(out, m.uncertainty_yaw_deg, 3);
+  out += ",\"vx_cm_s\":";
+  put_number(out, m.vx_cm_s, 2);
+  out += ",\"vy_cm_s\":";
+  put_number(out, m.vy_cm_s, 2);
+  out += ",\"omega_deg_s\":";
+  put_number(out, m.omega_deg_s, 2);
+  out += ",\"mono_ms\":";
+  put_number(out, m.mono_ms, 3);
+  out += ",\"wall_ms\":";
+  put_number(out, m.wall_ms, 3);
   out += ",\"status\":";
   put_string(out, to_string(m.status));
   out += '}';

@@ -479,6 +479,9 @@ LocalizedPose Localizer::make_pose(const EncoderWindow& window) {
   p.t_ms = window.t_end_ms;
   p.seq = window.seq;
   p.slip = e.slip.detected;
+  p.vx_cm_s = e.vx_cm_per_s;
+  p.vy_cm_s = e.vy_cm_per_s;
+  p.omega_deg_s = e.yaw_rate_deg_per_s;
   p.match_error = last_error_;
   p.search_range_cm = last_range_cm_;
   p.image_age_ms = anchor_.valid && anchor_.t_ms > 0.0 ? window.t_end_ms - anchor_.t_ms : kNoError;
