@@ -231,5 +231,21 @@ TEST(DaemonConfig, HelpListsEveryKeyAsAFlagWithItsDefault) {
   for (const char* gone : {"--board ", "--sim-", "sim |"}) EXPECT_EQ(help.find(gone), std::string::npos) << gone;
 }
 
+// Issue 17.3: log levels from the key table (--log-level, the config file) and -v / -q on top.
+TEST(DaemonCommandLine, LogLevelFromTheKeyAndVerboseQuietFlags) {
+  const auto level = [](std::vector<std::string> args) {
+    CommandLine c;
+    const DaemonConfig cfg = c.parse(std::move(args));
+    return cli::daemon_logger(cfg, c.cl, "omnilocd").threshold();
+  };
+  EXPECT_EQ(level({}), LogLevel::kInfo);
+  EXPECT_EQ(level({"--log-level", "warning"}), LogLevel::kWarning);
+  EXPECT_EQ(level({"-v"}), LogLevel::kDebug);
+  EXPECT_EQ(level({"-q"}), LogLevel::kWarning);
+  EXPECT_EQ(level({"-qq"}), LogLevel::kError);
+  EXPECT_EQ(level({"--log-level=error", "-v"}), LogLevel::kWarning);
+  EXPECT_NE(flag_error({"--log-level", "loud"}).find("log_level"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace omniloc::daemon

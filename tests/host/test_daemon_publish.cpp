@@ -190,7 +190,7 @@ TEST(DaemonPublish, StatusLineShowsEveryFigure) {
   s.send_failed = 2;
   s.reconnects = 1;
   EXPECT_EQ(omniloc::daemon::status_line(s),
-            "omnilocd t=12.0s odometry_only pose=(375.2,275.1,-90.0) src=odometry err=- sigma=3.2cm drift=-0.012deg/s win=100/s cam=0/s "
+            "t=12.0s odometry_only pose=(375.2,275.1,-90.0) src=odometry err=- sigma=3.2cm drift=-0.012deg/s win=100/s cam=0/s "
             "sent=1200 dropped=2 reconnects=1");
 }
 

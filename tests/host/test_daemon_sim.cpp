@@ -179,10 +179,10 @@ TEST(DaemonSim, PublishesTrackedPosesSurvivesUnplugAndCameraStop) {
     events.push_back(e);
     truths.push_back(rig.log.truth(e.message.t_ms));
   };
-  io.log = [&](const std::string& s) {
-    logs.push_back(s);
-    std::printf("%s\n", s.c_str());
-  };
+  io.logger = Logger(LogLevel::kInfo, [&](LogLevel level, std::string_view s) {
+    logs.push_back(format_log_line("omnilocd", level, s));
+    std::printf("%s\n", logs.back().c_str());
+  });
   Daemon d(cfg, mod, io);
   // After the daemon has made the recording directory, as omnilocd-sim does.
   TruthCsvWriter truth_csv(rec_dir / "truth.csv");
@@ -302,7 +302,7 @@ TEST(DaemonSim, NoCameraAndNoStartPoseIsOdometryOnly) {
     statuses.push_back(e.message.status);
     if (statuses.size() == 50) stop = 1;
   };
-  io.log = [](const std::string&) {};
+  io.logger = Logger::silent();
   Daemon d(cfg, mod, io);
   (void)d.run(&stop);
   ASSERT_EQ(statuses.size(), 50u);
@@ -334,7 +334,9 @@ TEST(DaemonSim, StopFlagEndsTheRunAndSwitchesStreamingOff) {
     truths.push_back(rig.log.truth(e.message.t_ms));
     if (events.size() == 150) stop = 1;
   };
-  io.log = [](const std::string& s) { std::printf("%s\n", s.c_str()); };
+  io.logger = Logger(LogLevel::kInfo, [](LogLevel level, std::string_view s) {
+    std::printf("%s\n", format_log_line("omnilocd", level, s).c_str());
+  });
   Daemon d(cfg, mod, io);
   const DaemonReport r = d.run(&stop);
   EXPECT_EQ(r.stop_reason, "signal");

@@ -348,7 +348,7 @@ TEST(OmnilocdSim, FullDiskStopsTheRecordingNotThePoses) {
                          std::to_string(rx.port()) + " --record-dir " + rec.string() + "\"",
                      dir.path / "daemon.log", out);
   ASSERT_EQ(rc, 0) << out;
-  EXPECT_NE(out.find("omnilocd: recording stopped: "), std::string::npos) << out;
+  EXPECT_NE(out.find("omnilocd-sim: error: recording stopped: "), std::string::npos) << out;
   EXPECT_NE(out.find("write failed (File too large); poses are still sent"), std::string::npos) << out;
   EXPECT_NE(out.find("rec=stopped rec_failures=1"), std::string::npos) << out;
   EXPECT_NE(out.find("stopped (duration)"), std::string::npos) << out;

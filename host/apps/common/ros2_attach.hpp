@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "omniloc/daemon.hpp"
+#include "omniloc/log.hpp"
 #include "omniloc/daemon_config.hpp"
 #include "omniloc/ros2_bridge.hpp"
 
@@ -18,7 +19,7 @@ namespace omniloc::cli {
 class Ros2Attachment {
  public:
   /// Nothing when config.ros2_domain_id < 0; else the bridge, or std::runtime_error saying why not.
-  Ros2Attachment(const daemon::DaemonConfig& config, const std::function<void(const std::string&)>& say) {
+  Ros2Attachment(const daemon::DaemonConfig& config, const Logger& log) : log_(log) {
     if (config.ros2_domain_id < 0) return;
     ros2::Ros2Config rc;
     rc.domain_id = config.ros2_domain_id;
@@ -26,8 +27,7 @@ class Ros2Attachment {
     rc.frame_id = config.ros2_frame_id;
     bridge_ = std::make_unique<ros2::Ros2Bridge>(rc);
     frame_id_ = rc.frame_id;
-    say_ = say;
-    say("ROS 2 topics " + rc.topic_prefix + "/pose, " + rc.topic_prefix + "/odom (subscribed: " +
+    log_.info("ROS 2 topics " + rc.topic_prefix + "/pose, " + rc.topic_prefix + "/odom (subscribed: " +
         rc.initial_pose_topic + ") in DDS domain " + std::to_string(rc.domain_id));
   }
 
@@ -41,13 +41,13 @@ class Ros2Attachment {
       const auto ip = bridge_->take_initial_pose();
       if (!ip) return;
       if (!ip->frame_id.empty() && ip->frame_id != frame_id_) {
-        say_("ROS 2: /initialpose in frame '" + ip->frame_id + "' ignored (poses are in '" + frame_id_ + "')");
+        log_.warning("ROS 2: /initialpose in frame '" + ip->frame_id + "' ignored (poses are in '" + frame_id_ + "')");
         return;
       }
       try {
         (void)daemon.apply(control::SetPose{ip->pose.x_cm, ip->pose.y_cm, ip->pose.yaw_deg});
       } catch (const control::ControlError& e) {
-        say_(std::string("ROS 2: /initialpose refused: ") + e.what());
+        log_.warning(std::string("ROS 2: /initialpose refused: ") + e.what());
       }
     };
     observer.on_pose = [bridge = bridge_.get(), next = std::move(observer.on_pose)](const daemon::PoseEvent& e) {
@@ -71,7 +71,7 @@ class Ros2Attachment {
  private:
   std::unique_ptr<ros2::Ros2Bridge> bridge_;
   std::string frame_id_;
-  std::function<void(const std::string&)> say_;
+  Logger log_;
 };
 
 }  // namespace omniloc::cli

@@ -21,15 +21,16 @@
 
 namespace {
 
-int run(const omniloc::daemon::DaemonConfig& config) {
+int run(const omniloc::daemon::DaemonConfig& config, const omniloc::Logger& log) {
   using namespace omniloc;
   using namespace omniloc::daemon;
-  auto say = [](const std::string& s) { std::fprintf(stderr, "omnilocd: %s\n", s.c_str()); };
+  auto say = [&log](const std::string& s) { log.info(s); };
   const DaemonModels models = load_models(config, say);
 
   SteadyClock wall;
   WheelYawHeading wheel_yaw(models.robot);
   DaemonIo io;
+  io.logger = log;
   io.clock = &wall;
   UsbTransportOptions usb;
   usb.serial = config.board_serial;
@@ -40,7 +41,7 @@ int run(const omniloc::daemon::DaemonConfig& config) {
   io.camera = camera.get();
   say("publishing poses to udp://" + config.udp_address + ":" + std::to_string(config.udp_port) +
       (config.record_dir.empty() ? "" : ", recording to " + config.record_dir));
-  omniloc::cli::Ros2Attachment ros2(config, say);
+  omniloc::cli::Ros2Attachment ros2(config, log);
   Daemon daemon(config, models, io);
   // Under systemd (Type=notify): ready once the models are loaded and the loop starts; the loop
   // feeds the watchdog whether or not a board is there.
@@ -54,7 +55,7 @@ int run(const omniloc::daemon::DaemonConfig& config) {
   service.ready();
   const DaemonReport r = daemon.run(&omniloc::cli::g_stop_requested);
   service.stopping();
-  std::fprintf(stderr, "omnilocd: %s\n", report_line(r).c_str());
+  log.info(report_line(r));
   return 0;
 }
 
@@ -68,5 +69,8 @@ int main(int argc, char** argv) {
   app.footer("SIGINT / SIGTERM stop it cleanly (recording closed, board streaming switched off).");
   omniloc::cli::DaemonCommandLine cl;
   omniloc::cli::add_daemon_options(app, cl);
-  return omniloc::cli::parse_and_run(app, argc, argv, "omnilocd", [&] { return run(omniloc::cli::daemon_config_from(cl)); });
+  return omniloc::cli::parse_and_run(app, argc, argv, "omnilocd", [&] {
+    const omniloc::daemon::DaemonConfig config = omniloc::cli::daemon_config_from(cl);
+    return run(config, omniloc::cli::daemon_logger(config, cl, "omnilocd"));
+  });
 }

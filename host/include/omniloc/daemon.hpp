@@ -23,6 +23,7 @@
 #include "omniloc/feature_db.hpp"
 #include "omniloc/field.hpp"
 #include "omniloc/localizer.hpp"
+#include "omniloc/log.hpp"
 #include "omniloc/odometry.hpp"
 #include "omniloc/robot_config.hpp"
 #include "omniloc/transport.hpp"
@@ -153,7 +154,7 @@ struct DaemonIo {
   FrameSource* camera = nullptr;       ///< null: no camera (odometry only)
   HeadingSource* heading = nullptr;    ///< required (WheelYawHeading when there is no gyro)
   DaemonObserver observer;             ///< optional
-  std::function<void(const std::string&)> log;     ///< status lines and events (default: stderr)
+  Logger logger;                       ///< status lines and events (default: info and above to stderr)
 };
 
 class Daemon {

@@ -40,6 +40,7 @@ struct DaemonConfig {
   bool record_overwrite = false;       ///< replace an old recording in record_dir (else refused)
   std::string record_format = "jpeg";  ///< frame store: "jpeg" (compact) or "png" (lossless)
   double status_period_s = 1.0;        ///< status line on stderr; 0 disables it
+  std::string log_level = "info";      ///< error | warning | info | debug (log.hpp); -v / -q move it
   double duration_s = 0.0;             ///< stop after this much (daemon) time; 0: until SIGINT/SIGTERM
   // --- ROS 2 topics (docs/ROS2.md; needs a build with Cyclone DDS) ---
   int ros2_domain_id = -1;             ///< DDS domain (ROS_DOMAIN_ID) of the topics; -1: no ROS 2

@@ -88,7 +88,7 @@ struct StatusSnapshot {
 };
 
 /// One line, no newline, e.g.
-/// "omnilocd t=12.0s ok pose=(375.2,275.1,90.0) src=integrated err=3.1 sigma=1.2cm drift=+0.004deg/s win=100/s cam=60/s sent=1200".
+/// "t=12.0s ok pose=(375.2,275.1,90.0) src=integrated err=3.1 sigma=1.2cm drift=+0.004deg/s win=100/s cam=60/s sent=1200".
 [[nodiscard]] std::string status_line(const StatusSnapshot& s);
 
 }  // namespace omniloc::daemon

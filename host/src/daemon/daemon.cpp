@@ -64,14 +64,13 @@ struct Daemon::Impl {
         localizer(localizer_config(c, m, io), m.robot, m.field, m.camera, m.db, m.initial_pose) {
     if (!io.clock || !io.open_board || !io.heading)
       throw std::invalid_argument("Daemon: clock, open_board and heading are required");
-    if (!io.log) io.log = [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); };
     if (!config.record_dir.empty()) start_recording(config.record_dir, config.record_overwrite);
     if (config.control_port > 0) {
       try {
         control_socket = std::make_unique<control::ControlSocket>("127.0.0.1", config.control_port);
       } catch (const std::exception& e) {
         // The poses matter more than the commands: the daemon runs on without them, and says so.
-        log(std::string("omnilocd: warning: control channel off: ") + e.what());
+        io.logger.warning(std::string("control channel off: ") + e.what());
       }
     }
   }
@@ -97,7 +96,7 @@ struct Daemon::Impl {
     } catch (const RecordingError& e) {
       ++report.recording_failures;
       report.recording_error = e.what();
-      log(std::string("omnilocd: recording could not be closed: ") + e.what());
+      io.logger.error(std::string("recording could not be closed: ") + e.what());
     }
     recorder.reset();
   }
@@ -109,7 +108,6 @@ struct Daemon::Impl {
     return lc;
   }
 
-  void log(const std::string& s) const { io.log(s); }
 
   // A recording that cannot be written (disk full, file size limit) stops; the pose stream goes on.
   template <class Write>
@@ -121,7 +119,7 @@ struct Daemon::Impl {
       ++report.recording_failures;
       report.recording_error = e.what();
       recorder.reset();  // closes what is open; whole rows only are on disk
-      log(std::string("omnilocd: recording stopped: ") + e.what() + "; poses are still sent");
+      io.logger.error(std::string("recording stopped: ") + e.what() + "; poses are still sent");
     }
   }
 
@@ -174,21 +172,21 @@ struct Daemon::Impl {
       o.window_period_ms = models.robot.window_period_ms;
       client = std::make_unique<BoardSession>(io.open_board(), o);
       if (version_differs(client->identity()))
-        log("omnilocd: warning: board register map " + client->identity().version_text() + " differs from the host's");
+        io.logger.warning("board register map " + client->identity().version_text() + " differs from the host's");
       connection_offset_ms.reset();
       last_window_clock_ms = io.clock->now_ms();
       if (ever_connected) {
         ++report.reconnects;
-        log("omnilocd: board back (" + client->describe() + "), streaming again");
+        io.logger.info("board back (" + client->describe() + "), streaming again");
       } else {
-        log("omnilocd: board open (" + client->describe() + "), streaming");
+        io.logger.info("board open (" + client->describe() + "), streaming");
       }
       ever_connected = true;
       board_gone = false;
       last_open_error.clear();
     } catch (const std::exception& e) {
       client.reset();
-      if (e.what() != last_open_error) log(std::string("omnilocd: board not available: ") + e.what());
+      if (e.what() != last_open_error) io.logger.warning(std::string("board not available: ") + e.what());
       last_open_error = e.what();
     }
   }
@@ -204,7 +202,7 @@ struct Daemon::Impl {
     client.reset();
     if (!board_gone) {
       ++report.board_losses;
-      log("omnilocd: board lost (" + why + "): status degraded, reconnecting every " +
+      io.logger.warning("board lost (" + why + "): status degraded, reconnecting every " +
           std::to_string(static_cast<int>(config.reconnect_period_ms)) + " ms");
     }
     board_gone = true;
@@ -233,7 +231,10 @@ struct Daemon::Impl {
     // Frames wait while the board is gone: the localizer can only place them between windows.
     if (!board_gone && client) {
       if (auto f = io.camera->poll(now_ms)) {
-        (void)localizer.on_image(f->t_ms, f->bgr);
+        const FrameReport fr = localizer.on_image(f->t_ms, f->bgr);
+        if (io.logger.enabled(LogLevel::kDebug))
+          io.logger.debug("frame t=" + nlohmann::json(f->t_ms).dump() + " ms: " +
+                          (fr.no_measurement.empty() ? "queued" : "no measurement: " + fr.no_measurement));
         record([&] { recorder->add_frame(f->t_ms, f->bgr); });
         if (io.observer.on_frame) io.observer.on_frame(*f);
         last_frame_ms = f->t_ms;
@@ -243,9 +244,9 @@ struct Daemon::Impl {
     const bool fresh = now_ms - last_frame_ms <= config.camera_timeout_ms;
     if (camera_fresh && !fresh && !board_gone) {
       ++report.camera_losses;
-      log("omnilocd: camera stopped delivering (" + io.camera->describe() + "): odometry only");
+      io.logger.warning("camera stopped delivering (" + io.camera->describe() + "): odometry only");
     } else if (!camera_fresh && fresh && report.camera_losses > 0) {
-      log("omnilocd: camera delivering again");
+      io.logger.info("camera delivering again");
     }
     camera_fresh = fresh;
   }
@@ -272,7 +273,7 @@ struct Daemon::Impl {
     if (!record_dir.empty()) s.recording = recorder ? "on" : "stopped";
     s.recording_failures = report.recording_failures;
     const std::string line = status_line(s);
-    log(line);
+    io.logger.info(line);
     if (io.observer.on_status) io.observer.on_status(line);
     windows_at_status = report.windows;
     frames_at_status = report.frames;
@@ -296,7 +297,7 @@ struct Daemon::Impl {
       const Pose2 pose{p->x_cm, p->y_cm, wrap_deg(p->yaw_deg)};
       localizer.set_pose(pose, models.localizer.image_sigma_cm, models.localizer.image_sigma_yaw_deg);
       last_localized = localizer.pose();
-      log("omnilocd: pose set by command to (" + json(pose.x_cm).dump() + ", " + json(pose.y_cm).dump() + ") cm, " +
+      io.logger.info("pose set by command to (" + json(pose.x_cm).dump() + ", " + json(pose.y_cm).dump() + ") cm, " +
           json(pose.yaw_deg).dump() + " deg");
       return {{"x_cm", pose.x_cm}, {"y_cm", pose.y_cm}, {"yaw_deg", pose.yaw_deg}, {"last_seq", seq}};
     }
@@ -304,7 +305,7 @@ struct Daemon::Impl {
       throw fail("not supported yet: the daemon has no notion of the team's side (issue 15.2)");
     if (std::holds_alternative<control::Relocalize>(command)) {
       localizer.force_global_search();
-      log("omnilocd: relocalizing by command: global search on the next frames");
+      io.logger.info("relocalizing by command: global search on the next frames");
       return {{"status", std::string(to_string(DaemonStatus::kLost))}, {"last_seq", seq}};
     }
     if (const auto* r = std::get_if<control::RecordStart>(&command)) {
@@ -314,13 +315,13 @@ struct Daemon::Impl {
       } catch (const std::exception& e) {
         throw fail(e.what());
       }
-      log("omnilocd: recording to " + r->dir + " (by command)");
+      io.logger.info("recording to " + r->dir + " (by command)");
       return {{"dir", r->dir}};
     }
     if (!recorder) throw fail("not recording");
     const std::string dir = record_dir;
     close_recording();
-    log("omnilocd: recording to " + dir + " stopped by command");
+    io.logger.info("recording to " + dir + " stopped by command");
     return {{"dir", dir}};
   }
 
@@ -361,6 +362,7 @@ struct Daemon::Impl {
       } catch (const control::ControlError& e) {
         reply = control::error_reply(e.id(), e.what());
       }
+      io.logger.debug("control: " + d->text + " -> " + reply);
       control_socket->reply(*d, reply);
     }
   }
@@ -414,7 +416,7 @@ struct Daemon::Impl {
       status_tick(clock.now_ms(), start);
     }
     if (client) {
-      if (const auto err = client->stop_streaming()) log("omnilocd: could not switch streaming off: " + *err);
+      if (const auto err = client->stop_streaming()) io.logger.warning("could not switch streaming off: " + *err);
       count_link_errors();
     }
     close_recording();

@@ -147,7 +147,7 @@ std::string status_line(const StatusSnapshot& s) {
   if (s.match_error < 0) std::snprintf(err, sizeof err, "-");
   else std::snprintf(err, sizeof err, "%.1f", s.match_error);
   std::snprintf(buf, sizeof buf,
-                "omnilocd t=%.1fs %s pose=(%.1f,%.1f,%.1f) src=%s err=%s sigma=%.1fcm drift=%+.3fdeg/s win=%.0f/s cam=%.0f/s "
+                "t=%.1fs %s pose=(%.1f,%.1f,%.1f) src=%s err=%s sigma=%.1fcm drift=%+.3fdeg/s win=%.0f/s cam=%.0f/s "
                 "sent=%llu dropped=%llu%s%s reconnects=%llu",
                 s.t_s, std::string(to_string(s.status)).c_str(), s.x_cm, s.y_cm, s.yaw_deg,
                 s.source.empty() ? "-" : s.source.c_str(), err, s.uncertainty_cm, s.gyro_drift_deg_per_s, s.windows_per_s, s.frames_per_s,

@@ -26,6 +26,7 @@
 
 #include "commands.hpp"
 #include "omniloc/daemon.hpp"
+#include "omniloc/log.hpp"
 #include "omniloc/daemon_config.hpp"
 #include "omniloc/field.hpp"
 #include "omniloc/line_scan.hpp"
@@ -418,7 +419,9 @@ int cmd_demo(std::span<const std::string_view> args) {
   DemoObserver observer(m, robot, o, drive, csv);
   daemon::DaemonIo io = robot.io();
   io.observer = observer.callbacks();
-  io.log = [](const std::string& s) { std::printf("  [daemon] %s\n", s.c_str()); };
+  io.logger = Logger(LogLevel::kInfo, [](LogLevel level, std::string_view s) {
+    std::printf("  [daemon] %s\n", format_log_line("omnilocd", level, s).c_str());
+  });
   daemon::Daemon d(dc, m, io);
   observer.print_header();
   const double cpu0 = process_cpu_s();

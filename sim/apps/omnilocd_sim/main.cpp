@@ -35,9 +35,9 @@ std::uint64_t parse_seed(std::string_view v) {
   return n;
 }
 
-int run(const omniloc::daemon::DaemonConfig& config, const SimArgs& sim_args) {
+int run(const omniloc::daemon::DaemonConfig& config, const SimArgs& sim_args, const omniloc::Logger& log) {
   using namespace omniloc;
-  auto say = [](const std::string& s) { std::fprintf(stderr, "omnilocd-sim: %s\n", s.c_str()); };
+  auto say = [&log](const std::string& s) { log.info(s); };
   const daemon::DaemonModels models = daemon::load_models(config, say);
   sim::SimRobotOptions o;
   o.seed = sim_args.seed;
@@ -46,9 +46,10 @@ int run(const omniloc::daemon::DaemonConfig& config, const SimArgs& sim_args) {
   sim::SimulatedRobot robot(models, sim::make_trajectory(sim_args.trajectory, sim_args.seed, sim::playing_area(models.field)), o);
   say(robot.describe() + "; trajectory " + sim_args.trajectory + ", seed " + std::to_string(sim_args.seed));
   daemon::DaemonIo io = robot.io();
+  io.logger = log;
   say("publishing poses to udp://" + config.udp_address + ":" + std::to_string(config.udp_port) +
       (config.record_dir.empty() ? "" : ", recording to " + config.record_dir));
-  omniloc::cli::Ros2Attachment ros2(config, say);
+  omniloc::cli::Ros2Attachment ros2(config, log);
   daemon::Daemon d(config, models, io);
   // After the daemon has made the recording directory (and removed an old truth.csv).
   std::unique_ptr<TruthCsvWriter> truth_csv;
@@ -82,6 +83,7 @@ int main(int argc, char** argv) {
   omniloc::cli::add_daemon_options(app, cl);
   return omniloc::cli::parse_and_run(app, argc, argv, "omnilocd-sim", [&] {
     if (!seed_text.empty()) sim_args.seed = parse_seed(seed_text);
-    return run(omniloc::cli::daemon_config_from(cl), sim_args);
+    const omniloc::daemon::DaemonConfig config = omniloc::cli::daemon_config_from(cl);
+    return run(config, sim_args, omniloc::cli::daemon_logger(config, cl, "omnilocd-sim"));
   });
 }
