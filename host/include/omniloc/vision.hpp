@@ -170,6 +170,15 @@ class LineExtractor {
   /// reference extract() must equal byte for byte (tests) and is measured against (bench_vision).
   [[nodiscard]] BearingScan extract_reference(const cv::Mat& bgr, int rays_per_degree, ExtractionReport* report = nullptr);
 
+  /// The ways of walking the rays; all give the same bytes (scan and report, frame after frame).
+  enum class Walk {
+    kFast,       ///< extract(): the code plane converted 8 pixels at a time (AVX2) and 8 rays walked in lockstep
+    kBinWalk,    ///< the scalar code plane and the scalar bin-by-bin walk (extract() before the lockstep walk)
+    kReference,  ///< extract_reference()
+  };
+  [[nodiscard]] BearingScan extract_with(Walk how, const cv::Mat& bgr, int rays_per_degree,
+                                         ExtractionReport* report = nullptr);
+
   struct RayTable {
     std::vector<std::int32_t> offset;  // byte offset of each pixel in the image
     std::vector<std::uint8_t> bin;     // its integer radius
@@ -193,12 +202,13 @@ class LineExtractor {
   struct Frame;
   const RayTable& table(int rays_per_degree, std::size_t step_bytes);
   bool ensure_carpet(const cv::Mat& bgr, std::string* why);
-  BearingScan extract_impl(const cv::Mat& bgr, int rays_per_degree, ExtractionReport* report, bool fast);
+  BearingScan extract_impl(const cv::Mat& bgr, int rays_per_degree, ExtractionReport* report, Walk how);
   template <class Pixel>
   void walk_rays(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr, Pixel px) const;
   void walk(const cv::Mat& bgr, const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const;
   void bin_layout(RayTable& t, int n) const;
   void code_pixels(const cv::Mat& bgr, const RayTable& t, int sat_min);
+  bool code_pixels_avx2(const cv::Mat& bgr, const RayTable& t, int sat_min);
   void walk_fast(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const;
   void adapt(const Frame& fr);
   void mark_tall_obstacles(const BearingScan& scan, ExtractionReport& rep) const;

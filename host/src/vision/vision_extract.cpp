@@ -12,6 +12,11 @@
 #include "omniloc/line_scan.hpp"
 #include "omniloc/vision.hpp"
 
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define OMNILOC_HAVE_X86 1
+#endif
+
 namespace omniloc {
 
 namespace {
@@ -28,6 +33,123 @@ inline int hue_of(const std::uint8_t* p, int v, int diff, const int* hdiv) {
   h = (h * hdiv[diff] + (1 << 11)) >> 12;
   return h < 0 ? h + 180 : (h >= 180 ? h - 180 : h);
 }
+
+#ifdef OMNILOC_HAVE_X86
+bool cpu_has_avx2() {
+  static const bool has = __builtin_cpu_supports("avx2") != 0;  // CPU feature, fixed for the process
+  return has;
+}
+
+// The divisors of OpenCV's integer HSV (hsv_tables.hpp) for 8 lanes, from a float division rounded
+// to nearest: sat_div[v] = round(255 * 4096 / v), hue_div[d] = round(30 * 4096 / d) (a lane of 0
+// gets the divisor of 1; it is multiplied by a difference of 0). hsv_divisors_match() checks them
+// against the tables for every value once, before they are used.
+__attribute__((target("avx2"))) inline __m256i sat_div8(__m256i v) {
+  const __m256 q = _mm256_div_ps(_mm256_set1_ps(255.0f * 4096.0f), _mm256_cvtepi32_ps(_mm256_max_epi32(v, _mm256_set1_epi32(1))));
+  return _mm256_cvttps_epi32(_mm256_round_ps(q, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC));
+}
+__attribute__((target("avx2"))) inline __m256i hue_div8(__m256i d) {
+  const __m256 q = _mm256_div_ps(_mm256_set1_ps(30.0f * 4096.0f), _mm256_cvtepi32_ps(_mm256_max_epi32(d, _mm256_set1_epi32(1))));
+  return _mm256_cvttps_epi32(_mm256_round_ps(q, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC));
+}
+__attribute__((target("avx2"))) bool hsv_divisors_match_avx2() {
+  const int* sdiv = detail::hsv_tables().sat_div;
+  const int* hdiv = detail::hsv_tables().hue_div;
+  for (int i = 1; i < 256; i += 8) {
+    alignas(32) std::int32_t s[8], h[8];
+    const __m256i x = _mm256_add_epi32(_mm256_set1_epi32(i), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+    _mm256_store_si256(reinterpret_cast<__m256i*>(s), sat_div8(x));
+    _mm256_store_si256(reinterpret_cast<__m256i*>(h), hue_div8(x));
+    for (int k = 0; k < 8 && i + k < 256; ++k)
+      if (s[k] != sdiv[i + k] || h[k] != hdiv[i + k]) return false;
+  }
+  return true;
+}
+bool hsv_divisors_match() {
+  static const bool match = hsv_divisors_match_avx2();  // a property of the CPU's float division, fixed
+  return match;
+}
+
+// The carpet's hue window as at most two ranges of the 8-bit hue (it may wrap round 0).
+struct HueRanges {
+  int lo[2] = {1, 1}, hi[2] = {0, 0};  // empty
+};
+bool hue_ranges(const std::array<bool, 180>& ok, HueRanges& out) {
+  int n = 0;
+  for (int i = 0; i < 180; ++i) {
+    if (!ok[static_cast<std::size_t>(i)] || (i > 0 && ok[static_cast<std::size_t>(i - 1)])) continue;
+    if (n == 2) return false;
+    int j = i;
+    while (j + 1 < 180 && ok[static_cast<std::size_t>(j + 1)]) ++j;
+    out.lo[n] = i;
+    out.hi[n] = j;
+    ++n;
+  }
+  return true;
+}
+
+// code_pixels' word for 8 pixels at p (24 bytes; 28 are read): V | S << 8 | carpet hue << 16, with
+// OpenCV's integer HSV exactly as the scalar loop.
+__attribute__((target("avx2"))) inline __m256i code8_avx2(const std::uint8_t* p, const HueRanges& hr_ok,
+                                                          __m256i sat_min_minus_1) {
+  const __m256i x = _mm256_inserti128_si256(
+      _mm256_castsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p))),
+      _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 12)), 1);
+  // Each 128-bit half holds 4 pixels (12 bytes): their b, g and r bytes to 32-bit lanes.
+  const __m256i mb = _mm256_setr_epi8(0, -1, -1, -1, 3, -1, -1, -1, 6, -1, -1, -1, 9, -1, -1, -1, 0, -1, -1, -1, 3, -1,
+                                      -1, -1, 6, -1, -1, -1, 9, -1, -1, -1);
+  const __m256i mg = _mm256_setr_epi8(1, -1, -1, -1, 4, -1, -1, -1, 7, -1, -1, -1, 10, -1, -1, -1, 1, -1, -1, -1, 4, -1,
+                                      -1, -1, 7, -1, -1, -1, 10, -1, -1, -1);
+  const __m256i mr = _mm256_setr_epi8(2, -1, -1, -1, 5, -1, -1, -1, 8, -1, -1, -1, 11, -1, -1, -1, 2, -1, -1, -1, 5, -1,
+                                      -1, -1, 8, -1, -1, -1, 11, -1, -1, -1);
+  const __m256i b = _mm256_shuffle_epi8(x, mb), g = _mm256_shuffle_epi8(x, mg), r = _mm256_shuffle_epi8(x, mr);
+  const __m256i v = _mm256_max_epi32(_mm256_max_epi32(b, g), r);
+  const __m256i diff = _mm256_sub_epi32(v, _mm256_min_epi32(_mm256_min_epi32(b, g), r));
+  const __m256i round = _mm256_set1_epi32(1 << 11);
+  const __m256i s = _mm256_srli_epi32(_mm256_add_epi32(_mm256_mullo_epi32(diff, sat_div8(v)), round), 12);
+  const __m256i hr = _mm256_sub_epi32(g, b);
+  const __m256i hg = _mm256_add_epi32(_mm256_sub_epi32(b, r), _mm256_slli_epi32(diff, 1));
+  const __m256i hb = _mm256_add_epi32(_mm256_sub_epi32(r, g), _mm256_slli_epi32(diff, 2));
+  const __m256i h0 = _mm256_blendv_epi8(_mm256_blendv_epi8(hb, hg, _mm256_cmpeq_epi32(v, g)), hr, _mm256_cmpeq_epi32(v, r));
+  __m256i h = _mm256_srai_epi32(_mm256_add_epi32(_mm256_mullo_epi32(h0, hue_div8(diff)), round), 12);
+  const __m256i k180 = _mm256_set1_epi32(180);
+  h = _mm256_add_epi32(h, _mm256_and_si256(k180, _mm256_cmpgt_epi32(_mm256_setzero_si256(), h)));
+  h = _mm256_sub_epi32(h, _mm256_and_si256(k180, _mm256_cmpgt_epi32(h, _mm256_set1_epi32(179))));
+  const __m256i in0 = _mm256_and_si256(_mm256_cmpgt_epi32(h, _mm256_set1_epi32(hr_ok.lo[0] - 1)),
+                                       _mm256_cmpgt_epi32(_mm256_set1_epi32(hr_ok.hi[0] + 1), h));
+  const __m256i in1 = _mm256_and_si256(_mm256_cmpgt_epi32(h, _mm256_set1_epi32(hr_ok.lo[1] - 1)),
+                                       _mm256_cmpgt_epi32(_mm256_set1_epi32(hr_ok.hi[1] + 1), h));
+  const __m256i flag = _mm256_and_si256(_mm256_or_si256(in0, in1), _mm256_cmpgt_epi32(s, sat_min_minus_1));
+  return _mm256_or_si256(_mm256_or_si256(v, _mm256_slli_epi32(s, 8)), _mm256_srli_epi32(_mm256_slli_epi32(flag, 31), 15));
+}
+
+// The rows of code_pixels_avx2: [row_u0, row_u1] of each row, 8 pixels at a time, the rest scalar.
+__attribute__((target("avx2"))) void code_rows_avx2(const cv::Mat& bgr, const std::int32_t* row_u0, const std::int32_t* row_u1,
+                                                    std::uint32_t* code, const HueRanges& hue_ok, int sat_min) {
+  const int* sdiv = detail::hsv_tables().sat_div;
+  const int* hdiv = detail::hsv_tables().hue_div;
+  const __m256i sat_min_minus_1 = _mm256_set1_epi32(sat_min - 1);
+  // 28 bytes are read for 8 pixels: stay inside the image's last row.
+  const std::uint8_t* data_end = bgr.ptr<std::uint8_t>(bgr.rows - 1) + 3 * bgr.cols;
+  for (int row = 0; row < bgr.rows; ++row) {
+    const int u0 = row_u0[row], u1 = row_u1[row];
+    const std::uint8_t* p = bgr.ptr<std::uint8_t>(row) + 3 * u0;
+    std::uint32_t* out = code + static_cast<std::size_t>(row) * static_cast<std::size_t>(bgr.cols);
+    int u = u0;
+    for (; u + 7 <= u1 && p + 28 <= data_end; u += 8, p += 24) {
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + u), code8_avx2(p, hue_ok, sat_min_minus_1));
+    }
+    for (; u <= u1; ++u, p += 3) {
+      const int v = std::max({p[0], p[1], p[2]});
+      const int diff = v - std::min({p[0], p[1], p[2]});
+      const int s = (diff * sdiv[v] + (1 << 11)) >> 12;
+      const int h = hue_of(p, v, diff, hdiv);
+      const bool carpet_hue = s >= sat_min && ((h >= hue_ok.lo[0] && h <= hue_ok.hi[0]) || (h >= hue_ok.lo[1] && h <= hue_ok.hi[1]));
+      out[u] = static_cast<std::uint32_t>(v) | static_cast<std::uint32_t>(s) << 8 | static_cast<std::uint32_t>(carpet_hue) << 16;
+    }
+  }
+}
+#endif
 
 // Robust sigma (1.4826 MAD) of a histogram of integer deviations offset by 255.
 double hist_sigma(const std::array<int, 511>& h) {
@@ -417,6 +539,24 @@ void LineExtractor::code_pixels(const cv::Mat& bgr, const RayTable& t, int sat_m
   }
 }
 
+// code_pixels, 8 pixels at a time with AVX2 (the scalar loop for the last few of a row); false
+// when the CPU has no AVX2 (nothing converted).
+bool LineExtractor::code_pixels_avx2(const cv::Mat& bgr, const RayTable& t, int sat_min) {
+#ifdef OMNILOC_HAVE_X86
+  if (!cpu_has_avx2() || !hsv_divisors_match()) return false;
+  HueRanges hue;
+  if (!hue_ranges(hue_ok_, hue)) return false;
+  code_.resize(static_cast<std::size_t>(width_px_) * static_cast<std::size_t>(height_px_));
+  code_rows_avx2(bgr, t.row_u0.data(), t.row_u1.data(), code_.data(), hue, sat_min);
+  return true;
+#else
+  (void)bgr;
+  (void)t;
+  (void)sat_min;
+  return false;
+#endif
+}
+
 // As walk_rays, bin by bin: both pixels of a bin read and combined without branches, the same
 // decisions in the same order (WhiteRun, the look behind an end and finish_ray as in walk_rays).
 void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const {
@@ -620,14 +760,19 @@ void LineExtractor::mark_tall_obstacles_fast(const BearingScan& scan, Extraction
 }
 
 BearingScan LineExtractor::extract(const cv::Mat& bgr, int rpd, ExtractionReport* report) {
-  return extract_impl(bgr, rpd, report, true);
+  return extract_impl(bgr, rpd, report, Walk::kFast);
 }
 
 BearingScan LineExtractor::extract_reference(const cv::Mat& bgr, int rpd, ExtractionReport* report) {
-  return extract_impl(bgr, rpd, report, false);
+  return extract_impl(bgr, rpd, report, Walk::kReference);
 }
 
-BearingScan LineExtractor::extract_impl(const cv::Mat& bgr, int rpd, ExtractionReport* report, bool fast) {
+BearingScan LineExtractor::extract_with(Walk how, const cv::Mat& bgr, int rpd, ExtractionReport* report) {
+  return extract_impl(bgr, rpd, report, how);
+}
+
+BearingScan LineExtractor::extract_impl(const cv::Mat& bgr, int rpd, ExtractionReport* report, Walk how) {
+  const bool fast = how != Walk::kReference;
   if (bgr.empty()) throw std::invalid_argument("extract: empty image");
   if (bgr.type() != CV_8UC3) throw std::invalid_argument("extract: image must be 8-bit BGR (CV_8UC3), got type " + std::to_string(bgr.type()));
   if (bgr.cols != width_px_ || bgr.rows != height_px_) {
@@ -664,7 +809,10 @@ BearingScan LineExtractor::extract_impl(const cv::Mat& bgr, int rpd, ExtractionR
   long plane_px = 0;
   for (std::size_t row = 0; row < t.row_u0.size(); ++row) plane_px += std::max(0, t.row_u1[row] - t.row_u0[row] + 1);
   const bool coded = fast && t.bins_ok && static_cast<long>(t.pixel.size()) >= plane_px;
-  if (coded) code_pixels(bgr, t, static_cast<int>(std::ceil(carpet_->sat_min)));
+  if (coded) {
+    const int sat_min = static_cast<int>(std::ceil(carpet_->sat_min));
+    if (how == Walk::kBinWalk || !code_pixels_avx2(bgr, t, sat_min)) code_pixels(bgr, t, sat_min);
+  }
   // The first frame is walked twice: once to measure the light and the carpet's spread, then with them.
   for (int pass = first ? 0 : 1; pass < 2; ++pass) {
     Frame fr;
