@@ -196,6 +196,11 @@ class LineExtractor {
     std::vector<std::int32_t> bin_begin, bin_pixel;
     std::vector<std::int16_t> bin_second;  // 0, +-1 or +-width: a 4-connected neighbour
     std::vector<std::uint8_t> first_bin;
+    // The lockstep walk's layout: the rays that are not hidden, 8 to a group (one per lane, the
+    // last group padded with empty lanes). Group g's steps are [lock_begin[g], lock_begin[g + 1]);
+    // step s of lane l reads lock_pixel0/1[8 s + l] (the bin's two pixels, equal for a one-pixel
+    // bin; past the lane's bins, pixel 0). Per lane (8 g + l): its ray (-1: padding) and bins.
+    std::vector<std::int32_t> lock_begin, lock_pixel0, lock_pixel1, lock_ray, lock_bins;
   };
 
  private:
@@ -210,6 +215,7 @@ class LineExtractor {
   void code_pixels(const cv::Mat& bgr, const RayTable& t, int sat_min);
   bool code_pixels_avx2(const cv::Mat& bgr, const RayTable& t, int sat_min);
   void walk_fast(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const;
+  bool walk_lockstep(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const;
   void adapt(const Frame& fr);
   void mark_tall_obstacles(const BearingScan& scan, ExtractionReport& rep) const;
   void mark_tall_obstacles_fast(const BearingScan& scan, ExtractionReport& rep) const;

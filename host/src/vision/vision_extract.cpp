@@ -149,6 +149,138 @@ __attribute__((target("avx2"))) void code_rows_avx2(const cv::Mat& bgr, const st
     }
   }
 }
+
+// The lockstep walk: 8 rays (lanes) walked bin by bin together, each lane making walk_fast's
+// decisions for its own ray without branches (line, carpet or other; the running carpet means; the
+// end run). What the rare decisions need (the white runs, the deviation histograms) is written per
+// step and lane (index 8 s + l) and taken up by scalar code afterwards:
+//   rec:  the bin's brightest pixel (walk_fast's prev_v) | its line V (0: not a line bin) << 8 |
+//         the running carpet mean (Q8, as the bin saw it) << 16
+//   hist: a carpet bin's rounded deviations dv, ds from the running means: (dv + 32) * 64 + ds + 32
+//         when both lie in [-32, 31], kHistWide | (dv + 255) | (ds + 255) << 12 otherwise;
+//         kHistNone + l for any other bin
+//   line: bit s % 32 of word 8 (s / 32) + l set for a line bin
+constexpr int kHistNone = 4096;
+constexpr std::uint32_t kHistWide = 0x80000000u;
+
+struct LockConsts {
+  int val_step_q = 0, sat_step_q = 0, end_run_px = 0, alpha_q = 0, alpha_shift = -1;
+};
+struct LockLanes {
+  // In: the lane's bins, starting carpet means (Q8) and carpet value window.
+  alignas(32) std::int32_t bins[8], vref[8], sref[8], vmin[8], vmax[8];
+  // Out: bins walked (up to and including the one that ended the ray), the step that ended it
+  // (-1: none), its carpet bins and their sums of V and S.
+  alignas(32) std::int32_t walked[8], end_step[8], carpet[8], sum_v[8], sum_s[8];
+};
+
+__attribute__((target("avx2"))) inline __m256i load8(const std::int32_t* p) {
+  return _mm256_load_si256(reinterpret_cast<const __m256i*>(p));
+}
+__attribute__((target("avx2"))) inline void store8(std::int32_t* p, __m256i x) {
+  _mm256_store_si256(reinterpret_cast<__m256i*>(p), x);
+}
+
+// Eight words by eight scalar loads: faster here than the gather instruction (which costs about
+// as much as 16 loads on the machines measured, docs/VISION.md).
+__attribute__((target("avx2"))) inline __m256i gather8(const int* base, const std::int32_t* at) {
+  return _mm256_setr_epi32(base[at[0]], base[at[1]], base[at[2]], base[at[3]], base[at[4]], base[at[5]], base[at[6]],
+                           base[at[7]]);
+}
+
+// Returns the steps walked (every lane has ended or run out of bins after them).
+__attribute__((target("avx2"))) int walk_group_avx2(const std::uint32_t* code, const std::int32_t* pixel0,
+                                                    const std::int32_t* pixel1, int steps, const LockConsts& k,
+                                                    LockLanes& ln, std::uint32_t* rec, std::uint32_t* hist,
+                                                    std::uint32_t* line_bits) {
+  const auto* code_i = reinterpret_cast<const int*>(code);
+  const __m256i bins = load8(ln.bins);
+  const __m256i one = _mm256_set1_epi32(1), m255 = _mm256_set1_epi32(255);
+  __m256i vref = load8(ln.vref), sref = load8(ln.sref);
+  const __m256i vmin_m1 = _mm256_sub_epi32(load8(ln.vmin), one), vmax_p1 = _mm256_add_epi32(load8(ln.vmax), one);
+  const __m256i vstep = _mm256_set1_epi32(k.val_step_q + 255), sstep = _mm256_set1_epi32(k.sat_step_q);
+  // v >= v_line_min <=> v > vl, s <= s_line_max <=> sl > s.
+  __m256i vl = _mm256_sub_epi32(_mm256_srai_epi32(_mm256_add_epi32(vref, vstep), 8), one);
+  __m256i sl = _mm256_add_epi32(_mm256_srai_epi32(_mm256_sub_epi32(sref, sstep), 8), one);
+  const __m256i flag_min = _mm256_set1_epi32(0xffff);
+  const __m256i end_run_m1 = _mm256_set1_epi32(k.end_run_px - 1);
+  const __m256i c32 = _mm256_set1_epi32(32), c128 = _mm256_set1_epi32(128), not63 = _mm256_set1_epi32(~63);
+  // One "none" slot per lane: back-to-back increments of one counter would wait on each other.
+  const __m256i none_lane = _mm256_setr_epi32(kHistNone, kHistNone + 1, kHistNone + 2, kHistNone + 3, kHistNone + 4,
+                                              kHistNone + 5, kHistNone + 6, kHistNone + 7);
+  const __m256i wide_bit = _mm256_set1_epi32(static_cast<int>(kHistWide | 255u | (255u << 12)));
+  const __m128i shift = _mm_cvtsi32_si128(k.alpha_shift >= 0 ? k.alpha_shift : 0);
+  const __m256i alpha = _mm256_set1_epi32(k.alpha_q);
+  __m256i alive = _mm256_set1_epi32(-1), other_run = _mm256_setzero_si256(), walked = _mm256_setzero_si256();
+  __m256i end_step = _mm256_set1_epi32(-1), ncarpet = _mm256_setzero_si256();
+  __m256i sum_v = _mm256_setzero_si256(), sum_s = _mm256_setzero_si256(), bits = _mm256_setzero_si256();
+  int s = 0;
+  for (; s < steps; ++s) {
+    const __m256i sv = _mm256_set1_epi32(s);
+    const __m256i act = _mm256_and_si256(alive, _mm256_cmpgt_epi32(bins, sv));
+    if (_mm256_testz_si256(act, act)) break;
+    const __m256i c0 = gather8(code_i, pixel0 + 8 * s), c1 = gather8(code_i, pixel1 + 8 * s);
+    const __m256i v0 = _mm256_and_si256(c0, m255), v1 = _mm256_and_si256(c1, m255);
+    const __m256i s0 = _mm256_and_si256(_mm256_srli_epi32(c0, 8), m255), s1 = _mm256_and_si256(_mm256_srli_epi32(c1, 8), m255);
+    const __m256i line0 = _mm256_and_si256(_mm256_cmpgt_epi32(v0, vl), _mm256_cmpgt_epi32(sl, s0));
+    const __m256i line1 = _mm256_and_si256(_mm256_cmpgt_epi32(v1, vl), _mm256_cmpgt_epi32(sl, s1));
+    const __m256i any_line = _mm256_or_si256(line0, line1);
+    const __m256i cp0 = _mm256_and_si256(_mm256_and_si256(_mm256_cmpgt_epi32(c0, flag_min), _mm256_cmpgt_epi32(v0, vmin_m1)),
+                                         _mm256_cmpgt_epi32(vmax_p1, v0));
+    const __m256i cp1 = _mm256_and_si256(_mm256_and_si256(_mm256_cmpgt_epi32(c1, flag_min), _mm256_cmpgt_epi32(v1, vmin_m1)),
+                                         _mm256_cmpgt_epi32(vmax_p1, v1));
+    const __m256i any_cp = _mm256_or_si256(cp0, cp1);
+    const __m256i line = _mm256_and_si256(any_line, act);
+    const __m256i carpet = _mm256_andnot_si256(any_line, _mm256_and_si256(any_cp, act));
+    const __m256i other = _mm256_andnot_si256(_mm256_or_si256(any_line, any_cp), act);
+    const __m256i bv = _mm256_blendv_epi8(v0, v1, cp1), bs = _mm256_blendv_epi8(s0, s1, cp1);
+    const __m256i dv = _mm256_sub_epi32(_mm256_slli_epi32(bv, 8), vref), ds = _mm256_sub_epi32(_mm256_slli_epi32(bs, 8), sref);
+    // The bin as seen, before the means move.
+    const __m256i line_v = _mm256_and_si256(line, _mm256_max_epi32(_mm256_and_si256(line0, v0), _mm256_and_si256(line1, v1)));
+    const __m256i r = _mm256_or_si256(_mm256_or_si256(_mm256_max_epi32(v0, v1), _mm256_slli_epi32(line_v, 8)), _mm256_slli_epi32(vref, 16));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(rec + 8 * s), r);
+    const __m256i dvr = _mm256_srai_epi32(_mm256_add_epi32(dv, c128), 8), dsr = _mm256_srai_epi32(_mm256_add_epi32(ds, c128), 8);
+    const __m256i dv32 = _mm256_add_epi32(dvr, c32), ds32 = _mm256_add_epi32(dsr, c32);
+    const __m256i narrow_ok = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_or_si256(dv32, ds32), not63), _mm256_setzero_si256());
+    const __m256i narrow = _mm256_or_si256(_mm256_slli_epi32(dv32, 6), ds32);
+    // kHistWide | (dv + 255) | (ds + 255) << 12: dv + 255 and ds + 255 lie in 0..510.
+    const __m256i wide = _mm256_add_epi32(wide_bit, _mm256_add_epi32(dvr, _mm256_slli_epi32(dsr, 12)));
+    const __m256i h = _mm256_blendv_epi8(none_lane, _mm256_blendv_epi8(wide, narrow, narrow_ok), carpet);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(hist + 8 * s), h);
+    __m256i step_v, step_s;
+    if (k.alpha_shift >= 0) {
+      step_v = _mm256_sra_epi32(dv, shift);
+      step_s = _mm256_sra_epi32(ds, shift);
+    } else {
+      step_v = _mm256_srai_epi32(_mm256_mullo_epi32(dv, alpha), 8);
+      step_s = _mm256_srai_epi32(_mm256_mullo_epi32(ds, alpha), 8);
+    }
+    vref = _mm256_add_epi32(vref, _mm256_and_si256(carpet, step_v));
+    sref = _mm256_add_epi32(sref, _mm256_and_si256(carpet, step_s));
+    vl = _mm256_sub_epi32(_mm256_srai_epi32(_mm256_add_epi32(vref, vstep), 8), one);
+    sl = _mm256_add_epi32(_mm256_srai_epi32(_mm256_sub_epi32(sref, sstep), 8), one);
+    sum_v = _mm256_add_epi32(sum_v, _mm256_and_si256(carpet, bv));
+    sum_s = _mm256_add_epi32(sum_s, _mm256_and_si256(carpet, bs));
+    ncarpet = _mm256_sub_epi32(ncarpet, carpet);
+    walked = _mm256_sub_epi32(walked, act);
+    other_run = _mm256_and_si256(_mm256_add_epi32(other_run, one), other);
+    const __m256i ended = _mm256_and_si256(other, _mm256_cmpgt_epi32(other_run, end_run_m1));
+    end_step = _mm256_blendv_epi8(end_step, sv, ended);
+    alive = _mm256_andnot_si256(ended, alive);
+    bits = _mm256_or_si256(bits, _mm256_and_si256(line, _mm256_set1_epi32(static_cast<int>(1u << (s & 31)))));
+    if ((s & 31) == 31) {
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(line_bits + 8 * (s >> 5)), bits);
+      bits = _mm256_setzero_si256();
+    }
+  }
+  if ((s & 31) != 0) _mm256_storeu_si256(reinterpret_cast<__m256i*>(line_bits + 8 * (s >> 5)), bits);
+  store8(ln.walked, walked);
+  store8(ln.end_step, end_step);
+  store8(ln.carpet, ncarpet);
+  store8(ln.sum_v, sum_v);
+  store8(ln.sum_s, sum_s);
+  return s;
+}
 #endif
 
 // Robust sigma (1.4826 MAD) of a histogram of integer deviations offset by 255.
@@ -356,6 +488,35 @@ void LineExtractor::bin_layout(RayTable& t, int n) const {
     }
     t.bin_begin.push_back(static_cast<std::int32_t>(t.bin_pixel.size()));
   }
+  if (!t.bins_ok) return;
+  t.lock_begin.assign(1, 0);
+  std::vector<int> rays;
+  for (int j = 0; j < n; ++j)
+    if (!t.hidden[static_cast<std::size_t>(j)]) rays.push_back(j);
+  for (std::size_t g = 0; g < rays.size(); g += 8) {
+    int steps = 0;
+    for (std::size_t l = 0; l < 8; ++l) {
+      const int j = g + l < rays.size() ? rays[g + l] : -1;
+      const int bins = j < 0 ? 0 : t.bin_begin[static_cast<std::size_t>(j) + 1] - t.bin_begin[static_cast<std::size_t>(j)];
+      t.lock_ray.push_back(j);
+      t.lock_bins.push_back(bins);
+      steps = std::max(steps, bins);
+    }
+    for (int st = 0; st < steps; ++st) {
+      for (std::size_t l = 0; l < 8; ++l) {
+        const std::size_t lane = g + l;
+        std::int32_t p0 = 0, p1 = 0;
+        if (lane < rays.size() && st < t.lock_bins[lane]) {
+          const auto k = static_cast<std::size_t>(t.bin_begin[static_cast<std::size_t>(rays[lane])] + st);
+          p0 = t.bin_pixel[k];
+          p1 = p0 + t.bin_second[k];
+        }
+        t.lock_pixel0.push_back(p0);
+        t.lock_pixel1.push_back(p1);
+      }
+    }
+    t.lock_begin.push_back(t.lock_begin.back() + steps);
+  }
 }
 
 // The carpet colour from the frame when the camera has none: the pixels of the inner half of the
@@ -553,6 +714,137 @@ bool LineExtractor::code_pixels_avx2(const cv::Mat& bgr, const RayTable& t, int 
   (void)bgr;
   (void)t;
   (void)sat_min;
+  return false;
+#endif
+}
+
+// walk_fast's decisions for 8 rays at a time (walk_group_avx2), then per ray the white runs from
+// the line bins it recorded, the look behind an end and finish_ray as in walk_fast. False (nothing
+// walked) without AVX2 or when a sector's carpet level does not fit the record's 16 bits.
+bool LineExtractor::walk_lockstep(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const {
+#ifdef OMNILOC_HAVE_X86
+  if (!cpu_has_avx2() || t.lock_begin.size() < 2) return false;
+  const ExtractionParams& x = vision_.extraction;
+  const std::size_t sectors = sector_val_.size();
+  std::vector<std::int32_t> vref0(sectors), sref0(sectors);
+  for (std::size_t k = 0; k < sectors; ++k) {
+    const long v = std::lround(256.0 * sector_val_[k]), sat = std::lround(256.0 * sector_sat_[k]);
+    if (v < 0 || v > 65535 || sat < -65535 || sat > 65535) return false;  // the mean stays within [0, max(start, 255 * 256)]
+    vref0[k] = static_cast<std::int32_t>(v);
+    sref0[k] = static_cast<std::int32_t>(sat);
+  }
+  LockConsts kc;
+  kc.val_step_q = fr.val_step << 8;
+  kc.sat_step_q = fr.sat_step << 8;
+  kc.end_run_px = x.end_run_px;
+  kc.alpha_q = std::max(1, static_cast<int>(std::lround(256.0 / x.carpet_mean_px)));
+  for (int a = 0; a <= 8; ++a)
+    if (kc.alpha_q == 1 << a) kc.alpha_shift = 8 - a;
+  const int min_gap = ScanParams{}.min_gap_px;
+  const int k0 = k0_;
+  const auto edge_fraction = static_cast<float>(x.edge_fraction);
+  const int n = static_cast<int>(t.hidden.size());
+  for (int j = 0; j < n; ++j)
+    if (t.hidden[static_cast<std::size_t>(j)]) (void)start_ray(true, j, scan, rep);
+  const std::size_t groups = t.lock_begin.size() - 1;
+  int max_steps = 0;
+  for (std::size_t g = 0; g < groups; ++g) max_steps = std::max(max_steps, t.lock_begin[g + 1] - t.lock_begin[g]);
+  const auto words = static_cast<std::size_t>(8 * (max_steps + 32));
+  std::vector<std::uint32_t> rec(words), hist(words), line_bits(words / 32 + 8);
+  // The narrow histogram in four copies by lane (neighbouring rays deviate alike at the same step).
+  std::vector<std::array<int, kHistNone + 8>> narrow(4);
+  long bins_seen = 0, bins_carpet = 0;
+  LockLanes ln;
+  const std::uint32_t* code = code_.data();
+  const std::int32_t* bp = t.bin_pixel.data();
+  const std::int16_t* bs = t.bin_second.data();
+  for (std::size_t g = 0; g < groups; ++g) {
+    for (std::size_t l = 0; l < 8; ++l) {
+      const int j = t.lock_ray[8 * g + l];
+      const auto sec = j < 0 ? std::size_t{0} : static_cast<std::size_t>(t.sector[static_cast<std::size_t>(j)]);
+      ln.bins[l] = t.lock_bins[8 * g + l];
+      ln.vref[l] = vref0[sec];
+      ln.sref[l] = sref0[sec];
+      ln.vmin[l] = fr.vmin[sec];
+      ln.vmax[l] = fr.vmax[sec];
+    }
+    const std::int32_t first = t.lock_begin[g], steps = t.lock_begin[g + 1] - first;
+    const int ran = walk_group_avx2(code, t.lock_pixel0.data() + 8 * static_cast<std::size_t>(first),
+                                    t.lock_pixel1.data() + 8 * static_cast<std::size_t>(first), steps, kc, ln, rec.data(),
+                                    hist.data(), line_bits.data());
+    for (int i = 0; i < 8 * ran; ++i) {
+      const std::uint32_t w = hist[static_cast<std::size_t>(i)];
+      if ((w & kHistWide) != 0) {
+        ++fr.dev_v[w & 4095u];
+        ++fr.dev_s[(w >> 12) & 4095u];
+      } else {
+        ++narrow[static_cast<std::size_t>(i & 3)][w];
+      }
+    }
+    for (std::size_t l = 0; l < 8; ++l) {
+      const int j = t.lock_ray[8 * g + l];
+      if (j < 0) continue;
+      std::uint8_t* out = start_ray(false, j, scan, rep);
+      const int first_bin = t.first_bin[static_cast<std::size_t>(j)];
+      const int walked = ln.walked[l];
+      WhiteRun run;
+      int found = 0, last = -1;
+      for (int w = 0; 32 * w < walked; ++w) {
+        for (std::uint32_t m = line_bits[8 * static_cast<std::size_t>(w) + l]; m != 0; m &= m - 1) {
+          const int st = 32 * w + __builtin_ctz(m);
+          const std::uint32_t r = rec[8 * static_cast<std::size_t>(st) + l];
+          const int line_v = static_cast<int>((r >> 8) & 255u), vref_q = static_cast<int>(r >> 16);
+          if (run.open && st != last + 1) run.finish(out, found, edge_fraction, k0, min_gap);
+          if (!run.open) {
+            const int prev_v = st > 0 ? static_cast<int>(rec[8 * static_cast<std::size_t>(st - 1) + l] & 255u) : 0;
+            run.add(first_bin + st, line_v, st - last - 1, min_gap, st > 0 ? first_bin + st - 1 : -1, prev_v, vref_q);
+          } else {
+            run.add(first_bin + st, line_v, 0, min_gap, -1, 0, vref_q);
+          }
+          last = st;
+        }
+      }
+      run.finish(out, found, edge_fraction, k0, min_gap);
+      const auto sec = static_cast<std::size_t>(t.sector[static_cast<std::size_t>(j)]);
+      bins_seen += walked;
+      bins_carpet += ln.carpet[l];
+      fr.sum_v[sec] += static_cast<double>(ln.sum_v[l]);
+      fr.sum_s[sec] += static_cast<double>(ln.sum_s[l]);
+      fr.count[sec] += ln.carpet[l];
+      // Behind the end, as walk_fast (its k is the bin after the one that ended the ray).
+      int end = -1, resume = 0;
+      if (ln.end_step[l] >= 0) {
+        end = first_bin + ln.end_step[l] - x.end_run_px + 1;
+        const std::int32_t b0 = t.bin_begin[static_cast<std::size_t>(j)], b1 = t.bin_begin[static_cast<std::size_t>(j) + 1];
+        const int vmin = fr.vmin[sec], vmax = fr.vmax[sec];
+        const int look_to = end + x.resume_within_px;
+        for (std::int32_t k = b0 + ln.end_step[l] + 1; k + 1 < b1 && resume < x.carpet_resume_px; ++k) {
+          if (first_bin + (k + 1 - b0) > look_to) break;
+          const std::uint32_t c0 = code[bp[k]], c1 = code[bp[k] + bs[k]];
+          const int v0 = static_cast<int>(c0 & 255u), v1 = static_cast<int>(c1 & 255u);
+          const bool carpet = ((c0 >> 16) != 0 && v0 >= vmin && v0 <= vmax) || ((c1 >> 16) != 0 && v1 >= vmin && v1 <= vmax);
+          resume = carpet ? resume + 1 : 0;
+        }
+      }
+      finish_ray(end, resume >= x.carpet_resume_px, ln.carpet[l], k0, x, out, scan.ray_end_px[static_cast<std::size_t>(j)],
+                 rep.carpet_end_px[static_cast<std::size_t>(j)], rep);
+    }
+  }
+  for (int a = 0; a < 64; ++a) {
+    for (int b = 0; b < 64; ++b) {
+      const auto at = static_cast<std::size_t>(a * 64 + b);
+      const int c = narrow[0][at] + narrow[1][at] + narrow[2][at] + narrow[3][at];
+      fr.dev_v[static_cast<std::size_t>(a - 32 + 255)] += c;
+      fr.dev_s[static_cast<std::size_t>(b - 32 + 255)] += c;
+    }
+  }
+  rep.carpet_fraction = bins_seen > 0 ? static_cast<double>(bins_carpet) / static_cast<double>(bins_seen) : 0.0;
+  return true;
+#else
+  (void)t;
+  (void)scan;
+  (void)rep;
+  (void)fr;
   return false;
 #endif
 }
@@ -834,8 +1126,11 @@ BearingScan LineExtractor::extract_impl(const cv::Mat& bgr, int rpd, ExtractionR
     rep.carpet_end_px.assign(static_cast<std::size_t>(n), 0);
     rep.carpet_estimated = !vision_.carpet_hsv;
     rep.contrast = c;
-    if (coded) walk_fast(t, scan, rep, fr);
-    else walk(bgr, t, scan, rep, fr);
+    if (coded) {
+      if (how == Walk::kBinWalk || !walk_lockstep(t, scan, rep, fr)) walk_fast(t, scan, rep, fr);
+    } else {
+      walk(bgr, t, scan, rep, fr);
+    }
     if (pass == 0) {
       const double keep = vision_.extraction.light_follow;
       vision_.extraction.light_follow = 1.0;  // the first measurement is taken whole
