@@ -165,13 +165,16 @@ constexpr std::uint32_t kHistWide = 0x80000000u;
 
 struct LockConsts {
   int val_step_q = 0, sat_step_q = 0, end_run_px = 0, alpha_q = 0, alpha_shift = -1;
+  int carpet_resume_px = 1, resume_within_px = 1;
+  bool histogram = true;  // the deviation histograms are wanted (the line steps are estimated)
 };
 struct LockLanes {
   // In: the lane's bins, starting carpet means (Q8) and carpet value window.
   alignas(32) std::int32_t bins[8], vref[8], sref[8], vmin[8], vmax[8];
   // Out: bins walked (up to and including the one that ended the ray), the step that ended it
-  // (-1: none), its carpet bins and their sums of V and S.
-  alignas(32) std::int32_t walked[8], end_step[8], carpet[8], sum_v[8], sum_s[8];
+  // (-1: none), its carpet bins and their sums of V and S, and whether the carpet resumed behind
+  // the end (walk_fast's look behind: carpet_resume_px carpet bins in a row within resume_within_px).
+  alignas(32) std::int32_t walked[8], end_step[8], carpet[8], sum_v[8], sum_s[8], resumed[8];
 };
 
 __attribute__((target("avx2"))) inline __m256i load8(const std::int32_t* p) {
@@ -214,21 +217,35 @@ __attribute__((target("avx2"))) int walk_group_avx2(const std::uint32_t* code, c
   __m256i alive = _mm256_set1_epi32(-1), other_run = _mm256_setzero_si256(), walked = _mm256_setzero_si256();
   __m256i end_step = _mm256_set1_epi32(-1), ncarpet = _mm256_setzero_si256();
   __m256i sum_v = _mm256_setzero_si256(), sum_s = _mm256_setzero_si256(), bits = _mm256_setzero_si256();
+  // Behind an end: lanes looking for the carpet up to their last step to look at, the run of carpet bins.
+  __m256i looking = _mm256_setzero_si256(), look_last = _mm256_setzero_si256(), resume = _mm256_setzero_si256();
+  __m256i resumed = _mm256_setzero_si256();
+  const __m256i resume_m1 = _mm256_set1_epi32(k.carpet_resume_px - 1);
+  const __m256i look_reach = _mm256_set1_epi32(k.resume_within_px - k.end_run_px);
+  const __m256i bins_m2 = _mm256_sub_epi32(bins, _mm256_set1_epi32(2));
   int s = 0;
   for (; s < steps; ++s) {
     const __m256i sv = _mm256_set1_epi32(s);
     const __m256i act = _mm256_and_si256(alive, _mm256_cmpgt_epi32(bins, sv));
-    if (_mm256_testz_si256(act, act)) break;
+    const __m256i look = _mm256_andnot_si256(_mm256_cmpgt_epi32(sv, look_last), looking);
+    if (_mm256_testz_si256(_mm256_or_si256(act, look), _mm256_or_si256(act, look))) break;
     const __m256i c0 = gather8(code_i, pixel0 + 8 * s), c1 = gather8(code_i, pixel1 + 8 * s);
     const __m256i v0 = _mm256_and_si256(c0, m255), v1 = _mm256_and_si256(c1, m255);
     const __m256i s0 = _mm256_and_si256(_mm256_srli_epi32(c0, 8), m255), s1 = _mm256_and_si256(_mm256_srli_epi32(c1, 8), m255);
     const __m256i line0 = _mm256_and_si256(_mm256_cmpgt_epi32(v0, vl), _mm256_cmpgt_epi32(sl, s0));
     const __m256i line1 = _mm256_and_si256(_mm256_cmpgt_epi32(v1, vl), _mm256_cmpgt_epi32(sl, s1));
     const __m256i any_line = _mm256_or_si256(line0, line1);
-    const __m256i cp0 = _mm256_and_si256(_mm256_and_si256(_mm256_cmpgt_epi32(c0, flag_min), _mm256_cmpgt_epi32(v0, vmin_m1)),
-                                         _mm256_cmpgt_epi32(vmax_p1, v0));
-    const __m256i cp1 = _mm256_and_si256(_mm256_and_si256(_mm256_cmpgt_epi32(c1, flag_min), _mm256_cmpgt_epi32(v1, vmin_m1)),
-                                         _mm256_cmpgt_epi32(vmax_p1, v1));
+    // A pixel of the carpet's colour (cp: and not line).
+    const __m256i raw0 = _mm256_and_si256(_mm256_and_si256(_mm256_cmpgt_epi32(c0, flag_min), _mm256_cmpgt_epi32(v0, vmin_m1)),
+                                          _mm256_cmpgt_epi32(vmax_p1, v0));
+    const __m256i raw1 = _mm256_and_si256(_mm256_and_si256(_mm256_cmpgt_epi32(c1, flag_min), _mm256_cmpgt_epi32(v1, vmin_m1)),
+                                          _mm256_cmpgt_epi32(vmax_p1, v1));
+    const __m256i cp0 = _mm256_andnot_si256(line0, raw0), cp1 = _mm256_andnot_si256(line1, raw1);
+    // Looking behind an end: any pixel of the carpet's colour makes the bin carpet.
+    resume = _mm256_blendv_epi8(resume, _mm256_and_si256(_mm256_add_epi32(resume, one), _mm256_or_si256(raw0, raw1)), look);
+    const __m256i found = _mm256_and_si256(look, _mm256_cmpgt_epi32(resume, resume_m1));
+    resumed = _mm256_or_si256(resumed, found);
+    looking = _mm256_and_si256(_mm256_andnot_si256(found, looking), _mm256_cmpgt_epi32(look_last, sv));
     const __m256i any_cp = _mm256_or_si256(cp0, cp1);
     const __m256i line = _mm256_and_si256(any_line, act);
     const __m256i carpet = _mm256_andnot_si256(any_line, _mm256_and_si256(any_cp, act));
@@ -246,7 +263,7 @@ __attribute__((target("avx2"))) int walk_group_avx2(const std::uint32_t* code, c
     // kHistWide | (dv + 255) | (ds + 255) << 12: dv + 255 and ds + 255 lie in 0..510.
     const __m256i wide = _mm256_add_epi32(wide_bit, _mm256_add_epi32(dvr, _mm256_slli_epi32(dsr, 12)));
     const __m256i h = _mm256_blendv_epi8(none_lane, _mm256_blendv_epi8(wide, narrow, narrow_ok), carpet);
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(hist + 8 * s), h);
+    if (k.histogram) _mm256_storeu_si256(reinterpret_cast<__m256i*>(hist + 8 * s), h);
     __m256i step_v, step_s;
     if (k.alpha_shift >= 0) {
       step_v = _mm256_sra_epi32(dv, shift);
@@ -267,6 +284,11 @@ __attribute__((target("avx2"))) int walk_group_avx2(const std::uint32_t* code, c
     const __m256i ended = _mm256_and_si256(other, _mm256_cmpgt_epi32(other_run, end_run_m1));
     end_step = _mm256_blendv_epi8(end_step, sv, ended);
     alive = _mm256_andnot_si256(ended, alive);
+    // The look behind covers the steps after this one up to min(bins - 2, end + resume_within_px - 1)
+    // (a bin counts once its successor is reached within resume_within_px, as walk_fast).
+    const __m256i last = _mm256_min_epi32(bins_m2, _mm256_add_epi32(sv, look_reach));
+    look_last = _mm256_blendv_epi8(look_last, last, ended);
+    looking = _mm256_or_si256(looking, _mm256_and_si256(ended, _mm256_cmpgt_epi32(last, sv)));
     bits = _mm256_or_si256(bits, _mm256_and_si256(line, _mm256_set1_epi32(static_cast<int>(1u << (s & 31)))));
     if ((s & 31) == 31) {
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(line_bits + 8 * (s >> 5)), bits);
@@ -279,6 +301,7 @@ __attribute__((target("avx2"))) int walk_group_avx2(const std::uint32_t* code, c
   store8(ln.carpet, ncarpet);
   store8(ln.sum_v, sum_v);
   store8(ln.sum_s, sum_s);
+  store8(ln.resumed, resumed);
   return s;
 }
 #endif
@@ -723,8 +746,8 @@ bool LineExtractor::code_pixels_avx2(const cv::Mat& bgr, const RayTable& t, int 
 // walked) without AVX2 or when a sector's carpet level does not fit the record's 16 bits.
 bool LineExtractor::walk_lockstep(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const {
 #ifdef OMNILOC_HAVE_X86
-  if (!cpu_has_avx2() || t.lock_begin.size() < 2) return false;
   const ExtractionParams& x = vision_.extraction;
+  if (!cpu_has_avx2() || t.lock_begin.size() < 2 || x.carpet_resume_px < 1 || x.resume_within_px < 1) return false;
   const std::size_t sectors = sector_val_.size();
   std::vector<std::int32_t> vref0(sectors), sref0(sectors);
   for (std::size_t k = 0; k < sectors; ++k) {
@@ -737,6 +760,9 @@ bool LineExtractor::walk_lockstep(const RayTable& t, BearingScan& scan, Extracti
   kc.val_step_q = fr.val_step << 8;
   kc.sat_step_q = fr.sat_step << 8;
   kc.end_run_px = x.end_run_px;
+  kc.carpet_resume_px = x.carpet_resume_px;
+  kc.histogram = !vision_.line_contrast;  // adapt() reads the histograms only to estimate the steps
+  kc.resume_within_px = x.resume_within_px;
   kc.alpha_q = std::max(1, static_cast<int>(std::lround(256.0 / x.carpet_mean_px)));
   for (int a = 0; a <= 8; ++a)
     if (kc.alpha_q == 1 << a) kc.alpha_shift = 8 - a;
@@ -751,13 +777,12 @@ bool LineExtractor::walk_lockstep(const RayTable& t, BearingScan& scan, Extracti
   for (std::size_t g = 0; g < groups; ++g) max_steps = std::max(max_steps, t.lock_begin[g + 1] - t.lock_begin[g]);
   const auto words = static_cast<std::size_t>(8 * (max_steps + 32));
   std::vector<std::uint32_t> rec(words), hist(words), line_bits(words / 32 + 8);
-  // The narrow histogram in four copies by lane (neighbouring rays deviate alike at the same step).
-  std::vector<std::array<int, kHistNone + 8>> narrow(4);
+  // The narrow histogram in a copy per lane (neighbouring rays deviate alike at the same step, and
+  // back-to-back increments of one counter wait on each other).
+  std::vector<std::array<int, kHistNone + 8>> narrow(8);
   long bins_seen = 0, bins_carpet = 0;
   LockLanes ln;
   const std::uint32_t* code = code_.data();
-  const std::int32_t* bp = t.bin_pixel.data();
-  const std::int16_t* bs = t.bin_second.data();
   for (std::size_t g = 0; g < groups; ++g) {
     for (std::size_t l = 0; l < 8; ++l) {
       const int j = t.lock_ray[8 * g + l];
@@ -772,13 +797,13 @@ bool LineExtractor::walk_lockstep(const RayTable& t, BearingScan& scan, Extracti
     const int ran = walk_group_avx2(code, t.lock_pixel0.data() + 8 * static_cast<std::size_t>(first),
                                     t.lock_pixel1.data() + 8 * static_cast<std::size_t>(first), steps, kc, ln, rec.data(),
                                     hist.data(), line_bits.data());
-    for (int i = 0; i < 8 * ran; ++i) {
+    for (int i = 0; kc.histogram && i < 8 * ran; ++i) {
       const std::uint32_t w = hist[static_cast<std::size_t>(i)];
       if ((w & kHistWide) != 0) {
         ++fr.dev_v[w & 4095u];
         ++fr.dev_s[(w >> 12) & 4095u];
       } else {
-        ++narrow[static_cast<std::size_t>(i & 3)][w];
+        ++narrow[static_cast<std::size_t>(i & 7)][w];
       }
     }
     for (std::size_t l = 0; l < 8; ++l) {
@@ -811,29 +836,16 @@ bool LineExtractor::walk_lockstep(const RayTable& t, BearingScan& scan, Extracti
       fr.sum_v[sec] += static_cast<double>(ln.sum_v[l]);
       fr.sum_s[sec] += static_cast<double>(ln.sum_s[l]);
       fr.count[sec] += ln.carpet[l];
-      // Behind the end, as walk_fast (its k is the bin after the one that ended the ray).
-      int end = -1, resume = 0;
-      if (ln.end_step[l] >= 0) {
-        end = first_bin + ln.end_step[l] - x.end_run_px + 1;
-        const std::int32_t b0 = t.bin_begin[static_cast<std::size_t>(j)], b1 = t.bin_begin[static_cast<std::size_t>(j) + 1];
-        const int vmin = fr.vmin[sec], vmax = fr.vmax[sec];
-        const int look_to = end + x.resume_within_px;
-        for (std::int32_t k = b0 + ln.end_step[l] + 1; k + 1 < b1 && resume < x.carpet_resume_px; ++k) {
-          if (first_bin + (k + 1 - b0) > look_to) break;
-          const std::uint32_t c0 = code[bp[k]], c1 = code[bp[k] + bs[k]];
-          const int v0 = static_cast<int>(c0 & 255u), v1 = static_cast<int>(c1 & 255u);
-          const bool carpet = ((c0 >> 16) != 0 && v0 >= vmin && v0 <= vmax) || ((c1 >> 16) != 0 && v1 >= vmin && v1 <= vmax);
-          resume = carpet ? resume + 1 : 0;
-        }
-      }
-      finish_ray(end, resume >= x.carpet_resume_px, ln.carpet[l], k0, x, out, scan.ray_end_px[static_cast<std::size_t>(j)],
+      const int end = ln.end_step[l] >= 0 ? first_bin + ln.end_step[l] - x.end_run_px + 1 : -1;
+      finish_ray(end, ln.resumed[l] != 0, ln.carpet[l], k0, x, out, scan.ray_end_px[static_cast<std::size_t>(j)],
                  rep.carpet_end_px[static_cast<std::size_t>(j)], rep);
     }
   }
   for (int a = 0; a < 64; ++a) {
     for (int b = 0; b < 64; ++b) {
       const auto at = static_cast<std::size_t>(a * 64 + b);
-      const int c = narrow[0][at] + narrow[1][at] + narrow[2][at] + narrow[3][at];
+      int c = 0;
+      for (const auto& copy : narrow) c += copy[at];
       fr.dev_v[static_cast<std::size_t>(a - 32 + 255)] += c;
       fr.dev_s[static_cast<std::size_t>(b - 32 + 255)] += c;
     }
