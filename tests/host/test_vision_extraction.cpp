@@ -514,15 +514,19 @@ void expect_same(const BearingScan& a, const ExtractionReport& ra, const Bearing
   EXPECT_EQ(ra.carpet_estimated, rb.carpet_estimated);
 }
 
-// Two extractors of one camera, one fast and one reference, fed the same frames in order.
+// Three extractors of one camera, the fast walk (extract), the scalar bin walk and the reference,
+// fed the same frames in order.
 int expect_same_sequence(const CameraModel& cam, const std::vector<cv::Mat>& frames, int rpd, const std::string& what) {
-  LineExtractor fast(cam), ref(cam);
+  LineExtractor fast(cam), bins(cam), ref(cam);
   int crossings = 0;
   for (std::size_t i = 0; i < frames.size(); ++i) {
-    ExtractionReport rf, rr;
+    ExtractionReport rf, rb, rr;
     const BearingScan bf = fast.extract(frames[i], rpd, &rf);
+    const BearingScan bb = bins.extract_with(LineExtractor::Walk::kBinWalk, frames[i], rpd, &rb);
     const BearingScan br = ref.extract_reference(frames[i], rpd, &rr);
-    expect_same(bf, rf, br, rr, what + ", frame " + std::to_string(i) + ", " + std::to_string(rpd) + " rays/deg");
+    const std::string at = ", frame " + std::to_string(i) + ", " + std::to_string(rpd) + " rays/deg";
+    expect_same(bf, rf, br, rr, what + at + ", fast walk");
+    expect_same(bb, rb, br, rr, what + at + ", scalar bin walk");
     crossings += rr.crossings;
   }
   return crossings;

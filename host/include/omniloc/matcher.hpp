@@ -154,6 +154,10 @@ void refine_match(const FieldGeometry& field, const CameraModel& camera, const F
 /// better): the reference refine_match is measured against (bench_frame_path).
 void refine_match_reference(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan,
                             MatchResult& result, const MatchOptions& options = {});
+/// refine_match as it stood before the speed work of issue 13 item 8 (the same walk and result):
+/// the reference bench_frame_path measures refine_match against.
+void refine_match_previous(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan,
+                           MatchResult& result, const MatchOptions& options = {});
 void refine_match(const FieldGeometry& field, const CameraModel& camera, const Scan& scan, MatchResult& result,
                   const MatchOptions& options = {});
 

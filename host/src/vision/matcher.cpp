@@ -381,8 +381,8 @@ class ProbeErrors {
 
 }  // namespace
 
-void refine_match(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, MatchResult& r,
-                  const MatchOptions& opt) {
+void refine_match_previous(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, MatchResult& r,
+                           const MatchOptions& opt) {
   if (r.cell < 0 || r.rays_used == 0) return;
   // A non-finite start would never compare equal to itself and never stop (a corrupt grid origin
   // did that once); load_feature_db refuses such grids, and this keeps the loop finite regardless.
@@ -443,6 +443,11 @@ void refine_match(const FieldGeometry& field, const CameraModel& camera, const F
     r.position_cm = start;
     r.refined_error = start_error;
   }
+}
+
+void refine_match(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, MatchResult& r,
+                  const MatchOptions& opt) {
+  refine_match_previous(field, camera, scan, r, opt);
 }
 
 void refine_match(const FieldGeometry& field, const CameraModel& camera, const Scan& scan, MatchResult& r,
