@@ -22,7 +22,7 @@ const std::vector<std::string> kEveryKey = {
     "board_serial", "reconnect_period_ms", "camera",     "camera_fps",  "camera_timeout_ms", "field",
     "camera_model", "robot",               "localizer",  "database",    "grid_step_cm",      "udp_address",
     "udp_port",     "control_port",        "publish_hz",          "record_dir", "record_overwrite", "record_format",
-    "status_period_s", "duration_s", "ros2_domain_id", "ros2_namespace", "ros2_frame_id"};
+    "status_period_s", "log_level", "duration_s", "ros2_domain_id", "ros2_namespace", "ros2_frame_id"};
 
 // Every key set to a value that differs from its default (publish_hz has only one valid value).
 const std::string kEveryKeyJson = R"({
@@ -45,6 +45,7 @@ const std::string kEveryKeyJson = R"({
   "record_overwrite": true,
   "record_format": "png",
   "status_period_s": 2.5,
+  "log_level": "debug",
   "duration_s": 12,
   "ros2_domain_id": 7,
   "ros2_namespace": "/robot2/omniloc",
