@@ -9,7 +9,9 @@
 #include <random>
 
 #include "omniloc/feature_db.hpp"
+#include "omniloc/locate.hpp"
 #include "omniloc/matcher.hpp"
+#include "omniloc/vision.hpp"
 #include "omniloc_sim/renderer.hpp"
 
 namespace omniloc {
@@ -41,12 +43,33 @@ class PaperPoints : public ::testing::Test {
     db_.reset();
   }
 
+  // Which scan the image gives: the paper's fixed-threshold scan (image_to_position), or the
+  // daemon's: the carpet-relative LineExtractor at the localizer's rays per degree, turned into the
+  // field frame at the heading, with the localizer's match options.
+  enum class Path { kPaperScan, kDaemon };
+
+  static MatchResult locate(const cv::Mat& image, double yaw_deg, Refinement refinement, Path path) {
+    if (path == Path::kPaperScan) {
+      MatchOptions options;
+      options.refinement = refinement;
+      return image_to_position(image, renderer_->camera(), renderer_->field(), *db_, yaw_deg, nullptr, 0.0, options);
+    }
+    const LocalizerConfig config;
+    MatchOptions options = match_options_of(config);
+    options.refinement = refinement;
+    LineExtractor extractor(renderer_->camera());
+    const FieldScan scan = make_field_scan(extractor.extract(image, config.scan_rays_per_degree), yaw_deg);
+    MatchResult m = global_search(*db_, scan, options);
+    apply_refinement(*db_, renderer_->field(), renderer_->camera(), scan, m, options);
+    return m;
+  }
+
   // Runs the points, prints the table, returns the mean error.
   static double run(const char* title, const TestPoint* points, int count, std::uint64_t seed, Refinement refinement,
-                    double& worst) {
-    std::printf("\n%s, %s refinement (seed %llu; noise sigma 6, blur, +-20 %% lighting gradient, 2 other robots)\n",
+                    double& worst, Path path = Path::kPaperScan) {
+    std::printf("\n%s, %s refinement, %s (seed %llu; noise sigma 6, blur, +-20 %% lighting gradient, 2 other robots)\n",
                 title, refinement == Refinement::kRayCast ? "ray-cast" : "interpolated",
-                static_cast<unsigned long long>(seed));
+                path == Path::kPaperScan ? "paper scan" : "daemon's line extraction", static_cast<unsigned long long>(seed));
     std::printf("point  real (x, y)     yaw     estimated (x, y)    error cm  match err  2nd err  ambiguous  paper err cm\n");
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> uyaw(-180.0, 180.0);
@@ -59,10 +82,7 @@ class PaperPoints : public ::testing::Test {
       opt.seed = seed * 100 + static_cast<std::uint64_t>(i);
       opt.obstacles = sim::random_obstacles(renderer_->field(), truth, 2, opt.seed);
       const cv::Mat image = renderer_->render(truth, opt);
-      MatchOptions options;
-      options.refinement = refinement;
-      const MatchResult m =
-          image_to_position(image, renderer_->camera(), renderer_->field(), *db_, truth.yaw_deg, nullptr, 0.0, options);
+      const MatchResult m = locate(image, truth.yaw_deg, refinement, path);
       const double err = (m.position_cm - Eigen::Vector2d(truth.x_cm, truth.y_cm)).norm();
       std::printf("%-5s  (%5.1f, %5.1f)  %6.1f  (%6.1f, %6.1f)   %7.1f  %9.2f  %7.2f  %-9s  %6.0f\n", p.label, truth.x_cm,
                   truth.y_cm, truth.yaw_deg, m.position_cm.x(), m.position_cm.y(), err, m.refined_error, m.second_error,
@@ -109,6 +129,21 @@ TEST_F(PaperPoints, GeneralPointsTable1RayCast) {
 TEST_F(PaperPoints, BoundaryPointsTable2RayCast) {
   double worst = 0.0;
   const double mean = run("Table 2 points (boundary)", kBoundary, 10, 62, Refinement::kRayCast, worst);
+  EXPECT_LT(mean, 2.0);
+  EXPECT_LT(worst, 4.0);
+}
+
+// The same points through the daemon's path (what Localizer::on_image does with a frame).
+TEST_F(PaperPoints, GeneralPointsTable1DaemonPath) {
+  double worst = 0.0;
+  const double mean = run("Table 1 points (general)", kGeneral, 9, 61, Refinement::kRayCast, worst, Path::kDaemon);
+  EXPECT_LT(mean, 2.0);
+  EXPECT_LT(worst, 4.0);
+}
+
+TEST_F(PaperPoints, BoundaryPointsTable2DaemonPath) {
+  double worst = 0.0;
+  const double mean = run("Table 2 points (boundary)", kBoundary, 10, 62, Refinement::kRayCast, worst, Path::kDaemon);
   EXPECT_LT(mean, 2.0);
   EXPECT_LT(worst, 4.0);
 }

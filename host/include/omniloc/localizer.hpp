@@ -66,7 +66,7 @@ struct LocalizerConfig {
   double ambiguity_ratio = MatchOptions{}.ambiguity_ratio;  ///< ambiguous when 2nd error <= ratio * best
   double reset_period_ms = 125.0;  ///< odometry origin reset period (paper: 125 ms)
   double history_ms = 1000.0;      ///< odometry history kept for late frames; older frames are dropped
-  int scan_rays_per_degree = 4;    ///< on_image(): robot-frame scan step (for re-rotating by yaw)
+  int scan_rays_per_degree = 2;    ///< on_image(): robot-frame scan step (for re-rotating by yaw)
   // --- kFull only ---
   Refinement refinement = Refinement::kRayCast;  ///< kRayCast: E_TH judged at the refined position
   double min_range_cm = 10.0;      ///< local search at least this wide (0 would pin to one grid point)
