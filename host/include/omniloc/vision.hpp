@@ -196,6 +196,10 @@ class LineExtractor {
     std::vector<std::int32_t> bin_begin, bin_pixel;
     std::vector<std::int16_t> bin_second;  // 0, +-1 or +-width: a 4-connected neighbour
     std::vector<std::uint8_t> first_bin;
+    // Where along the ray each pixel's centre lies (px), and per bin its outer pixel's (a bin b
+    // holds the centres in (b - 1, b] and reports its brighter pixel, the outer one on a rising
+    // edge): where a line's edge is placed between two bins.
+    std::vector<float> along, bin_centre;
     // The lockstep walk's layout: the rays that are not hidden, 8 to a group (one per lane, the
     // last group padded with empty lanes). Group g's steps are [lock_begin[g], lock_begin[g + 1]);
     // step s of lane l reads lock_pixel0/1[8 s + l] (the bin's two pixels, equal for a one-pixel

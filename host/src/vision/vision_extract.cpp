@@ -333,7 +333,13 @@ double hist_sigma(const std::array<int, 511>& h) {
 // A white run along a ray (consecutive "line" bins): its crossing is placed where it first reaches
 // edge_fraction of the way from the carpet to its peak (a blurred edge's foot is brighter than the
 // carpet but is not yet the line).
+constexpr int kClippedV = 250;  // a V this high may be the sensor's clipping, not the line's level
+
 struct WhiteRun {
+  // The ray's bin centres (RayTable::bin_centre from its first bin; null: none known, then a
+  // crossing is the first bin at or above the edge level).
+  const float* centre = nullptr;
+  int centre_first = 0, centre_count = 0;
   bool open = false, counts = false;
   int start = 0, n = 0, peak = 0, before_v = 0, gap_before = 0;
   float floor = 0.0f;
@@ -366,7 +372,32 @@ struct WhiteRun {
     }
     int k = 0;
     while (k + 1 < n && static_cast<float>(v[static_cast<std::size_t>(k)]) < half) ++k;
-    out[found++] = static_cast<std::uint8_t>(start + k);
+    out[found++] = static_cast<std::uint8_t>(start + k - (edge_in_bin_before(k, half, k0, min_gap) ? 1 : 0));
+  }
+  // The database's crossing is the first integer at or beyond the edge (expected_features). Bin b
+  // holds the pixel centres in (b - 1, b], so the first bin at the edge level can lie one beyond
+  // it: the edge is placed where the level crosses `half`, linearly between the two bins' pixel
+  // centres (RayTable::bin_centre), and the crossing is the bin before when the edge is at or below
+  // its upper end (the first bin alone put crossings 0.27 px outward on average on rendered frames).
+  [[nodiscard]] bool edge_in_bin_before(int k, float half, int k0, int min_gap) const {
+    const int b = start + k;
+    if (centre == nullptr || b - 1 < centre_first || b - centre_first >= centre_count) return false;
+    if (k == 0 && !(b - 1 >= k0 && gap_before > min_gap)) return false;  // the gap rule still holds
+    // A clipped peak (over-exposed white) is not the line's level: half of it comes early.
+    if (peak >= kClippedV) return false;
+    const float vk = static_cast<float>(v[static_cast<std::size_t>(k)]);
+    const float vp = k > 0 ? static_cast<float>(v[static_cast<std::size_t>(k - 1)]) : (before_v > 0 ? static_cast<float>(before_v) : floor);
+    if (!(vk >= half && vp < half && vk > vp)) return false;
+    const float cp = centre[b - 1 - centre_first], ck = centre[b - centre_first];
+    const float edge = cp + (half - vp) / (vk - vp) * (ck - cp);
+    return edge <= static_cast<float>(b - 1) + 1e-4f;
+  }
+  void on_ray(const LineExtractor::RayTable& t, int j) {
+    if (!t.bins_ok || t.bin_centre.size() != t.bin_pixel.size()) return;
+    const auto a = static_cast<std::size_t>(j);
+    centre = t.bin_centre.data() + t.bin_begin[a];
+    centre_first = t.first_bin[a];
+    centre_count = t.bin_begin[a + 1] - t.bin_begin[a];
   }
 };
 
@@ -469,6 +500,7 @@ const LineExtractor::RayTable& LineExtractor::table(int rpd, std::size_t step_by
       if (bin < k0_ || bin > k1_) return;
       t.offset.push_back(static_cast<std::int32_t>(v * static_cast<long>(step_bytes) + 3L * u));
       t.bin.push_back(static_cast<std::uint8_t>(bin));
+      t.along.push_back(static_cast<float>(along));
       t.pixel.push_back(v * width_px_ + u);
       t.row_u0[static_cast<std::size_t>(v)] = std::min(t.row_u0[static_cast<std::size_t>(v)], u);
       t.row_u1[static_cast<std::size_t>(v)] = std::max(t.row_u1[static_cast<std::size_t>(v)], u);
@@ -512,6 +544,7 @@ void LineExtractor::bin_layout(RayTable& t, int n) const {
       if (pair && std::abs(t.pixel[k + 1] - t.pixel[k]) > 32767) t.bins_ok = false;  // a row wider than int16
       t.bin_pixel.push_back(t.pixel[k]);
       t.bin_second.push_back(static_cast<std::int16_t>(pair ? t.pixel[k + 1] - t.pixel[k] : 0));
+      t.bin_centre.push_back(pair ? std::max(t.along[k], t.along[k + 1]) : t.along[k]);
       i = next;
     }
     t.bin_begin.push_back(static_cast<std::int32_t>(t.bin_pixel.size()));
@@ -608,6 +641,7 @@ void LineExtractor::walk_rays(const RayTable& t, BearingScan& scan, ExtractionRe
     int b_v = 0, b_s = 0, b_line_v = 0, b_any_v = 0;
     int prev_bin = -1, prev_v = 0;  // the last closed bin that was not line, and its brightest pixel
     WhiteRun run;
+    run.on_ray(t, j);
     const auto edge_fraction = static_cast<float>(x.edge_fraction);
     // One bin decided: crossing (line entry after the gap), carpet (updates the running mean), or other.
     auto close_bin = [&]() {
@@ -825,6 +859,7 @@ bool LineExtractor::walk_lockstep(const RayTable& t, BearingScan& scan, Extracti
       const int first_bin = t.first_bin[static_cast<std::size_t>(j)];
       const int walked = ln.walked[l];
       WhiteRun run;
+      run.on_ray(t, j);
       int found = 0, last = -1;
       for (int w = 0; 32 * w < walked; ++w) {
         for (std::uint32_t m = line_bits[8 * static_cast<std::size_t>(w) + l]; m != 0; m &= m - 1) {
@@ -908,6 +943,7 @@ void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionRe
     int found = 0, gap = 0, other_run = 0, carpet_bins = 0, end = -1;
     int prev_bin = -1, prev_v = 0;
     WhiteRun run;
+    run.on_ray(t, j);
     const std::int32_t b0 = t.bin_begin[static_cast<std::size_t>(j)], b1 = t.bin_begin[static_cast<std::size_t>(j) + 1];
     const int first_bin = t.first_bin[static_cast<std::size_t>(j)];
     const std::int32_t* bp = t.bin_pixel.data();
