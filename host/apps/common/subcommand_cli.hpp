@@ -54,22 +54,27 @@ std::string number_text(T value) {
   return os.str();
 }
 
-/// A numeric option `flag` ("--seed") stored in `value` (whose value now is the default shown by
-/// --help), parsed strictly in [min, max]; a bad text is a CLI11 ValidationError (exit 2) saying
+/// A numeric option `flag` ("--seed") whose value, parsed strictly in [min, max], goes to
+/// `store`; a bad text is a CLI11 ValidationError (exit 2) saying
 /// "--seed: must be an integer in [0, ...] (got 'abc')".
 template <class T>
-CLI::Option* add_number_option(CLI::App& app, const std::string& flag, T& value, const std::string& help,
-                               T min = std::numeric_limits<T>::lowest(), T max = std::numeric_limits<T>::max()) {
-  auto parse = [&value, flag, min, max](const std::string& text) {
+CLI::Option* add_number_callback(CLI::App& app, const std::string& flag, std::function<void(T)> store,
+                                 const std::string& help, T min, T max) {
+  auto parse = [store = std::move(store), flag, min, max](const std::string& text) {
     try {
-      value = parse_number_as<T>(text, flag, min, max);
+      store(parse_number_as<T>(text, flag, min, max));
     } catch (const NumberError& e) {
       throw CLI::ValidationError(e.what());
     }
   };
-  return app.add_option_function<std::string>(flag, parse, help)
-      ->type_name(number_type_name(min, max))
-      ->default_str(number_text(value));
+  return app.add_option_function<std::string>(flag, parse, help)->type_name(number_type_name(min, max));
+}
+
+/// add_number_callback into `value`, whose value now is the default --help shows.
+template <class T>
+CLI::Option* add_number_option(CLI::App& app, const std::string& flag, T& value, const std::string& help,
+                               T min = std::numeric_limits<T>::lowest(), T max = std::numeric_limits<T>::max()) {
+  return add_number_callback<T>(app, flag, [&value](T v) { value = v; }, help, min, max)->default_str(number_text(value));
 }
 
 /// One subcommand: its CLI11 app (owned by the parent) and what runs when it was chosen. The
@@ -117,6 +122,10 @@ inline int run_program(CLI::App& app, int argc, char** argv, const std::vector<S
   std::reverse(args.begin(), args.end());  // CLI11's vector form takes the arguments last first
   try {
     app.parse(args);
+  } catch (const CLI::RequiredError& e) {
+    // CLI11 checks what is required before what is unknown: name the unknown option first.
+    const std::vector<std::string> extra = app.remaining(true);
+    return app.exit(extra.empty() ? CLI::ParseError(e) : CLI::ExtrasError(extra)) == 0 ? 0 : 2;
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
