@@ -95,12 +95,13 @@ inline std::string command_path(const CLI::App& app) {
   return path;
 }
 
-/// The top-level app of a program with subcommands: --version as version_line(name), one command
-/// required, a failure printed as "PROGRAM COMMAND: error: WHAT" with where to find the options.
+/// The top-level app of a program with subcommands (call it before adding them): --version as
+/// version_line(name), one command required, a flag takes no value, a failure printed as "PROGRAM COMMAND: error: WHAT" with where to find the options.
 inline void setup_program(CLI::App& app, const std::string& name) {
   app.name(name);
   app.set_version_flag("--version", version_line(name));
   app.require_subcommand(1);
+  app.option_defaults()->disable_flag_override();  // "--paper=3" is an error, not a flag set 3 times
   app.failure_message([](const CLI::App* a, const CLI::Error& e) {
     const std::string path = command_path(*a);
     return path + ": error: " + e.what() + "\nRun '" + path + " --help' for every option and its default.\n";
