@@ -95,6 +95,12 @@ inline std::string command_path(const CLI::App& app) {
   return path;
 }
 
+/// CLI11's failure message as "PROGRAM COMMAND: error: WHAT" and where to find the options.
+inline std::string failure_message_with_path(const CLI::App* app, const CLI::Error& e) {
+  const std::string path = command_path(*app);
+  return path + ": error: " + e.what() + "\nRun '" + path + " --help' for every option and its default.\n";
+}
+
 /// The top-level app of a program with subcommands (call it before adding them): --version as
 /// version_line(name), one command required, a flag takes no value, a failure printed as "PROGRAM COMMAND: error: WHAT" with where to find the options.
 inline void setup_program(CLI::App& app, const std::string& name) {
@@ -102,10 +108,7 @@ inline void setup_program(CLI::App& app, const std::string& name) {
   app.set_version_flag("--version", version_line(name));
   app.require_subcommand(1);
   app.option_defaults()->disable_flag_override();  // "--paper=3" is an error, not a flag set 3 times
-  app.failure_message([](const CLI::App* a, const CLI::Error& e) {
-    const std::string path = command_path(*a);
-    return path + ": error: " + e.what() + "\nRun '" + path + " --help' for every option and its default.\n";
-  });
+  app.failure_message(failure_message_with_path);
 }
 
 /// Parses the command line and runs the chosen subcommand: 0 / 2 from the parse (help, version,

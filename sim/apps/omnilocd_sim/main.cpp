@@ -65,6 +65,7 @@ int main(int argc, char** argv) {
                "(--camera none: no camera, odometry only; any other camera value means the rendered one).",
                "omnilocd-sim"};
   app.set_version_flag("--version", omniloc::version_line("omnilocd-sim"));
+  app.failure_message(omniloc::cli::failure_message_with_path);  // "omnilocd-sim: error: ..."
   SimArgs sim_args;
   app.add_option("--trajectory", sim_args.trajectory, "the simulated drive: " + omniloc::sim::trajectory_names())
       ->default_str(sim_args.trajectory);
