@@ -102,7 +102,8 @@ inline std::string failure_message_with_path(const CLI::App* app, const CLI::Err
 }
 
 /// The top-level app of a program with subcommands (call it before adding them): --version as
-/// version_line(name), one command required, a flag takes no value, a failure printed as "PROGRAM COMMAND: error: WHAT" with where to find the options.
+/// version_line(name), one command required, a flag takes no value, a failure printed by
+/// failure_message_with_path.
 inline void setup_program(CLI::App& app, const std::string& name) {
   app.name(name);
   app.set_version_flag("--version", version_line(name));
