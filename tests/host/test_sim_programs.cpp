@@ -432,4 +432,169 @@ TEST(Programs, VersionAndKeyEqualsValue) {
   EXPECT_NE(out.find("udp_port: must be in [1, 65535] (got 0)"), std::string::npos) << out;
 }
 
+// Issue 16.7 / 17.3: every number on the command lines of omniloc and omniloc-sim (and omnilocd-sim's
+// --seed) goes through the one strict parser; each bad text is exit 2 with the flag and the text
+// on stderr, before any work is done.
+struct BadCase {
+  std::string command;  // program + arguments
+  std::string flag;     // what the message must name
+  std::string value;    // the text it must quote
+};
+
+std::vector<BadCase> bad_numbers() {
+  const std::string sim = OMNILOC_SIM_PATH, cli = OMNILOC_CLI_PATH, dsim = OMNILOCD_SIM_PATH;
+  std::vector<BadCase> cases;
+  for (const std::string v : {"abc", "-1", "inf", "1e30", "1.7", "18446744073709551616", "", " 1", "0x10"}) {
+    cases.push_back({sim + " bench paper --seed '" + v + "'", "--seed", v});
+    cases.push_back({sim + " demo --seed '" + v + "'", "--seed", v});
+    cases.push_back({dsim + " --seed '" + v + "'", "--seed", v});
+  }
+  for (const std::string v : {"0", "120.5", "nan", "inf", "60x"})
+    cases.push_back({sim + " demo --camera-hz " + v, "--camera-hz", v});
+  for (const std::string v : {"0", "30.5", "-inf", "3s"}) cases.push_back({sim + " demo --duration=" + v, "--duration", v});
+  for (const std::string v : {"0", "100.5", "ten", "nan"})
+    cases.push_back({cli + " builddb --out /nonexistent/x.db --step " + v, "--step", v});
+  for (const std::string v : {"1.5", "-1", "257", "1e2"})
+    cases.push_back({cli + " builddb --out /nonexistent/x.db --threads=" + v, "--threads", v});
+  for (const std::string v : {"0", "65536", "56066666666660", "-1", "5601.0", "http"})
+    cases.push_back({cli + " ctl --port " + v + " status", "--port", v});
+  for (const std::string v : {"0", "1.5", "600001", "1e3"})
+    cases.push_back({cli + " ctl --timeout-ms=" + v + " status", "--timeout-ms", v});
+  cases.push_back({cli + " ctl --timeout-ms 50 set_pose 1 x 3", "set_pose Y_CM", "x"});
+  cases.push_back({cli + " ctl --timeout-ms 50 set_pose 1 2 nan", "set_pose YAW_DEG", "nan"});
+  for (const std::string v : {"-1", "0", "12000001", "9600.5"}) cases.push_back({cli + " probe --baud " + v, "--baud", v});
+  for (const std::string v : {"-1", "1e3", "2.5"}) cases.push_back({cli + " probe --once --seconds=" + v, "--seconds", v});
+  for (const std::string v : {"inf", "12x", "361", "nan"})
+    cases.push_back({cli + " locate /nonexistent.png --camera default --yaw-deg " + v, "--yaw-deg", v});
+  cases.push_back({cli + " calibrate /nonexistent.png --out /nonexistent/c.json --pose 1,x", "--pose", "x"});
+  cases.push_back({cli + " calibrate /nonexistent.png --out /nonexistent/c.json --pose=1,2,400", "--pose", "400"});
+  cases.push_back({cli + " calibrate /nonexistent.png --out /nonexistent/c.json --pose inf,2", "--pose", "inf"});
+  return cases;
+}
+
+TEST(Programs, BadNumbersAreRefusedNamingTheFlagAndTheText) {
+  TempDir dir("bad_numbers");
+  for (const BadCase& c : bad_numbers()) {
+    std::string out;
+    EXPECT_EQ(run(c.command, dir.path / "bad.log", out), 2) << c.command << "\n" << out;
+    EXPECT_NE(out.find(c.flag), std::string::npos) << c.command << "\n" << out;
+    EXPECT_NE(out.find("(got '" + c.value + "')"), std::string::npos) << c.command << "\n" << out;
+  }
+}
+
+// Unknown options and commands, a value missing at the end, a required option missing: exit 2,
+// the option or command named.
+TEST(Programs, UnknownOptionsAndMissingValuesAreNamed) {
+  TempDir dir("usage");
+  const std::string sim = OMNILOC_SIM_PATH, cli = OMNILOC_CLI_PATH;
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {sim + " demo --bogus 3", "--bogus"},
+      {sim + " bench paper --fast", "--fast"},
+      {sim + " bench paper --seed", "--seed"},
+      {sim + " demo --duration", "--duration"},
+      {sim + " demo --camera rendered", "rendered"},
+      {sim + " fly", "'fly'"},
+      {cli + " fly", "'fly'"},
+      {cli + " builddb --bogus 1", "--bogus"},
+      {cli + " builddb --step 25", "--out is required"},
+      {cli + " builddb --out", "--out"},
+      {cli + " replay", "REC_DIR is required"},
+      {cli + " replay /tmp --paper=3", "paper was given a disallowed flag override"},
+      {cli + " locate x.png", "--camera is required"},
+      {cli + " locate x.png --camera c --yaw-deg", "--yaw-deg"},
+      {cli + " ctl --port", "--port"},
+      {cli + " ctl --bogus", "--bogus"},
+      {cli + " ctl", "COMMAND is required"},
+      {cli + " ctl fly", "unknown command 'fly'"},
+      {cli + " probe --serial", "--serial"},
+      {cli + " probe --fast", "--fast"},
+      {cli + " calibrate x.png", "--out is required"},
+      {cli + " calibrate x.png --out c.json --pose", "--pose"},
+      {cli + " version extra", "extra"},
+      {cli + " regmap --all", "--all"},
+  };
+  for (const auto& [command, named] : cases) {
+    std::string out;
+    EXPECT_EQ(run(command, dir.path / "usage.log", out), 2) << command << "\n" << out;
+    EXPECT_NE(out.find(named), std::string::npos) << command << "\n" << out;
+  }
+}
+
+// `--help` at the top lists the commands; per command it lists every option the docs show, with
+// its default (the hand-written values below are the documented defaults).
+TEST(Programs, HelpListsEveryOptionAndItsDefault) {
+  TempDir dir("help");
+  const std::string sim = OMNILOC_SIM_PATH, cli = OMNILOC_CLI_PATH;
+  const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
+      {sim + " --help", {"demo", "bench", "--version"}},
+      {sim + " help", {"demo", "bench"}},
+      {sim + " demo --help", {"--out TEXT=build/demo", "--camera-hz NUMBER in [1, 120]=60", "--camera", "=rendered",
+                              "--seed UINT=1", "--duration NUMBER in [0.01, 30]=30"}},
+      {sim + " bench paper --help", {"--seed UINT=1", "--no-paper-mode"}},
+      {sim + " bench --help", {"paper"}},
+      {cli + " --help", {"version", "regmap", "probe", "builddb", "replay", "locate", "ctl", "calibrate"}},
+      {cli + " builddb --help", {"--out TEXT REQUIRED", "--field TEXT=fira-robosot", "--camera TEXT=default",
+                                 "--step NUMBER in [1, 100]=10", "--threads UINT in [0, 256]=0"}},
+      {cli + " replay --help", {"REC_DIR", "--out TEXT=REC_DIR/poses.csv", "--db", "--config TEXT=default", "--paper"}},
+      {cli + " locate --help", {"IMAGE", "--camera TEXT REQUIRED", "--field TEXT=fira-robosot", "--yaw-deg", "--db",
+                                "--config TEXT=default", "--overlay", "--json"}},
+      {cli + " ctl --help", {"COMMAND", "--port INT in [1, 65535]=5601", "--timeout-ms INT in [1, 600000]=1000",
+                             "set_pose X_CM Y_CM YAW_DEG", "record start DIR"}},
+      {cli + " probe --help", {"--once", "--serial", "--baud UINT in [1, 12000000]=" + std::to_string(regmap::kUartBaud),
+                               "--enable", "--seconds UINT in [0, 31536000]=0"}},
+      {cli + " calibrate --help", {"IMAGE", "--out TEXT REQUIRED", "--pose X,Y[,YAW]", "--field TEXT=fira-robosot",
+                                   "--overlay"}},
+  };
+  for (const auto& [command, listed] : cases) {
+    std::string out;
+    EXPECT_EQ(run(command, dir.path / "help.log", out), 0) << command << "\n" << out;
+    for (const auto& item : listed) EXPECT_NE(out.find(item), std::string::npos) << command << ": " << item << "\n" << out;
+  }
+}
+
+// --key=value is --key value: the values arrive where they belong.
+TEST(Programs, KeyEqualsValueReachesTheCommand) {
+  TempDir dir("key_value");
+  std::string out;
+  // ctl: the request goes to --port=N with the negative numbers as arguments, not options.
+  omniloc::test::UdpReceiver rx;
+  ASSERT_GT(rx.port(), 0);
+  EXPECT_EQ(run(std::string(OMNILOC_CLI_PATH) + " ctl --port=" + std::to_string(rx.port()) +
+                    " --timeout-ms=200 set_pose 12.5 -90 -3.5",
+                dir.path / "ctl.log", out),
+            1)
+      << out;
+  EXPECT_NE(out.find("no reply from 127.0.0.1:" + std::to_string(rx.port()) + " within 200 ms"), std::string::npos) << out;
+  const auto grams = rx.drain();
+  ASSERT_EQ(grams.size(), 1u) << out;
+  const nlohmann::json req = nlohmann::json::parse(grams[0]);
+  EXPECT_EQ(req["cmd"], "set_pose");
+  EXPECT_EQ(req["x_cm"], 12.5);
+  EXPECT_EQ(req["y_cm"], -90.0);
+  EXPECT_EQ(req["yaw_deg"], -3.5);
+  // builddb: --step=50 gives the 15 x 11 grid of the 750 x 550 cm FIRA field.
+  const fs::path db = dir.path / "fira50.db";
+  ASSERT_EQ(run(std::string(OMNILOC_CLI_PATH) + " builddb --out=" + db.string() + " --step=50 --threads=1",
+                dir.path / "db.log", out),
+            0)
+      << out;
+  EXPECT_NE(out.find("grid 15 x 11 at 50.0 cm"), std::string::npos) << out;
+  EXPECT_TRUE(fs::exists(db));
+  // demo: --duration=0.5 simulates 50 windows, --camera=none has no fix (exit 1), --seed=7 is the seed.
+  EXPECT_EQ(run(std::string(OMNILOC_SIM_PATH) + " demo --duration=0.5 --camera=none --seed=7 --out=" +
+                    (dir.path / "demo").string(),
+                dir.path / "demo.log", out),
+            1)
+      << out;
+  EXPECT_NE(out.find("seed 7\n"), std::string::npos) << out;
+  EXPECT_EQ(read_csv(dir.path / "demo" / "errors.csv").size(), 50u) << out;
+  // omnilocd-sim: a seed above 2^53 is taken exactly (no double in between).
+  EXPECT_EQ(run(std::string(OMNILOCD_SIM_PATH) + " --seed=9007199254740993 --camera none --duration-s 0.05 "
+                    "--status-period-s 0 --udp-port " + std::to_string(rx.port()),
+                dir.path / "dsim.log", out),
+            0)
+      << out;
+  EXPECT_NE(out.find("seed 9007199254740993"), std::string::npos) << out;
+}
+
 }  // namespace

@@ -12,6 +12,7 @@
 #include "omniloc/daemon.hpp"
 #include "omniloc/daemon_camera.hpp"
 #include "daemon_cli.hpp"
+#include "subcommand_cli.hpp"
 #include "ros2_attach.hpp"
 #include "omniloc/daemon_config.hpp"
 #include "omniloc/service_notify.hpp"
@@ -66,6 +67,7 @@ int main(int argc, char** argv) {
                "Flags override the config file (JSON, docs/DAEMON.md).",
                "omnilocd"};
   app.set_version_flag("--version", omniloc::version_line("omnilocd"));
+  app.failure_message(omniloc::cli::failure_message_with_path);  // "omnilocd: error: ..."
   app.footer("SIGINT / SIGTERM stop it cleanly (recording closed, board streaming switched off).");
   omniloc::cli::DaemonCommandLine cl;
   omniloc::cli::add_daemon_options(app, cl);

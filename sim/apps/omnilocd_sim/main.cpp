@@ -3,7 +3,6 @@
 // the board's simulated time. Takes every omnilocd option (the camera is rendered unless
 // `--camera none`) plus the simulation's own: --trajectory NAME and --seed N. With --record-dir it
 // also writes the run's truth.csv beside the recording, so `omniloc replay` reports errors.
-#include <charconv>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -18,6 +17,7 @@
 #include "omniloc_sim/playing_area.hpp"
 #include "omniloc_sim/sim_daemon.hpp"
 #include "stop_signal.hpp"
+#include "subcommand_cli.hpp"
 
 namespace {
 
@@ -25,15 +25,6 @@ struct SimArgs {
   std::string trajectory = "figure_eight";
   std::uint64_t seed = 1;
 };
-
-std::uint64_t parse_seed(std::string_view v) {
-  std::uint64_t n = 0;
-  const auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
-  if (v.empty() || ec != std::errc() || p != v.data() + v.size())
-    throw omniloc::ConfigError("command line: --seed: must be an integer 0 .. 18446744073709551615 (got '" +
-                               std::string(v) + "')");
-  return n;
-}
 
 int run(const omniloc::daemon::DaemonConfig& config, const SimArgs& sim_args, const omniloc::Logger& log) {
   using namespace omniloc;
@@ -74,15 +65,14 @@ int main(int argc, char** argv) {
                "(--camera none: no camera, odometry only; any other camera value means the rendered one).",
                "omnilocd-sim"};
   app.set_version_flag("--version", omniloc::version_line("omnilocd-sim"));
+  app.failure_message(omniloc::cli::failure_message_with_path);  // "omnilocd-sim: error: ..."
   SimArgs sim_args;
-  std::string seed_text;
   app.add_option("--trajectory", sim_args.trajectory, "the simulated drive: " + omniloc::sim::trajectory_names())
       ->default_str(sim_args.trajectory);
-  app.add_option("--seed", seed_text, "world and sensor noise seed, 0 .. 2^64-1")->default_str("1");
+  omniloc::cli::add_number_option(app, "--seed", sim_args.seed, "world and sensor noise seed");
   omniloc::cli::DaemonCommandLine cl;
   omniloc::cli::add_daemon_options(app, cl);
   return omniloc::cli::parse_and_run(app, argc, argv, "omnilocd-sim", [&] {
-    if (!seed_text.empty()) sim_args.seed = parse_seed(seed_text);
     const omniloc::daemon::DaemonConfig config = omniloc::cli::daemon_config_from(cl);
     return run(config, sim_args, omniloc::cli::daemon_logger(config, cl, "omnilocd-sim"));
   });
