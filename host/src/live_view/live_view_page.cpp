@@ -3,9 +3,9 @@
 // the status line on top; the field (600 x 440 canvas at 10, 40) with the carpet, the lines from
 // the field model, the recent path (cyan), the pose (red disc, dark heading line) with its 2-sigma
 // position circle and +-2-sigma heading wedge (yellow); the camera frame with the overlay (640 x
-// 480 canvas at 630, 40, drawn 1:1); the match error over the last 5-30 s with E_TH (600 x 220
-// canvas at 10, 500); the pose and frame in numbers. Colours are part of the contract with
-// the screenshot test (tests/host/test_live_view.cpp).
+// 480 canvas at 630, 40, drawn 1:1; a larger frame scaled down); the match error over the last
+// 5-30 s with E_TH (600 x 220 canvas at 10, 500); the pose and frame in numbers. Colours are part
+// of the contract with the screenshot test (tests/host/test_live_view.cpp).
 #include "omniloc/live_view.hpp"
 
 namespace omniloc::live {
@@ -94,7 +94,7 @@ function drawField() {
   c.lineWidth = 2;
   c.beginPath(); c.moveTo(px, py); c.lineTo(px + 20 * Math.cos(yaw), py - 20 * Math.sin(yaw)); c.stroke();
   c.fillStyle = MARKER;
-  c.beginPath(); c.arc(px, py, 6, 0, 2 * Math.PI); c.fill();
+  c.beginPath(); c.arc(px, py, 7, 0, 2 * Math.PI); c.fill();
   // On top of the marker: a tracked pose's 2-sigma circle is often smaller than the marker.
   c.strokeStyle = SIGMA;
   c.lineWidth = 1.5;
@@ -189,8 +189,12 @@ async function poll() {
 function loadFrame() {
   const img = new Image();
   img.onload = () => {
-    cctx.imageSmoothingEnabled = false;
-    cctx.drawImage(img, 0, 0);
+    // 1:1 (exact overlay colours) when the frame fits the 640 x 480 panel, else scaled down.
+    const k = Math.min(1, 640 / img.width, 480 / img.height);
+    const w = Math.round(img.width * k), h = Math.round(img.height * k);
+    if (camCanvas.width !== w || camCanvas.height !== h) { camCanvas.width = w; camCanvas.height = h; }
+    cctx.imageSmoothingEnabled = k < 1;
+    cctx.drawImage(img, 0, 0, w, h);
     setTimeout(loadFrame, 250);
   };
   img.onerror = () => setTimeout(loadFrame, 1000);
