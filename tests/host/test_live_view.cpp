@@ -32,6 +32,7 @@
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "omniloc/camera.hpp"
 #include "omniloc/daemon.hpp"
@@ -89,6 +90,24 @@ int count_colour(const cv::Mat& bgr, cv::Rect r, cv::Vec3b want, int tol = 0, cv
       }
     }
   if (centroid != nullptr && n > 0) *centroid = {sx / n, sy / n};
+  return n;
+}
+
+// Pixels of a hue (degrees, 0..360) within tol_deg, saturation >= s_min and value >= v_min (0..255):
+// the overlay's colours as they survive JPEG's chroma subsampling (the hue stays, the saturation
+// drops on 1 px marks).
+int count_hue(const cv::Mat& bgr, cv::Rect r, double hue_deg, double tol_deg, int s_min, int v_min) {
+  r &= cv::Rect(0, 0, bgr.cols, bgr.rows);
+  cv::Mat hsv;
+  cv::cvtColor(bgr(r), hsv, cv::COLOR_BGR2HSV_FULL);  // hue 0..255 for 0..360 deg
+  int n = 0;
+  for (int y = 0; y < hsv.rows; ++y)
+    for (int x = 0; x < hsv.cols; ++x) {
+      const cv::Vec3b p = hsv.at<cv::Vec3b>(y, x);
+      const double h = p[0] * 360.0 / 256.0;
+      const double d = std::fabs(std::remainder(h - hue_deg, 360.0));
+      if (d <= tol_deg && p[1] >= s_min && p[2] >= v_min) ++n;
+    }
   return n;
 }
 
@@ -159,6 +178,24 @@ TEST(LiveState, FrameIsTheLocateOverlayAtThePoseMadeOnlyForANewerFrameAndAtMostA
   r.match.cell = 0;
   const cv::Mat want = locate_overlay(bgr, models.camera, models.field, {&bearings, &r, &goals});
   EXPECT_EQ(cv::norm(got, want, cv::NORM_INF), 0.0);
+  // The JPEG the page shows: the same overlay (not drawn again), within JPEG's loss.
+  const auto jpeg = s.frame_jpeg();
+  ASSERT_NE(jpeg, nullptr);
+  EXPECT_EQ(s.frame_jpeg(), jpeg);
+  EXPECT_EQ(s.frames_encoded(), 1u);
+  const cv::Mat got_jpeg = cv::imdecode(*jpeg, cv::IMREAD_COLOR);
+  ASSERT_EQ(got_jpeg.size(), want.size());
+  const double jpeg_err = cv::norm(got_jpeg, want, cv::NORM_L1) / (want.total() * 3.0);
+  const cv::Rect whole(0, 0, want.cols, want.rows);
+  const int magenta_png = count_hue(want, whole, 300, 20, 60, 100), magenta_jpeg = count_hue(got_jpeg, whole, 300, 20, 60, 100);
+  const int yellow_png = count_hue(want, whole, 60, 12, 60, 150), yellow_jpeg = count_hue(got_jpeg, whole, 60, 12, 60, 150);
+  std::printf("JPEG %zu bytes, PNG %zu bytes; JPEG mean abs error %.2f / 255; magenta-hue pixels %d (PNG %d), "
+              "yellow-hue %d (PNG %d)\n",
+              jpeg->size(), png->size(), jpeg_err, magenta_jpeg, magenta_png, yellow_jpeg, yellow_png);
+  EXPECT_LT(jpeg_err, 20.0);
+  EXPECT_GT(magenta_jpeg, magenta_png / 2);
+  EXPECT_GT(yellow_jpeg, yellow_png / 3);  // thin yellow on green carpet: the hue drifts greenwards
+  EXPECT_EQ(count_hue(bgr, whole, 300, 20, 60, 100), 0) << "the rendered frame has no magenta of its own";
   const cv::Rect all(0, 0, got.cols, got.rows);
   const int magenta = count_colour(got, all, kCrossingMagenta), yellow = count_colour(got, all, kModelYellow);
   std::printf("overlay: %d crossing pixels, %d field-model pixels\n", magenta, yellow);
@@ -257,6 +294,7 @@ TEST(LiveViewServer, ServesThePageAndEveryEndpoint) {
   // Before any pose or frame: 503 for the pose and the frame, the rest answer.
   EXPECT_EQ(http_get(server.port(), "/pose.json")->status, 503);
   EXPECT_EQ(http_get(server.port(), "/frame.png")->status, 503);
+  EXPECT_EQ(http_get(server.port(), "/frame.jpg")->status, 503);
   EXPECT_EQ(http_get(server.port(), "/state.json")->status, 200);
   const auto last = pose_at(1000.0, 375.0, 275.0, 1.0);
   s.on_pose(last);
@@ -294,6 +332,10 @@ TEST(LiveViewServer, ServesThePageAndEveryEndpoint) {
   const cv::Mat img = cv::imdecode(std::vector<unsigned char>(png->body.begin(), png->body.end()), cv::IMREAD_COLOR);
   EXPECT_EQ(img.cols, 640);
   EXPECT_GT(count_colour(img, {0, 0, img.cols, img.rows}, kCrossingMagenta), 100);
+  const auto jpg = http_get(server.port(), "/frame.jpg");
+  EXPECT_EQ(jpg->status, 200);
+  EXPECT_NE(jpg->headers.find("image/jpeg"), std::string::npos);
+  EXPECT_EQ(cv::imdecode(std::vector<unsigned char>(jpg->body.begin(), jpg->body.end()), cv::IMREAD_COLOR).cols, 640);
   EXPECT_EQ(http_get(server.port(), "/nothing-here")->status, 404);
 
   // The same port again is refused, naming it.
@@ -419,6 +461,9 @@ TEST(OmnilocdSimLiveView, PageShowsThePoseOnTheFieldAndTheCameraOverlay) {
   ASSERT_TRUE(frame && frame->status == 200);
   const cv::Mat frame_img = cv::imdecode(std::vector<unsigned char>(frame->body.begin(), frame->body.end()), cv::IMREAD_COLOR);
   EXPECT_EQ(frame_img.cols, 640);
+  const auto jpeg = http_get(port, "/frame.jpg");
+  ASSERT_TRUE(jpeg && jpeg->status == 200);
+  EXPECT_EQ(cv::imdecode(std::vector<unsigned char>(jpeg->body.begin(), jpeg->body.end()), cv::IMREAD_COLOR).rows, 480);
 
   // The browser: headless Chromium renders the page and takes a screenshot.
   const std::string chromium = find_chromium();
@@ -501,14 +546,15 @@ TEST(OmnilocdSimLiveView, PageShowsThePoseOnTheFieldAndTheCameraOverlay) {
   EXPECT_GT(count_colour(img, field_panel, {0xff, 0xe5, 0x00}, 10), 20) << "no path (#00e5ff)";
   // The camera panel shows the overlay: grey rays, magenta crossings, the yellow field model; none
   // of these in the field panel.
-  const int grey = count_colour(img, camera_panel, kRayGrey), magenta = count_colour(img, camera_panel, kCrossingMagenta),
-            yellow = count_colour(img, camera_panel, kModelYellow);
+  // (The page shows the JPEG: grey within a tolerance, the marks by their hue.)
+  const int grey = count_colour(img, camera_panel, kRayGrey, 12), magenta = count_hue(img, camera_panel, 300, 20, 60, 100),
+            yellow = count_hue(img, camera_panel, 60, 12, 60, 150);
   std::printf("camera panel: %d ray, %d crossing, %d field-model pixels; screenshot %s\n", grey, magenta, yellow,
               png.c_str());
   EXPECT_GT(grey, 200);
   EXPECT_GT(magenta, 50);
   EXPECT_GT(yellow, 200);
-  EXPECT_EQ(count_colour(img, field_panel, kCrossingMagenta), 0);
+  EXPECT_EQ(count_hue(img, field_panel, 300, 20, 60, 100), 0);
 }
 
 // The robot's own daemon (no simulator) serves the page too: without a board, no pose, no frame,

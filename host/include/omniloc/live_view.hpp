@@ -8,7 +8,7 @@
 // LiveState is fed by the daemon's observer callbacks (attach() chains onto a DaemonObserver, as the
 // ROS 2 attachment does) and read by the server's threads: a mutex guards a small snapshot, the
 // callbacks only copy (a frame at most every 100 ms), and the costly part (line extraction, overlay,
-// PNG) runs in the server's thread when /frame.png is asked for, at most once per
+// encoding) runs in the server's thread when the frame is asked for, at most once per
 // frame_min_period_ms (5 Hz): requests in between get the last image again.
 //
 // LiveViewServer is the HTTP server (cpp-httplib) in its own thread, four worker threads. In a build
@@ -19,7 +19,9 @@
 //   GET /status.json {"line": last status line, "poses": datagrams seen, "frames": frames seen}
 //   GET /state.json  what the page polls: pose, path, match errors, status line, frame info, e_th
 //   GET /field.json  the field model: carpet size, segments, arcs, discs, goals (cm)
-//   GET /frame.png   the latest camera frame with the overlay (503 before the first frame)
+//   GET /frame.jpg   the latest camera frame with the overlay, JPEG (what the page shows; 503 before
+//                    the first frame)
+//   GET /frame.png   the same, PNG (lossless: the overlay's exact colours)
 #pragma once
 
 #include <cstdint>
@@ -70,10 +72,13 @@ class LiveState {
   [[nodiscard]] std::string status_json() const;
   [[nodiscard]] std::string state_json() const;
   [[nodiscard]] std::string field_json() const;
-  /// PNG of the latest frame with the overlay, empty before the first frame. Made again only when a
-  /// newer frame is there and frame_min_period_ms has passed since the last one.
+  /// The latest frame with the overlay as JPEG (quality 90, what the page shows: ~1 ms to encode)
+  /// or PNG (lossless, the overlay's exact colours: ~30 ms), null before the first frame. The
+  /// overlay is drawn again only when a newer frame is there and frame_min_period_ms has passed
+  /// since the last one; each format is encoded at most once per overlay.
+  [[nodiscard]] std::shared_ptr<const std::vector<unsigned char>> frame_jpeg();
   [[nodiscard]] std::shared_ptr<const std::vector<unsigned char>> frame_png();
-  /// How many overlay images have been made (tests: the rate bound).
+  /// How many overlays have been drawn (tests: the rate bound).
   [[nodiscard]] std::uint64_t frames_encoded() const;
 
   /// The page (HTML, CSS and JavaScript in one document).
@@ -102,14 +107,18 @@ class LiveState {
   std::uint64_t frame_seq_ = 0;    // frames kept
   daemon::PoseMessage frame_pose_; // the pose when it was kept
   bool frame_has_pose_ = false;
-  // The last overlay image and what it was made from.
-  std::shared_ptr<const std::vector<unsigned char>> png_;
-  std::uint64_t png_seq_ = 0;
-  double png_wall_ms_ = -1e300;
+  // The last overlay, what it was made from, and its encodings (made on demand).
+  cv::Mat overlay_;
+  std::uint64_t overlay_seq_ = 0;  // frame_seq_ it was drawn from (0: none yet)
+  double overlay_wall_ms_ = -1e300;
   std::uint64_t encoded_ = 0;
-  ExtractionReport png_report_;
-  double png_t_ms_ = 0.0;
-  std::mutex encode_mutex_;        // one overlay at a time (the extractor has state)
+  ExtractionReport overlay_report_;
+  double overlay_t_ms_ = 0.0;
+  std::shared_ptr<const std::vector<unsigned char>> png_, jpeg_;
+  std::mutex encode_mutex_;        // one overlay and encoding at a time (the extractor has state)
+  /// Under encode_mutex_: draws the overlay again if due; false before the first frame.
+  bool refresh_overlay();
+  std::shared_ptr<const std::vector<unsigned char>> encoded(bool png);
   std::unique_ptr<LineExtractor> extractor_;
 };
 

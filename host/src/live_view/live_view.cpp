@@ -121,11 +121,11 @@ std::string LiveState::state_json() const {
   nlohmann::ordered_json frame;
   frame["t_ms"] = frame_seq_ > 0 ? number(frame_t_ms_) : nlohmann::ordered_json(nullptr);
   frame["seq"] = frame_seq_;
-  frame["overlay_t_ms"] = encoded_ > 0 ? number(png_t_ms_) : nlohmann::ordered_json(nullptr);
-  frame["usable"] = png_report_.usable;
-  frame["reason"] = png_report_.reason;
-  frame["rays_seen"] = png_report_.rays_seen;
-  frame["crossings"] = png_report_.crossings;
+  frame["overlay_t_ms"] = encoded_ > 0 ? number(overlay_t_ms_) : nlohmann::ordered_json(nullptr);
+  frame["usable"] = overlay_report_.usable;
+  frame["reason"] = overlay_report_.reason;
+  frame["rays_seen"] = overlay_report_.rays_seen;
+  frame["crossings"] = overlay_report_.crossings;
   j["frame"] = frame;
   return j.dump();
 }
@@ -157,8 +157,7 @@ std::string LiveState::field_json() const {
   return j.dump();
 }
 
-std::shared_ptr<const std::vector<unsigned char>> LiveState::frame_png() {
-  const std::lock_guard encode(encode_mutex_);
+bool LiveState::refresh_overlay() {
   cv::Mat bgr;
   daemon::PoseMessage pose;
   bool with_pose = false;
@@ -166,8 +165,10 @@ std::shared_ptr<const std::vector<unsigned char>> LiveState::frame_png() {
   double t_ms = 0.0;
   {
     const std::lock_guard lock(mutex_);
-    if (frame_seq_ == 0) return nullptr;
-    if (png_ && (frame_seq_ == png_seq_ || steady_ms() - png_wall_ms_ < options_.frame_min_period_ms)) return png_;
+    if (frame_seq_ == 0) return false;
+    if (overlay_seq_ != 0 &&
+        (frame_seq_ == overlay_seq_ || steady_ms() - overlay_wall_ms_ < options_.frame_min_period_ms))
+      return true;
     bgr = frame_;  // shares the pixels; on_frame replaces frame_, never writes into it
     pose = frame_pose_;
     with_pose = frame_has_pose_;
@@ -194,18 +195,41 @@ std::shared_ptr<const std::vector<unsigned char>> LiveState::frame_png() {
   in.bearings = bearings.radii_px.empty() ? nullptr : &bearings;
   in.result = &result;
   in.goals = &goals;
-  const cv::Mat overlay = locate_overlay(bgr, models_.camera, models_.field, in);
-  auto png = std::make_shared<std::vector<unsigned char>>();
-  cv::imencode(".png", overlay, *png, {cv::IMWRITE_PNG_COMPRESSION, 1});
+  cv::Mat overlay = locate_overlay(bgr, models_.camera, models_.field, in);
   const std::lock_guard lock(mutex_);
-  png_ = std::move(png);
-  png_seq_ = seq;
-  png_wall_ms_ = steady_ms();
-  png_t_ms_ = t_ms;
-  png_report_ = report;
+  overlay_ = std::move(overlay);
+  overlay_seq_ = seq;
+  overlay_wall_ms_ = steady_ms();
+  overlay_t_ms_ = t_ms;
+  overlay_report_ = report;
+  png_.reset();
+  jpeg_.reset();
   ++encoded_;
-  return png_;
+  return true;
 }
+
+std::shared_ptr<const std::vector<unsigned char>> LiveState::encoded(bool png) {
+  const std::lock_guard encode(encode_mutex_);
+  if (!refresh_overlay()) return nullptr;
+  cv::Mat overlay;
+  {
+    const std::lock_guard lock(mutex_);
+    if (const auto& have = png ? png_ : jpeg_) return have;
+    overlay = overlay_;  // replaced, never written, by refresh_overlay (under encode_mutex_ too)
+  }
+  auto bytes = std::make_shared<std::vector<unsigned char>>();
+  if (png)
+    cv::imencode(".png", overlay, *bytes, {cv::IMWRITE_PNG_COMPRESSION, 1});
+  else
+    cv::imencode(".jpg", overlay, *bytes, {cv::IMWRITE_JPEG_QUALITY, 90});
+  const std::lock_guard lock(mutex_);
+  (png ? png_ : jpeg_) = bytes;
+  return bytes;
+}
+
+std::shared_ptr<const std::vector<unsigned char>> LiveState::frame_png() { return encoded(true); }
+
+std::shared_ptr<const std::vector<unsigned char>> LiveState::frame_jpeg() { return encoded(false); }
 
 std::uint64_t LiveState::frames_encoded() const {
   const std::lock_guard lock(mutex_);

@@ -2,10 +2,10 @@
 // fetched but the daemon's own endpoints (it works without internet). Layout, 1280 x 800:
 // the status line on top; the field (600 x 440 canvas at 10, 40) with the carpet, the lines from
 // the field model, the recent path (cyan), the pose (red disc, dark heading line) with its 2-sigma
-// position circle and +-2-sigma heading wedge (yellow); the camera frame with the overlay (640 x
-// 480 canvas at 630, 40, drawn 1:1; a larger frame scaled down); the match error over the last
-// 5-30 s with E_TH (600 x 220 canvas at 10, 500); the pose and frame in numbers. Colours are part
-// of the contract with the screenshot test (tests/host/test_live_view.cpp).
+// position circle and +-2-sigma heading wedge (yellow); the camera frame with the overlay
+// (/frame.jpg on a 640 x 480 canvas at 630, 40, drawn 1:1; a larger frame scaled down); the match
+// error over the last 5-30 s with E_TH (600 x 220 canvas at 10, 500); the pose and frame in
+// numbers. Colours are part of the contract with the screenshot test (tests/host/test_live_view.cpp).
 #include "omniloc/live_view.hpp"
 
 namespace omniloc::live {
@@ -198,7 +198,7 @@ function loadFrame() {
     setTimeout(loadFrame, 250);
   };
   img.onerror = () => setTimeout(loadFrame, 1000);
-  img.src = '/frame.png?n=' + Date.now();
+  img.src = '/frame.jpg?n=' + Date.now();
 }
 
 drawField();

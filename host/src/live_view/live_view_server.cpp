@@ -63,16 +63,20 @@ LiveViewServer::LiveViewServer(LiveState& state, const LiveViewOptions& options)
   s.Get("/status.json", json(&LiveState::status_json));
   s.Get("/state.json", json(&LiveState::state_json));
   s.Get("/field.json", json(&LiveState::field_json));
-  s.Get("/frame.png", [&state](const httplib::Request&, httplib::Response& res) {
-    no_cache(res);
-    const auto png = state.frame_png();
-    if (!png) {
-      res.status = 503;
-      res.set_content("no camera frame yet", "text/plain");
-      return;
-    }
-    res.set_content(reinterpret_cast<const char*>(png->data()), png->size(), "image/png");
-  });
+  auto image = [&state](std::shared_ptr<const std::vector<unsigned char>> (LiveState::*get)(), const char* type) {
+    return [&state, get, type](const httplib::Request&, httplib::Response& res) {
+      no_cache(res);
+      const auto bytes = (state.*get)();
+      if (!bytes) {
+        res.status = 503;
+        res.set_content("no camera frame yet", "text/plain");
+        return;
+      }
+      res.set_content(reinterpret_cast<const char*>(bytes->data()), bytes->size(), type);
+    };
+  };
+  s.Get("/frame.jpg", image(&LiveState::frame_jpeg, "image/jpeg"));
+  s.Get("/frame.png", image(&LiveState::frame_png, "image/png"));
   const std::string where = "live view: http://" + options.address + ":" + std::to_string(options.port) + "/";
   if (options.port == 0) {
     impl_->port = s.bind_to_any_port(options.address);
