@@ -1,6 +1,7 @@
 // The live view's server in a build without cpp-httplib (libcpp-httplib-dev): it refuses to start,
 // saying why, so `--http-port` fails clearly instead of serving nothing.
 #include <stdexcept>
+#include <string>
 
 #include "omniloc/live_view.hpp"
 
