@@ -98,6 +98,7 @@ int count_colour(const cv::Mat& bgr, cv::Rect r, cv::Vec3b want, int tol = 0, cv
 // drops on 1 px marks).
 int count_hue(const cv::Mat& bgr, cv::Rect r, double hue_deg, double tol_deg, int s_min, int v_min) {
   r &= cv::Rect(0, 0, bgr.cols, bgr.rows);
+  if (r.empty()) return 0;
   cv::Mat hsv;
   cv::cvtColor(bgr(r), hsv, cv::COLOR_BGR2HSV_FULL);  // hue 0..255 for 0..360 deg
   int n = 0;
@@ -544,6 +545,13 @@ TEST(OmnilocdSimLiveView, PageShowsThePoseOnTheFieldAndTheCameraOverlay) {
   EXPECT_LT(best, 3.0);
   EXPECT_LT(worst_truth_cm, 10.0);
   EXPECT_GT(count_colour(img, field_panel, {0xff, 0xe5, 0x00}, 10), 20) << "no path (#00e5ff)";
+  // The 2-sigma circle (#ffd600, hue 50 deg) around the marker: the datagram's 2 cm sigma is 3.2 px.
+  const cv::Rect around(static_cast<int>(marker.x) - 12, static_cast<int>(marker.y) - 12, 25, 25);
+  const int ring = count_hue(img, around, 50, 8, 150, 200);
+  std::printf("2-sigma circle: %d px around the marker (sigma %.2f cm)\n", ring, after["pose"]["uncertainty_cm"].get<double>());
+  EXPECT_GE(ring, 5) << "no uncertainty circle";
+  EXPECT_EQ(count_hue(img, field_panel & cv::Rect(0, 0, 1280, static_cast<int>(marker.y) - 40), 50, 8, 150, 200), 0)
+      << "the circle's colour away from the marker";
   // The camera panel shows the overlay: grey rays, magenta crossings, the yellow field model; none
   // of these in the field panel.
   // (The page shows the JPEG: grey within a tolerance, the marks by their hue.)
