@@ -11,6 +11,7 @@ packages=(
   umockdev libumockdev-dev libglib2.0-dev
   ftdi-eeprom
   cyclonedds-dev cyclonedds-tools
+  libcpp-httplib-dev chromium
   clang libclang-rt-14-dev
 )
 

@@ -22,7 +22,8 @@ const std::vector<std::string> kEveryKey = {
     "board_serial", "reconnect_period_ms", "camera",     "camera_fps",  "camera_timeout_ms", "field",
     "camera_model", "robot",               "localizer",  "database",    "grid_step_cm",      "udp_address",
     "udp_port",     "control_port",        "publish_hz",          "record_dir", "record_overwrite", "record_format",
-    "status_period_s", "log_level", "duration_s", "ros2_domain_id", "ros2_namespace", "ros2_frame_id"};
+    "status_period_s", "log_level", "duration_s", "ros2_domain_id", "ros2_namespace", "ros2_frame_id",
+    "http_port", "http_address"};
 
 // Every key set to a value that differs from its default (publish_hz has only one valid value).
 const std::string kEveryKeyJson = R"({
@@ -49,7 +50,9 @@ const std::string kEveryKeyJson = R"({
   "duration_s": 12,
   "ros2_domain_id": 7,
   "ros2_namespace": "/robot2/omniloc",
-  "ros2_frame_id": "field"
+  "ros2_frame_id": "field",
+  "http_port": 8080,
+  "http_address": "0.0.0.0"
 })";
 
 TEST(DaemonConfig, ShippedDefaultFileIsTheStructDefaultsEveryKey) {
@@ -90,6 +93,8 @@ TEST(DaemonConfig, EveryKeyReachesItsMember) {
   EXPECT_EQ(c.ros2_domain_id, 7);
   EXPECT_EQ(c.ros2_namespace, "/robot2/omniloc");
   EXPECT_EQ(c.ros2_frame_id, "field");
+  EXPECT_EQ(c.http_port, 8080);
+  EXPECT_EQ(c.http_address, "0.0.0.0");
 }
 
 TEST(DaemonConfig, EachKeyOfTheFullFileMatters) {
@@ -144,6 +149,9 @@ TEST(DaemonConfig, BadFilesNameTheFileAndTheField) {
                           {R"({"ros2_namespace": "omniloc"})", "ros2_namespace", "absolute ROS 2 name"},
                           {R"({"ros2_namespace": "/a//b"})", "ros2_namespace", "absolute ROS 2 name"},
                           {R"({"grid_step_cm": 1})", "grid_step_cm", "[2, 50] (got 1)"},
+                          {R"({"http_port": -1})", "http_port", "must be 0 (off) or in [1, 65535] (got -1)"},
+                          {R"({"http_port": 65536})", "http_port", "must be 0 (off) or in [1, 65535] (got 65536)"},
+                          {R"({"http_address": "localhost"})", "http_address", "dotted IPv4 address (got \"localhost\")"},
                           {R"({"camera": ""})", "camera", "must not be empty"},
                           {"{\"udp_port\" 5600}", "udp_port", "not valid JSON: parse error at line 1"},
                           {"{\"udp_port\": 5600 \"camera\": \"0\"}", "", "not valid JSON: parse error at line 1"},
@@ -197,6 +205,9 @@ TEST(DaemonConfig, FlagsOverrideTheFileWhateverTheirOrder) {
   EXPECT_EQ(a.camera_fps, 15.0);  // --key=value as well as --key value
   // A text key takes the flag's text as it is (a camera index is the string "1").
   EXPECT_EQ(parse_flags({"--camera", "1"}).camera, "1");
+  // --http is the short form of --http-port (the live view).
+  EXPECT_EQ(parse_flags({"--http", "8081"}).http_port, 8081);
+  EXPECT_EQ(parse_flags({"--http-port=8082"}).http_port, 8082);
   // No flag at all: the defaults, valid on their own.
   EXPECT_TRUE(parse_flags({}) == DaemonConfig{});
 }

@@ -35,6 +35,12 @@ inline std::string flag_of(std::string_view key) {
   return flag;
 }
 
+/// Short forms of some keys' flags: `--http 8080` for `--http-port 8080` (the live view).
+inline std::string flag_names_of(std::string_view key) {
+  const std::string names = "--" + flag_of(key);
+  return key == "http_port" ? "--http," + names : names;
+}
+
 /// Adds --config and one option per daemon key to `app`; the values land in `cl` (which must
 /// outlive the parse).
 inline void add_daemon_options(CLI::App& app, DaemonCommandLine& cl) {
@@ -49,7 +55,7 @@ inline void add_daemon_options(CLI::App& app, DaemonCommandLine& cl) {
     const config::Json v = *k.write(defaults);
     const std::string shown = v.is_string() ? "\"" + v.get<std::string>() + "\"" : v.dump();
     std::optional<std::string>* slot = &cl.values[i];
-    app.add_option_function<std::string>("--" + flag_of(k.name), [slot](const std::string& text) { *slot = text; },
+    app.add_option_function<std::string>(flag_names_of(k.name), [slot](const std::string& text) { *slot = text; },
                                          std::string(k.help))
         ->type_name(k.kind == config::Kind::kText ? "TEXT" : "NUMBER")
         ->default_str(shown);

@@ -12,6 +12,7 @@
 #include "omniloc/daemon.hpp"
 #include "omniloc/daemon_camera.hpp"
 #include "daemon_cli.hpp"
+#include "live_view_attach.hpp"
 #include "subcommand_cli.hpp"
 #include "ros2_attach.hpp"
 #include "omniloc/daemon_config.hpp"
@@ -43,6 +44,7 @@ int run(const omniloc::daemon::DaemonConfig& config, const omniloc::Logger& log)
   say("publishing poses to udp://" + config.udp_address + ":" + std::to_string(config.udp_port) +
       (config.record_dir.empty() ? "" : ", recording to " + config.record_dir));
   omniloc::cli::Ros2Attachment ros2(config, log);
+  omniloc::cli::LiveViewAttachment live_view(config, models, log);
   Daemon daemon(config, models, io);
   // Under systemd (Type=notify): ready once the models are loaded and the loop starts; the loop
   // feeds the watchdog whether or not a board is there.
@@ -51,6 +53,7 @@ int run(const omniloc::daemon::DaemonConfig& config, const omniloc::Logger& log)
   observer.on_loop = [&service](double now_ms) { service.loop(now_ms); };
   observer.on_status = [&service](const std::string& line) { service.status(line); };
   ros2.attach(observer, daemon);
+  live_view.attach(observer);
   daemon.set_observer(std::move(observer));
   omniloc::cli::install_stop_signal_handlers();
   service.ready();

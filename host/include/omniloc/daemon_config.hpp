@@ -46,6 +46,9 @@ struct DaemonConfig {
   int ros2_domain_id = -1;             ///< DDS domain (ROS_DOMAIN_ID) of the topics; -1: no ROS 2
   std::string ros2_namespace = "/omniloc";  ///< topics <ns>/pose and <ns>/odom
   std::string ros2_frame_id = "map";   ///< frame_id of the poses: the field frame, in metres
+  // --- live view (docs/DAEMON.md "Live view"; needs a build with cpp-httplib) ---
+  int http_port = 0;                   ///< TCP port of the live view's web page; 0: off
+  std::string http_address = "127.0.0.1";  ///< IPv4 address it listens on (0.0.0.0: every interface)
 
   /// Checks ranges; throws ConfigError "<at>.<key>: <why> (got <value>)".
   void validate(const config::Origin& at) const;

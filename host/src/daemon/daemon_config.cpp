@@ -46,6 +46,8 @@ const config::KeyTable<DaemonConfig>& daemon_config_keys() {
       key("ros2_domain_id", &D::ros2_domain_id, opt, "ROS 2 topics in this DDS domain (ROS_DOMAIN_ID); -1: off"),
       key("ros2_namespace", &D::ros2_namespace, opt, "ROS 2 namespace of the topics: <ns>/pose, <ns>/odom"),
       key("ros2_frame_id", &D::ros2_frame_id, opt, "frame_id of the published poses (the field frame)"),
+      key("http_port", &D::http_port, opt, "live view: a web page on this TCP port (http://ADDRESS:PORT/); 0: off"),
+      key("http_address", &D::http_address, opt, "IPv4 address the live view listens on; 0.0.0.0: every interface"),
   };
   return table;
 }
@@ -83,6 +85,9 @@ void DaemonConfig::validate(const config::Origin& at) const {
     require(false, at / "ros2_namespace", "must be an absolute ROS 2 name such as /omniloc", show(ros2_namespace));
   }
   require(!ros2_frame_id.empty(), at / "ros2_frame_id", "must not be empty", show(ros2_frame_id));
+  require(http_port >= 0 && http_port <= 65535, at / "http_port", "must be 0 (off) or in [1, 65535]", http_port);
+  require(inet_pton(AF_INET, http_address.c_str(), &addr) == 1, at / "http_address", "must be a dotted IPv4 address",
+          show(http_address));
 }
 
 void validate_daemon_config(const DaemonConfig& c, const std::string& source) { c.validate(source); }

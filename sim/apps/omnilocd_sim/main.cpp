@@ -9,6 +9,7 @@
 #include <string_view>
 
 #include "daemon_cli.hpp"
+#include "live_view_attach.hpp"
 #include "ros2_attach.hpp"
 #include "omniloc/daemon.hpp"
 #include "omniloc/daemon_config.hpp"
@@ -41,6 +42,7 @@ int run(const omniloc::daemon::DaemonConfig& config, const SimArgs& sim_args, co
   say("publishing poses to udp://" + config.udp_address + ":" + std::to_string(config.udp_port) +
       (config.record_dir.empty() ? "" : ", recording to " + config.record_dir));
   omniloc::cli::Ros2Attachment ros2(config, log);
+  omniloc::cli::LiveViewAttachment live_view(config, models, log);
   daemon::Daemon d(config, models, io);
   // After the daemon has made the recording directory (and removed an old truth.csv).
   std::unique_ptr<TruthCsvWriter> truth_csv;
@@ -50,6 +52,7 @@ int run(const omniloc::daemon::DaemonConfig& config, const SimArgs& sim_args, co
     observer.on_window = sim::truth_recorder(robot.truth(), *truth_csv);
   }
   ros2.attach(observer, d);
+  live_view.attach(observer);
   d.set_observer(std::move(observer));
   omniloc::cli::install_stop_signal_handlers();
   const daemon::DaemonReport r = d.run(&omniloc::cli::g_stop_requested);
