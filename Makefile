@@ -8,7 +8,8 @@
 #   make formal     yosys + yosys-smtbmc (z3) proofs
 #   make bitstream  iCEBreaker bitstream with the open iCE40 flow
 #   make bench      benchmarks (each against a naive reference, ratio printed)
-#   make soak       long simulated runs of the localizer (SOAK_MINUTES, default 10)
+#   make soak       long simulated runs: the localizer (SOAK_MINUTES, default 10), the daemon with faults
+#                   (SOAK_DAEMON_MINUTES, default 60 simulated; SOAK_BOARD reference or verilated)
 #   make fuzz       the libFuzzer harnesses of tests/fuzz, FUZZ_SECONDS each (default 60; clang tree $(BUILD)/sanitize)
 #   make install    install the library, headers, programs and data under PREFIX (default /usr/local)
 #   make generate   regenerate headers and docs from common/regmap.json
@@ -55,8 +56,11 @@ bench: build
 	@bash scripts/bench.sh $(BUILD)
 
 SOAK_MINUTES ?= 10
+SOAK_DAEMON_MINUTES ?= 60
+SOAK_BOARD ?= reference
 soak: build
 	$(BUILD)/soak/soak_localizer --minutes $(SOAK_MINUTES)
+	$(BUILD)/soak/soak_daemon --minutes $(SOAK_DAEMON_MINUTES) --board $(SOAK_BOARD) --out $(BUILD)/soak/daemon
 
 # ASan + UBSan + libFuzzer in a clang tree of its own (scripts/fuzz.sh, docs/TESTING.md "Fuzzing").
 FUZZ_SECONDS ?= 60

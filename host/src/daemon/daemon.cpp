@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <utility>
+#include <vector>
 
 #include "omniloc/board_session.hpp"
 #include "omniloc/control.hpp"
@@ -21,6 +22,7 @@ constexpr double kBoardSilentMs = 250.0;
 // While the board is gone, a degraded pose goes out every window period, so consumers see the state.
 constexpr double kDegradedTickMs = 10.0;
 constexpr std::chrono::milliseconds kTelemetryWait{20};
+constexpr std::size_t kMaxQueuedAtOpen = 1024;  // the board client's telemetry queue
 
 }  // namespace
 
@@ -401,7 +403,22 @@ struct Daemon::Impl {
       }
       try {
         if (const auto w = client->next_window(kTelemetryWait)) {
-          on_board_window(*w);
+          if (!connection_offset_ms) {
+            // A session's first window may be stale: the board streams on while the link is down,
+            // so windows wait in the link for the session to open. The newest one that has arrived
+            // is the one that arrived now: the session's clock is anchored on it, the others keep
+            // their board times before it.
+            std::vector<SessionWindow> queued{*w};
+            while (queued.size() < kMaxQueuedAtOpen) {
+              auto more = client->next_window(std::chrono::milliseconds(0));
+              if (!more) break;
+              queued.push_back(*more);
+            }
+            connection_offset_ms = clock.now_ms() - queued.back().board_ms;
+            for (const SessionWindow& q : queued) on_board_window(q);
+          } else {
+            on_board_window(*w);
+          }
         } else if (clock.now_ms() - last_window_clock_ms > kBoardSilentMs) {
           throw TransportError(TransportErrorKind::kIo, "no telemetry for 250 ms");
         }
