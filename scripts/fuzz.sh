@@ -35,7 +35,7 @@ build() {
   # (Re)configured when new or when made before the tree held the tests.
   if ! grep -q '^OMNILOC_BUILD_TESTS:BOOL=ON' "$out/CMakeCache.txt" 2>/dev/null; then
     CC=clang CXX=clang++ cmake -S "$src" -B "$out" "${gen[@]}" "${launcher[@]}" \
-      -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" -DCMAKE_C_FLAGS_DEBUG="-O1 -g" \
+      -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -gline-tables-only" -DCMAKE_C_FLAGS_DEBUG="-O1 -gline-tables-only" \
       -DOMNILOC_FUZZ=ON -DOMNILOC_BUILD_SIM=ON -DOMNILOC_BUILD_TESTS=ON -DOMNILOC_BUILD_CALIBRATION=ON \
       -DOMNILOC_ROS2=OFF >"$out/configure.log" 2>&1 || { cat "$out/configure.log"; fail "configure (clang, -DOMNILOC_FUZZ=ON)"; }
   fi
