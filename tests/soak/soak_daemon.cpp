@@ -57,6 +57,7 @@
 #include "omniloc_sim/sim_robot.hpp"
 #include "omniloc_sim/trajectory.hpp"
 #include "omniloc_sim/world.hpp"
+#include "../host/udp_receiver.hpp"
 
 #ifndef OMNILOC_CLI_PATH
 #error "OMNILOC_CLI_PATH (the omniloc program, for `omniloc replay`) must be defined"
@@ -325,40 +326,6 @@ double rss_mb() {
   return -1.0;
 }
 
-class UdpSink {
- public:
-  UdpSink() {
-    fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    int big = 4 << 20;
-    ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &big, sizeof big);
-    if (fd_ < 0 || ::bind(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0)
-      throw std::runtime_error(std::string("soak: UDP socket on 127.0.0.1: ") + std::strerror(errno));
-    socklen_t len = sizeof a;
-    ::getsockname(fd_, reinterpret_cast<sockaddr*>(&a), &len);
-    port_ = ntohs(a.sin_port);
-  }
-  ~UdpSink() { ::close(fd_); }
-  UdpSink(const UdpSink&) = delete;
-  UdpSink& operator=(const UdpSink&) = delete;
-  [[nodiscard]] int port() const { return port_; }
-  template <class F>
-  void drain(F&& each) {
-    char buf[2048];
-    for (;;) {
-      const ssize_t n = ::recv(fd_, buf, sizeof buf, 0);
-      if (n <= 0) return;
-      each(std::string_view(buf, static_cast<std::size_t>(n)));
-    }
-  }
-
- private:
-  int fd_ = -1;
-  int port_ = 0;
-};
-
 /// The pose stream as a consumer sees it, checked datagram by datagram (nothing kept per datagram,
 /// so that an hour's run does not grow with the stream).
 struct StreamStats {
@@ -449,7 +416,8 @@ int run(const Options& o) {
   DaemonConfig cfg;
   cfg.camera_fps = o.camera_fps;
   cfg.udp_address = "127.0.0.1";
-  UdpSink sink;
+  test::UdpReceiver sink;  // the tests' receiver: non-blocking, 8 MB of buffer, a free port
+  if (sink.port() == 0) throw std::runtime_error(std::string("soak: UDP socket on 127.0.0.1: ") + std::strerror(errno));
   cfg.udp_port = sink.port();
   cfg.control_port = 0;
   cfg.record_dir = rec.string();
@@ -518,7 +486,7 @@ int run(const Options& o) {
   DaemonObserver observer;
   observer.on_window = sim::truth_recorder(*truth, truth_csv);
   observer.on_loop = [&](double now) {
-    sink.drain([&](std::string_view s) { take_datagram(s, stream, faults.list); });
+    for (const std::string& s : sink.drain()) take_datagram(s, stream, faults.list);
     if (rss_start < 0 && now >= 10'000.0) rss_start = rss_mb();
     if (static_cast<std::int64_t>(now) % 1000 < 10) rss_max = std::max(rss_max, rss_mb());
     for (const Fault& f : faults.list) {
@@ -541,7 +509,7 @@ int run(const Options& o) {
   const DaemonReport r = d.run(&stop);
   ::setrlimit(RLIMIT_FSIZE, &unlimited);
   truth_csv.close();
-  sink.drain([&](std::string_view s) { take_datagram(s, stream, faults.list); });
+  for (const std::string& s : sink.drain()) take_datagram(s, stream, faults.list);
   const double rss_end = rss_mb();
   rss_max = std::max(rss_max, rss_end);
 
