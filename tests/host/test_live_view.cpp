@@ -545,11 +545,15 @@ TEST(OmnilocdSimLiveView, PageShowsThePoseOnTheFieldAndTheCameraOverlay) {
   EXPECT_LT(best, 3.0);
   EXPECT_LT(worst_truth_cm, 10.0);
   EXPECT_GT(count_colour(img, field_panel, {0xff, 0xe5, 0x00}, 10), 20) << "no path (#00e5ff)";
-  // The 2-sigma circle (#ffd600, hue 50 deg) around the marker: the datagram's 2 cm sigma is 3.2 px.
+  // The 2-sigma circle (#ffd600, hue 50 deg) around the marker, drawn at least 1 px in radius (a
+  // tracked pose's sigma is a few tenths of a cm: under a pixel at this scale); its outline is
+  // about 2 pi r pixels, at least 4.
+  const double sigma_cm = after["pose"]["uncertainty_cm"].get<double>();
+  const double radius_px = std::max(1.0, 2.0 * sigma_cm * sx);
   const cv::Rect around(static_cast<int>(marker.x) - 12, static_cast<int>(marker.y) - 12, 25, 25);
   const int ring = count_hue(img, around, 50, 8, 150, 200);
-  std::printf("2-sigma circle: %d px around the marker (sigma %.2f cm)\n", ring, after["pose"]["uncertainty_cm"].get<double>());
-  EXPECT_GE(ring, 5) << "no uncertainty circle";
+  std::printf("2-sigma circle: %d px around the marker (sigma %.2f cm, radius %.1f px)\n", ring, sigma_cm, radius_px);
+  EXPECT_GE(ring, std::min(5, static_cast<int>(std::floor(4.0 * radius_px)))) << "no uncertainty circle";
   EXPECT_EQ(count_hue(img, field_panel & cv::Rect(0, 0, 1280, static_cast<int>(marker.y) - 40), 50, 8, 150, 200), 0)
       << "the circle's colour away from the marker";
   // The camera panel shows the overlay: grey rays, magenta crossings, the yellow field model; none

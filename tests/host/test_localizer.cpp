@@ -265,6 +265,56 @@ TEST_F(LocalizerSim, FramesAreAppliedAtTheTimeTheyWereTaken) {
   EXPECT_LT(worst_diff, 3.0);
 }
 
+TEST_F(LocalizerSim, ReportedUncertaintyCoversTheTrueError) {
+  // Issue 15.5: the pose's uncertainty comes from the match (the error surface's curvature) and
+  // the odometry's growth since the fix. Over the simulator's random walk with default noise, and
+  // a 3 s stretch without frames in the middle (odometry only), the true position error must lie
+  // within the reported 2 sigma in at least 90 % of the windows, and the sigma must say something:
+  // it must not cover by being several times the error it describes.
+  const std::uint64_t seed = 29;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  sim::World world(sim::WorldConfig::default_noise(robot_, seed), sim::make_trajectory("random_walk", seed));
+  Localizer loc(LocalizerConfig{}, robot_, renderer_->field(), renderer_->camera(), *db_);
+  sim::SimRunOptions opt;
+  opt.render.seed = seed;
+  constexpr double kOutageFromMs = 12000.0, kOutageToMs = 15000.0;
+  int windows = 0, covered = 0, outage_windows = 0, outage_covered = 0;
+  std::vector<double> error_over_sigma;
+  double sum_sq_error = 0.0, sum_sq_sigma = 0.0;
+  sim::run_simulation(
+      world, *renderer_, opt,
+      [&](const sim::SimWindow& w) {
+        const LocalizedPose p = loc.on_window(w.window);
+        if (p.source == PoseSource::kNone || p.source == PoseSource::kLost) return;
+        const double e = position_error(p, w.truth);
+        const bool in = e <= 2.0 * p.sigma_xy_cm;
+        ++windows;
+        covered += in ? 1 : 0;
+        const bool outage = w.window.t_end_ms > kOutageFromMs && w.window.t_end_ms < kOutageToMs;
+        outage_windows += outage ? 1 : 0;
+        outage_covered += outage && in ? 1 : 0;
+        error_over_sigma.push_back(e / p.sigma_xy_cm);
+        sum_sq_error += e * e;
+        sum_sq_sigma += p.sigma_xy_cm * p.sigma_xy_cm;
+      },
+      [&](const sim::SimFrame& f) {
+        if (f.t_ms > kOutageFromMs && f.t_ms < kOutageToMs) return;
+        (void)loc.on_image(f.t_ms, f.bgr);
+      });
+  ASSERT_GT(windows, 1000);
+  ASSERT_GT(outage_windows, 250);
+  std::sort(error_over_sigma.begin(), error_over_sigma.end());
+  const double rms_error = std::sqrt(sum_sq_error / windows), rms_sigma = std::sqrt(sum_sq_sigma / windows);
+  std::printf("uncertainty: %d windows, true error within 2 sigma in %.1f %% (outage: %.1f %% of %d); "
+              "error / sigma median %.2f, p90 %.2f; RMS error %.2f cm, RMS sigma %.2f cm\n",
+              windows, 100.0 * covered / windows, 100.0 * outage_covered / outage_windows, outage_windows,
+              error_over_sigma[error_over_sigma.size() / 2], error_over_sigma[error_over_sigma.size() * 9 / 10],
+              rms_error, rms_sigma);
+  EXPECT_GE(covered, 0.9 * windows);
+  EXPECT_GE(outage_covered, 0.9 * outage_windows);
+  EXPECT_LT(rms_sigma, 3.0 * rms_error) << "a sigma that covers only by being far too large";
+}
+
 TEST_F(LocalizerSim, FramesWithNoMeasurementLeaveTheOdometryStanding) {
   sim::MotionLimits limits;
   sim::Trajectory tr("line", Pose2{300, 275, 0});

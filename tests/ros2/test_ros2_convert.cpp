@@ -42,9 +42,9 @@ TEST(Ros2Convert, QuaternionYawOfAnyQuaternion) {
 }
 
 TEST(Ros2Convert, PlanarCovarianceInMetresAndRadians) {
-  const auto c = planar_covariance(2.0, 0.5);  // 2 cm, 0.5 deg
-  EXPECT_DOUBLE_EQ(c[0], 0.0004);              // (0.02 m)^2
-  EXPECT_DOUBLE_EQ(c[7], 0.0004);
+  const auto c = planar_covariance(2.0, 0.5);  // 2 cm radial RMS, 0.5 deg
+  EXPECT_DOUBLE_EQ(c[0], 0.0002);              // (0.02 m)^2 / 2 per axis
+  EXPECT_DOUBLE_EQ(c[7], 0.0002);
   EXPECT_NEAR(c[35], std::pow(0.5 * 3.14159265358979 / 180.0, 2), 1e-15);
   for (int i = 0; i < 36; ++i)
     if (i != 0 && i != 7 && i != 35) EXPECT_EQ(c[static_cast<std::size_t>(i)], 0.0) << i;

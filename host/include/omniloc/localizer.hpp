@@ -71,7 +71,7 @@ struct LocalizerConfig {
   Refinement refinement = Refinement::kRayCast;  ///< kRayCast: E_TH judged at the refined position
   double min_range_cm = 10.0;      ///< local search at least this wide (0 would pin to one grid point)
   bool refuse_ambiguous = true;    ///< a global result flagged ambiguous is never accepted
-  double image_sigma_cm = 2.0;     ///< 1-sigma of a good image position (uncertainty model)
+  double image_sigma_cm = 2.0;     ///< a fix's position uncertainty when its match gives none (MatchResult::sigma_cm)
   double image_sigma_yaw_deg = 0.5;
   int lost_after_bad_frames = 30;  ///< this many bad results in a row -> lost (0.5 s at 60 Hz)
   double check_period_ms = 100.0;  ///< cross-check by global search at least this often while tracking
@@ -264,6 +264,7 @@ class Localizer {
     Pose2 pose;
     Pose2 odometry_at_t;  // odometry's pose at t_ms, to carry the anchor forward
     double error = kNoError;
+    double sigma_cm = 0.0;  // the fix's position uncertainty (radial RMS)
     /// The anchor moved by the odometry's field-frame displacement since t_ms; the heading is the
     /// odometry's (both follow the same gyro, so the displacement needs no rotation).
     [[nodiscard]] Pose2 carried_to(const Pose2& odometry_now) const;
@@ -307,7 +308,10 @@ class Localizer {
   [[nodiscard]] bool covered(double t_ms) const;
   [[nodiscard]] Pose2 odometry_pose_at(double t_ms, double* speed_cm_per_s, double* sigma_xy_cm) const;
   void reset_origin_at(double t_ms, const Pose2& pose, double sigma_xy_cm, double sigma_yaw_deg);
-  void set_anchor(double t_ms, const Pose2& pose, double error);
+  void set_anchor(double t_ms, const Pose2& pose, double error, double sigma_cm);
+  /// A fix's position uncertainty: the match's own (MatchResult::sigma_cm, from its error
+  /// surface), else the configured image_sigma_cm.
+  [[nodiscard]] double image_sigma_cm(const MatchResult& match) const;
   [[nodiscard]] double anchor_sigma_cm(const Pose2& odometry_now) const;
   [[nodiscard]] LocalizedPose make_pose(const EncoderWindow& window);
   void trim_history();

@@ -119,6 +119,12 @@ struct MatchResult {
   int cells_searched = 0;
   int refine_probes = 0;  // points refine_match evaluated
   int refine_casts = 0;   // full ray casts among them (each ~0.1 ms; the rest come from a linear model)
+  /// The position's uncertainty from the error surface's curvature at position_cm (refine_match
+  /// only, docs/LOCALIZER.md "Uncertainty"): the covariance in cm^2 and sigma_cm = sqrt(trace), the
+  /// radial RMS error it predicts. sigma_cm stays kNoError when it could not be computed (no
+  /// ray-cast refinement, too few crossings, or the crossings do not fix the position).
+  Eigen::Matrix2d covariance_cm2 = Eigen::Matrix2d::Zero();
+  double sigma_cm = kNoError;
 };
 
 /// Global search over all grid points.

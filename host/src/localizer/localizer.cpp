@@ -162,8 +162,9 @@ void Localizer::reset_origin_at(double t_ms, const Pose2& pose, double sigma_xy_
   odometry_ = o;
 }
 
-void Localizer::set_anchor(double t_ms, const Pose2& pose, double error) {
+void Localizer::set_anchor(double t_ms, const Pose2& pose, double error, double sigma_cm) {
   anchor_.valid = true;
+  anchor_.sigma_cm = sigma_cm;
   anchor_.t_ms = t_ms;
   anchor_.pose = pose;
   anchor_.odometry_at_t = odometry_pose_at(t_ms, nullptr, nullptr);
@@ -258,7 +259,7 @@ void Localizer::resync() {
 void Localizer::set_pose(const Pose2& pose, double sigma_xy_cm, double sigma_yaw_deg) {
   const double t_ms = history_.empty() ? 0.0 : history_.back().window.t_end_ms;
   reset_origin_at(t_ms, pose, sigma_xy_cm, sigma_yaw_deg);
-  set_anchor(t_ms, pose, kNoError);
+  set_anchor(t_ms, pose, kNoError, sigma_xy_cm);
   state_ = State::kTracking;
   bad_run_ = 0;
   disagree_run_ = 0;
@@ -399,9 +400,9 @@ void Localizer::accept(const Frame& frame, const MatchResult& local, FrameReport
         sigma_yaw = std::min(sigma_yaw, config_.image_sigma_yaw_deg);
       }
     }
-    reset_origin_at(frame.t_ms, pose, config_.image_sigma_cm, sigma_yaw);
+    reset_origin_at(frame.t_ms, pose, image_sigma_cm(local), sigma_yaw);
   }
-  set_anchor(frame.t_ms, pose, local.error);
+  set_anchor(frame.t_ms, pose, local.error, image_sigma_cm(local));
 }
 
 void Localizer::reject(FrameReport& rep) {
@@ -420,8 +421,8 @@ void Localizer::reject(FrameReport& rep) {
 
 void Localizer::relocalize(double t_ms, const SingleFrameResult& global, FrameReport& rep) {
   const Pose2 pose = global.pose;
-  reset_origin_at(t_ms, pose, config_.image_sigma_cm, config_.image_sigma_yaw_deg);
-  set_anchor(t_ms, pose, global.match.error);
+  reset_origin_at(t_ms, pose, image_sigma_cm(global.match), config_.image_sigma_yaw_deg);
+  set_anchor(t_ms, pose, global.match.error, image_sigma_cm(global.match));
   state_ = State::kTracking;
   bad_run_ = 0;
   disagree_run_ = 0;
@@ -470,7 +471,11 @@ std::optional<double> Localizer::corrected_yaw(double t_ms, const BearingScan& b
 
 double Localizer::anchor_sigma_cm(const Pose2& odometry_now) const {
   const double moved = distance_cm(odometry_now, anchor_.odometry_at_t);
-  return std::hypot(config_.image_sigma_cm, robot_.odometry_noise_fraction * moved);
+  return std::hypot(anchor_.sigma_cm, robot_.odometry_noise_fraction * moved);
+}
+
+double Localizer::image_sigma_cm(const MatchResult& match) const {
+  return std::isfinite(match.sigma_cm) ? match.sigma_cm : config_.image_sigma_cm;
 }
 
 LocalizedPose Localizer::make_pose(const EncoderWindow& window) {

@@ -47,10 +47,10 @@ std::optional<double> quaternion_yaw_deg(double x, double y, double z, double w)
 
 std::array<double, 36> planar_covariance(double sigma_xy_cm, double sigma_yaw_deg) {
   std::array<double, 36> c{};
-  const double s_m = sigma_xy_cm / 100.0;
+  const double s_m = sigma_xy_cm / 100.0;  // radial: each axis carries half its square
   const double s_rad = deg_to_rad(sigma_yaw_deg);
-  c[0 * 6 + 0] = s_m * s_m;
-  c[1 * 6 + 1] = s_m * s_m;
+  c[0 * 6 + 0] = s_m * s_m / 2.0;
+  c[1 * 6 + 1] = s_m * s_m / 2.0;
   c[5 * 6 + 5] = s_rad * s_rad;
   return c;
 }

@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include <Eigen/LU>
+
 #include "omniloc/conventions.hpp"
 
 namespace omniloc {
@@ -298,6 +300,74 @@ class LinearisedCaster {
 
   [[nodiscard]] const Eigen::Vector2d& centre() const { return centre_; }
 
+  /// The position's covariance at q from the error surface's curvature (Gauss-Newton) and the
+  /// residuals themselves: every scan crossing within cap_px of a modelled run entry gives a
+  /// residual r = d - entry(q) and the entry's gradient g (px per cm). H = sum g g^T is the
+  /// surface's curvature. Neighbouring rays cross the same line and share its error (blur, width,
+  /// the camera model), so the residuals are not independent: the covariance is the cluster-robust
+  /// (sandwich) form H^-1 (sum over sectors s_c s_c^T) H^-1, s_c = sum of g r over a sector of
+  /// kSectorRays rays, with r taken about the residuals' median (the integer rounding's constant
+  /// offset) and clipped at 3 robust spreads (a spurious crossing within the cap is not noise).
+  /// Rays the model does not hold (cast exactly) are left out. nullopt with fewer than
+  /// kMinCrossings crossings or a singular H.
+  [[nodiscard]] std::optional<Eigen::Matrix2d> covariance(const Eigen::Vector2d& q, const PreparedScan& scan,
+                                                          int cap_px) const {
+    const Eigen::Vector2d d = q - centre_;
+    struct Term {
+      int sector;
+      double r;
+      Eigen::Vector2d g;
+    };
+    std::vector<Term> terms;
+    Eigen::Matrix2d h = Eigen::Matrix2d::Zero();
+    for (int k = 0; k < kScanRays; ++k) {
+      if (exact_[static_cast<std::size_t>(k)]) continue;
+      for (int n = 0; n < kCrossingsPerRay; ++n) {
+        const auto slot = static_cast<std::size_t>(k * kCrossingsPerRay + n);
+        const int seen = scan.radii[slot];
+        if (seen == kNoCrossing || seen >= scan.end[slot]) continue;
+        double nearest = kNoError;
+        Eigen::Vector2d g{0.0, 0.0};
+        for (int i = first_[static_cast<std::size_t>(k)]; i < first_[static_cast<std::size_t>(k) + 1]; ++i) {
+          const Run& r = runs_[static_cast<std::size_t>(i)];
+          const double at = r.enter_px + r.enter_g.dot(d);
+          if (at < k0_ || at > k1_) continue;  // no entry the scan could see
+          if (std::abs(seen - at) < std::abs(nearest)) {
+            nearest = seen - at;
+            g = r.enter_g;
+          }
+        }
+        if (!(std::abs(nearest) <= cap_px)) continue;
+        terms.push_back({k / kSectorRays, nearest, g});
+        h += g * g.transpose();
+      }
+    }
+    if (static_cast<int>(terms.size()) < kMinCrossings || std::abs(h.determinant()) < 1e-12) return std::nullopt;
+    const auto median = [](std::vector<double> v) {
+      const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+      std::nth_element(v.begin(), mid, v.end());
+      return *mid;
+    };
+    std::vector<double> r;
+    for (const Term& t : terms) r.push_back(t.r);
+    const double centre = median(r);
+    for (double& x : r) x = std::abs(x - centre);
+    // Whole pixels against a continuous model: never less spread than rounding's 1/sqrt(12) px.
+    const double clip = 3.0 * std::max(1.4826 * median(r), 1.0 / std::sqrt(12.0));
+    std::array<Eigen::Vector2d, kScanRays / kSectorRays> score;
+    score.fill(Eigen::Vector2d::Zero());
+    for (const Term& t : terms) score[static_cast<std::size_t>(t.sector)] += t.g * std::clamp(t.r - centre, -clip, clip);
+    Eigen::Matrix2d b = Eigen::Matrix2d::Zero();
+    int sectors = 0;
+    for (const Eigen::Vector2d& s : score) {
+      b += s * s.transpose();
+      sectors += s.isZero() ? 0 : 1;
+    }
+    if (sectors < 3) return std::nullopt;
+    const Eigen::Matrix2d hi = h.inverse();
+    return static_cast<double>(sectors) / (sectors - 1) * hi * b * hi;
+  }
+
   /// The expected scan at q (kFeatureBytes radii).
   void features(const Eigen::Vector2d& q, std::uint8_t* out) {
     const Eigen::Vector2d d = q - centre_;
@@ -322,6 +392,8 @@ class LinearisedCaster {
 
  private:
   static constexpr double kStepCm = 1.0;
+  static constexpr int kMinCrossings = 8;
+  static constexpr int kSectorRays = 10;  // the sandwich's clusters: 10 degrees of rays
   struct Run {
     double enter_px = 0.0, exit_px = 0.0;
     Eigen::Vector2d enter_g{0.0, 0.0}, exit_g{0.0, 0.0};  // px per cm of the origin's shift
@@ -371,6 +443,15 @@ class ProbeErrors {
     return e;
   }
   [[nodiscard]] int probes() const { return static_cast<int>(seen_.size()); }
+  /// The linearised caster nearest the walk's end (re-centred there when it is farther than the
+  /// model holds), for the covariance at the end point.
+  [[nodiscard]] const LinearisedCaster& caster_at(const Eigen::Vector2d& q) {
+    if (!caster_ || (q - caster_->centre()).cwiseAbs().maxCoeff() > kRecentreCm) {
+      caster_.emplace(field_, camera_, q, offset_deg_);
+      ++casts_;
+    }
+    return *caster_;
+  }
   [[nodiscard]] int linearisations() const { return casts_; }
 
  private:
@@ -385,6 +466,17 @@ class ProbeErrors {
   int casts_ = 0;
 };
 
+}  // namespace
+
+namespace {
+// The crossings' share (from the error surface) plus the walk's own resolution: it ends on a
+// point within half its last step of the surface's minimum along each axis, uniformly as far as it
+// knows (the V fit below the step does better, so this is the conservative side).
+void set_covariance(MatchResult& r, const std::optional<Eigen::Matrix2d>& cov, double min_step_cm) {
+  if (!cov || !cov->allFinite()) return;
+  r.covariance_cm2 = *cov + (min_step_cm * min_step_cm / 12.0) * Eigen::Matrix2d::Identity();
+  r.sigma_cm = std::sqrt(std::max(r.covariance_cm2.trace(), 0.0));
+}
 }  // namespace
 
 void refine_match_previous(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, MatchResult& r,
@@ -449,6 +541,8 @@ void refine_match_previous(const FieldGeometry& field, const CameraModel& camera
     r.position_cm = start;
     r.refined_error = start_error;
   }
+  set_covariance(r, error_of.caster_at(r.position_cm).covariance(r.position_cm, scan.prepared, opt.crossing_cap_px),
+                 opt.refine_min_step_cm);
 }
 
 void refine_match(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, MatchResult& r,
