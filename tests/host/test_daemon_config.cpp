@@ -137,9 +137,9 @@ TEST(DaemonConfig, BadFilesNameTheFileAndTheField) {
                           {R"({"camera_fps": NaN})", "camera_fps", "not valid JSON"},
                           {R"({"duration_s": Infinity})", "duration_s", "not valid JSON"},
                           {R"({"duration_s": 1e400})", "duration_s", "number out of range: beyond a double (got 1e400)"},
-                          {R"({"udp_port": 70000})", "udp_port", "must be in [1, 65535] (got 70000)"},
+                          {R"({"udp_port": 70000})", "udp_port", "out of range: must be in [1, 65535] (got 70000)"},
                           {R"({"udp_port": 1e10})", "udp_port", "must be an integer"},
-                          {R"({"udp_port": 99999999999})", "udp_port", "out of range"},
+                          {R"({"udp_port": 99999999999})", "udp_port", "out of range: must be in [1, 65535] (got 99999999999)"},
                           {R"({"udp_address": "localhost"})", "udp_address", "dotted IPv4 address (got \"localhost\")"},
                           {R"({"publish_hz": 50})", "publish_hz", "must be 100"},
                           {R"({"camera_timeout_ms": 0})", "camera_timeout_ms", "[10, 60000] (got 0)"},
@@ -216,7 +216,7 @@ TEST(DaemonConfig, BadFlagsAreRefusedWithTheFlagNamed) {
   EXPECT_EQ(flag_error({"--udp-port", "abc"}), "command line:udp_port: must be a number (got \"abc\")");
   EXPECT_EQ(flag_error({"--udp-port=5600.5"}).rfind("command line:udp_port: must be an integer", 0), 0u);
   EXPECT_EQ(flag_error({"--camera-fps", "nan"}), "command line:camera_fps: must be a number (got \"nan\")");
-  EXPECT_EQ(flag_error({"--udp-port", "0"}), "command line:udp_port: must be in [1, 65535] (got 0)");
+  EXPECT_EQ(flag_error({"--udp-port", "0"}), "command line:udp_port: out of range: must be in [1, 65535] (got 0)");
   // What is not an option of the table is refused by the parser, naming it.
   for (const auto& [args, named] : std::vector<std::pair<std::vector<std::string>, std::string>>{
            {{"--no-such-key", "1"}, "--no-such-key"}, {{"--board", "sim"}, "--board"}, {{"stray"}, "stray"},

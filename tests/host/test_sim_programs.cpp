@@ -429,7 +429,7 @@ TEST(Programs, VersionAndKeyEqualsValue) {
   EXPECT_EQ(run(std::string(OMNILOCD_SIM_PATH) + " --seed=abc", dir.path / "v.log", out), 2) << out;
   EXPECT_NE(out.find("--seed: must be an integer"), std::string::npos) << out;
   EXPECT_EQ(run(std::string(OMNILOCD_SIM_PATH) + " --udp-port=0", dir.path / "v.log", out), 2) << out;
-  EXPECT_NE(out.find("udp_port: must be in [1, 65535] (got 0)"), std::string::npos) << out;
+  EXPECT_NE(out.find("udp_port: out of range: must be in [1, 65535] (got 0)"), std::string::npos) << out;
 }
 
 // Issue 16.7 / 17.3: every number on the command lines of omniloc and omniloc-sim (and omnilocd-sim's

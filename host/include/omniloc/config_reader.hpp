@@ -222,6 +222,18 @@ Key<T> key(std::string name, M T::*member, Need need = Need::kOptional, std::str
                 std::move(help)};
 }
 
+/// An integer key with its own range [lo, hi]: a value outside it (also one beyond the member's
+/// type) is refused as "out of range: must be in [lo, hi]", not with the type's limits.
+template <class T, class M>
+  requires(std::is_integral_v<M> && !std::is_same_v<M, bool>)
+Key<T> ranged(std::string name, M T::*member, std::int64_t lo, std::int64_t hi, Need need = Need::kOptional,
+              std::string help = {}) {
+  return Key<T>{std::move(name), need, Kind::kNumber,
+                [member, lo, hi](const Node& n, T& out) { out.*member = static_cast<M>(n.integer(lo, hi)); },
+                [member](const T& in) -> std::optional<Json> { return Codec<M>::write(in.*member); },
+                std::move(help)};
+}
+
 /// A key whose value is one of a few names (an enum member, or a restricted string).
 template <class T, class M>
 Key<T> choice(std::string name, M T::*member, Choices<M> choices, Need need = Need::kOptional, std::string help = {}) {

@@ -31,7 +31,7 @@ const config::KeyTable<DaemonConfig>& daemon_config_keys() {
       key("database", &D::database, opt, "feature database file; empty: build at start-up"),
       key("grid_step_cm", &D::grid_step_cm, opt, "grid step of a database built at start-up"),
       key("udp_address", &D::udp_address, opt, "IPv4 address the poses are sent to"),
-      key("udp_port", &D::udp_port, opt, "UDP port the poses are sent to"),
+      config::ranged("udp_port", &D::udp_port, 1, 65535, opt, "UDP port the poses are sent to"),
       key("publish_hz", &D::publish_hz, opt, "pose rate (the board window rate, 100)"),
       key("control_port", &D::control_port, opt, "UDP port of the control channel on 127.0.0.1; 0: off"),
       key("record_dir", &D::record_dir, opt, "record the session here (a new or empty directory); empty: no recording"),
