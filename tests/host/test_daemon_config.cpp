@@ -20,7 +20,7 @@ using test::error_of;
 // Every key of DaemonConfig, written down here by hand (not taken from the reader's table).
 const std::vector<std::string> kEveryKey = {
     "board_serial", "reconnect_period_ms", "camera",     "camera_fps",  "camera_timeout_ms", "field",
-    "camera_model", "robot",               "localizer",  "database",    "grid_step_cm",      "udp_address",
+    "camera_model", "robot",               "localizer",  "database",    "grid_step_cm",      "side",  "udp_address",
     "udp_port",     "control_port",        "publish_hz",          "record_dir", "record_overwrite", "record_format",
     "status_period_s", "log_level", "duration_s", "ros2_domain_id", "ros2_namespace", "ros2_frame_id",
     "http_port", "http_address"};
@@ -38,6 +38,7 @@ const std::string kEveryKeyJson = R"({
   "localizer": "loc/l.json",
   "database": "/var/db.bin",
   "grid_step_cm": 20,
+  "side": "yellow",
   "udp_address": "192.168.1.20",
   "udp_port": 6001,
   "control_port": 6101,
@@ -87,6 +88,7 @@ TEST(DaemonConfig, EveryKeyReachesItsMember) {
   EXPECT_EQ(c.record_dir, "/data/run1");
   EXPECT_TRUE(c.record_overwrite);
   EXPECT_EQ(c.record_format, "png");
+  EXPECT_EQ(c.side, "yellow");
   EXPECT_EQ(c.status_period_s, 2.5);
   EXPECT_EQ(c.duration_s, 12.0);
   EXPECT_EQ(c.control_port, 6101);

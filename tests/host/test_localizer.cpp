@@ -371,6 +371,60 @@ TEST_F(LocalizerSim, RefusesAmbiguousMatchesWithoutAHeading) {
   EXPECT_EQ(a.on_window(w).source, PoseSource::kNone);
 }
 
+TEST_F(LocalizerSim, TheSideGivenDecidesTheTwinAtKickOff) {
+  // Issue 15.2: without a heading the point-symmetric field cannot tell p from its twin; the team's
+  // side (the colour of the goal it defends) and the kick-off rule (own half, facing the opponent's
+  // goal) can. Goals: yellow at x = max, so blue is defended from the x < centre half.
+  FieldGeometry field = renderer_->field();
+  field.goal.colour_at_x_max = GoalColour::kYellow;
+  LocalizerConfig cfg;
+  cfg.gyro_yaw_known = false;
+  const auto first_fix = [&](const Pose2& truth, std::optional<GoalColour> side) {
+    Localizer loc(cfg, robot_, field, renderer_->camera(), *db_);
+    if (side) loc.set_side(*side);
+    EncoderWindow w;
+    w.t_end_ms = 10.0;
+    (void)loc.on_window(w);
+    const FrameReport r = loc.on_image(5.0, renderer_->render(truth, sim::RenderOptions{}));
+    w.t_end_ms = 20.0;
+    w.seq = 1;
+    const LocalizedPose p = loc.on_window(w);
+    std::printf("truth (%.0f, %.0f, %.0f), side %s: %s, pose (%.1f, %.1f, %.1f), decided by side %d\n", truth.x_cm,
+                truth.y_cm, truth.yaw_deg, side ? goal_colour_name(*side) : "none", frame_outcome_name(r.outcome),
+                p.pose.x_cm, p.pose.y_cm, p.pose.yaw_deg, loc.stats().decided_by_side);
+    return std::make_pair(r.outcome, p);
+  };
+  // In the blue half, facing the yellow goal, away from the centre: the twin stands in the other half.
+  const Pose2 truth{250, 200, 30};
+  EXPECT_EQ(first_fix(truth, std::nullopt).first, FrameOutcome::kAmbiguous);
+  const auto [blue_outcome, blue] = first_fix(truth, GoalColour::kBlue);
+  EXPECT_EQ(blue_outcome, FrameOutcome::kRelocalized);
+  EXPECT_LT(position_error(blue, truth), 3.0);
+  EXPECT_LT(std::abs(angle_diff_deg(blue.pose.yaw_deg, truth.yaw_deg)), 2.0);
+  // The other side picks the twin: the rule, not the image, decided (a wrong side is a wrong pose).
+  const auto [yellow_outcome, yellow] = first_fix(truth, GoalColour::kYellow);
+  EXPECT_EQ(yellow_outcome, FrameOutcome::kRelocalized);
+  const Eigen::Vector2d twin = 2.0 * field.centre_cm() - truth.position_cm();
+  EXPECT_LT((yellow.pose.position_cm() - twin).norm(), 3.0);
+  // On the centre spot the position is known and the heading only up to 180 deg: the robot faces
+  // the opponent's goal.
+  const Pose2 centre{field.centre_cm().x(), field.centre_cm().y(), 10};
+  const auto [c_blue_outcome, c_blue] = first_fix(centre, GoalColour::kBlue);
+  EXPECT_EQ(c_blue_outcome, FrameOutcome::kRelocalized);
+  EXPECT_LT(std::abs(angle_diff_deg(c_blue.pose.yaw_deg, 10.0)), 2.0);
+  const auto [c_yellow_outcome, c_yellow] = first_fix(centre, GoalColour::kYellow);
+  EXPECT_EQ(c_yellow_outcome, FrameOutcome::kRelocalized);
+  EXPECT_LT(std::abs(angle_diff_deg(c_yellow.pose.yaw_deg, 190.0)), 2.0);
+  // A field and camera that do not say which goal is which colour: refused, saying what is missing.
+  Localizer unknown(cfg, robot_, renderer_->field(), renderer_->camera(), *db_);
+  try {
+    unknown.set_side(GoalColour::kBlue);
+    ADD_FAILURE() << "set_side accepted a field without goal colours";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("colour_at_x_max"), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(LocalizerSim, WindowsMustMoveForwardInTime) {
   Localizer loc(LocalizerConfig{}, robot_, renderer_->field(), renderer_->camera(), *db_, Pose2{300, 275, 0});
   EncoderWindow w;

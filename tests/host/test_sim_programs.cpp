@@ -298,6 +298,10 @@ TEST(OmnilocdSim, ControlChannelServesCommandsWhileThePosesFlow) {
   EXPECT_NE(out.find("is not on the carpet of field 'fira-robosot'"), std::string::npos) << out;
   EXPECT_EQ(ctl("set_pose abc 0 0"), 2) << out;
   EXPECT_NE(out.find("X_CM"), std::string::npos) << out;
+  // set_side needs to know which goal is which colour: the shipped field and camera do not say.
+  EXPECT_EQ(ctl("set_side blue"), 1) << out;
+  EXPECT_NE(out.find("set_side: side: field 'fira-robosot' does not say which goal is which colour"), std::string::npos)
+      << out;
 
   // Raw requests the client would never send.
   const std::vector<std::pair<std::string, std::string>> bad = {

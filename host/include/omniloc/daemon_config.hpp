@@ -31,6 +31,7 @@ struct DaemonConfig {
   std::string localizer = "default";   ///< common/localizer/<name>.json or a path
   std::string database;                ///< feature DB file; empty: built in memory at start-up
   double grid_step_cm = 10.0;          ///< grid of a database built at start-up
+  std::string side = "unknown";        ///< the defended goal's colour: "blue", "yellow" or "unknown" (Localizer::set_side)
   // --- output ---
   std::string udp_address = "127.0.0.1";  ///< IPv4 address of the pose consumer
   int udp_port = 5600;

@@ -198,6 +198,7 @@ struct LocalizerStats {
   int origin_resets = 0;
   int lost_events = 0;
   int yaw_corrections = 0;
+  int decided_by_side = 0;  ///< ambiguous global results decided by the kick-off rule (set_side)
 };
 
 class Localizer {
@@ -235,6 +236,15 @@ class Localizer {
   /// Forgets the fix (the control channel's relocalize): lost, so the next usable frame makes a
   /// global search; the odometry goes on meanwhile.
   void force_global_search();
+  /// The team's side (the control channel's set_side, the daemon's `side` key): the colour of the
+  /// goal it defends. Until the next fix, a global result the lines cannot tell from its twin (the
+  /// point-symmetric field without a heading) is decided by the kick-off rule: the robot stands in
+  /// its own half, facing the opponent's goal (docs/LOCALIZER.md, "Side"). Throws
+  /// std::invalid_argument when neither the field nor the camera's vision block says which goal is
+  /// which colour (goal_colour_at_x_max), or for GoalColour::kUnknown.
+  void set_side(GoalColour defended);
+  /// The side given, if any.
+  [[nodiscard]] std::optional<GoalColour> side() const { return side_; }
 
   /// The pose at the last window (source kNone before any).
   [[nodiscard]] const LocalizedPose& pose() const { return last_pose_; }
@@ -328,6 +338,11 @@ class Localizer {
   const FeatureDb& db_;
   MatchOptions match_options_;
   GoalColourModels goal_colours_;
+  std::optional<GoalColour> side_;  ///< the defended goal's colour (set_side)
+  bool kickoff_pending_ = false;     ///< set_side given and no fix since: the kick-off rule applies
+  /// The candidate of an ambiguous global result that the kick-off rule picks, as an accepted
+  /// result; nullopt when the rule does not apply or cannot decide.
+  [[nodiscard]] std::optional<SingleFrameResult> choose_by_side(const SingleFrameResult& global) const;
   Odometry odometry_;
   LineExtractor extractor_;  ///< on_image(): this camera's line extraction (adapts frame to frame)
   std::deque<HistoryEntry> history_;

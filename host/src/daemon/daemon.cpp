@@ -66,6 +66,13 @@ struct Daemon::Impl {
         localizer(localizer_config(c, m, io), m.robot, m.field, m.camera, m.db, m.initial_pose) {
     if (!io.clock || !io.open_board || !io.heading)
       throw std::invalid_argument("Daemon: clock, open_board and heading are required");
+    if (config.side != "unknown") {
+      try {
+        localizer.set_side(config.side == "blue" ? GoalColour::kBlue : GoalColour::kYellow);
+      } catch (const std::invalid_argument& e) {
+        throw ConfigError(e.what());
+      }
+    }
     if (!config.record_dir.empty()) start_recording(config.record_dir, config.record_overwrite);
     if (config.control_port > 0) {
       try {
@@ -303,8 +310,15 @@ struct Daemon::Impl {
           json(pose.yaw_deg).dump() + " deg");
       return {{"x_cm", pose.x_cm}, {"y_cm", pose.y_cm}, {"yaw_deg", pose.yaw_deg}, {"last_seq", seq}};
     }
-    if (std::holds_alternative<control::SetSide>(command))
-      throw fail("not supported yet: the daemon has no notion of the team's side (issue 15.2)");
+    if (const auto* s = std::get_if<control::SetSide>(&command)) {
+      try {
+        localizer.set_side(s->side == "blue" ? GoalColour::kBlue : GoalColour::kYellow);
+      } catch (const std::invalid_argument& e) {
+        throw fail(e.what());
+      }
+      io.logger.info("side set by command: defending the " + s->side + " goal (decides the first fix's twin)");
+      return {{"side", s->side}, {"has_fix", localizer.has_fix()}, {"last_seq", seq}};
+    }
     if (std::holds_alternative<control::Relocalize>(command)) {
       localizer.force_global_search();
       io.logger.info("relocalizing by command: global search on the next frames");

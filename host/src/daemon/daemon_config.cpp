@@ -30,6 +30,8 @@ const config::KeyTable<DaemonConfig>& daemon_config_keys() {
       key("localizer", &D::localizer, opt, "localizer config name or path"),
       key("database", &D::database, opt, "feature database file; empty: build at start-up"),
       key("grid_step_cm", &D::grid_step_cm, opt, "grid step of a database built at start-up"),
+      config::choice<D, std::string>("side", &D::side, {{"unknown", "unknown"}, {"blue", "blue"}, {"yellow", "yellow"}},
+                                     opt, "the colour of the goal the team defends: blue | yellow | unknown"),
       key("udp_address", &D::udp_address, opt, "IPv4 address the poses are sent to"),
       config::ranged("udp_port", &D::udp_port, 1, 65535, opt, "UDP port the poses are sent to"),
       key("publish_hz", &D::publish_hz, opt, "pose rate (the board window rate, 100)"),

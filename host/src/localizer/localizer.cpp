@@ -260,6 +260,7 @@ void Localizer::set_pose(const Pose2& pose, double sigma_xy_cm, double sigma_yaw
   const double t_ms = history_.empty() ? 0.0 : history_.back().window.t_end_ms;
   reset_origin_at(t_ms, pose, sigma_xy_cm, sigma_yaw_deg);
   set_anchor(t_ms, pose, kNoError, sigma_xy_cm);
+  kickoff_pending_ = false;
   state_ = State::kTracking;
   bad_run_ = 0;
   disagree_run_ = 0;
@@ -267,6 +268,46 @@ void Localizer::set_pose(const Pose2& pose, double sigma_xy_cm, double sigma_yaw
   last_pose_.pose = odometry_.estimate().pose;
   last_pose_.sigma_xy_cm = sigma_xy_cm;
   last_pose_.sigma_yaw_deg = sigma_yaw_deg;
+}
+
+void Localizer::set_side(GoalColour defended) {
+  if (defended == GoalColour::kUnknown) throw std::invalid_argument("side: must be blue or yellow");
+  if (goal_colour_at_x_max(field_, goal_colours_) == GoalColour::kUnknown)
+    throw std::invalid_argument("side: field '" + field_.name +
+                                "' does not say which goal is which colour (goal.colour_at_x_max in the field file, or "
+                                "goal_colour_at_x_max in the camera's vision block from omniloc calibrate)");
+  side_ = defended;
+  kickoff_pending_ = true;
+}
+
+std::optional<SingleFrameResult> Localizer::choose_by_side(const SingleFrameResult& g) const {
+  if (!side_ || !kickoff_pending_ || !(g.match.error < config_.e_th)) return std::nullopt;
+  // The defended goal at the x = max end: the own half is x > centre and the opponent's goal,
+  // which the robot faces at kick-off, lies towards -x.
+  const bool own_half_x_max = goal_colour_at_x_max(field_, goal_colours_) == *side_;
+  const double centre_x = field_.centre_cm().x();
+  const auto in_own_half = [&](const Pose2& p) { return own_half_x_max ? p.x_cm > centre_x : p.x_cm < centre_x; };
+  const auto facing_opponent = [&](const Pose2& p) {
+    return std::cos(deg_to_rad(p.yaw_deg)) * (own_half_x_max ? -1.0 : 1.0) > 0.0;
+  };
+  SingleFrameResult chosen = g;
+  chosen.accepted = true;
+  chosen.ambiguous = chosen.heading_ambiguous = chosen.lines_ambiguous = false;
+  chosen.twin.reset();
+  if (g.heading_ambiguous) {  // near the centre spot: the position is known, the heading up to 180 deg
+    if (!facing_opponent(g.pose)) chosen.pose.yaw_deg = wrap_deg(g.pose.yaw_deg + 180.0);
+    return chosen;
+  }
+  if (!g.ambiguous || !g.twin || !(g.twin_error < config_.e_th)) return std::nullopt;
+  const bool first = in_own_half(g.pose), second = in_own_half(*g.twin);
+  if (first == second) return std::nullopt;  // both on one side of the centre line: the rule cannot tell
+  if (second) {
+    chosen.pose = *g.twin;
+    chosen.match.position_cm = g.twin->position_cm();
+    chosen.match.error = g.twin_error;
+    chosen.match.sigma_cm = kNoError;  // the refinement's uncertainty was the other candidate's
+  }
+  return chosen;
 }
 
 void Localizer::force_global_search() {
@@ -325,6 +366,10 @@ void Localizer::search(const Frame& frame, FrameReport& rep) {
   // Without a heading, one known only up to 180 deg would turn every wheel displacement around.
   if (g.accepted && !(g.heading_ambiguous && config_.refuse_ambiguous)) {
     relocalize(frame.t_ms, g, rep);
+  } else if (const std::optional<SingleFrameResult> by_side = choose_by_side(g)) {
+    ++stats_.decided_by_side;
+    note_global(rep, *by_side);
+    relocalize(frame.t_ms, *by_side, rep);
   } else if (good) {
     rep.outcome = FrameOutcome::kAmbiguous;
     ++stats_.ambiguous;
@@ -430,6 +475,7 @@ void Localizer::relocalize(double t_ms, const SingleFrameResult& global, FrameRe
   applied_this_window_ = true;
   last_image_ms_ = t_ms;
   ++stats_.relocalizations;
+  kickoff_pending_ = false;  // the kick-off rule has served (or was not needed)
   rep.outcome = FrameOutcome::kRelocalized;
 }
 
