@@ -9,7 +9,9 @@
 // Streaming: with stream_en_i, each captured window (win_valid_i) is sent as one TELEMETRY frame
 // as soon as the transmitter is free, between responses, and acknowledged with win_consumed_o.
 // Every body field is placed at its offset in the generated layout (OMNILOC_BODY_*_LSB / _W of
-// common/regmap.json "frames.layouts"); frame_tx sends body byte k from bits [8k+7:8k].
+// common/regmap.json "frames.layouts"); frame_tx reads body byte k (bits [8k+7:8k]) through
+// tx_idx_i / tx_byte_o while it sends, so the body is held, and no request or window is taken,
+// until frame_tx is idle again (tx_ready_i).
 // Assumptions: the register bus acks every access within a bounded time (encoder_regs: 1 cycle).
 `resetall
 `timescale 1ns / 1ps
@@ -17,7 +19,8 @@
 `include "omniloc_regs.vh"
 
 module link_engine #(
-    parameter integer BODY_BYTES = `OMNILOC_FRAME_TELEMETRY_BODY_BYTES
+    parameter integer BODY_BYTES = `OMNILOC_FRAME_TELEMETRY_BODY_BYTES,
+    parameter integer IDX_W = $clog2(BODY_BYTES + 1)
 ) (
     input  wire                    clk_i,
     input  wire                    rst_i,
@@ -33,7 +36,8 @@ module link_engine #(
     input  wire                    tx_ready_i,
     output reg  [7:0]              tx_type_o,
     output reg  [7:0]              tx_body_len_o,
-    output reg  [8*BODY_BYTES-1:0] tx_body_o,
+    input  wire [IDX_W-1:0]        tx_idx_i,
+    output wire [7:0]              tx_byte_o,
     // register bus master
     output reg  [`OMNILOC_ADDR_W-1:0] reg_addr_o,
     output reg                     reg_rd_o,
@@ -65,6 +69,16 @@ module link_engine #(
     reg [7:0]        req_code_q;
     reg [ADDR_W-1:0] req_addr_q;
     reg [2:0]        snap_step_q;
+    reg [8*BODY_BYTES-1:0] body_q;
+
+    // Body byte tx_idx_i (an index past the body reads as 0).
+    wire [8*BODY_BYTES+7:0] body_ext = {8'd0, body_q};
+    localparam [IDX_W-1:0] LAST_IDX = BODY_BYTES[IDX_W-1:0];
+    assign tx_byte_o = (tx_idx_i < LAST_IDX) ? body_ext[8*tx_idx_i +: 8] : 8'd0;
+    // frame_tx has or is sending the body: registered (a cycle late when it ends, never when it
+    // starts, since tx_start_o itself counts), so that no ready depends on tx_ready_i in the same cycle.
+    reg  tx_busy_q;
+    wire tx_busy = tx_start_o || tx_busy_q;
 
     // Field slots of the body layouts.
     localparam integer W_SEQ   = `OMNILOC_BODY_WINDOW_SEQ_LSB;
@@ -89,7 +103,7 @@ module link_engine #(
     endfunction
 
     // tx_start_o is a valid held until frame_tx takes the frame (tx_ready_i); the body stays stable.
-    assign ev_ready_o = (state_q == S_IDLE) && !tx_start_o && !tele_pending_q;
+    assign ev_ready_o = (state_q == S_IDLE) && !tx_busy && !tele_pending_q;
 
     // Snapshot read order; the body slot of each read follows the SNAPSHOT_RESP layout.
     function [ADDR_W-1:0] snap_addr(input [2:0] step);
@@ -121,13 +135,13 @@ module link_engine #(
         if (rst_i) begin
             state_q        <= S_IDLE;
             tele_pending_q <= 1'b0;
+            tx_busy_q      <= 1'b1;
             req_code_q     <= 8'd0;
             req_addr_q     <= {ADDR_W{1'b0}};
             snap_step_q    <= 3'd0;
             tx_start_o     <= 1'b0;
             tx_type_o      <= 8'd0;
             tx_body_len_o  <= 8'd0;
-            tx_body_o      <= {8*BODY_BYTES{1'b0}};
             reg_addr_o     <= {ADDR_W{1'b0}};
             reg_rd_o       <= 1'b0;
             reg_wr_o       <= 1'b0;
@@ -135,6 +149,7 @@ module link_engine #(
             win_consumed_o <= 1'b0;
         end else begin
             if (tx_start_o && tx_ready_i) tx_start_o <= 1'b0;
+            tx_busy_q      <= tx_start_o || !tx_ready_i;
             reg_rd_o       <= 1'b0;
             reg_wr_o       <= 1'b0;
             win_consumed_o <= 1'b0;
@@ -142,23 +157,23 @@ module link_engine #(
 
             case (state_q)
                 S_IDLE: begin
-                    if (tx_start_o) begin
-                        // wait until frame_tx has taken the previous frame
+                    if (tx_busy) begin
+                        // wait until frame_tx has sent the previous frame
                     end else if (tele_pending_q && !win_valid_i) begin
                         // Telemetry goes first: it is the time-critical traffic.
                         tele_pending_q <= 1'b0;
                         win_consumed_o <= 1'b1;
                         tx_type_o      <= `OMNILOC_FRAME_TELEMETRY;
                         tx_body_len_o  <= `OMNILOC_FRAME_TELEMETRY_BODY_BYTES;
-                        tx_body_o      <= window_body(win_seq_i, win_timestamp_i, win_count_i, win_dir_i, status_i);
+                        body_q      <= window_body(win_seq_i, win_timestamp_i, win_count_i, win_dir_i, status_i);
                         tx_start_o     <= 1'b1;
                     end else if (ev_valid_i) begin
                         req_code_q <= ev_code_i;
                         req_addr_q <= ev_addr_i;
-                        tx_body_o  <= {8*BODY_BYTES{1'b0}};
+                        body_q  <= {8*BODY_BYTES{1'b0}};
                         if (ev_error_i) begin
-                            tx_body_o[`OMNILOC_BODY_ERROR_CODE_LSB +: `OMNILOC_BODY_ERROR_CODE_W] <= ev_code_i;
-                            tx_body_o[`OMNILOC_BODY_ERROR_DETAIL_LSB +: `OMNILOC_BODY_ERROR_DETAIL_W] <= ev_addr_i;
+                            body_q[`OMNILOC_BODY_ERROR_CODE_LSB +: `OMNILOC_BODY_ERROR_CODE_W] <= ev_code_i;
+                            body_q[`OMNILOC_BODY_ERROR_DETAIL_LSB +: `OMNILOC_BODY_ERROR_DETAIL_W] <= ev_addr_i;
                             send(`OMNILOC_FRAME_ERROR, `OMNILOC_FRAME_ERROR_BODY_BYTES);
                         end else if (ev_code_i == `OMNILOC_FRAME_SNAPSHOT_REQ) begin
                             snap_step_q <= 3'd0;
@@ -176,29 +191,29 @@ module link_engine #(
                 end
                 S_BUS: if (reg_ack_i) begin
                     if (reg_err_i) begin
-                        tx_body_o[`OMNILOC_BODY_ERROR_CODE_LSB +: `OMNILOC_BODY_ERROR_CODE_W] <= bus_err_code;
-                        tx_body_o[`OMNILOC_BODY_ERROR_DETAIL_LSB +: `OMNILOC_BODY_ERROR_DETAIL_W] <= req_addr_q;
+                        body_q[`OMNILOC_BODY_ERROR_CODE_LSB +: `OMNILOC_BODY_ERROR_CODE_W] <= bus_err_code;
+                        body_q[`OMNILOC_BODY_ERROR_DETAIL_LSB +: `OMNILOC_BODY_ERROR_DETAIL_W] <= req_addr_q;
                         send(`OMNILOC_FRAME_ERROR, `OMNILOC_FRAME_ERROR_BODY_BYTES);
                     end else if (req_code_q == `OMNILOC_FRAME_READ_REQ) begin
-                        tx_body_o[`OMNILOC_BODY_REG_VALUE_ADDR_LSB +: `OMNILOC_BODY_REG_VALUE_ADDR_W] <= req_addr_q;
-                        tx_body_o[`OMNILOC_BODY_REG_VALUE_DATA_LSB +: `OMNILOC_BODY_REG_VALUE_DATA_W] <= reg_rdata_i;
+                        body_q[`OMNILOC_BODY_REG_VALUE_ADDR_LSB +: `OMNILOC_BODY_REG_VALUE_ADDR_W] <= req_addr_q;
+                        body_q[`OMNILOC_BODY_REG_VALUE_DATA_LSB +: `OMNILOC_BODY_REG_VALUE_DATA_W] <= reg_rdata_i;
                         send(`OMNILOC_FRAME_READ_RESP, `OMNILOC_FRAME_READ_RESP_BODY_BYTES);
                     end else begin
-                        tx_body_o[`OMNILOC_BODY_REG_ADDR_ADDR_LSB +: `OMNILOC_BODY_REG_ADDR_ADDR_W] <= req_addr_q;
+                        body_q[`OMNILOC_BODY_REG_ADDR_ADDR_LSB +: `OMNILOC_BODY_REG_ADDR_ADDR_W] <= req_addr_q;
                         send(`OMNILOC_FRAME_WRITE_ACK, `OMNILOC_FRAME_WRITE_ACK_BODY_BYTES);
                     end
                 end
                 S_SNAP: if (reg_ack_i) begin
                     // Each read goes to its field of the WINDOW layout (same order as snap_addr).
                     case (snap_step_q)
-                        3'd0:    tx_body_o[W_SEQ +: `OMNILOC_BODY_WINDOW_SEQ_W] <= reg_rdata_i;
-                        3'd1:    tx_body_o[W_TS +: `OMNILOC_BODY_WINDOW_TIMESTAMP_CYCLES_W] <= reg_rdata_i;
-                        3'd2:    tx_body_o[W_COUNT + 0 * `OMNILOC_BODY_WINDOW_COUNT_W +: `OMNILOC_BODY_WINDOW_COUNT_W] <= reg_rdata_i;
-                        3'd3:    tx_body_o[W_COUNT + 1 * `OMNILOC_BODY_WINDOW_COUNT_W +: `OMNILOC_BODY_WINDOW_COUNT_W] <= reg_rdata_i;
-                        3'd4:    tx_body_o[W_COUNT + 2 * `OMNILOC_BODY_WINDOW_COUNT_W +: `OMNILOC_BODY_WINDOW_COUNT_W] <= reg_rdata_i;
-                        3'd5:    tx_body_o[W_COUNT + 3 * `OMNILOC_BODY_WINDOW_COUNT_W +: `OMNILOC_BODY_WINDOW_COUNT_W] <= reg_rdata_i;
-                        3'd6:    tx_body_o[W_DIR +: DIR_W] <= reg_rdata_i[DIR_W-1:0];
-                        default: tx_body_o[W_STAT +: `OMNILOC_BODY_WINDOW_STATUS_W] <= reg_rdata_i[`OMNILOC_BODY_WINDOW_STATUS_W-1:0];
+                        3'd0:    body_q[W_SEQ +: `OMNILOC_BODY_WINDOW_SEQ_W] <= reg_rdata_i;
+                        3'd1:    body_q[W_TS +: `OMNILOC_BODY_WINDOW_TIMESTAMP_CYCLES_W] <= reg_rdata_i;
+                        3'd2:    body_q[W_COUNT + 0 * `OMNILOC_BODY_WINDOW_COUNT_W +: `OMNILOC_BODY_WINDOW_COUNT_W] <= reg_rdata_i;
+                        3'd3:    body_q[W_COUNT + 1 * `OMNILOC_BODY_WINDOW_COUNT_W +: `OMNILOC_BODY_WINDOW_COUNT_W] <= reg_rdata_i;
+                        3'd4:    body_q[W_COUNT + 2 * `OMNILOC_BODY_WINDOW_COUNT_W +: `OMNILOC_BODY_WINDOW_COUNT_W] <= reg_rdata_i;
+                        3'd5:    body_q[W_COUNT + 3 * `OMNILOC_BODY_WINDOW_COUNT_W +: `OMNILOC_BODY_WINDOW_COUNT_W] <= reg_rdata_i;
+                        3'd6:    body_q[W_DIR +: DIR_W] <= reg_rdata_i[DIR_W-1:0];
+                        default: body_q[W_STAT +: `OMNILOC_BODY_WINDOW_STATUS_W] <= reg_rdata_i[`OMNILOC_BODY_WINDOW_STATUS_W-1:0];
                     endcase
                     if (snap_step_q == 3'd7) begin
                         send(`OMNILOC_FRAME_SNAPSHOT_RESP, `OMNILOC_FRAME_SNAPSHOT_RESP_BODY_BYTES);

@@ -61,10 +61,13 @@ module omniloc_top #(
     localparam integer BODY_BYTES = `OMNILOC_FRAME_TELEMETRY_BODY_BYTES;
     wire                    ftx_start, ftx_ready;
     wire [7:0]              ftx_type, ftx_len;
-    wire [8*BODY_BYTES-1:0] ftx_body;
+    localparam integer IDX_W = $clog2(BODY_BYTES + 1);
+    wire [IDX_W-1:0]        ftx_idx;
+    wire [7:0]              ftx_byte;
     frame_tx #(.MAX_BODY_BYTES(BODY_BYTES)) u_frame_tx (
         .clk_i(clk_i), .rst_i(rst_i),
-        .start_i(ftx_start), .ready_o(ftx_ready), .type_i(ftx_type), .body_len_i(ftx_len), .body_i(ftx_body),
+        .start_i(ftx_start), .ready_o(ftx_ready), .type_i(ftx_type), .body_len_i(ftx_len),
+        .body_idx_o(ftx_idx), .body_byte_i(ftx_byte),
         .byte_o(tx_byte), .byte_valid_o(tx_valid), .byte_ready_i(tx_ready));
 
     // ---- register bus: LINK_ERRORS here, the rest in the core ----
@@ -117,7 +120,7 @@ module omniloc_top #(
         .ev_valid_i(ev_valid), .ev_ready_o(ev_ready), .ev_error_i(ev_error), .ev_code_i(ev_code),
         .ev_addr_i(ev_addr), .ev_data_i(ev_data),
         .tx_start_o(ftx_start), .tx_ready_i(ftx_ready), .tx_type_o(ftx_type), .tx_body_len_o(ftx_len),
-        .tx_body_o(ftx_body),
+        .tx_idx_i(ftx_idx), .tx_byte_o(ftx_byte),
         .reg_addr_o(bus_addr), .reg_rd_o(bus_rd), .reg_wr_o(bus_wr), .reg_wdata_o(bus_wdata),
         .reg_rdata_i(bus_rdata), .reg_ack_i(bus_ack), .reg_err_i(bus_err),
         .stream_en_i(stream_en), .win_valid_i(win_valid), .win_seq_i(win_seq), .win_timestamp_i(win_ts),

@@ -57,9 +57,17 @@ struct RegisterModel {
   }
 };
 
-std::vector<std::uint8_t> body_bytes(const Vlink_engine& dut, int n) {
+// The body as frame_tx reads it: byte k through tx_idx_i / tx_byte_o (combinational).
+std::vector<std::uint8_t> body_bytes(Vlink_engine& dut, int n) {
   std::vector<std::uint8_t> b;
-  for (int k = 0; k < n; ++k) b.push_back(static_cast<std::uint8_t>(dut.tx_body_o[k / 4] >> (8 * (k % 4))));
+  const auto idx = dut.tx_idx_i;
+  for (int k = 0; k < n; ++k) {
+    dut.tx_idx_i = static_cast<std::uint8_t>(k);
+    dut.eval();
+    b.push_back(dut.tx_byte_o);
+  }
+  dut.tx_idx_i = idx;
+  dut.eval();
   return b;
 }
 
@@ -91,6 +99,7 @@ TEST(LinkEngine, RequestsSnapshotsAndStreamingMatchGoldenModel) {
   bool bus_err = false;
   std::uint32_t bus_data = 0;
   int tx_busy = 0;
+  Frame sending{};
   int requests_left = 3000;
   bool event_up = false;
   int next_window_in = 700;
@@ -201,8 +210,12 @@ TEST(LinkEngine, RequestsSnapshotsAndStreamingMatchGoldenModel) {
     if (dut.tx_start_o && dut.tx_ready_i) {
       Frame f{dut.tx_type_o, body_bytes(dut, dut.tx_body_len_o)};
       (f.type == rm::kFrameTelemetry ? telemetry : responses).push_back(f);
+      sending = f;
       tx_busy = static_cast<int>(rng() % 200);
     } else if (tx_busy > 0) {
+      // frame_tx reads the body while it sends: it must stay as it was at the start.
+      if (rng() % 8 == 0 || tx_busy == 1)
+        ASSERT_EQ(body_bytes(dut, static_cast<int>(sending.body.size())), sending.body) << "body changed mid-frame";
       --tx_busy;
     }
     if (dut.win_consumed_o) ++consumed;
