@@ -9,9 +9,11 @@
 //
 // Window bank: at capture_i (tick while enabled) the sequence number increments and the capture
 // timestamp and STATUS are recorded; the channels' window registers update in the same edge.
-// win_valid_o pulses in the cycle after, when all of it is visible. Reading SNAP_SEQ copies the
-// whole bank (seq, timestamp, status, dir, counts, positions) into a shadow that SNAP_* read, so
-// the reads that follow belong to the same window even if captures happen meanwhile.
+// win_valid_o pulses in the cycle after, when all of it is visible. Reading SNAP_SEQ, or
+// win_consumed_i (the link streaming the window), copies the whole bank (seq, timestamp, status,
+// dir, counts, positions) into the one frozen bank that SNAP_* read and that the link sends byte
+// by byte (bank_idx_i -> bank_byte_o, the WINDOW body layout), so the reads that follow belong to
+// the same window even if captures happen meanwhile.
 // STATUS.OVERRUN: a capture while the previous window was neither latched through SNAP_SEQ nor
 // acknowledged by win_consumed_i. A flag set and cleared (W1C) in the same cycle stays set.
 //
@@ -24,7 +26,8 @@
 
 module encoder_regs #(
     parameter CLK_HZ = `OMNILOC_PAPER_CLOCK_HZ,
-    parameter TICK_HZ = `OMNILOC_TICK_HZ
+    parameter TICK_HZ = `OMNILOC_TICK_HZ,
+    parameter integer BANK_IDX_W = $clog2(`OMNILOC_BODY_WINDOW_BYTES + 1)
 ) (
     input  wire                                         clk_i,
     input  wire                                         rst_i,
@@ -56,7 +59,10 @@ module encoder_regs #(
     output wire [`OMNILOC_DATA_W-1:0]                   win_seq_o,
     output wire [`OMNILOC_DATA_W-1:0]                   win_timestamp_o,
     output wire [`OMNILOC_BODY_WINDOW_STATUS_W-1:0]     win_status_o,
-    output wire [`OMNILOC_BODY_WINDOW_STATUS_W-1:0]     status_o
+    output wire [`OMNILOC_BODY_WINDOW_STATUS_W-1:0]     status_o,
+    // the frozen bank byte by byte in the WINDOW layout (TELEMETRY / SNAPSHOT_RESP body)
+    input  wire [BANK_IDX_W-1:0]                        bank_idx_i,
+    output wire [7:0]                                   bank_byte_o
 );
 
 localparam integer DATA_W = `OMNILOC_DATA_W;
@@ -97,11 +103,25 @@ reg [DATA_W-1:0]    win_ts_q;
 reg [BYTE_W-1:0]    win_status_q;
 reg                 pending_q;
 
-reg [DATA_W-1:0]    snap_ts_q;
-reg [BYTE_W-1:0]    snap_status_q;
-reg [DIR_W-1:0]     snap_dir_q;
-reg [CH*DATA_W-1:0] snap_count_q;
-reg [CH*DATA_W-1:0] snap_pos_q;
+// The frozen bank: the WINDOW body (seq, timestamp, counts, dir, status at their offsets) and the
+// positions. Pure data: no reset (it is 0 from configuration, and only read after a latch).
+localparam integer BODY_BYTES = `OMNILOC_BODY_WINDOW_BYTES;
+localparam integer W_SEQ = `OMNILOC_BODY_WINDOW_SEQ_LSB;
+localparam integer W_TS = `OMNILOC_BODY_WINDOW_TIMESTAMP_CYCLES_LSB;
+localparam integer W_COUNT = `OMNILOC_BODY_WINDOW_COUNT_LSB;
+localparam integer W_DIR = `OMNILOC_BODY_WINDOW_DIR_LSB;
+localparam integer W_STAT = `OMNILOC_BODY_WINDOW_STATUS_LSB;
+localparam integer BDIR_W = `OMNILOC_BODY_WINDOW_DIR_W;
+reg [8*BODY_BYTES-1:0] fz_body_q = {8*BODY_BYTES{1'b0}};
+reg [CH*DATA_W-1:0]    fz_pos_q = {CH*DATA_W{1'b0}};
+wire [DATA_W-1:0] snap_ts_q = fz_body_q[W_TS +: DATA_W];
+wire [CH*DATA_W-1:0] snap_count_q = fz_body_q[W_COUNT +: CH*DATA_W];
+wire [DIR_W-1:0] snap_dir_q = fz_body_q[W_DIR +: DIR_W];
+wire [BYTE_W-1:0] snap_status_q = fz_body_q[W_STAT +: BYTE_W];
+wire [CH*DATA_W-1:0] snap_pos_q = fz_pos_q;
+localparam [BANK_IDX_W-1:0] LAST_IDX = BODY_BYTES[BANK_IDX_W-1:0];
+wire [8*BODY_BYTES+7:0] fz_ext = {8'd0, fz_body_q};
+assign bank_byte_o = (bank_idx_i < LAST_IDX) ? fz_ext[8*bank_idx_i +: 8] : 8'd0;
 
 assign win_valid_o = win_valid_q;
 assign win_seq_o = seq_q;
@@ -190,7 +210,7 @@ always @(*) begin
 end
 
 wire latch_snapshot = rd && addr_snap_seq;
-wire consumed = latch_snapshot || win_consumed_i;
+wire consumed = latch_snapshot || win_consumed_i;   // either latches the frozen bank
 wire overrun = capture_i && pending_q && !consumed;
 
 // STATUS after this cycle's events: set wins over a simultaneous write-one-to-clear.
@@ -224,11 +244,6 @@ always @(posedge clk_i) begin
         win_ts_q <= {DATA_W{1'b0}};
         win_status_q <= {BYTE_W{1'b0}};
         pending_q <= 1'b0;
-        snap_ts_q <= {DATA_W{1'b0}};
-        snap_status_q <= {BYTE_W{1'b0}};
-        snap_dir_q <= {DIR_W{1'b0}};
-        snap_count_q <= {CH*DATA_W{1'b0}};
-        snap_pos_q <= {CH*DATA_W{1'b0}};
         reg_rdata_q <= {DATA_W{1'b0}};
         reg_ack_q <= 1'b0;
         reg_err_q <= 1'b0;
@@ -252,19 +267,23 @@ always @(posedge clk_i) begin
             pending_q <= 1'b0;
         end
 
-        // The bank is copied as it stands before this edge, so it is one window even when a
-        // capture happens in the same cycle (the new window goes to the bank, not the shadow).
-        if (latch_snapshot) begin
-            snap_ts_q <= win_ts_q;
-            snap_status_q <= win_status_q;
-            snap_dir_q <= win_dir_i;
-            snap_count_q <= win_count_i;
-            snap_pos_q <= win_position_i;
-        end
 
         reg_ack_q <= reg_rd_i || reg_wr_i;
         reg_err_q <= both || (rd && !known) || (wr && (!known || !writable)) || refused;
         reg_rdata_q <= rd ? rdata : {DATA_W{1'b0}};
+    end
+end
+
+// The bank is copied as it stands before this edge, so it is one window even when a capture
+// happens in the same cycle (the new window goes to the live bank, not the frozen one).
+always @(posedge clk_i) begin
+    if (consumed) begin
+        fz_body_q[W_SEQ +: DATA_W] <= seq_q;
+        fz_body_q[W_TS +: DATA_W] <= win_ts_q;
+        fz_body_q[W_COUNT +: CH*DATA_W] <= win_count_i;
+        fz_body_q[W_DIR +: BDIR_W] <= {{(BDIR_W - DIR_W){1'b0}}, win_dir_i};
+        fz_body_q[W_STAT +: BYTE_W] <= win_status_q;
+        fz_pos_q <= win_position_i;
     end
 end
 
