@@ -3,9 +3,11 @@
 // Counts up_i/down_i pulses into the running window. At capture_i the ending window's count is
 // copied out and the counter restarts in the same clock edge. A pulse present in the capture
 // cycle belongs to the ENDING window (it is added to the captured value and the counter restarts
-// at zero), so no edge is lost or counted twice. The position accumulator adds every pulse and is
-// never cleared (it wraps at 2^W): a host that misses a window still recovers the position as the
-// difference of two captured positions.
+// at zero), so no edge is lost or counted twice. The position is kept once: the captured position
+// of the last window, which adds the ending window's count at each capture (never cleared, wraps at
+// 2^W), so a host that misses a window still recovers it as the difference of two captured
+// positions. position_o (the live position) is that plus the running count, a sum for other tops
+// (the core leaves it unconnected, so it costs nothing there).
 //
 // Assumptions: up_i and down_i are never high together (quadrature_decoder guarantees it);
 // rst_i synchronous, active high.
@@ -36,7 +38,6 @@ module window_counter #(
 );
 
 reg [W-1:0] count_q;
-reg [W-1:0] position_q;
 reg [W-1:0] win_count_q;
 reg [W-1:0] win_position_q;
 reg         win_dir_q;
@@ -44,27 +45,27 @@ reg         win_dir_q;
 assign win_count_o = win_count_q;
 assign win_position_o = win_position_q;
 assign win_dir_o = win_dir_q;
-assign position_o = position_q;
+assign position_o = win_position_q + count_q;
 
 // +1, -1 or 0 as a W-bit two's-complement step.
 wire [W-1:0] delta = up_i ? {{(W-1){1'b0}}, 1'b1} : (down_i ? {W{1'b1}} : {W{1'b0}});
+// The ending window's count (this cycle's pulse included).
+wire [W-1:0] ending = count_q + delta;
 
 always @(posedge clk_i) begin
     if (rst_i) begin
         count_q <= {W{1'b0}};
-        position_q <= {W{1'b0}};
         win_count_q <= {W{1'b0}};
         win_position_q <= {W{1'b0}};
         win_dir_q <= 1'b0;
     end else begin
-        position_q <= position_q + delta;
         if (capture_i) begin
-            win_count_q <= count_q + delta;
-            win_position_q <= position_q + delta;
+            win_count_q <= ending;
+            win_position_q <= win_position_q + ending;
             win_dir_q <= dir_i;
             count_q <= {W{1'b0}};
         end else begin
-            count_q <= count_q + delta;
+            count_q <= ending;
         end
     end
 end
@@ -75,17 +76,25 @@ always @(posedge clk_i) f_past_valid <= 1'b1;
 initial assume (rst_i);
 always @(*) assume (!(up_i && down_i));
 
-// Captured position of the window before the last one.
+// Captured position of the window before the last one, and an independent position accumulator
+// that adds every pulse.
 reg [W-1:0] f_prev_win_position = {W{1'b0}};
+reg [W-1:0] f_position = {W{1'b0}};
 always @(posedge clk_i) begin
-    if (rst_i) f_prev_win_position <= {W{1'b0}};
-    else if (capture_i) f_prev_win_position <= win_position_q;
+    if (rst_i) begin
+        f_prev_win_position <= {W{1'b0}};
+        f_position <= {W{1'b0}};
+    end else begin
+        f_position <= f_position + delta;
+        if (capture_i) f_prev_win_position <= win_position_q;
+    end
 end
 
 always @(*) begin
     if (f_past_valid && !rst_i) begin
         // Conservation: every pulse is in exactly one place, the last window or the running one.
-        assert (position_q == win_position_q + count_q);
+        assert (f_position == win_position_q + count_q);
+        assert (position_o == f_position);
         assert (win_count_q == win_position_q - f_prev_win_position);
     end
 end
@@ -93,7 +102,7 @@ end
 always @(posedge clk_i) begin
     if (f_past_valid && !$past(rst_i) && !rst_i) begin
         // The position moves by exactly the pulse of the previous cycle.
-        assert (position_q == $past(position_q) + $past(delta));
+        assert (position_o == $past(position_o) + $past(delta));
         if ($past(capture_i)) begin
             // Across the capture: window count + new counter = edges seen.
             assert (win_count_q + count_q == $past(count_q) + $past(delta));

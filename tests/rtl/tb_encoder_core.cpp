@@ -48,6 +48,7 @@ struct StreamReport {
   std::array<std::uint64_t, 4> counted{};
   std::uint64_t windows = 0;
   std::uint64_t snapshots = 0;
+  std::uint64_t relatched = 0;  // snapshots whose later reads saw a bank re-latched by a consume
   std::uint64_t cycles = 0;
 };
 
@@ -129,6 +130,13 @@ StreamReport run_streams(const StreamConfig& cfg, std::uint64_t seed,
   std::size_t reader_pos = 0;
   bool reader_active = false;
   std::vector<std::uint32_t> snap;
+  // The one frozen bank (docs/RTL.md): a SNAP_SEQ read or a consume strobe latches the last window
+  // captured before that edge; every SNAP_* read answers from the bank as it stood before its own
+  // edge. frozen_seq models it (0 = nothing latched yet); snap_frozen holds, per read of the
+  // snapshot, the window it must describe.
+  std::uint64_t live_seq = 0;     // windows captured at earlier edges
+  std::uint64_t frozen_seq = 0;
+  std::vector<std::uint64_t> snap_frozen;
   std::uniform_int_distribution<int> reader_start(0, 199);
   std::uint64_t expected_seq = 1;
   bool consume_next = false;
@@ -148,16 +156,26 @@ StreamReport run_streams(const StreamConfig& cfg, std::uint64_t seed,
       }
     }
     h.set_pins(a_mask, b_mask);
-    if (consume_next) h.consume_window();
+    const bool consume_now = consume_next;
+    if (consume_now) h.consume_window();
     consume_next = false;
     // The snapshot reader issues one read per cycle.
     if (!reader_active && s > stream_start && reader_start(rng) == 0) {
       reader_active = true;
       reader_pos = 0;
       snap.clear();
+      snap_frozen.clear();
     }
     const bool issued = reader_active && reader_pos < kSnapshotOrder.size();
-    if (issued) h.issue_read(kSnapshotOrder[reader_pos++]);
+    bool latch = consume_now;
+    if (issued) {
+      const std::uint8_t addr = kSnapshotOrder[reader_pos++];
+      h.issue_read(addr);
+      // SNAP_SEQ answers the live SEQ; the other SNAP_* the bank before this edge.
+      snap_frozen.push_back(addr == rm::kRegSnapSeq ? live_seq : frozen_seq);
+      latch = latch || addr == rm::kRegSnapSeq;
+    }
+    if (latch) frozen_seq = live_seq;
     h.step();
 
     if (issued) {
@@ -171,25 +189,37 @@ StreamReport run_streams(const StreamConfig& cfg, std::uint64_t seed,
         reader_active = false;
         ++rep.snapshots;
         const std::uint32_t seq = snap[0];
+        if (seq != snap_frozen[0]) {
+          fail("SNAP_SEQ " + std::to_string(seq) + ", golden " + std::to_string(snap_frozen[0]));
+        }
         if (seq >= 1 && seq <= ticks.size()) {
-          const std::size_t k = seq - 1;
-          std::uint32_t dir = 0;
+          // Each read against the window the bank held at its edge (a consume strobe in the middle
+          // of the sequence re-latches the bank, with STREAM on the link's TELEMETRY does that).
+          auto window_of = [&](std::size_t i) -> std::size_t { return snap_frozen[i] - 1; };
           for (int ch = 0; ch < 4; ++ch) {
-            if (static_cast<std::int32_t>(snap[1 + ch]) != golden[ch][k].count ||
-                snap[5 + ch] != golden[ch][k].position) {
+            const std::size_t kc = window_of(1 + ch), kp = window_of(5 + ch);
+            if (snap_frozen[1 + ch] == 0 || snap_frozen[5 + ch] == 0 ||
+                static_cast<std::int32_t>(snap[1 + ch]) != golden[ch][kc].count ||
+                snap[5 + ch] != golden[ch][kp].position) {
               std::ostringstream os;
               os << "torn or wrong snapshot of window " << seq << " channel " << ch << ": count "
                  << static_cast<std::int32_t>(snap[1 + ch]) << " position " << snap[5 + ch]
-                 << ", golden " << golden[ch][k].count << " / " << golden[ch][k].position;
+                 << ", golden (windows " << snap_frozen[1 + ch] << ", " << snap_frozen[5 + ch] << ") "
+                 << (snap_frozen[1 + ch] ? golden[ch][kc].count : 0) << " / "
+                 << (snap_frozen[5 + ch] ? golden[ch][kp].position : 0u);
               fail(os.str());
             }
-            dir |= (golden[ch][k].dir ? 1u : 0u) << ch;
           }
-          if (snap[9] != dir) fail("snapshot SNAP_DIR mismatch in window " + std::to_string(seq));
-          if (snap[10] != static_cast<std::uint32_t>(ticks[k] - 1)) {
+          std::uint32_t dir = 0;
+          const std::size_t kd = window_of(9);
+          for (int ch = 0; ch < 4; ++ch) dir |= (golden[ch][kd].dir ? 1u : 0u) << ch;
+          if (snap[9] != dir) fail("snapshot SNAP_DIR mismatch in window " + std::to_string(kd + 1));
+          const std::size_t kt = window_of(10);
+          if (snap[10] != static_cast<std::uint32_t>(ticks[kt] - 1)) {
             fail("snapshot SNAP_TIMESTAMP " + std::to_string(snap[10]) + " != golden " +
-                 std::to_string(ticks[k] - 1) + " in window " + std::to_string(seq));
+                 std::to_string(ticks[kt] - 1) + " in window " + std::to_string(kt + 1));
           }
+          if (snap_frozen.back() != seq) ++rep.relatched;
         } else if (seq != 0) {
           fail("SNAP_SEQ out of range: " + std::to_string(seq));
         }
@@ -229,6 +259,7 @@ StreamReport run_streams(const StreamConfig& cfg, std::uint64_t seed,
       }
       ++rep.windows;
       ++expected_seq;
+      live_seq = w.seq;
     }
   }
   if (rep.failure.empty() && rep.windows != ticks.size()) {
@@ -256,7 +287,7 @@ void run_and_check(const StreamConfig& cfg, std::uint64_t default_seed) {
   const std::uint64_t seed = omniloc::rtl_tb::test_seed(cfg.name, default_seed);
   const auto rep = run_streams(cfg, seed, nullptr);
   std::cout << "[" << cfg.name << "] cycles=" << rep.cycles << " windows=" << rep.windows
-            << " snapshots=" << rep.snapshots << "\n";
+            << " snapshots=" << rep.snapshots << " re-latched mid-snapshot=" << rep.relatched << "\n";
   for (int ch = 0; ch < 4; ++ch) {
     std::cout << "  channel " << ch << ": steps=" << rep.steps[ch] << " counted=" << rep.counted[ch] << "\n";
   }
