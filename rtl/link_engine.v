@@ -15,7 +15,7 @@
 // until frame_tx is idle again (tx_ready_i).
 // The bus answer (ack, error, data) is registered before the FSM decides on it; decisions are
 // registered (state_q, small_q, tx_*), so no bus or frame_tx output feeds a wide enable directly.
-// Assumptions: the register bus acks every access within a bounded time (encoder_regs: 1 cycle).
+// Assumptions: the register bus acks every access within a bounded time (encoder_regs: 3 cycles, pipelined).
 `resetall
 `timescale 1ns / 1ps
 `default_nettype none

@@ -137,6 +137,8 @@ StreamReport run_streams(const StreamConfig& cfg, std::uint64_t seed,
   std::uint64_t live_seq = 0;     // windows captured at earlier edges
   std::uint64_t frozen_seq = 0;
   std::vector<std::uint64_t> snap_frozen;
+  int acting_read = -1;           // the address read in the previous cycle, or -1
+  int reader_wait = 0;            // cycles since the last read was issued
   std::uniform_int_distribution<int> reader_start(0, 199);
   std::uint64_t expected_seq = 1;
   bool consume_next = false;
@@ -166,22 +168,31 @@ StreamReport run_streams(const StreamConfig& cfg, std::uint64_t seed,
       snap.clear();
       snap_frozen.clear();
     }
-    const bool issued = reader_active && reader_pos < kSnapshotOrder.size();
     bool latch = consume_now;
-    if (issued) {
-      const std::uint8_t addr = kSnapshotOrder[reader_pos++];
-      h.issue_read(addr);
-      // SNAP_SEQ answers the live SEQ; the other SNAP_* the bank before this edge.
-      snap_frozen.push_back(addr == rm::kRegSnapSeq ? live_seq : frozen_seq);
-      latch = latch || addr == rm::kRegSnapSeq;
+    // The read issued in the previous cycle takes effect at this edge (the bus is pipelined):
+    // SNAP_SEQ answers the live SEQ and latches; the other SNAP_* answer the bank before this edge.
+    if (acting_read >= 0) {
+      const bool is_seq = acting_read == rm::kRegSnapSeq;
+      snap_frozen.push_back(is_seq ? live_seq : frozen_seq);
+      latch = latch || is_seq;
+      acting_read = -1;
     }
     if (latch) frozen_seq = live_seq;
+    if (reader_active && reader_pos < kSnapshotOrder.size()) {
+      acting_read = kSnapshotOrder[reader_pos];
+      h.issue_read(kSnapshotOrder[reader_pos++]);
+      reader_wait = 0;
+    }
     h.step();
 
-    if (issued) {
-      const auto r = h.response();
-      if (!r || r->err) {
-        fail("snapshot read not acknowledged or refused");
+    if (reader_active && reader_pos == kSnapshotOrder.size() &&
+        ++reader_wait > EncoderCoreHarness::kBusLatency) {
+      fail("snapshot read not acknowledged");
+      break;
+    }
+    if (const auto r = h.response(); reader_active && r) {
+      if (r->err) {
+        fail("snapshot read refused");
         break;
       }
       snap.push_back(r->data);
@@ -435,11 +446,19 @@ TEST(EncoderCore, RegistersFromTheBus) {
   EXPECT_FALSE(h.write(rm::kRegFilter, 255).err);
   EXPECT_EQ(h.read(rm::kRegFilter).data, 255u);
   // TIMESTAMP counts cycles: two reads one cycle apart differ by one.
+  // (Back to back on the pipelined bus: the answers come kBusLatency cycles later, in order.)
   h.issue_read(rm::kRegTimestamp);
   h.step();
+  h.issue_read(rm::kRegTimestamp);
+  for (int i = 2; i < EncoderCoreHarness::kBusLatency; ++i) {
+    h.step();
+    ASSERT_FALSE(h.response().has_value()) << "answer before the bus latency";
+  }
+  h.step();
+  ASSERT_TRUE(h.response().has_value());
   const std::uint32_t t0 = h.response()->data;
-  h.issue_read(rm::kRegTimestamp);
   h.step();
+  ASSERT_TRUE(h.response().has_value());
   EXPECT_EQ(h.response()->data, t0 + 1);
 }
 
@@ -500,7 +519,7 @@ TEST(EncoderCore, OverrunWhenAWindowIsNotConsumed) {
   for (int i = 0; i < 20; ++i) {
     h.step(60);
     ASSERT_FALSE(h.read(rm::kRegSnapSeq).err);
-    h.step(39);
+    h.step(40 - EncoderCoreHarness::kBusLatency);   // 100 cycles a round, one read per window
   }
   EXPECT_EQ(h.read(rm::kRegStatus).data & 0x10u, 0u);
 }

@@ -187,6 +187,15 @@ Result run(std::uint64_t seed, std::uint64_t cycles, const TraceRequest* trace) 
   dut.reset(2);
   if (auto s = compare(dut.io(), model); !s.empty()) return res.failure = "after reset: " + s, res;
   Inputs in;
+  // The bus is pipelined (docs/RTL.md): a request presented before edge e takes effect at edge e+1
+  // exactly as the golden register file takes it, and its answer is visible after edge e+2. So the
+  // golden model gets the request one edge late and its answer is shown one edge later again.
+  Inputs prev_req;
+  struct Answer {
+    bool ack = false;
+    bool err = false;
+    std::uint32_t rdata = 0;
+  } answer;
   const std::array<std::uint8_t, 8> hot = {rm::kRegControl, rm::kRegFilter, rm::kRegPeriod, rm::kRegStatus,
                                            rm::kRegSnapSeq, rm::kRegSnapCount2, rm::kRegSnapStatus, rm::kRegId};
   for (std::uint64_t i = 0; i < cycles; ++i) {
@@ -231,14 +240,25 @@ Result run(std::uint64_t seed, std::uint64_t cycles, const TraceRequest* trace) 
     const std::uint64_t e = dut.cycle();
     const bool had_overrun = (model.status & 0x10) != 0;
     dut.step();
-    model.edge(in);
-    if (auto s = compare(dut.io(), model, static_cast<unsigned>(e % 27)); !s.empty()) {
+    Inputs delayed = in;
+    delayed.addr = prev_req.addr;
+    delayed.rd = prev_req.rd;
+    delayed.wr = prev_req.wr;
+    delayed.wdata = prev_req.wdata;
+    prev_req = in;
+    model.edge(delayed);
+    Model shown = model;
+    shown.ack = answer.ack;
+    shown.err = answer.err;
+    shown.rdata = answer.rdata;
+    answer = {model.ack, model.err, model.rdata};
+    if (auto s = compare(dut.io(), shown, static_cast<unsigned>(e % 27)); !s.empty()) {
       res.failure = "edge " + std::to_string(e) + ": " + s;
       res.fail_cycle = e;
       return res;
     }
     res.errors += model.err;
-    res.refused += model.err && in.wr && !in.rd;
+    res.refused += model.err && delayed.wr && !delayed.rd;
     res.overruns += !had_overrun && (model.status & 0x10);
   }
   return res;
