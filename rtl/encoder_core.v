@@ -20,7 +20,8 @@
 
 module encoder_core #(
     parameter CLK_HZ = `OMNILOC_PAPER_CLOCK_HZ,
-    parameter TICK_HZ = `OMNILOC_TICK_HZ
+    parameter TICK_HZ = `OMNILOC_TICK_HZ,
+    parameter integer BANK_IDX_W = $clog2(`OMNILOC_BODY_WINDOW_BYTES + 1)
 ) (
     input  wire                                         clk_i,
     input  wire                                         rst_i,
@@ -44,7 +45,10 @@ module encoder_core #(
     output wire [`OMNILOC_BODY_WINDOW_STATUS_W-1:0]     status_o,
     input  wire         win_consumed_i,
     output wire         stream_en_o,
-    output wire         tick_o
+    output wire         tick_o,
+    // the frozen window bank, byte k of the WINDOW body layout (TELEMETRY / SNAPSHOT_RESP)
+    input  wire [BANK_IDX_W-1:0] bank_idx_i,
+    output wire [7:0]            bank_byte_o
 );
 
 localparam integer DATA_W = `OMNILOC_DATA_W;
@@ -96,7 +100,7 @@ encoder_regs #(.CLK_HZ(CLK_HZ), .TICK_HZ(TICK_HZ)) u_regs (
     .timestamp_i(timestamp), .win_count_i(win_count_o), .win_position_i(win_position_o),
     .win_dir_i(win_dir_o), .err_count_i(err_count),
     .win_valid_o(win_valid_o), .win_seq_o(win_seq_o), .win_timestamp_o(win_timestamp_o),
-    .win_status_o(status_o),
+    .win_status_o(status_o), .bank_idx_i(bank_idx_i), .bank_byte_o(bank_byte_o),
     /* verilator lint_off PINCONNECTEMPTY */
     .status_o()
     /* verilator lint_on PINCONNECTEMPTY */

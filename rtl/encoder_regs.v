@@ -9,9 +9,11 @@
 //
 // Window bank: at capture_i (tick while enabled) the sequence number increments and the capture
 // timestamp and STATUS are recorded; the channels' window registers update in the same edge.
-// win_valid_o pulses in the cycle after, when all of it is visible. Reading SNAP_SEQ copies the
-// whole bank (seq, timestamp, status, dir, counts, positions) into a shadow that SNAP_* read, so
-// the reads that follow belong to the same window even if captures happen meanwhile.
+// win_valid_o pulses in the cycle after, when all of it is visible. Reading SNAP_SEQ, or
+// win_consumed_i (the link streaming the window), copies the whole bank (seq, timestamp, status,
+// dir, counts, positions) into the one frozen bank that SNAP_* read and that the link sends byte
+// by byte (bank_idx_i -> bank_byte_o, the WINDOW body layout), so the reads that follow belong to
+// the same window even if captures happen meanwhile.
 // STATUS.OVERRUN: a capture while the previous window was neither latched through SNAP_SEQ nor
 // acknowledged by win_consumed_i. A flag set and cleared (W1C) in the same cycle stays set.
 //
@@ -24,7 +26,8 @@
 
 module encoder_regs #(
     parameter CLK_HZ = `OMNILOC_PAPER_CLOCK_HZ,
-    parameter TICK_HZ = `OMNILOC_TICK_HZ
+    parameter TICK_HZ = `OMNILOC_TICK_HZ,
+    parameter integer BANK_IDX_W = $clog2(`OMNILOC_BODY_WINDOW_BYTES + 1)
 ) (
     input  wire                                         clk_i,
     input  wire                                         rst_i,
@@ -56,7 +59,10 @@ module encoder_regs #(
     output wire [`OMNILOC_DATA_W-1:0]                   win_seq_o,
     output wire [`OMNILOC_DATA_W-1:0]                   win_timestamp_o,
     output wire [`OMNILOC_BODY_WINDOW_STATUS_W-1:0]     win_status_o,
-    output wire [`OMNILOC_BODY_WINDOW_STATUS_W-1:0]     status_o
+    output wire [`OMNILOC_BODY_WINDOW_STATUS_W-1:0]     status_o,
+    // the frozen bank byte by byte in the WINDOW layout (TELEMETRY / SNAPSHOT_RESP body)
+    input  wire [BANK_IDX_W-1:0]                        bank_idx_i,
+    output wire [7:0]                                   bank_byte_o
 );
 
 localparam integer DATA_W = `OMNILOC_DATA_W;
@@ -97,100 +103,169 @@ reg [DATA_W-1:0]    win_ts_q;
 reg [BYTE_W-1:0]    win_status_q;
 reg                 pending_q;
 
-reg [DATA_W-1:0]    snap_ts_q;
-reg [BYTE_W-1:0]    snap_status_q;
-reg [DIR_W-1:0]     snap_dir_q;
-reg [CH*DATA_W-1:0] snap_count_q;
-reg [CH*DATA_W-1:0] snap_pos_q;
+// The frozen bank: the WINDOW body (seq, timestamp, counts, dir, status at their offsets) and the
+// positions. Pure data: no reset (it is 0 from configuration, and only read after a latch).
+localparam integer BODY_BYTES = `OMNILOC_BODY_WINDOW_BYTES;
+localparam integer W_SEQ = `OMNILOC_BODY_WINDOW_SEQ_LSB;
+localparam integer W_TS = `OMNILOC_BODY_WINDOW_TIMESTAMP_CYCLES_LSB;
+localparam integer W_COUNT = `OMNILOC_BODY_WINDOW_COUNT_LSB;
+localparam integer W_DIR = `OMNILOC_BODY_WINDOW_DIR_LSB;
+localparam integer W_STAT = `OMNILOC_BODY_WINDOW_STATUS_LSB;
+localparam integer BDIR_W = `OMNILOC_BODY_WINDOW_DIR_W;
+reg [8*BODY_BYTES-1:0] fz_body_q = {8*BODY_BYTES{1'b0}};
+reg [CH*DATA_W-1:0]    fz_pos_q = {CH*DATA_W{1'b0}};
+wire [DATA_W-1:0] snap_ts_q = fz_body_q[W_TS +: DATA_W];
+wire [CH*DATA_W-1:0] snap_count_q = fz_body_q[W_COUNT +: CH*DATA_W];
+wire [DIR_W-1:0] snap_dir_q = fz_body_q[W_DIR +: DIR_W];
+wire [BYTE_W-1:0] snap_status_q = fz_body_q[W_STAT +: BYTE_W];
+wire [CH*DATA_W-1:0] snap_pos_q = fz_pos_q;
+localparam [BANK_IDX_W-1:0] LAST_IDX = BODY_BYTES[BANK_IDX_W-1:0];
+wire [8*BODY_BYTES+7:0] fz_ext = {8'd0, fz_body_q};
+assign bank_byte_o = (bank_idx_i < LAST_IDX) ? fz_ext[8*bank_idx_i +: 8] : 8'd0;
 
 assign win_valid_o = win_valid_q;
 assign win_seq_o = seq_q;
 assign win_timestamp_o = win_ts_q;
 assign win_status_o = win_status_q;
 
-// ---- request decode ----
-wire rd = reg_rd_i && !reg_wr_i;
-wire wr = reg_wr_i && !reg_rd_i;
-wire both = reg_rd_i && reg_wr_i;
+// ---- pipelined bus ----
+// Stage R (the request edge t): the request and its decoded address and value checks are
+// registered (rq_*), computed only from the request's own wires. Stage E (edge t+1): the request
+// takes effect exactly as an unpipelined register file would take it at that edge (writes, W1C,
+// SNAP_SEQ latch, errors), and the read data is sampled: the first mux level (the four words of a
+// group, by the low address bits) into grp_q. Stage O (edge t+2): the group is chosen and the
+// answer registered: reg_ack_o / reg_err_o / reg_rdata_o are visible after edge t+2, i.e. three
+// cycles after the request is presented. Back-to-back requests are allowed (one a cycle).
+localparam integer MUX_LO = 2;                   // words per group: 2^MUX_LO
+localparam integer MUX_HI = 3;                   // groups: 2^MUX_HI (32 words, addresses 0x00..0x1F)
 
-wire addr_control = (reg_addr_i == `OMNILOC_REG_CONTROL);
-wire addr_filter = (reg_addr_i == `OMNILOC_REG_FILTER);
-wire addr_period = (reg_addr_i == `OMNILOC_REG_PERIOD);
-wire addr_status = (reg_addr_i == `OMNILOC_REG_STATUS);
-wire addr_snap_seq = (reg_addr_i == `OMNILOC_REG_SNAP_SEQ);
+wire rd_i = reg_rd_i && !reg_wr_i;
+wire wr_i = reg_wr_i && !reg_rd_i;
 
 // Value checks of the writable registers: no bit above the register's fields, DECODE one of its values.
-wire [DEC_W-1:0] wdecode = reg_wdata_i[DEC_LSB +: DEC_W];
-wire decode_ok = (wdecode == `OMNILOC_CONTROL_DECODE_X4) || (wdecode == `OMNILOC_CONTROL_DECODE_X2)
-              || (wdecode == `OMNILOC_CONTROL_DECODE_X1);
+wire [DEC_W-1:0] wdecode_i = reg_wdata_i[DEC_LSB +: DEC_W];
+wire decode_ok = (wdecode_i == `OMNILOC_CONTROL_DECODE_X4) || (wdecode_i == `OMNILOC_CONTROL_DECODE_X2)
+              || (wdecode_i == `OMNILOC_CONTROL_DECODE_X1);
 wire control_ok = (reg_wdata_i[DATA_W-1:`OMNILOC_CONTROL_BITS] == {(DATA_W - `OMNILOC_CONTROL_BITS){1'b0}}) && decode_ok;
 wire filter_ok = (reg_wdata_i[DATA_W-1:`OMNILOC_FILTER_BITS] == {(DATA_W - `OMNILOC_FILTER_BITS){1'b0}});
-// period >= PERIOD_MIN_CYCLES, split so that no 32-bit carry chain sits in front of the status
-// and write enables (it kept the iCE40 build under 40 MHz): any bit above the minimum's width
-// set, or the low bits compared on their own.
+// period >= PERIOD_MIN_CYCLES, split so that no 32-bit carry chain is needed: any bit above the
+// minimum's width set, or the low bits compared on their own.
 localparam integer PMIN_W = $clog2(`OMNILOC_PERIOD_MIN_CYCLES + 1);
 wire period_ok = (reg_wdata_i[DATA_W-1:PMIN_W] != {(DATA_W - PMIN_W){1'b0}})
               || (reg_wdata_i[PMIN_W-1:0] >= PERIOD_MIN_CYCLES[PMIN_W-1:0]);
 
-wire wr_control = wr && addr_control && control_ok;
-wire wr_filter = wr && addr_filter && filter_ok;
-wire wr_period = wr && addr_period && period_ok;
-wire wr_status = wr && addr_status;
-wire refused = wr && ((addr_control && !control_ok) || (addr_filter && !filter_ok)
-                      || (addr_period && !period_ok));
-
-// Read mux (combinational on the request; registered into reg_rdata_q). Fields at their LSBs.
-reg [DATA_W-1:0] rdata;
-reg              known;
-reg              writable;
+reg known_i;
+reg writable_i;
 always @(*) begin
-    rdata = {DATA_W{1'b0}};
-    known = 1'b1;
-    writable = 1'b0;
-    case (reg_addr_i)
-        `OMNILOC_REG_ID: rdata = `OMNILOC_ID;
-        `OMNILOC_REG_VERSION: rdata = `OMNILOC_VERSION;
-        `OMNILOC_REG_CONTROL: begin
-            rdata[`OMNILOC_CONTROL_ENABLE_LSB] = enable_q;
-            rdata[DEC_LSB +: DEC_W] = decode_q;
-            rdata[`OMNILOC_CONTROL_STREAM_LSB] = stream_q;
-            writable = 1'b1;
-        end
-        `OMNILOC_REG_FILTER: begin
-            rdata[`OMNILOC_FILTER_LENGTH_LSB +: FLT_W] = filter_q;
-            writable = 1'b1;
-        end
-        `OMNILOC_REG_PERIOD: begin
-            rdata = period_q;
-            writable = 1'b1;
-        end
-        `OMNILOC_REG_STATUS: begin
-            rdata[ST_W-1:0] = status_q;
-            writable = 1'b1;
-        end
-        `OMNILOC_REG_TIMESTAMP: rdata = timestamp_i;
-        `OMNILOC_REG_SNAP_SEQ: rdata = seq_q;
-        `OMNILOC_REG_SNAP_TIMESTAMP: rdata = snap_ts_q;
-        `OMNILOC_REG_SNAP_DIR: rdata[`OMNILOC_SNAP_DIR_DIR_LSB +: DIR_W] = snap_dir_q;
-        `OMNILOC_REG_SNAP_STATUS: rdata[BYTE_W-1:0] = snap_status_q;
-        `OMNILOC_REG_SNAP_COUNT0: rdata = snap_count_q[0*DATA_W +: DATA_W];
-        `OMNILOC_REG_SNAP_COUNT1: rdata = snap_count_q[1*DATA_W +: DATA_W];
-        `OMNILOC_REG_SNAP_COUNT2: rdata = snap_count_q[2*DATA_W +: DATA_W];
-        `OMNILOC_REG_SNAP_COUNT3: rdata = snap_count_q[3*DATA_W +: DATA_W];
-        `OMNILOC_REG_SNAP_POSITION0: rdata = snap_pos_q[0*DATA_W +: DATA_W];
-        `OMNILOC_REG_SNAP_POSITION1: rdata = snap_pos_q[1*DATA_W +: DATA_W];
-        `OMNILOC_REG_SNAP_POSITION2: rdata = snap_pos_q[2*DATA_W +: DATA_W];
-        `OMNILOC_REG_SNAP_POSITION3: rdata = snap_pos_q[3*DATA_W +: DATA_W];
-        `OMNILOC_REG_ERROR_COUNT0: rdata = err_count_i[0*DATA_W +: DATA_W];
-        `OMNILOC_REG_ERROR_COUNT1: rdata = err_count_i[1*DATA_W +: DATA_W];
-        `OMNILOC_REG_ERROR_COUNT2: rdata = err_count_i[2*DATA_W +: DATA_W];
-        `OMNILOC_REG_ERROR_COUNT3: rdata = err_count_i[3*DATA_W +: DATA_W];
-        default: known = 1'b0;
-    endcase
+    known_i = `OMNILOC_ADDR_KNOWN(reg_addr_i) && (reg_addr_i != `OMNILOC_REG_LINK_ERRORS);
+    writable_i = `OMNILOC_ADDR_WRITABLE(reg_addr_i);
 end
 
-wire latch_snapshot = rd && addr_snap_seq;
-wire consumed = latch_snapshot || win_consumed_i;
+// Stage R registers.
+reg              rq_rd, rq_wr, rq_both;   // valid bits (reset)
+reg              rq_known, rq_writable;
+reg              rq_control, rq_filter, rq_period, rq_status, rq_snap_seq;
+reg              rq_control_ok, rq_filter_ok, rq_period_ok;
+reg [MUX_LO+MUX_HI-1:0] rq_word;
+reg [DATA_W-1:0] rq_wdata;
+always @(posedge clk_i) begin
+    // Data: no reset (only used with the valid bits).
+    rq_known      <= known_i;
+    rq_writable   <= writable_i;
+    rq_control    <= (reg_addr_i == `OMNILOC_REG_CONTROL);
+    rq_filter     <= (reg_addr_i == `OMNILOC_REG_FILTER);
+    rq_period     <= (reg_addr_i == `OMNILOC_REG_PERIOD);
+    rq_status     <= (reg_addr_i == `OMNILOC_REG_STATUS);
+    rq_snap_seq   <= (reg_addr_i == `OMNILOC_REG_SNAP_SEQ);
+    rq_control_ok <= control_ok;
+    rq_filter_ok  <= filter_ok;
+    rq_period_ok  <= period_ok;
+    rq_word       <= reg_addr_i[MUX_LO+MUX_HI-1:0];
+    rq_wdata      <= reg_wdata_i;
+end
+always @(posedge clk_i) begin
+    if (rst_i) begin
+        rq_rd   <= 1'b0;
+        rq_wr   <= 1'b0;
+        rq_both <= 1'b0;
+    end else begin
+        rq_rd   <= rd_i;
+        rq_wr   <= wr_i;
+        rq_both <= reg_rd_i && reg_wr_i;
+    end
+end
+
+wire [DEC_W-1:0] wdecode = rq_wdata[DEC_LSB +: DEC_W];
+wire wr_control = rq_wr && rq_control && rq_control_ok;
+wire wr_filter = rq_wr && rq_filter && rq_filter_ok;
+wire wr_period = rq_wr && rq_period && rq_period_ok;
+wire wr_status = rq_wr && rq_status;
+wire refused = rq_wr && ((rq_control && !rq_control_ok) || (rq_filter && !rq_filter_ok)
+                         || (rq_period && !rq_period_ok));
+
+// The readable words by address (0 where nothing is), fields at their LSBs.
+function [DATA_W-1:0] word;
+    input [`OMNILOC_ADDR_W-1:0] i;
+    begin
+        word = {DATA_W{1'b0}};
+        case (i)
+            `OMNILOC_REG_ID: word = `OMNILOC_ID;
+            `OMNILOC_REG_VERSION: word = `OMNILOC_VERSION;
+            `OMNILOC_REG_CONTROL: begin
+                word[`OMNILOC_CONTROL_ENABLE_LSB] = enable_q;
+                word[DEC_LSB +: DEC_W] = decode_q;
+                word[`OMNILOC_CONTROL_STREAM_LSB] = stream_q;
+            end
+            `OMNILOC_REG_FILTER: word[`OMNILOC_FILTER_LENGTH_LSB +: FLT_W] = filter_q;
+            `OMNILOC_REG_PERIOD: word = period_q;
+            `OMNILOC_REG_STATUS: word[ST_W-1:0] = status_q;
+            `OMNILOC_REG_TIMESTAMP: word = timestamp_i;
+            `OMNILOC_REG_SNAP_SEQ: word = seq_q;
+            `OMNILOC_REG_SNAP_TIMESTAMP: word = snap_ts_q;
+            `OMNILOC_REG_SNAP_DIR: word[`OMNILOC_SNAP_DIR_DIR_LSB +: DIR_W] = snap_dir_q;
+            `OMNILOC_REG_SNAP_STATUS: word[BYTE_W-1:0] = snap_status_q;
+            `OMNILOC_REG_SNAP_COUNT0: word = snap_count_q[0*DATA_W +: DATA_W];
+            `OMNILOC_REG_SNAP_COUNT1: word = snap_count_q[1*DATA_W +: DATA_W];
+            `OMNILOC_REG_SNAP_COUNT2: word = snap_count_q[2*DATA_W +: DATA_W];
+            `OMNILOC_REG_SNAP_COUNT3: word = snap_count_q[3*DATA_W +: DATA_W];
+            `OMNILOC_REG_SNAP_POSITION0: word = snap_pos_q[0*DATA_W +: DATA_W];
+            `OMNILOC_REG_SNAP_POSITION1: word = snap_pos_q[1*DATA_W +: DATA_W];
+            `OMNILOC_REG_SNAP_POSITION2: word = snap_pos_q[2*DATA_W +: DATA_W];
+            `OMNILOC_REG_SNAP_POSITION3: word = snap_pos_q[3*DATA_W +: DATA_W];
+            `OMNILOC_REG_ERROR_COUNT0: word = err_count_i[0*DATA_W +: DATA_W];
+            `OMNILOC_REG_ERROR_COUNT1: word = err_count_i[1*DATA_W +: DATA_W];
+            `OMNILOC_REG_ERROR_COUNT2: word = err_count_i[2*DATA_W +: DATA_W];
+            `OMNILOC_REG_ERROR_COUNT3: word = err_count_i[3*DATA_W +: DATA_W];
+            default: word = {DATA_W{1'b0}};
+        endcase
+    end
+endfunction
+
+// Stage E: first mux level (word rq_word[MUX_LO-1:0] of every group).
+reg [DATA_W-1:0] grp_d [0:(1<<MUX_HI)-1];
+integer gi, wi;
+reg [`OMNILOC_ADDR_W-1:0] widx;
+always @(*) begin
+    widx = {`OMNILOC_ADDR_W{1'b0}};
+    for (gi = 0; gi < (1 << MUX_HI); gi = gi + 1) begin
+        grp_d[gi] = {DATA_W{1'b0}};
+        for (wi = 0; wi < (1 << MUX_LO); wi = wi + 1) begin
+            widx = gi[`OMNILOC_ADDR_W-1:0] * (1 << MUX_LO) + wi[`OMNILOC_ADDR_W-1:0];
+            if ({{(32-MUX_LO){1'b0}}, rq_word[MUX_LO-1:0]} == wi) grp_d[gi] = word(widx);
+        end
+    end
+end
+reg [DATA_W-1:0] grp_q [0:(1<<MUX_HI)-1];
+reg [MUX_HI-1:0] grp_sel_q;
+reg              rd_e, ack_e, err_e;
+integer gq;
+always @(posedge clk_i) begin
+    for (gq = 0; gq < (1 << MUX_HI); gq = gq + 1) grp_q[gq] <= grp_d[gq];
+    grp_sel_q <= rq_word[MUX_LO +: MUX_HI];
+end
+
+wire latch_snapshot = rq_rd && rq_snap_seq;
+wire consumed = latch_snapshot || win_consumed_i;   // either latches the frozen bank
 wire overrun = capture_i && pending_q && !consumed;
 
 // STATUS after this cycle's events: set wins over a simultaneous write-one-to-clear.
@@ -201,7 +276,7 @@ always @(*) begin
     status_set[OVR_BIT] = overrun;
     status_set[BAD_BIT] = refused;
 end
-wire [ST_W-1:0] status_clr = wr_status ? reg_wdata_i[ST_W-1:0] : {ST_W{1'b0}};
+wire [ST_W-1:0] status_clr = wr_status ? rq_wdata[ST_W-1:0] : {ST_W{1'b0}};
 wire [ST_W-1:0] status_next = (status_q & ~status_clr) | status_set;
 
 reg [DATA_W-1:0] reg_rdata_q;
@@ -224,22 +299,20 @@ always @(posedge clk_i) begin
         win_ts_q <= {DATA_W{1'b0}};
         win_status_q <= {BYTE_W{1'b0}};
         pending_q <= 1'b0;
-        snap_ts_q <= {DATA_W{1'b0}};
-        snap_status_q <= {BYTE_W{1'b0}};
-        snap_dir_q <= {DIR_W{1'b0}};
-        snap_count_q <= {CH*DATA_W{1'b0}};
-        snap_pos_q <= {CH*DATA_W{1'b0}};
+        rd_e <= 1'b0;
+        ack_e <= 1'b0;
+        err_e <= 1'b0;
         reg_rdata_q <= {DATA_W{1'b0}};
         reg_ack_q <= 1'b0;
         reg_err_q <= 1'b0;
     end else begin
         if (wr_control) begin
-            enable_q <= reg_wdata_i[`OMNILOC_CONTROL_ENABLE_LSB];
+            enable_q <= rq_wdata[`OMNILOC_CONTROL_ENABLE_LSB];
             decode_q <= wdecode;
-            stream_q <= reg_wdata_i[`OMNILOC_CONTROL_STREAM_LSB];
+            stream_q <= rq_wdata[`OMNILOC_CONTROL_STREAM_LSB];
         end
-        if (wr_filter) filter_q <= reg_wdata_i[`OMNILOC_FILTER_LENGTH_LSB +: FLT_W];
-        if (wr_period) period_q <= reg_wdata_i;
+        if (wr_filter) filter_q <= rq_wdata[`OMNILOC_FILTER_LENGTH_LSB +: FLT_W];
+        if (wr_period) period_q <= rq_wdata;
         status_q <= status_next;
 
         win_valid_q <= capture_i;
@@ -252,19 +325,26 @@ always @(posedge clk_i) begin
             pending_q <= 1'b0;
         end
 
-        // The bank is copied as it stands before this edge, so it is one window even when a
-        // capture happens in the same cycle (the new window goes to the bank, not the shadow).
-        if (latch_snapshot) begin
-            snap_ts_q <= win_ts_q;
-            snap_status_q <= win_status_q;
-            snap_dir_q <= win_dir_i;
-            snap_count_q <= win_count_i;
-            snap_pos_q <= win_position_i;
-        end
+        // Stage E answer, then stage O.
+        rd_e  <= rq_rd && rq_known;
+        ack_e <= rq_rd || rq_wr || rq_both;
+        err_e <= rq_both || (rq_rd && !rq_known) || (rq_wr && (!rq_known || !rq_writable)) || refused;
+        reg_ack_q   <= ack_e;
+        reg_err_q   <= err_e;
+        reg_rdata_q <= rd_e ? grp_q[grp_sel_q] : {DATA_W{1'b0}};
+    end
+end
 
-        reg_ack_q <= reg_rd_i || reg_wr_i;
-        reg_err_q <= both || (rd && !known) || (wr && (!known || !writable)) || refused;
-        reg_rdata_q <= rd ? rdata : {DATA_W{1'b0}};
+// The bank is copied as it stands before this edge, so it is one window even when a capture
+// happens in the same cycle (the new window goes to the live bank, not the frozen one).
+always @(posedge clk_i) begin
+    if (consumed) begin
+        fz_body_q[W_SEQ +: DATA_W] <= seq_q;
+        fz_body_q[W_TS +: DATA_W] <= win_ts_q;
+        fz_body_q[W_COUNT +: CH*DATA_W] <= win_count_i;
+        fz_body_q[W_DIR +: BDIR_W] <= {{(BDIR_W - DIR_W){1'b0}}, win_dir_i};
+        fz_body_q[W_STAT +: BYTE_W] <= win_status_q;
+        fz_pos_q <= win_position_i;
     end
 end
 
@@ -284,10 +364,12 @@ end
 
 always @(posedge clk_i) begin
     if (f_past_valid && !$past(rst_i) && !rst_i) begin
-        // Every request is answered exactly one cycle later.
-        assert (reg_ack_q == ($past(reg_rd_i) || $past(reg_wr_i)));
+        // Every request takes effect one cycle later (stage E) and is answered one more cycle after.
+        assert ((rq_rd || rq_wr || rq_both) == ($past(reg_rd_i) || $past(reg_wr_i)));
+        assert (ack_e == $past(rq_rd || rq_wr || rq_both));
+        assert (reg_ack_q == $past(ack_e) && reg_err_q == $past(err_e));
         // A refused or erroneous write leaves the control registers unchanged.
-        if (reg_err_q) begin
+        if (err_e) begin
             assert (enable_q == $past(enable_q) && decode_q == $past(decode_q));
             assert (filter_q == $past(filter_q) && period_q == $past(period_q));
         end

@@ -57,17 +57,43 @@ module frame_rx #(
     reg [7:0]         crc_hi_q;
     reg [TIMER_W-1:0] timer_q;
 
+    // Input stage: a byte is taken into in_byte_q (load) and its checks against the byte itself are
+    // registered with it (in_*_q); the parser works on it in the next cycle (take), so no decision
+    // of the parser depends on byte_i in the same cycle. One byte a cycle at most every other
+    // cycle, far above the UART's rate (120 cycles a byte at 12 MHz / 1 Mbaud).
+    reg       in_full_q;
+    reg [7:0] in_byte_q;
+    reg       in_sync_q;      // the byte is SYNC
+    reg       in_len_bad_q;   // as LEN: 0 or above MAX_LEN
+    reg       in_crc_ok_q;    // as CRC_LO: {crc_hi_q, byte} == crc_q
+    assign byte_ready_o = (state_q != S_EVENT) && !in_full_q;
+    wire load = byte_valid_i && byte_ready_o;
+    wire take = in_full_q;
+
     wire [15:0] crc_next;
-    crc16_ccitt crc_step (.crc_i(crc_q), .data_i(byte_i), .crc_o(crc_next));
+    crc16_ccitt crc_step (.crc_i(crc_q), .data_i(in_byte_q), .crc_o(crc_next));
 
-    assign byte_ready_o = (state_q != S_EVENT);
-    wire take = byte_valid_i && byte_ready_o;
-
-    // Is (TYPE, LEN) a request this board serves?
+    // Is (TYPE, LEN) a request this board serves? Decided when TYPE is parsed (len_q is known then).
     wire [7:0] body_len = len_q - 8'd1;
-    wire known_read  = (type_q == `OMNILOC_FRAME_READ_REQ)     && (body_len == `OMNILOC_FRAME_READ_REQ_BODY_BYTES);
-    wire known_write = (type_q == `OMNILOC_FRAME_WRITE_REQ)    && (body_len == `OMNILOC_FRAME_WRITE_REQ_BODY_BYTES);
-    wire known_snap  = (type_q == `OMNILOC_FRAME_SNAPSHOT_REQ) && (body_len == `OMNILOC_FRAME_SNAPSHOT_REQ_BODY_BYTES);
+    reg known_q, known_write_q;
+    wire known_read_d  = (in_byte_q == `OMNILOC_FRAME_READ_REQ)     && (body_len == `OMNILOC_FRAME_READ_REQ_BODY_BYTES);
+    wire known_write_d = (in_byte_q == `OMNILOC_FRAME_WRITE_REQ)    && (body_len == `OMNILOC_FRAME_WRITE_REQ_BODY_BYTES);
+    wire known_snap_d  = (in_byte_q == `OMNILOC_FRAME_SNAPSHOT_REQ) && (body_len == `OMNILOC_FRAME_SNAPSHOT_REQ_BODY_BYTES);
+    wire in_frame = (state_q != S_HUNT) && (state_q != S_EVENT);
+
+    // Input stage and data registers: no reset (each is written before it is used).
+    always @(posedge clk_i) begin
+        if (load) begin
+            in_byte_q    <= byte_i;
+            in_sync_q    <= (byte_i == `OMNILOC_FRAME_SYNC);
+            in_len_bad_q <= (byte_i == 8'd0) || (byte_i > MAX_LEN[7:0]);
+            in_crc_ok_q  <= ({crc_hi_q, byte_i} == crc_q);
+        end
+        if (take && state_q == S_TYPE) begin
+            known_q       <= known_read_d || known_write_d || known_snap_d;
+            known_write_q <= known_write_d;
+        end
+    end
 
     task raise_error(input [7:0] code, input [7:0] detail);
         begin
@@ -83,6 +109,7 @@ module frame_rx #(
     always @(posedge clk_i) begin
         if (rst_i) begin
             state_q    <= S_HUNT;
+            in_full_q  <= 1'b0;
             len_q      <= 8'd0;
             left_q     <= 8'd0;
             type_q     <= 8'd0;
@@ -96,61 +123,63 @@ module frame_rx #(
             ev_addr_o  <= {ADDR_W{1'b0}};
             ev_data_o  <= {DATA_W{1'b0}};
         end else begin
-            // Inter-byte timeout inside a frame.
-            if (state_q != S_HUNT && state_q != S_EVENT) begin
-                if (take) timer_q <= {TIMER_W{1'b0}};
-                else if (timer_q != TIMEOUT) timer_q <= timer_q + 1'b1;
+            in_full_q <= load;
+            // Inter-byte timeout inside a frame, from the cycle a byte is taken by the input stage
+            // (a SYNC parsed now opens the frame, as if it had been parsed when it was taken).
+            if (load) timer_q <= {TIMER_W{1'b0}};
+            else if (in_frame || (take && state_q == S_HUNT && in_sync_q)) begin
+                if (timer_q != TIMEOUT) timer_q <= timer_q + 1'b1;
             end else begin
                 timer_q <= {TIMER_W{1'b0}};
             end
 
-            if (state_q != S_HUNT && state_q != S_EVENT && !take && timer_q == TIMEOUT) begin
+            if (in_frame && !take && !load && timer_q == TIMEOUT) begin
                 raise_error(`OMNILOC_ERR_MALFORMED, 8'hFF);
             end else begin
                 case (state_q)
-                    S_HUNT: if (take && byte_i == `OMNILOC_FRAME_SYNC) begin
+                    S_HUNT: if (take && in_sync_q) begin
                         state_q <= S_LEN;
                         crc_q   <= `OMNILOC_CRC_INIT;
                     end
                     S_LEN: if (take) begin
-                        if (byte_i == 8'd0 || byte_i > MAX_LEN[7:0]) begin
-                            raise_error(`OMNILOC_ERR_MALFORMED, byte_i);
+                        if (in_len_bad_q) begin
+                            raise_error(`OMNILOC_ERR_MALFORMED, in_byte_q);
                         end else begin
-                            len_q   <= byte_i;
-                            left_q  <= byte_i - 8'd1;
+                            len_q   <= in_byte_q;
+                            left_q  <= in_byte_q - 8'd1;
                             crc_q   <= crc_next;
                             state_q <= S_TYPE;
                         end
                     end
                     S_TYPE: if (take) begin
-                        type_q  <= byte_i;
+                        type_q  <= in_byte_q;
                         crc_q   <= crc_next;
                         body_q  <= {8*MAX_BODY{1'b0}};
                         state_q <= (left_q == 8'd0) ? S_CRC_HI : S_BODY;
                     end
                     S_BODY: if (take) begin
-                        body_q  <= {byte_i, body_q[8*MAX_BODY-1:8]};
+                        body_q  <= {in_byte_q, body_q[8*MAX_BODY-1:8]};
                         crc_q   <= crc_next;
                         left_q  <= left_q - 8'd1;
                         if (left_q == 8'd1) state_q <= S_CRC_HI;
                     end
                     S_CRC_HI: if (take) begin
-                        crc_hi_q <= byte_i;
+                        crc_hi_q <= in_byte_q;
                         state_q  <= S_CRC_LO;
                     end
                     S_CRC_LO: if (take) begin
-                        if ({crc_hi_q, byte_i} != crc_q) begin
+                        if (!in_crc_ok_q) begin
                             raise_error(`OMNILOC_ERR_BAD_CRC, type_q);
-                        end else if (!(known_read || known_write || known_snap)) begin
+                        end else if (!known_q) begin
                             raise_error(`OMNILOC_ERR_MALFORMED, type_q);
                         end else begin
                             // The fields at their layout's offsets (a WRITE_REQ fills body_q, a
                             // READ_REQ sits in its top bytes).
                             ev_error_o <= 1'b0;
                             ev_code_o  <= type_q;
-                            ev_addr_o  <= known_write ? body_q[`OMNILOC_BODY_REG_VALUE_ADDR_LSB +: `OMNILOC_BODY_REG_VALUE_ADDR_W]
+                            ev_addr_o  <= known_write_q ? body_q[`OMNILOC_BODY_REG_VALUE_ADDR_LSB +: `OMNILOC_BODY_REG_VALUE_ADDR_W]
                                                       : body_q[READ_BASE + `OMNILOC_BODY_REG_ADDR_ADDR_LSB +: `OMNILOC_BODY_REG_ADDR_ADDR_W];
-                            ev_data_o  <= known_write ? body_q[`OMNILOC_BODY_REG_VALUE_DATA_LSB +: `OMNILOC_BODY_REG_VALUE_DATA_W]
+                            ev_data_o  <= known_write_q ? body_q[`OMNILOC_BODY_REG_VALUE_DATA_LSB +: `OMNILOC_BODY_REG_VALUE_DATA_W]
                                                       : {DATA_W{1'b0}};
                             ev_valid_o <= 1'b1;
                             state_q    <= S_EVENT;
@@ -184,6 +213,15 @@ module frame_rx #(
             if (ev_valid_o && !$past(ev_valid_o) && !ev_error_o) assert($past(state_q) == S_CRC_LO);
             assert(ev_valid_o == (state_q == S_EVENT));
             assert(left_q < MAX_LEN);
+            // The input stage's flags describe its byte (auxiliary invariant for the induction).
+            // known_q was decided from TYPE (auxiliary invariant for the induction).
+            if ((state_q == S_BODY || state_q == S_CRC_HI || state_q == S_CRC_LO) && known_q)
+                assert(type_q == `OMNILOC_FRAME_READ_REQ || type_q == `OMNILOC_FRAME_WRITE_REQ
+                       || type_q == `OMNILOC_FRAME_SNAPSHOT_REQ);
+            if (in_full_q) begin
+                assert(in_len_bad_q == ((in_byte_q == 8'd0) || (in_byte_q > MAX_LEN[7:0])));
+                assert(in_sync_q == (in_byte_q == `OMNILOC_FRAME_SYNC));
+            end
         end
     end
 `endif

@@ -43,17 +43,26 @@ assign valid_o = prime_q[2];
 
 // run_q counts the cycles the synchronized input has differed from out_q, minus one.
 wire differs = (sync2_q != out_q);
-// The filter length, decoded once a cycle into registers of this conditioner: FILTER fans out to
-// all eight conditioners, and a subtract and compare behind that fan-out kept the iCE40 build
-// under 40 MHz. A new length takes effect one cycle after it is written (the reset value at once).
-reg                 off_q;     // len_i <= 1: the filter is off
-reg [LEN_W-1:0]     last_q;    // len_i - 1: the run length that settles a level
+// The filter length, decoded once a cycle into registers (FILTER fans out to all eight
+// conditioners; a subtract and compare behind that fan-out kept the iCE40 build slow).
+// settled_q: the level differing now has held long enough (or the filter is off), i.e.
+// len <= 1 || run_q >= len - 1, computed a cycle ahead from the run this cycle makes (0, or
+// run_q + 1: run_q + 1 >= len - 1 is run_q >= len - 2), so no compare sits between run_q and the
+// decision. So a new length takes effect two cycles after it is written. '>=' (not '==') so that
+// shortening the filter in mid-run never strands a run past its end.
+localparam [LEN_W-1:0] ONE = {{(LEN_W-1){1'b0}}, 1'b1};
+reg             off_q;     // len_i <= 1: the filter is off
+reg [LEN_W-1:0] lm2_q;     // len_i - 2
 always @(posedge clk_i) begin
-    off_q <= (len_i <= {{(LEN_W-1){1'b0}}, 1'b1});
-    last_q <= len_i - {{(LEN_W-1){1'b0}}, 1'b1};
+    off_q <= (len_i <= ONE);
+    lm2_q <= len_i - (ONE + ONE);
 end
-// '>=' (not '==') so that shortening the filter in mid-run never strands a run past its end.
-wire settled = off_q || (run_q >= last_q);
+reg  settled_q;
+wire settled = settled_q;
+
+// The run grows this cycle (the last branch below).
+wire grows = !rst_i && prime_q[2] && differs && !settled;
+always @(posedge clk_i) settled_q <= off_q || (grows && (run_q >= lm2_q));
 
 always @(posedge clk_i) begin
     if (rst_i) begin
@@ -85,6 +94,9 @@ end
 `ifdef FORMAL
 reg f_past_valid = 1'b0;
 always @(posedge clk_i) f_past_valid <= 1'b1;
+wire [LEN_W-1:0] f_lm2 = len_i - (ONE + ONE);
+reg f_past2_valid = 1'b0;
+always @(posedge clk_i) f_past2_valid <= f_past_valid;
 initial assume (rst_i);
 
 // Independent measure: consecutive cycles (up to saturation) that sync2_q has held its value.
@@ -105,6 +117,11 @@ always @(*) begin
 end
 
 always @(*) begin
+    // The decoded length and settled_q are what they replace (auxiliary invariants; len_i is
+    // constant here, and the decode needs two cycles after the start).
+    if (f_past_valid) assert (off_q == (len_i <= 1) && lm2_q == f_lm2);
+    if (f_past2_valid && !rst_i)
+        assert (settled_q == ((len_i <= 1) || ({1'b0, run_q} + 1'b1 >= {1'b0, len_i})));
     if (f_past_valid && !rst_i && prime_q[2]) begin
         // run_q is the run length of the differing level minus one, bounded by the filter.
         if (differs && len_i > 1) assert ({1'b0, run_q} + 1'b1 == f_held);

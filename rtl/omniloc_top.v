@@ -61,10 +61,13 @@ module omniloc_top #(
     localparam integer BODY_BYTES = `OMNILOC_FRAME_TELEMETRY_BODY_BYTES;
     wire                    ftx_start, ftx_ready;
     wire [7:0]              ftx_type, ftx_len;
-    wire [8*BODY_BYTES-1:0] ftx_body;
+    localparam integer IDX_W = $clog2(BODY_BYTES + 1);
+    wire [IDX_W-1:0]        ftx_idx;
+    wire [7:0]              ftx_byte;
     frame_tx #(.MAX_BODY_BYTES(BODY_BYTES)) u_frame_tx (
         .clk_i(clk_i), .rst_i(rst_i),
-        .start_i(ftx_start), .ready_o(ftx_ready), .type_i(ftx_type), .body_len_i(ftx_len), .body_i(ftx_body),
+        .start_i(ftx_start), .ready_o(ftx_ready), .type_i(ftx_type), .body_len_i(ftx_len),
+        .body_idx_o(ftx_idx), .body_byte_i(ftx_byte),
         .byte_o(tx_byte), .byte_valid_o(tx_valid), .byte_ready_i(tx_ready));
 
     // ---- register bus: LINK_ERRORS here, the rest in the core ----
@@ -100,6 +103,7 @@ module omniloc_top #(
     wire        bus_err   = link_ack_q ? link_err_q : core_err;
 
     wire                 win_valid, win_consumed, stream_en, tick;
+    wire [7:0]           bank_byte;
     wire [DATA_W-1:0]    win_seq, win_ts;
     wire [CH*DATA_W-1:0] win_count, win_position;
     wire [CH-1:0]        win_dir;
@@ -110,18 +114,19 @@ module omniloc_top #(
         .reg_wdata_i(bus_wdata), .reg_rdata_o(core_rdata), .reg_ack_o(core_ack), .reg_err_o(core_err),
         .win_valid_o(win_valid), .win_seq_o(win_seq), .win_timestamp_o(win_ts), .win_count_o(win_count),
         .win_position_o(win_position), .win_dir_o(win_dir), .status_o(status),
-        .win_consumed_i(win_consumed), .stream_en_o(stream_en), .tick_o(tick));
+        .win_consumed_i(win_consumed), .stream_en_o(stream_en), .tick_o(tick),
+        .bank_idx_i(ftx_idx), .bank_byte_o(bank_byte));
 
     link_engine u_link (
         .clk_i(clk_i), .rst_i(rst_i),
         .ev_valid_i(ev_valid), .ev_ready_o(ev_ready), .ev_error_i(ev_error), .ev_code_i(ev_code),
         .ev_addr_i(ev_addr), .ev_data_i(ev_data),
         .tx_start_o(ftx_start), .tx_ready_i(ftx_ready), .tx_type_o(ftx_type), .tx_body_len_o(ftx_len),
-        .tx_body_o(ftx_body),
+        .tx_idx_i(ftx_idx), .tx_byte_o(ftx_byte),
         .reg_addr_o(bus_addr), .reg_rd_o(bus_rd), .reg_wr_o(bus_wr), .reg_wdata_o(bus_wdata),
         .reg_rdata_i(bus_rdata), .reg_ack_i(bus_ack), .reg_err_i(bus_err),
-        .stream_en_i(stream_en), .win_valid_i(win_valid), .win_seq_i(win_seq), .win_timestamp_i(win_ts),
-        .win_count_i(win_count), .win_dir_i(win_dir), .status_i(status), .win_consumed_o(win_consumed));
+        .stream_en_i(stream_en), .win_valid_i(win_valid), .bank_byte_i(bank_byte),
+        .win_consumed_o(win_consumed));
 
     // ---- LEDs: activity held for 5 window ticks (~50 ms), errors sticky ----
     // Counting ticks rather than clock cycles keeps the counter at 3 bits (no long carry chain).
@@ -136,8 +141,9 @@ module omniloc_top #(
                    || status[`OMNILOC_STATUS_BAD_WRITE_LSB]
                    || (|rx_framing) || (|rx_overruns);
 
-    // win_position is for other tops (e.g. a position display); unused here.
-    wire unused_ok = &{1'b0, win_position};
+    // The live window and positions are for other tops (e.g. a position display); the link sends
+    // the frozen bank.
+    wire unused_ok = &{1'b0, win_position, win_seq, win_ts, win_count, win_dir, status};
 
 endmodule
 

@@ -37,10 +37,19 @@ module tick_generator #(
 localparam integer P_W = `OMNILOC_PERIOD_CYCLES_W;   // PERIOD.CYCLES
 localparam integer TS_W = `OMNILOC_DATA_W;           // TIMESTAMP
 localparam [P_W-1:0] DEFAULT_PERIOD_CYCLES = CLK_HZ / TICK_HZ;
-localparam [P_W-1:0] ONE = {{(P_W-1){1'b0}}, 1'b1};
 
-// Counts down to zero; the cycle after it reads zero is the tick, so tick_o is a plain flop.
-reg [P_W-1:0]  remain_q;
+// Counts down from the period to one; the cycle after it reads one is the tick, so tick_o is a
+// plain flop. The counter is split in halves so that no carry chain is P_W bits long and nothing
+// but registered flags decides: lo_zero_q / lo_one_q (low half 0 / 1) and hi_zero_q (high half 0)
+// are kept in step with the count (from the period at a reload, from the halves when counting).
+localparam integer LO_W = P_W / 2;
+localparam integer HI_W = P_W - LO_W;
+localparam [LO_W-1:0] LO_ONE = {{(LO_W-1){1'b0}}, 1'b1};
+localparam [HI_W-1:0] HI_ONE = {{(HI_W-1){1'b0}}, 1'b1};
+reg [LO_W-1:0] lo_q;
+reg [HI_W-1:0] hi_q;
+reg            lo_zero_q, lo_one_q, hi_zero_q;
+wire           at_one = lo_one_q && hi_zero_q;   // the count is 1: the last cycle of the window
 reg [P_W-1:0]  period_q;
 reg            tick_q;
 reg [TS_W-1:0] timestamp_q;
@@ -51,24 +60,37 @@ assign timestamp_o = timestamp_q;
 
 always @(posedge clk_i) begin
     if (rst_i) begin
-        remain_q <= DEFAULT_PERIOD_CYCLES - ONE;
+        {hi_q, lo_q} <= DEFAULT_PERIOD_CYCLES;
+        lo_zero_q <= (DEFAULT_PERIOD_CYCLES[LO_W-1:0] == {LO_W{1'b0}});
+        lo_one_q <= (DEFAULT_PERIOD_CYCLES[LO_W-1:0] == LO_ONE);
+        hi_zero_q <= (DEFAULT_PERIOD_CYCLES[P_W-1:LO_W] == {HI_W{1'b0}});
         period_q <= DEFAULT_PERIOD_CYCLES;
         tick_q <= 1'b0;
         timestamp_q <= {TS_W{1'b0}};
     end else begin
         timestamp_q <= timestamp_q + 1'b1;
-        tick_q <= (remain_q == {P_W{1'b0}});
-        if (remain_q == {P_W{1'b0}}) begin
-            remain_q <= period_i - ONE;
+        tick_q <= at_one;
+        if (at_one) begin
+            {hi_q, lo_q} <= period_i;
+            lo_zero_q <= (period_i[LO_W-1:0] == {LO_W{1'b0}});
+            lo_one_q <= (period_i[LO_W-1:0] == LO_ONE);
+            hi_zero_q <= (period_i[P_W-1:LO_W] == {HI_W{1'b0}});
             period_q <= period_i;
         end else begin
-            remain_q <= remain_q - ONE;
+            lo_q <= lo_q - LO_ONE;
+            lo_zero_q <= lo_one_q;
+            lo_one_q <= (lo_q == LO_ONE + LO_ONE);
+            if (lo_zero_q) begin
+                hi_q <= hi_q - HI_ONE;
+                hi_zero_q <= (hi_q == HI_ONE);
+            end
         end
     end
 end
 
 `ifdef FORMAL
 // Formal harness: prove exact tick spacing against an independent cycle counter.
+wire [P_W-1:0] remain_q = {hi_q, lo_q} - {{(P_W-1){1'b0}}, 1'b1};    // cycles left after this one
 reg f_past_valid = 1'b0;
 always @(posedge clk_i) f_past_valid <= 1'b1;
 initial assume (rst_i);
@@ -83,7 +105,7 @@ always @(posedge clk_i) begin
         f_ending_period <= DEFAULT_PERIOD_CYCLES;
     end else begin
         f_since <= tick_q ? 32'd1 : f_since + 32'd1;
-        if (remain_q == 32'd0) f_ending_period <= period_q;
+        if (at_one) f_ending_period <= period_q;
     end
 end
 
@@ -98,6 +120,8 @@ always @(*) begin
         assert (period_q >= 32'd2 && period_q <= 32'd12);
         assert (f_ending_period >= 32'd2 && f_ending_period <= 32'd12);
         assert (remain_q < period_q);
+        // The flags describe the halves (what the split counter relies on).
+        assert (lo_zero_q == (lo_q == 0) && lo_one_q == (lo_q == 1) && hi_zero_q == (hi_q == 0));
         if (tick_q) begin
             // Tick spacing: exactly the period of the window that just ended.
             assert (f_since == f_ending_period);

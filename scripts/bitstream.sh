@@ -1,8 +1,12 @@
 #!/usr/bin/env bash
-# iCEBreaker bitstream with the open iCE40 flow: yosys synth_ice40 -> nextpnr-ice40 (timed at
-# PAPER_CLOCK_HZ of common/regmap.json, 40 MHz, the paper's FPGA clock) -> icepack. Fails when timing
-# fails; prints the achieved Fmax and the utilisation from nextpnr's JSON report.
+# iCEBreaker bitstream with the open iCE40 flow: yosys synth_ice40 -> nextpnr-ice40 -> icepack.
+# Timing: nextpnr places for TIMING_TARGET_HZ of common/regmap.json "link" (60 MHz, the goal of
+# issue 14) at seed 1 only (no seed sweep), and the script fails when seed 1 misses
+# TIMING_REQUIRED_HZ (40 MHz, what the design meets today; raised as it gets faster). Seeds 2-5
+# are placed as information (their Fmax printed, never used). Prints the utilisation from nextpnr's report and
+# per module (yosys synth_ice40 -noflatten: LUT4, flip-flops, carries of each module, own cells only).
 # Usage: scripts/bitstream.sh [BUILD_DIR]
+#   BITSTREAM_SEEDS (environment) overrides the information seeds (default "2 3 4 5"; "" = none).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=$(realpath -m "${1:-build}")
@@ -10,36 +14,54 @@ out="$build/icebreaker"
 mkdir -p "$out"
 cd "$root"
 
-# The timing target in MHz, from the generated header (one source: common/regmap.json "link").
-target_hz=$(sed -n 's/^`define OMNILOC_PAPER_CLOCK_HZ \([0-9]*\)$/\1/p' rtl/include/omniloc_regs.vh)
+# The timing target, from the generated header (one source: common/regmap.json "link").
+target_hz=$(sed -n 's/^`define OMNILOC_TIMING_TARGET_HZ \([0-9]*\)$/\1/p' rtl/include/omniloc_regs.vh)
 if [ -z "$target_hz" ]; then
-  echo "bitstream: error: no OMNILOC_PAPER_CLOCK_HZ in rtl/include/omniloc_regs.vh" >&2
+  echo "bitstream: error: no OMNILOC_TIMING_TARGET_HZ in rtl/include/omniloc_regs.vh" >&2
   exit 1
 fi
 mhz=$(python3 -c "print(f'{$target_hz / 1e6:g}')")
+required_hz=$(sed -n 's/^`define OMNILOC_TIMING_REQUIRED_HZ \([0-9]*\)$/\1/p' rtl/include/omniloc_regs.vh)
+if [ -z "$required_hz" ]; then
+  echo "bitstream: error: no OMNILOC_TIMING_REQUIRED_HZ in rtl/include/omniloc_regs.vh" >&2
+  exit 1
+fi
+required_mhz=$(python3 -c "print(f'{$required_hz / 1e6:g}')")
 
 mapfile -t sources < <(ls rtl/*.v)
 echo "bitstream: synthesising icebreaker_top from ${#sources[@]} RTL files (log: $out/yosys.log)"
 yosys -q -l "$out/yosys.log" -p "read_verilog -Irtl/include ${sources[*]}; synth_ice40 -top icebreaker_top -json $out/omniloc.json"
+yosys -q -l "$out/yosys_modules.log" -p "read_verilog -Irtl/include ${sources[*]}; synth_ice40 -noflatten -top icebreaker_top; tee -o $out/modules.stat stat"
 
-# Timing closure at 40 MHz is within a few per cent of the 32-bit counters' carry chains, so the
-# placement seed matters: try a few seeds, in order, and keep the first that meets the target (the
-# seed is printed; the same sources and seed give the same bitstream).
-seeds=(1 2 3 4 5 6)
-ok=0
-for seed in "${seeds[@]}"; do
-  echo "bitstream: place and route, target $mhz MHz, seed $seed (log: $out/nextpnr.log)"
-  if nextpnr-ice40 --up5k --package sg48 --json "$out/omniloc.json" --pcf constraints/icebreaker.pcf \
-       --asc "$out/omniloc.asc" --freq "$mhz" --report "$out/report.json" --seed "$seed" -q -l "$out/nextpnr.log"; then
-    ok=1
-    break
-  fi
-  echo "bitstream: seed $seed: $(grep -E 'Max frequency' "$out/nextpnr.log" | tail -1 | sed 's/^[A-Za-z]*: //')"
+# nextpnr is told to finish even when timing fails, so that every seed reports its Fmax; the
+# verdict on seed 1 is nextpnr_report.py's.
+place() {  # $1 = seed, $2 = output prefix; returns nextpnr's status
+  nextpnr-ice40 --up5k --package sg48 --json "$out/omniloc.json" --pcf constraints/icebreaker.pcf \
+    --asc "$2.asc" --freq "$mhz" --timing-allow-fail --report "$2.json" --seed "$1" -q -l "$2.log"
+}
+fmax_of() {  # $1 = report JSON
+  python3 -c "import json,sys; r=json.load(open(sys.argv[1])); print(' '.join(f\"{v['achieved']:.1f}\" for v in r['fmax'].values()))" "$1"
+}
+
+echo "bitstream: place and route at seed 1 for $mhz MHz, required $required_mhz MHz (log: $out/nextpnr.log)"
+seed1_ok=1
+place 1 "$out/seed1" || seed1_ok=0
+cp "$out/seed1.log" "$out/nextpnr.log"
+[ -f "$out/seed1.json" ] && cp "$out/seed1.json" "$out/report.json"
+for seed in ${BITSTREAM_SEEDS-2 3 4 5}; do
+  place "$seed" "$out/seed$seed" || true
 done
-if [ $ok -ne 1 ]; then
-  echo "bitstream: error: no seed of ${seeds[*]} meets $mhz MHz; see $out/nextpnr.log" >&2
+for seed in 1 ${BITSTREAM_SEEDS-2 3 4 5}; do
+  if [ -f "$out/seed$seed.json" ]; then
+    echo "bitstream: seed $seed: Fmax $(fmax_of "$out/seed$seed.json") MHz$([ "$seed" = 1 ] && echo ' (the one that counts)' || echo ' (information)')"
+  else
+    echo "bitstream: seed $seed: no report (nextpnr failed, see $out/seed$seed.log)"
+  fi
+done
+python3 scripts/nextpnr_report.py "$out/seed1.json" --min-mhz "$required_mhz" --modules "$out/modules.stat" || seed1_ok=0
+if [ $seed1_ok -ne 1 ]; then
+  echo "bitstream: error: seed 1 does not meet the required $required_mhz MHz; see $out/nextpnr.log" >&2
   exit 1
 fi
-icepack "$out/omniloc.asc" "$out/omniloc.bin"
-python3 scripts/nextpnr_report.py "$out/report.json" --min-mhz "$mhz"
+icepack "$out/seed1.asc" "$out/omniloc.bin"
 echo "bitstream: wrote $out/omniloc.bin ($(stat -c %s "$out/omniloc.bin") bytes)"

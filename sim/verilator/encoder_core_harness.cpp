@@ -94,18 +94,28 @@ std::optional<BusResult> EncoderCoreHarness::response() const {
 
 BusResult EncoderCoreHarness::read(std::uint8_t addr) {
   issue_read(addr);
-  step();
+  for (int i = 0; i < kBusLatency; ++i) {
+    if (i > 0 && response()) {
+      throw std::logic_error("encoder_core: reg_ack_o too early after a read of address " + std::to_string(addr));
+    }
+    step();
+  }
   const auto r = response();
-  if (!r) throw std::logic_error("encoder_core: no reg_ack_o in the cycle after a read of address " +
+  if (!r) throw std::logic_error("encoder_core: no reg_ack_o " + std::to_string(kBusLatency) + " cycles after a read of address " +
                                  std::to_string(addr));
   return *r;
 }
 
 BusResult EncoderCoreHarness::write(std::uint8_t addr, std::uint32_t data) {
   issue_write(addr, data);
-  step();
+  for (int i = 0; i < kBusLatency; ++i) {
+    if (i > 0 && response()) {
+      throw std::logic_error("encoder_core: reg_ack_o too early after a write of address " + std::to_string(addr));
+    }
+    step();
+  }
   const auto r = response();
-  if (!r) throw std::logic_error("encoder_core: no reg_ack_o in the cycle after a write of address " +
+  if (!r) throw std::logic_error("encoder_core: no reg_ack_o " + std::to_string(kBusLatency) + " cycles after a write of address " +
                                  std::to_string(addr));
   return *r;
 }

@@ -57,9 +57,24 @@ struct RegisterModel {
   }
 };
 
-std::vector<std::uint8_t> body_bytes(const Vlink_engine& dut, int n) {
+// The frozen window bank of encoder_regs as the link reads it: byte k at bank_byte_i when tx_idx_i = k.
+void drive_bank(Vlink_engine& dut, const std::vector<std::uint8_t>& bank) {
+  dut.bank_byte_i = dut.tx_idx_i < bank.size() ? bank[dut.tx_idx_i] : 0;
+}
+
+// The body as frame_tx reads it: byte k through tx_idx_i / tx_byte_o (combinational).
+std::vector<std::uint8_t> body_bytes(Vlink_engine& dut, const std::vector<std::uint8_t>& bank, int n) {
   std::vector<std::uint8_t> b;
-  for (int k = 0; k < n; ++k) b.push_back(static_cast<std::uint8_t>(dut.tx_body_o[k / 4] >> (8 * (k % 4))));
+  const auto idx = dut.tx_idx_i;
+  for (int k = 0; k < n; ++k) {
+    dut.tx_idx_i = static_cast<std::uint8_t>(k);
+    drive_bank(dut, bank);
+    dut.eval();
+    b.push_back(dut.tx_byte_o);
+  }
+  dut.tx_idx_i = idx;
+  drive_bank(dut, bank);
+  dut.eval();
   return b;
 }
 
@@ -91,6 +106,10 @@ TEST(LinkEngine, RequestsSnapshotsAndStreamingMatchGoldenModel) {
   bool bus_err = false;
   std::uint32_t bus_data = 0;
   int tx_busy = 0;
+  Frame sending{};
+  int sending_len = -1;
+  std::vector<std::uint8_t> bank(26, 0);      // the frozen bank (latched by SNAP_SEQ reads and win_consumed_o)
+  std::vector<std::size_t> snapshot_answers;  // expected_responses slots waiting for their SNAP_SEQ read
   int requests_left = 3000;
   bool event_up = false;
   int next_window_in = 700;
@@ -136,11 +155,6 @@ TEST(LinkEngine, RequestsSnapshotsAndStreamingMatchGoldenModel) {
       if (stream) expected_telemetry.push_back({rm::kFrameTelemetry, win.body()});
     }
     dut.stream_en_i = stream;
-    dut.win_seq_i = win.seq;
-    dut.win_timestamp_i = win.ts;
-    for (int c = 0; c < 4; ++c) dut.win_count_i[c] = win.count[c];
-    dut.win_dir_i = win.dir;
-    dut.status_i = win.status;
 
     // Register bus: ack one cycle after the strobe, like encoder_regs.
     dut.reg_ack_i = 0;
@@ -177,18 +191,22 @@ TEST(LinkEngine, RequestsSnapshotsAndStreamingMatchGoldenModel) {
         else if (a == rm::kRegPeriod && dut.ev_data_i < rm::kPeriodMinCycles) expected_responses.push_back({rm::kFrameError, {rm::kErrBadValue, a}});
         else expected_responses.push_back({rm::kFrameWriteAck, {a}});
       } else {
-        std::vector<std::uint8_t> b;
-        for (auto addr : {rm::kRegSnapSeq, rm::kRegSnapTimestamp, rm::kRegSnapCount0, rm::kRegSnapCount1,
-                          rm::kRegSnapCount2, rm::kRegSnapCount3})
-          omniloc::tb::put_u32(b, regs.values[addr]);
-        b.push_back(static_cast<std::uint8_t>(regs.values[rm::kRegSnapDir]));
-        b.push_back(static_cast<std::uint8_t>(regs.values[rm::kRegSnapStatus]));
-        expected_responses.push_back({rm::kFrameSnapshotResp, b});
+        // The answer is the window latched by the SNAP_SEQ read that follows.
+        snapshot_answers.push_back(expected_responses.size());
+        expected_responses.push_back({rm::kFrameSnapshotResp, {}});
       }
       event_up = false;
     }
+    bool latch = dut.win_consumed_o;  // the bank takes the live window at this edge
     if (dut.reg_rd_o || dut.reg_wr_o) {
       ASSERT_FALSE(dut.reg_rd_o && dut.reg_wr_o);
+      if (dut.reg_rd_o && dut.reg_addr_o == rm::kRegSnapSeq) {
+        latch = true;
+        if (!snapshot_answers.empty()) {
+          expected_responses[snapshot_answers.front()].body = win.body();
+          snapshot_answers.erase(snapshot_answers.begin());
+        }
+      }
       ASSERT_EQ(pending_bus, -1) << "a second bus access before the ack";
       if (dut.reg_rd_o) {
         std::tie(bus_err, bus_data) = regs.read(dut.reg_addr_o);
@@ -199,14 +217,26 @@ TEST(LinkEngine, RequestsSnapshotsAndStreamingMatchGoldenModel) {
       pending_bus = 0;
     }
     if (dut.tx_start_o && dut.tx_ready_i) {
-      Frame f{dut.tx_type_o, body_bytes(dut, dut.tx_body_len_o)};
-      (f.type == rm::kFrameTelemetry ? telemetry : responses).push_back(f);
-      tx_busy = static_cast<int>(rng() % 200);
+      // frame_tx reads the body from its fourth byte on (after SYNC, LEN, TYPE): read it then.
+      sending = {dut.tx_type_o, {}};
+      sending_len = dut.tx_body_len_o;
+      tx_busy = 3 + static_cast<int>(rng() % 200);
     } else if (tx_busy > 0) {
+      if (sending_len >= 0) {
+        sending.body = body_bytes(dut, bank, sending_len);
+        (sending.type == rm::kFrameTelemetry ? telemetry : responses).push_back(sending);
+        sending_len = -1;
+      } else if (rng() % 8 == 0 || tx_busy == 1) {
+        // The body must stay as it was while the frame is on the line.
+        ASSERT_EQ(body_bytes(dut, bank, static_cast<int>(sending.body.size())), sending.body) << "body changed mid-frame";
+      }
       --tx_busy;
     }
     if (dut.win_consumed_o) ++consumed;
+    const auto live = win.body();
+    drive_bank(dut, bank);
     bench.step();
+    if (latch) bank = live;
   }
   ASSERT_EQ(responses.size(), expected_responses.size());
   for (std::size_t i = 0; i < responses.size(); ++i) ASSERT_EQ(responses[i], expected_responses[i]) << "response " << i;

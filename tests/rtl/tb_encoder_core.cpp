@@ -48,6 +48,7 @@ struct StreamReport {
   std::array<std::uint64_t, 4> counted{};
   std::uint64_t windows = 0;
   std::uint64_t snapshots = 0;
+  std::uint64_t relatched = 0;  // snapshots whose later reads saw a bank re-latched by a consume
   std::uint64_t cycles = 0;
 };
 
@@ -129,6 +130,15 @@ StreamReport run_streams(const StreamConfig& cfg, std::uint64_t seed,
   std::size_t reader_pos = 0;
   bool reader_active = false;
   std::vector<std::uint32_t> snap;
+  // The one frozen bank (docs/RTL.md): a SNAP_SEQ read or a consume strobe latches the last window
+  // captured before that edge; every SNAP_* read answers from the bank as it stood before its own
+  // edge. frozen_seq models it (0 = nothing latched yet); snap_frozen holds, per read of the
+  // snapshot, the window it must describe.
+  std::uint64_t live_seq = 0;     // windows captured at earlier edges
+  std::uint64_t frozen_seq = 0;
+  std::vector<std::uint64_t> snap_frozen;
+  int acting_read = -1;           // the address read in the previous cycle, or -1
+  int reader_wait = 0;            // cycles since the last read was issued
   std::uniform_int_distribution<int> reader_start(0, 199);
   std::uint64_t expected_seq = 1;
   bool consume_next = false;
@@ -148,22 +158,41 @@ StreamReport run_streams(const StreamConfig& cfg, std::uint64_t seed,
       }
     }
     h.set_pins(a_mask, b_mask);
-    if (consume_next) h.consume_window();
+    const bool consume_now = consume_next;
+    if (consume_now) h.consume_window();
     consume_next = false;
     // The snapshot reader issues one read per cycle.
     if (!reader_active && s > stream_start && reader_start(rng) == 0) {
       reader_active = true;
       reader_pos = 0;
       snap.clear();
+      snap_frozen.clear();
     }
-    const bool issued = reader_active && reader_pos < kSnapshotOrder.size();
-    if (issued) h.issue_read(kSnapshotOrder[reader_pos++]);
+    bool latch = consume_now;
+    // The read issued in the previous cycle takes effect at this edge (the bus is pipelined):
+    // SNAP_SEQ answers the live SEQ and latches; the other SNAP_* answer the bank before this edge.
+    if (acting_read >= 0) {
+      const bool is_seq = acting_read == rm::kRegSnapSeq;
+      snap_frozen.push_back(is_seq ? live_seq : frozen_seq);
+      latch = latch || is_seq;
+      acting_read = -1;
+    }
+    if (latch) frozen_seq = live_seq;
+    if (reader_active && reader_pos < kSnapshotOrder.size()) {
+      acting_read = kSnapshotOrder[reader_pos];
+      h.issue_read(kSnapshotOrder[reader_pos++]);
+      reader_wait = 0;
+    }
     h.step();
 
-    if (issued) {
-      const auto r = h.response();
-      if (!r || r->err) {
-        fail("snapshot read not acknowledged or refused");
+    if (reader_active && reader_pos == kSnapshotOrder.size() &&
+        ++reader_wait > EncoderCoreHarness::kBusLatency) {
+      fail("snapshot read not acknowledged");
+      break;
+    }
+    if (const auto r = h.response(); reader_active && r) {
+      if (r->err) {
+        fail("snapshot read refused");
         break;
       }
       snap.push_back(r->data);
@@ -171,25 +200,37 @@ StreamReport run_streams(const StreamConfig& cfg, std::uint64_t seed,
         reader_active = false;
         ++rep.snapshots;
         const std::uint32_t seq = snap[0];
+        if (seq != snap_frozen[0]) {
+          fail("SNAP_SEQ " + std::to_string(seq) + ", golden " + std::to_string(snap_frozen[0]));
+        }
         if (seq >= 1 && seq <= ticks.size()) {
-          const std::size_t k = seq - 1;
-          std::uint32_t dir = 0;
+          // Each read against the window the bank held at its edge (a consume strobe in the middle
+          // of the sequence re-latches the bank, with STREAM on the link's TELEMETRY does that).
+          auto window_of = [&](std::size_t i) -> std::size_t { return snap_frozen[i] - 1; };
           for (int ch = 0; ch < 4; ++ch) {
-            if (static_cast<std::int32_t>(snap[1 + ch]) != golden[ch][k].count ||
-                snap[5 + ch] != golden[ch][k].position) {
+            const std::size_t kc = window_of(1 + ch), kp = window_of(5 + ch);
+            if (snap_frozen[1 + ch] == 0 || snap_frozen[5 + ch] == 0 ||
+                static_cast<std::int32_t>(snap[1 + ch]) != golden[ch][kc].count ||
+                snap[5 + ch] != golden[ch][kp].position) {
               std::ostringstream os;
               os << "torn or wrong snapshot of window " << seq << " channel " << ch << ": count "
                  << static_cast<std::int32_t>(snap[1 + ch]) << " position " << snap[5 + ch]
-                 << ", golden " << golden[ch][k].count << " / " << golden[ch][k].position;
+                 << ", golden (windows " << snap_frozen[1 + ch] << ", " << snap_frozen[5 + ch] << ") "
+                 << (snap_frozen[1 + ch] ? golden[ch][kc].count : 0) << " / "
+                 << (snap_frozen[5 + ch] ? golden[ch][kp].position : 0u);
               fail(os.str());
             }
-            dir |= (golden[ch][k].dir ? 1u : 0u) << ch;
           }
-          if (snap[9] != dir) fail("snapshot SNAP_DIR mismatch in window " + std::to_string(seq));
-          if (snap[10] != static_cast<std::uint32_t>(ticks[k] - 1)) {
+          std::uint32_t dir = 0;
+          const std::size_t kd = window_of(9);
+          for (int ch = 0; ch < 4; ++ch) dir |= (golden[ch][kd].dir ? 1u : 0u) << ch;
+          if (snap[9] != dir) fail("snapshot SNAP_DIR mismatch in window " + std::to_string(kd + 1));
+          const std::size_t kt = window_of(10);
+          if (snap[10] != static_cast<std::uint32_t>(ticks[kt] - 1)) {
             fail("snapshot SNAP_TIMESTAMP " + std::to_string(snap[10]) + " != golden " +
-                 std::to_string(ticks[k] - 1) + " in window " + std::to_string(seq));
+                 std::to_string(ticks[kt] - 1) + " in window " + std::to_string(kt + 1));
           }
+          if (snap_frozen.back() != seq) ++rep.relatched;
         } else if (seq != 0) {
           fail("SNAP_SEQ out of range: " + std::to_string(seq));
         }
@@ -229,6 +270,7 @@ StreamReport run_streams(const StreamConfig& cfg, std::uint64_t seed,
       }
       ++rep.windows;
       ++expected_seq;
+      live_seq = w.seq;
     }
   }
   if (rep.failure.empty() && rep.windows != ticks.size()) {
@@ -256,7 +298,7 @@ void run_and_check(const StreamConfig& cfg, std::uint64_t default_seed) {
   const std::uint64_t seed = omniloc::rtl_tb::test_seed(cfg.name, default_seed);
   const auto rep = run_streams(cfg, seed, nullptr);
   std::cout << "[" << cfg.name << "] cycles=" << rep.cycles << " windows=" << rep.windows
-            << " snapshots=" << rep.snapshots << "\n";
+            << " snapshots=" << rep.snapshots << " re-latched mid-snapshot=" << rep.relatched << "\n";
   for (int ch = 0; ch < 4; ++ch) {
     std::cout << "  channel " << ch << ": steps=" << rep.steps[ch] << " counted=" << rep.counted[ch] << "\n";
   }
@@ -404,11 +446,19 @@ TEST(EncoderCore, RegistersFromTheBus) {
   EXPECT_FALSE(h.write(rm::kRegFilter, 255).err);
   EXPECT_EQ(h.read(rm::kRegFilter).data, 255u);
   // TIMESTAMP counts cycles: two reads one cycle apart differ by one.
+  // (Back to back on the pipelined bus: the answers come kBusLatency cycles later, in order.)
   h.issue_read(rm::kRegTimestamp);
   h.step();
+  h.issue_read(rm::kRegTimestamp);
+  for (int i = 2; i < EncoderCoreHarness::kBusLatency; ++i) {
+    h.step();
+    ASSERT_FALSE(h.response().has_value()) << "answer before the bus latency";
+  }
+  h.step();
+  ASSERT_TRUE(h.response().has_value());
   const std::uint32_t t0 = h.response()->data;
-  h.issue_read(rm::kRegTimestamp);
   h.step();
+  ASSERT_TRUE(h.response().has_value());
   EXPECT_EQ(h.response()->data, t0 + 1);
 }
 
@@ -469,7 +519,7 @@ TEST(EncoderCore, OverrunWhenAWindowIsNotConsumed) {
   for (int i = 0; i < 20; ++i) {
     h.step(60);
     ASSERT_FALSE(h.read(rm::kRegSnapSeq).err);
-    h.step(39);
+    h.step(40 - EncoderCoreHarness::kBusLatency);   // 100 cycles a round, one read per window
   }
   EXPECT_EQ(h.read(rm::kRegStatus).data & 0x10u, 0u);
 }

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <random>
 #include <string>
+#include <vector>
 
 #include <Vencoder_regs.h>
 #include <omniloc/regmap.hpp>
@@ -46,6 +47,7 @@ struct Model {
   std::uint8_t status = 0;
   bool win_valid = false;
   std::uint32_t seq = 0;
+  std::uint32_t snap_seq = 0;
   std::uint32_t win_ts = 0;
   std::uint8_t win_status = 0;
   bool pending = false;
@@ -120,7 +122,8 @@ struct Model {
     } else if (consumed) {
       n.pending = false;
     }
-    if (latch) {
+    if (consumed) {  // SNAP_SEQ read or win_consumed_i: the frozen bank takes the window
+      n.snap_seq = seq;
       n.snap_ts = win_ts;
       n.snap_status = win_status;
       n.snap_dir = in.dir;
@@ -134,10 +137,28 @@ struct Model {
   }
 };
 
-std::string compare(Vencoder_regs& d, const Model& m) {
+// The frozen bank as a WINDOW body (seq, timestamp, counts, dir, status), as the link sends it.
+std::vector<std::uint8_t> bank_body(const Model& m) {
+  std::vector<std::uint8_t> b;
+  auto put = [&](std::uint32_t v) { for (int k = 0; k < 4; ++k) b.push_back(static_cast<std::uint8_t>(v >> (8 * k))); };
+  put(m.snap_seq);
+  put(m.snap_ts);
+  for (auto c : m.snap_count) put(c);
+  b.push_back(m.snap_dir);
+  b.push_back(m.snap_status);
+  return b;
+}
+
+// idx: the bank byte to check this cycle (26 = past the body, reads 0).
+std::string compare(Vencoder_regs& d, const Model& m, unsigned idx = 0) {
   auto field = [](const char* name, std::uint64_t got, std::uint64_t want) {
     return got == want ? std::string() : std::string(name) + " " + std::to_string(got) + " != golden " + std::to_string(want);
   };
+  const auto body = bank_body(m);
+  d.bank_idx_i = static_cast<std::uint8_t>(idx);
+  d.eval();
+  if (auto s = field("bank_byte_o", d.bank_byte_o, idx < body.size() ? body[idx] : 0); !s.empty())
+    return s + " (bank byte " + std::to_string(idx) + ")";
   for (const auto& s : {field("reg_ack_o", d.reg_ack_o, m.ack), field("reg_err_o", d.reg_err_o, m.err),
                         field("reg_rdata_o", d.reg_rdata_o, m.rdata), field("enable_o", d.enable_o, m.enable),
                         field("decode_o", d.decode_o, m.decode), field("stream_o", d.stream_o, m.stream),
@@ -166,6 +187,15 @@ Result run(std::uint64_t seed, std::uint64_t cycles, const TraceRequest* trace) 
   dut.reset(2);
   if (auto s = compare(dut.io(), model); !s.empty()) return res.failure = "after reset: " + s, res;
   Inputs in;
+  // The bus is pipelined (docs/RTL.md): a request presented before edge e takes effect at edge e+1
+  // exactly as the golden register file takes it, and its answer is visible after edge e+2. So the
+  // golden model gets the request one edge late and its answer is shown one edge later again.
+  Inputs prev_req;
+  struct Answer {
+    bool ack = false;
+    bool err = false;
+    std::uint32_t rdata = 0;
+  } answer;
   const std::array<std::uint8_t, 8> hot = {rm::kRegControl, rm::kRegFilter, rm::kRegPeriod, rm::kRegStatus,
                                            rm::kRegSnapSeq, rm::kRegSnapCount2, rm::kRegSnapStatus, rm::kRegId};
   for (std::uint64_t i = 0; i < cycles; ++i) {
@@ -210,14 +240,25 @@ Result run(std::uint64_t seed, std::uint64_t cycles, const TraceRequest* trace) 
     const std::uint64_t e = dut.cycle();
     const bool had_overrun = (model.status & 0x10) != 0;
     dut.step();
-    model.edge(in);
-    if (auto s = compare(dut.io(), model); !s.empty()) {
+    Inputs delayed = in;
+    delayed.addr = prev_req.addr;
+    delayed.rd = prev_req.rd;
+    delayed.wr = prev_req.wr;
+    delayed.wdata = prev_req.wdata;
+    prev_req = in;
+    model.edge(delayed);
+    Model shown = model;
+    shown.ack = answer.ack;
+    shown.err = answer.err;
+    shown.rdata = answer.rdata;
+    answer = {model.ack, model.err, model.rdata};
+    if (auto s = compare(dut.io(), shown, static_cast<unsigned>(e % 27)); !s.empty()) {
       res.failure = "edge " + std::to_string(e) + ": " + s;
       res.fail_cycle = e;
       return res;
     }
     res.errors += model.err;
-    res.refused += model.err && in.wr && !in.rd;
+    res.refused += model.err && delayed.wr && !delayed.rd;
     res.overruns += !had_overrun && (model.status & 0x10);
   }
   return res;

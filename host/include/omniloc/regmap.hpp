@@ -16,8 +16,12 @@ inline constexpr std::uint32_t kPeriodMinCycles = 64u;
 // Link: clocks and rates (common/regmap.json "link")
 /// The iCEBreaker's 12 MHz oscillator, which drives the design directly (no PLL: 40 MHz cannot be made exactly from 12 MHz, and at 12 MHz both the 100 Hz window and 1 Mbaud divide exactly).
 inline constexpr std::uint32_t kBoardClockHz = 12000000u;
-/// The paper's FPGA clock (NI myRIO, 40 MHz): the timing target of scripts/bitstream.sh (nextpnr) and scripts/synth_xilinx.sh, and the CLK_HZ default of tick_generator, encoder_regs and encoder_core, whose testbenches run at the paper's 40 MHz / 100 Hz.
+/// The paper's FPGA clock (NI myRIO, 40 MHz): the timing target of scripts/synth_xilinx.sh, and the CLK_HZ default of tick_generator, encoder_regs and encoder_core, whose testbenches run at the paper's 40 MHz / 100 Hz.
 inline constexpr std::uint32_t kPaperClockHz = 40000000u;
+/// The iCE40 timing goal of scripts/bitstream.sh (issue 14): nextpnr places for it (--freq) at seed 1 only (no seed sweep), headroom over the 12 MHz board clock and the paper's 40 MHz. Not yet met: the design reaches what timing_required_hz states.
+inline constexpr std::uint32_t kTimingTargetHz = 60000000u;
+/// What scripts/bitstream.sh (CTest bitstream_icebreaker) requires of nextpnr's Fmax at placement seed 1: the paper's 40 MHz, met with the margin stated in docs/RTL.md. Raised towards timing_target_hz as the design gets faster.
+inline constexpr std::uint32_t kTimingRequiredHz = 40000000u;
 /// UART rate between the FT2232H channel B and the FPGA (8N1): 12 cycles a bit at 12 MHz, and exact at both ends (the FT2232H makes 3 MHz / n).
 inline constexpr std::uint32_t kUartBaud = 1000000u;
 /// Window rate: one captured window every 10 ms at reset (PERIOD = clock / TICK_HZ).

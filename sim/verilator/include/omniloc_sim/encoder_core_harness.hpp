@@ -2,9 +2,10 @@
 //
 // One clock cycle per step(): the inputs set before step() are what the core samples at that
 // rising edge, and the outputs read after step() are the registered values after it. The register
-// bus is driven for exactly one cycle per request (the step() that samples it), and its answer
-// (reg_ack_o) is visible right after that step, i.e. in the next cycle; read()/write() do both
-// in one step (the encoder pins keep their levels meanwhile).
+// bus is driven for exactly one cycle per request (the step() that samples it). The bus is
+// pipelined (docs/RTL.md): the request takes effect at the next edge and its answer (reg_ack_o)
+// is visible after kBusLatency steps; requests may be issued back to back, answers come in order.
+// read()/write() issue one request and step until its answer (the encoder pins keep their levels).
 #pragma once
 
 #include <array>
@@ -53,12 +54,14 @@ class EncoderCoreHarness {
   void set_pins(std::uint8_t a_mask, std::uint8_t b_mask);
   void set_channel(int channel, bool a, bool b);
 
-  /// Present a request during the next step() only; its answer is in response() after it.
+  /// Steps from issuing a request until its answer is in response().
+  static constexpr int kBusLatency = 3;
+  /// Present a request during the next step() only; its answer is in response() kBusLatency steps later.
   void issue_read(std::uint8_t addr);
   void issue_write(std::uint8_t addr, std::uint32_t data);
   /// The bus answer acknowledged at the last step, if any.
   std::optional<BusResult> response() const;
-  /// Blocking access: one cycle.
+  /// Blocking access: kBusLatency cycles.
   BusResult read(std::uint8_t addr);
   BusResult write(std::uint8_t addr, std::uint32_t data);
 
