@@ -240,6 +240,12 @@ struct Daemon::Impl {
     // Frames wait while the board is gone: the localizer can only place them between windows.
     if (!board_gone && client) {
       if (auto f = io.camera->poll(now_ms)) {
+        if (f->time_source == "host") {
+          // Stamped at hand-over: the exposure was camera_latency_ms before (docs/DAEMON.md "Camera time").
+          if (f->handover_ms < 0) f->handover_ms = f->t_ms;
+          f->t_ms -= config.camera_latency_ms;
+          f->time_source = "latency";
+        }
         const FrameReport fr = localizer.on_image(f->t_ms, f->bgr);
         if (io.logger.enabled(LogLevel::kDebug))
           io.logger.debug("frame t=" + nlohmann::json(f->t_ms).dump() + " ms: " +

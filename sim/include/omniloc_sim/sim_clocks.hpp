@@ -27,7 +27,8 @@ struct SimClockConfig {
   /// All clocks equal, no latency, no drops (the simulator before issue 18).
   [[nodiscard]] static SimClockConfig perfect() { return {}; }
   /// A 50 ppm crystal, USB latency exponential with mean 0.5 ms capped at 2 ms, a 20 ms burst of
-  /// 100 ms every 7 s on average, the camera 33 ms (two 60 Hz periods) + 0..8 ms late, 2 % dropped.
+  /// 100 ms every 7 s on average, the camera 29 + 0..8 ms late (mean 33 ms:
+  /// the daemon's default camera_latency_ms, two 60 Hz periods), 2 % dropped.
   [[nodiscard]] static SimClockConfig realistic() {
     SimClockConfig c;
     c.board_drift_ppm = 50.0;
@@ -36,7 +37,7 @@ struct SimClockConfig {
     c.burst_every_s = 7.0;
     c.burst_extra_ms = 20.0;
     c.burst_length_ms = 100.0;
-    c.camera_latency_ms = 33.0;
+    c.camera_latency_ms = 29.0;
     c.camera_jitter_ms = 8.0;
     c.camera_drop_fraction = 0.02;
     return c;

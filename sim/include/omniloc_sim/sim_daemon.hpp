@@ -13,6 +13,7 @@
 #include "omniloc/daemon.hpp"
 #include "omniloc/recording.hpp"
 #include "omniloc_sim/renderer.hpp"
+#include "omniloc_sim/sim_clocks.hpp"
 #include "omniloc_sim/sim_robot.hpp"
 #include "omniloc_sim/trajectory.hpp"
 #include "omniloc_sim/verilated_robot.hpp"
@@ -26,6 +27,9 @@ struct SimRobotOptions {
   double camera_fps = 60.0;          ///< frames per second of simulated time
   std::vector<SlipEvent> slips;      ///< wheel slips the world injects
   std::vector<KidnapEvent> kidnaps;  ///< kidnappings the world injects
+  /// The board's crystal, the USB latency and the camera's delays (sim_clocks.hpp): realistic by
+  /// default; SimClockConfig::perfect() for every clock equal and no delay.
+  SimClockConfig clocks = SimClockConfig::realistic();
 };
 
 class SimulatedRobot {
