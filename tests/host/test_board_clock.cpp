@@ -150,6 +150,35 @@ TEST(BoardClock, ABoardResetIsDetectedAndReanchored) {
   }
 }
 
+TEST(BoardClock, BoardTimeContinuesThroughAReconnectButNotThroughAReset) {
+  // 40 MHz: the 32-bit counter wraps every 107.37 s. The last window before the link went down was
+  // at raw 4'000'000'000 (board 50 s on the daemon's scale), arriving at host 1'000 ms.
+  const double hz = 40e6;
+  const BoardTimeMark last{4'000'000'000u, 50'000.0, 1'000.0, hz};
+  const auto cycles_after = [&](double ms) {
+    return static_cast<std::uint32_t>((4'000'000'000ull + static_cast<std::uint64_t>(ms * hz / 1000.0)) & 0xFFFFFFFFu);
+  };
+  // Back after 2 s (the counter wrapped once meanwhile), the window arriving 3 ms late.
+  auto b = continued_board_ms(last, cycles_after(2'000.0), hz, 1'000.0 + 2'003.0);
+  ASSERT_TRUE(b.has_value());
+  EXPECT_NEAR(*b, 52'000.0, 1e-6);
+  // Back after 250 s (two more wraps), the crystal 50 ppm fast.
+  b = continued_board_ms(last, cycles_after(250'000.0 * (1.0 + 50e-6)), hz, 1'000.0 + 250'000.0);
+  ASSERT_TRUE(b.has_value());
+  EXPECT_NEAR(*b, 50'000.0 + 250'012.5, 1e-3);
+  // The board restarted while away: its counter is at 1.5 s after 4 s of host time.
+  EXPECT_FALSE(continued_board_ms(last, static_cast<std::uint32_t>(1.5 * hz), hz, 5'000.0).has_value());
+  // Another board (another clock).
+  EXPECT_FALSE(continued_board_ms(last, cycles_after(2'000.0), 12e6, 3'000.0).has_value());
+  // And the model: restart() starts a new epoch at the next window.
+  BoardClockModel m;
+  (void)m.add(0.0, 1.0);
+  (void)m.add(10.0, 11.0);
+  m.restart();
+  EXPECT_EQ(m.add(20.0, 500.0).epoch, 2u);
+  EXPECT_EQ(m.resets(), 1u);
+}
+
 TEST(BoardClock, BadConfigNamesTheField) {
   BoardClockConfig c;
   c.bucket_ms = 0.0;

@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <optional>
 #include <string>
 
 namespace omniloc {
@@ -57,6 +58,9 @@ class BoardClockModel {
   /// The newest add()'s estimate (epoch 0 and zeros before the first).
   [[nodiscard]] const BoardClockEstimate& last() const { return last_; }
   [[nodiscard]] std::uint64_t resets() const { return epoch_ > 0 ? epoch_ - 1 : 0; }
+  /// The caller knows the board restarted (continued_board_ms said so): the next add() starts a
+  /// new epoch.
+  void restart() { restart_ = true; }
   /// "offset +12.345 ms, drift +50.1 ppm, +-0.02 ms" for status lines.
   [[nodiscard]] std::string describe() const;
 
@@ -78,10 +82,28 @@ class BoardClockModel {
   double ref_board_ms_ = 0.0, intercept_ms_ = 0.0, slope_ = 0.0;
   double scatter_ms_ = 0.0, slope_sigma_ = 0.0;
   int fit_buckets_ = 0;
+  bool restart_ = false;
   bool off_line_ = false;
   double off_line_since_ms_ = 0.0;
   double first_board_ms_ = 0.0;
   BoardClockEstimate last_;
 };
+
+/// Where a board's time stood at a window: its raw 32-bit cycle counter, the same instant on a
+/// scale that runs on across sessions (ms), and when the window arrived (host ms).
+struct BoardTimeMark {
+  std::uint32_t raw_cycles = 0;
+  double board_ms = 0.0;
+  double arrival_ms = 0.0;
+  double clock_hz = 0.0;
+};
+
+/// A new session's window on the previous session's board-time scale: the counter's advance since
+/// `last` (its wraps counted from the host time between the arrivals), or nullopt when that
+/// advance disagrees with the host time by more than 100 ms + 0.2 % (the board restarted its
+/// counter while the link was down) or the clock differs (another board). A session's own board
+/// times (BoardSession) start at 0, so the daemon keeps one scale with this.
+[[nodiscard]] std::optional<double> continued_board_ms(const BoardTimeMark& last, std::uint32_t raw_cycles,
+                                                       double clock_hz, double arrival_ms);
 
 }  // namespace omniloc

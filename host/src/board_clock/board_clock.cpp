@@ -110,7 +110,8 @@ BoardClockEstimate BoardClockModel::map(double board_ms) const {
 }
 
 BoardClockEstimate BoardClockModel::add(double board_ms, double arrival_host_ms) {
-  if (epoch_ == 0 || board_ms < last_board_ms_ - config_.reset_back_ms) reanchor(board_ms);
+  if (epoch_ == 0 || restart_ || board_ms < last_board_ms_ - config_.reset_back_ms) reanchor(board_ms);
+  restart_ = false;
   const double d = arrival_host_ms - board_ms;
   if (fit_buckets_ >= config_.min_fit_buckets) {  // before: the minimum is still being found
     const double resid = d - line_d(board_ms);
@@ -148,6 +149,18 @@ BoardClockEstimate BoardClockModel::add(double board_ms, double arrival_host_ms)
   last_ = map(board_ms);
   last_.host_ms = std::min(last_.host_ms, arrival_host_ms);  // a window cannot have ended after it arrived
   return last_;
+}
+
+std::optional<double> continued_board_ms(const BoardTimeMark& last, std::uint32_t raw_cycles, double clock_hz,
+                                         double arrival_ms) {
+  if (!(clock_hz > 0.0) || std::abs(clock_hz - last.clock_hz) > 1e-9 * clock_hz) return std::nullopt;
+  const double wrap_ms = 4294967296.0 / clock_hz * 1000.0;
+  const double advance_ms = static_cast<double>(static_cast<std::uint32_t>(raw_cycles - last.raw_cycles)) / clock_hz * 1000.0;
+  const double gap_ms = arrival_ms - last.arrival_ms;
+  const double wraps = std::max(0.0, std::round((gap_ms - advance_ms) / wrap_ms));
+  const double elapsed_ms = advance_ms + wraps * wrap_ms;
+  if (std::abs(elapsed_ms - gap_ms) > 100.0 + 2e-3 * std::abs(gap_ms)) return std::nullopt;
+  return last.board_ms + elapsed_ms;
 }
 
 std::string BoardClockModel::describe() const {

@@ -44,6 +44,10 @@ struct Daemon::Impl {
   // time runs on through a reconnect; a board reset starts a new epoch in it.
   BoardClockModel board_clock;
   bool session_started = false;  // the first windows of this session have been read
+  // A session's board times start at 0 (BoardSession); the model gets them on one scale over the
+  // sessions, continued through a reconnect from the board's raw counter (continued_board_ms).
+  double session_base_ms = 0.0;
+  std::optional<BoardTimeMark> last_mark;  // the newest window of any session
   double last_window_clock_ms = 0.0;  // clock time a window last arrived
   double next_attempt_ms = 0.0;
   bool ever_connected = false;
@@ -216,9 +220,30 @@ struct Daemon::Impl {
     next_attempt_ms = io.clock->now_ms() + config.reconnect_period_ms;
   }
 
+  // This session's board_ms 0 on the scale the clock model has seen so far; a board that restarted
+  // its counter while away starts a new epoch in the model.
+  void continue_board_time(const SessionWindow& newest, double arrival_ms) {
+    const double clock_hz = client->identity().clock_hz;
+    if (!last_mark) {
+      session_base_ms = 0.0;
+      return;
+    }
+    if (const auto b = continued_board_ms(*last_mark, newest.raw.timestamp_cycles, clock_hz, arrival_ms)) {
+      session_base_ms = *b - newest.board_ms;
+      return;
+    }
+    board_clock.restart();
+    session_base_ms = last_mark->board_ms + (arrival_ms - last_mark->arrival_ms) - newest.board_ms;
+    io.logger.info("board time does not continue from before the reconnect (board reset?): clock re-anchored");
+  }
+
+  double scaled_board_ms(const SessionWindow& w) const { return session_base_ms + w.board_ms; }
+
   void on_board_window(const SessionWindow& w, const BoardClockEstimate& clock_at) {
     const double now = io.clock->now_ms();
     last_window_clock_ms = now;
+    const double board_ms = scaled_board_ms(w);
+    last_mark = BoardTimeMark{w.raw.timestamp_cycles, board_ms, now, client->identity().clock_hz};
     EncoderWindow ew = w.to_encoder_window(clock_at.host_ms - w.board_ms);
     if (ew.t_end_ms <= last_window_t_ms) ew.t_end_ms = last_window_t_ms + 1e-3;  // the localizer needs increasing times
     last_window_t_ms = ew.t_end_ms;
@@ -228,7 +253,7 @@ struct Daemon::Impl {
     last_localized = lp;
     record([&] {
       recorder->add_window(ew);
-      recorder->add_clock(ClockRow{ew.seq, w.board_ms, now, ew.t_end_ms, clock_at.offset_ms, clock_at.drift_ppm,
+      recorder->add_clock(ClockRow{ew.seq, board_ms, now, ew.t_end_ms, clock_at.offset_ms, clock_at.drift_ppm,
                                    clock_at.uncertainty_ms, clock_at.epoch});
     });
     if (io.observer.on_window) io.observer.on_window(ew);
@@ -442,14 +467,16 @@ struct Daemon::Impl {
               queued.push_back(*more);
             }
             const double read_at = clock.now_ms();
-            for (std::size_t i = 0; i < queued.size(); ++i) (void)board_clock.add(queued[i].board_ms, i == 0 ? arrival : read_at);
+            continue_board_time(queued.back(), read_at);
+            for (std::size_t i = 0; i < queued.size(); ++i)
+              (void)board_clock.add(scaled_board_ms(queued[i]), i == 0 ? arrival : read_at);
             for (const SessionWindow& q : queued) {
-              BoardClockEstimate e = board_clock.map(q.board_ms);
+              BoardClockEstimate e = board_clock.map(scaled_board_ms(q));
               e.host_ms = std::min(e.host_ms, read_at);
               on_board_window(q, e);
             }
           } else {
-            on_board_window(*w, board_clock.add(w->board_ms, arrival));
+            on_board_window(*w, board_clock.add(scaled_board_ms(*w), arrival));
           }
         } else if (clock.now_ms() - last_window_clock_ms > kBoardSilentMs) {
           throw TransportError(TransportErrorKind::kIo, "no telemetry for 250 ms");

@@ -1,7 +1,9 @@
 // omnilocd-sim: the robot's daemon (the same Daemon as omnilocd) on the simulated robot: the world
 // simulator drives the Verilated board, the camera renders the field at the true pose, and time is
-// the board's simulated time. Takes every omnilocd option (the camera is rendered unless
-// `--camera none`) plus the simulation's own: --trajectory NAME and --seed N. With --record-dir it
+// the simulation's host clock (realistic clocks by default, docs/SIMULATOR.md "Clocks";
+// --perfect-clocks: the board's simulated time). Takes every omnilocd option (the camera is
+// rendered unless `--camera none`) plus the simulation's own: --trajectory NAME, --seed N,
+// --perfect-clocks, --board-drift-ppm PPM. With --record-dir it
 // also writes the run's truth.csv beside the recording, so `omniloc replay` reports errors.
 #include <cstdio>
 #include <memory>

@@ -1,7 +1,7 @@
 // The simulated robot behind the robot's own Daemon: world -> quadrature waveforms -> Verilated
 // board (rtl/omniloc_top.v) -> SimTransport, the simulated gyro as heading, a camera rendering the
-// field at the true pose, and the board's simulated time as the daemon's clock. `omnilocd-sim`,
-// `omniloc-sim demo` and the tests build their runs from it; truth reaches them through the truth
+// field at the true pose, and the simulation's host clock as the daemon's (realistic clocks by
+// default, sim_clocks.hpp). `omnilocd-sim`, `omniloc-sim demo` and the tests build their runs from it; truth reaches them through the truth
 // log and the daemon's observer, never through the daemon.
 #pragma once
 
