@@ -16,11 +16,14 @@ WorldConfig world_config(const daemon::DaemonModels& models, const SimRobotOptio
 
 SimulatedRobot::SimulatedRobot(const daemon::DaemonModels& models, Trajectory trajectory,
                                const SimRobotOptions& options)
-    : robot_(world_config(models, options), std::move(trajectory)), renderer_(models.field, models.camera) {
+    : robot_(world_config(models, options), std::move(trajectory), options.clocks, options.seed ^ 0xC10C5ULL),
+      renderer_(models.field, models.camera) {
   if (options.camera) {
     RenderOptions ro;
     ro.seed = options.seed;
     camera_ = std::make_unique<SimCamera>(renderer_, robot_.log, options.camera_fps, ro);
+    camera_->set_delays(options.clocks.camera_latency_ms, options.clocks.camera_jitter_ms,
+                        options.clocks.camera_drop_fraction, options.seed ^ 0xCA3E4AULL);
   }
 }
 
@@ -34,8 +37,17 @@ daemon::DaemonIo SimulatedRobot::io() {
 }
 
 std::string SimulatedRobot::describe() const {
+  const SimClockConfig& c = robot_.clocks;
+  char clocks[200];
+  if (c.is_perfect()) std::snprintf(clocks, sizeof clocks, ", perfect clocks");
+  else
+    std::snprintf(clocks, sizeof clocks,
+                  ", board crystal %+.0f ppm, USB latency exp %.1f ms (max %.1f) + %.0f ms bursts, camera %.0f+%.0f ms late, "
+                  "%.0f %% dropped",
+                  c.board_drift_ppm, c.usb_jitter_mean_ms, c.usb_jitter_max_ms, c.burst_extra_ms, c.camera_latency_ms,
+                  c.camera_jitter_ms, c.camera_drop_fraction * 100.0);
   return "simulated robot: Verilated board at " + std::to_string(BoardSim::kClockHz / 1'000'000) + " MHz" +
-         (camera_ ? ", rendered omni camera" : ", no camera") +
+         (camera_ ? ", rendered omni camera" : ", no camera") + clocks +
          "; the daemon runs at the simulator's pace (slower than real time), not on the wall clock";
 }
 

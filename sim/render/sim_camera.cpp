@@ -80,10 +80,17 @@ void SimCamera::on_truth(double t_ms) {
 }
 
 std::optional<CameraFrame> SimCamera::poll(double now_ms) {
-  const double kd = std::floor(std::min(now_ms, truth_.latest_ms()) / period_ms_);
+  const double lead_ms = delayed_ ? latency_ms_ : 0.0;  // no frame is handed over sooner
+  const double kd = std::floor(std::min(now_ms - lead_ms, truth_.latest_ms()) / period_ms_);
   if (kd < 0) return std::nullopt;
-  const auto k = static_cast<std::int64_t>(kd);
+  auto k = static_cast<std::int64_t>(kd);
+  // The newest frame handed over by now (the jitter can hold the last exposed one back).
+  while (k > last_k_ && handover_ms(k) > now_ms) --k;
   if (k <= last_k_ || k >= next_job_k_) return std::nullopt;
+  if (dropped(k)) {
+    last_k_ = k;  // lost in the driver: the camera delivers nothing for it
+    return std::nullopt;
+  }
   const double t = static_cast<double>(k) * period_ms_;
   if (t >= stop_ms_) return std::nullopt;
   std::unique_lock lock(worker_->mu);
@@ -100,7 +107,9 @@ std::optional<CameraFrame> SimCamera::poll(double now_ms) {
   worker_->cv.wait(lock, [&] { return worker_->done.count(k) != 0; });
   cv::Mat image = std::move(worker_->done[k]);
   worker_->done.erase(worker_->done.begin(), worker_->done.lower_bound(k + 1));
-  return CameraFrame{t, std::move(image)};
+  if (!delayed_) return CameraFrame{t, std::move(image), "sim", t};
+  const double handover = handover_ms(k);
+  return CameraFrame{handover, std::move(image), "host", handover};
 }
 
 }  // namespace omniloc::sim

@@ -19,7 +19,7 @@ using test::error_of;
 
 // Every key of DaemonConfig, written down here by hand (not taken from the reader's table).
 const std::vector<std::string> kEveryKey = {
-    "board_serial", "reconnect_period_ms", "camera",     "camera_fps",  "camera_timeout_ms", "field",
+    "board_serial", "reconnect_period_ms", "camera",     "camera_fps",  "camera_timeout_ms", "camera_latency_ms", "field",
     "camera_model", "robot",               "localizer",  "database",    "grid_step_cm",      "side",  "udp_address",
     "udp_port",     "control_port",        "publish_hz",          "record_dir", "record_overwrite", "record_format",
     "status_period_s", "log_level", "duration_s", "ros2_domain_id", "ros2_namespace", "ros2_frame_id",
@@ -32,6 +32,7 @@ const std::string kEveryKeyJson = R"({
   "camera": "/dev/video2",
   "camera_fps": 30.5,
   "camera_timeout_ms": 250,
+  "camera_latency_ms": 12.5,
   "field": "robocup-msl",
   "camera_model": "cams/c.json",
   "robot": "robots/r.json",
@@ -76,6 +77,7 @@ TEST(DaemonConfig, EveryKeyReachesItsMember) {
   EXPECT_EQ(c.camera, "/dev/video2");
   EXPECT_EQ(c.camera_fps, 30.5);
   EXPECT_EQ(c.camera_timeout_ms, 250.0);
+  EXPECT_EQ(c.camera_latency_ms, 12.5);
   EXPECT_EQ(c.field, "robocup-msl");
   EXPECT_EQ(c.camera_model, "cams/c.json");
   EXPECT_EQ(c.robot, "robots/r.json");
@@ -145,6 +147,7 @@ TEST(DaemonConfig, BadFilesNameTheFileAndTheField) {
                           {R"({"udp_address": "localhost"})", "udp_address", "dotted IPv4 address (got \"localhost\")"},
                           {R"({"publish_hz": 50})", "publish_hz", "must be 100"},
                           {R"({"camera_timeout_ms": 0})", "camera_timeout_ms", "[10, 60000] (got 0)"},
+                          {R"({"camera_latency_ms": -1})", "camera_latency_ms", "[0, 1000] (got -1)"},
                           {R"({"duration_s": -1})", "duration_s", ">= 0 (got -1)"},
                           {R"({"control_port": 70000})", "control_port", "must be 0 (off) or in [1, 65535] (got 70000)"},
                           {R"({"ros2_domain_id": 233})", "ros2_domain_id", "must be -1 (off) or in [0, 232] (got 233)"},

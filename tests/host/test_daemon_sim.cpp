@@ -320,11 +320,15 @@ TEST(DaemonSim, WindowsQueuedBeforeAReconnectKeepTheirBoardTimes) {
     worst_ms = std::max(worst_ms, std::abs(w.t_end_ms - it->second));
     if (it->second > rig.unplug_to_ms) ++after_reconnect;
   };
+  std::string last_status;
+  io.observer.on_status = [&](const std::string& line) { last_status = line; };
   Daemon d(cfg, mod, io);
   volatile std::sig_atomic_t stop = 0;
   const DaemonReport r = d.run(&stop);
   EXPECT_EQ(r.reconnects, 1u);
   EXPECT_GE(after_reconnect, 140);  // 1.45 .. 3 s
+  // The board's time ran on through the reconnect: the clock model kept its line (no new epoch).
+  EXPECT_NE(last_status.find(" clk_resets=0"), std::string::npos) << last_status;
   std::printf("window times vs board capture: worst %.1f ms\n", worst_ms);
   EXPECT_LE(worst_ms, kWindowMs + 1e-6);
 }

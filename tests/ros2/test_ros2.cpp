@@ -111,12 +111,14 @@ TEST(Ros2Topics, ASubscriberBuiltFromTheIdlReceivesTheDatagramsPoses) {
     EXPECT_NEAR(std::hypot(x_of(f, 10), x_of(f, 11)), 1.0, 1e-9);
     const double sigma_m = g["uncertainty_cm"].get<double>() / 100.0;
     const double sigma_rad = g["uncertainty_yaw_deg"].get<double>() * M_PI / 180.0;
-    // The datagram's uncertainty is the radial RMS, printed to 0.001 cm: each axis carries half its
-    // square, to that rounding (2 sigma x 0.0005 cm).
-    const double rounding_m2 = 2.0 * sigma_m * 0.0005e-2 + 1e-12;
-    EXPECT_NEAR(x_of(f, 12), sigma_m * sigma_m / 2.0, rounding_m2);
-    EXPECT_NEAR(x_of(f, 13), sigma_m * sigma_m / 2.0, rounding_m2);
-    EXPECT_NEAR(x_of(f, 14), sigma_rad * sigma_rad, 1e-8);
+    // The datagram's uncertainty is the radial RMS: each axis carries half its square. The datagram
+    // keeps 3 decimals of the sigmas (cm, deg), the message their full value: a variance differs by
+    // up to 2 sigma x the rounding.
+    const double tol_m2 = 2.0 * sigma_m * 0.5e-5 + 1e-10;
+    const double tol_rad2 = 2.0 * sigma_rad * (0.5e-3 * M_PI / 180.0) + 1e-10;
+    EXPECT_NEAR(x_of(f, 12), sigma_m * sigma_m / 2.0, tol_m2);
+    EXPECT_NEAR(x_of(f, 13), sigma_m * sigma_m / 2.0, tol_m2);
+    EXPECT_NEAR(x_of(f, 14), sigma_rad * sigma_rad, tol_rad2);
     const int sec = std::stoi(f[2]);
     const unsigned ns = static_cast<unsigned>(std::stoul(f[3]));
     EXPECT_LT(ns, 1'000'000'000u);

@@ -52,8 +52,13 @@ class SteadyClock final : public DaemonClock {
 };
 
 struct CameraFrame {
-  double t_ms = 0.0;  ///< daemon time the image was taken
+  double t_ms = 0.0;  ///< daemon time the image was taken (exposed)
   cv::Mat bgr;
+  /// Where t_ms came from, recorded in frame_times.csv: "buffer" (the driver's buffer timestamp),
+  /// "latency" (hand-over time minus camera_latency_ms), "file" (the video file's own time), "sim"
+  /// (the simulator's exposure time), "host" (the daemon clock at hand-over, nothing subtracted).
+  std::string time_source = "host";
+  double handover_ms = -1.0;  ///< daemon time the frame was handed over (< 0: not known)
 };
 
 /// Camera frames; poll() never blocks for long.

@@ -1,8 +1,10 @@
 // omnilocd's real camera: OpenCV VideoCapture on a V4L2 device (index or /dev/videoN) or a video
 // file, read by its own thread so that a slow or stalled camera never holds up the encoder windows.
-// A frame is stamped with the daemon's (wall) clock when it is read; a file is paced at the
-// configured rate and, at its end, stops delivering (the daemon goes odometry-only, as with a
-// camera that dies).
+// A device's frame is stamped with the V4L2 buffer timestamp when OpenCV gives a plausible one
+// (time_source "buffer"), else with the daemon clock when it is read ("host": the daemon subtracts
+// camera_latency_ms); a file's frames carry the file's own times ("file") and are handed over at
+// them (at the configured rate if the file has none); at its end a file stops delivering (the
+// daemon goes odometry-only, as with a camera that dies). docs/DAEMON.md "Camera time".
 #pragma once
 
 #include <atomic>

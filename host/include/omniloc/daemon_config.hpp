@@ -24,6 +24,9 @@ struct DaemonConfig {
   std::string camera = "0";          ///< "none", a V4L2 index ("0"), a device path or a video file
   double camera_fps = 60.0;          ///< requested rate (a video file: its pacing)
   double camera_timeout_ms = 500;    ///< no frame for this long: odometry only, flagged
+  /// Exposure to hand-over of a frame with no driver timestamp: subtracted from the hand-over time
+  /// (docs/DAEMON.md "Camera time"). 33 ms: two 60 Hz frame periods.
+  double camera_latency_ms = 33;
   // --- models ---
   std::string field = "fira-robosot";  ///< common/fields/<name>.json or a path
   std::string camera_model = "default";  ///< common/cameras/<name>.json or a path

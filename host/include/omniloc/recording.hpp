@@ -144,6 +144,24 @@ class TruthCsvWriter {
   CsvFile file_;
 };
 
+/// One clock.csv row (the daemon's board clock, board_clock.hpp): the window's board seq and board
+/// time, when it arrived (daemon clock), the time it was given (encoders.csv t_ms), and the model's
+/// offset, drift, uncertainty and epoch then. Replay does not read it (old recordings have none).
+struct ClockRow {
+  std::uint32_t seq = 0;
+  double board_ms = 0.0, arrival_ms = 0.0, t_ms = 0.0, offset_ms = 0.0, drift_ppm = 0.0, uncertainty_ms = 0.0;
+  std::uint32_t epoch = 0;
+};
+
+/// One frame_times.csv row: a frame's time (camera.csv t_ms), where it came from ("buffer": the
+/// driver's buffer timestamp, "latency": hand-over minus the configured latency, "file": the video
+/// file's own time, "sim": the simulator's exposure time) and when the daemon got it.
+struct FrameTimeRow {
+  double t_ms = 0.0;
+  std::string source;
+  double handover_ms = 0.0;
+};
+
 /// Writes a recording directory (created if needed; see RecordingOptions for an existing one).
 /// Every write is checked: add_* throw RecordingError naming the file and the reason (a full disk:
 /// "No space left on device"); after one, the writer refuses further rows (the daemon stops the
@@ -161,6 +179,11 @@ class RecordingWriter {
   /// Writes frames/NNNNNN.jpg (or .png) and the camera.csv row.
   void add_frame(double t_ms, const cv::Mat& bgr);
   void add_truth(double t_ms, const Pose2& pose);
+  /// clock.csv (`seq,board_ms,arrival_ms,t_ms,offset_ms,drift_ppm,uncertainty_ms,epoch`), created at
+  /// the first row.
+  void add_clock(const ClockRow& row);
+  /// frame_times.csv (`t_ms,source,handover_ms`), created at the first row.
+  void add_frame_time(const FrameTimeRow& row);
   /// Flushes and closes (also done by the destructor, which cannot report errors).
   void close();
   [[nodiscard]] std::uint64_t frame_bytes() const { return frame_bytes_; }
@@ -172,6 +195,7 @@ class RecordingWriter {
   std::unique_ptr<CsvFile> encoders_;
   std::unique_ptr<CsvFile> camera_;
   std::unique_ptr<TruthCsvWriter> truth_;
+  std::unique_ptr<CsvFile> clock_, frame_times_;
   int frame_count_ = 0;
   std::uint64_t frame_bytes_ = 0;
   std::string failed_;  // the first write error; the writer is unusable after it

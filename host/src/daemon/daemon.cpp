@@ -3,12 +3,14 @@
 // one loop keeps the order of windows and frames obvious.
 #include "omniloc/daemon.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <utility>
 #include <vector>
 
+#include "omniloc/board_clock.hpp"
 #include "omniloc/board_session.hpp"
 #include "omniloc/control.hpp"
 #include "omniloc/recording.hpp"
@@ -38,7 +40,14 @@ struct Daemon::Impl {
 
   // Board connection.
   std::unique_ptr<BoardSession> client;
-  std::optional<double> connection_offset_ms;  // daemon time of board time 0 of this session
+  // Board time -> daemon time (board_clock.hpp): one model over all sessions, since the board's
+  // time runs on through a reconnect; a board reset starts a new epoch in it.
+  BoardClockModel board_clock;
+  bool session_started = false;  // the first windows of this session have been read
+  // A session's board times start at 0 (BoardSession); the model gets them on one scale over the
+  // sessions, continued through a reconnect from the board's raw counter (continued_board_ms).
+  double session_base_ms = 0.0;
+  std::optional<BoardTimeMark> last_mark;  // the newest window of any session
   double last_window_clock_ms = 0.0;  // clock time a window last arrived
   double next_attempt_ms = 0.0;
   bool ever_connected = false;
@@ -182,7 +191,7 @@ struct Daemon::Impl {
       client = std::make_unique<BoardSession>(io.open_board(), o);
       if (version_differs(client->identity()))
         io.logger.warning("board register map " + client->identity().version_text() + " differs from the host's");
-      connection_offset_ms.reset();
+      session_started = false;
       last_window_clock_ms = io.clock->now_ms();
       if (ever_connected) {
         ++report.reconnects;
@@ -218,19 +227,42 @@ struct Daemon::Impl {
     next_attempt_ms = io.clock->now_ms() + config.reconnect_period_ms;
   }
 
-  void on_board_window(const SessionWindow& w) {
+  // This session's board_ms 0 on the scale the clock model has seen so far; a board that restarted
+  // its counter while away starts a new epoch in the model.
+  void continue_board_time(const SessionWindow& newest, double arrival_ms) {
+    const double clock_hz = client->identity().clock_hz;
+    if (!last_mark) {
+      session_base_ms = 0.0;
+      return;
+    }
+    if (const auto b = continued_board_ms(*last_mark, newest.raw.timestamp_cycles, clock_hz, arrival_ms)) {
+      session_base_ms = *b - newest.board_ms;
+      return;
+    }
+    board_clock.restart();
+    session_base_ms = last_mark->board_ms + (arrival_ms - last_mark->arrival_ms) - newest.board_ms;
+    io.logger.info("board time does not continue from before the reconnect (board reset?): clock re-anchored");
+  }
+
+  double scaled_board_ms(const SessionWindow& w) const { return session_base_ms + w.board_ms; }
+
+  void on_board_window(const SessionWindow& w, const BoardClockEstimate& clock_at) {
     const double now = io.clock->now_ms();
     last_window_clock_ms = now;
-    // First window of this session: its board time is "now" in daemon time.
-    if (!connection_offset_ms) connection_offset_ms = now - w.board_ms;
-    EncoderWindow ew = w.to_encoder_window(*connection_offset_ms);
+    const double board_ms = scaled_board_ms(w);
+    last_mark = BoardTimeMark{w.raw.timestamp_cycles, board_ms, now, client->identity().clock_hz};
+    EncoderWindow ew = w.to_encoder_window(clock_at.host_ms - w.board_ms);
     if (ew.t_end_ms <= last_window_t_ms) ew.t_end_ms = last_window_t_ms + 1e-3;  // the localizer needs increasing times
     last_window_t_ms = ew.t_end_ms;
     ew.gyro_yaw_deg = io.heading->gyro_yaw_deg(ew);
     const LocalizedPose lp = localizer.on_window(ew);
     ++report.windows;
     last_localized = lp;
-    record([&] { recorder->add_window(ew); });
+    record([&] {
+      recorder->add_window(ew);
+      recorder->add_clock(ClockRow{ew.seq, board_ms, now, ew.t_end_ms, clock_at.offset_ms, clock_at.drift_ppm,
+                                   clock_at.uncertainty_ms, clock_at.epoch});
+    });
     if (io.observer.on_window) io.observer.on_window(ew);
     publish(lp, status(now), ew.t_end_ms, true);
   }
@@ -240,11 +272,20 @@ struct Daemon::Impl {
     // Frames wait while the board is gone: the localizer can only place them between windows.
     if (!board_gone && client) {
       if (auto f = io.camera->poll(now_ms)) {
+        if (f->time_source == "host") {
+          // Stamped at hand-over: the exposure was camera_latency_ms before (docs/DAEMON.md "Camera time").
+          if (f->handover_ms < 0) f->handover_ms = f->t_ms;
+          f->t_ms -= config.camera_latency_ms;
+          f->time_source = "latency";
+        }
         const FrameReport fr = localizer.on_image(f->t_ms, f->bgr);
         if (io.logger.enabled(LogLevel::kDebug))
           io.logger.debug("frame t=" + nlohmann::json(f->t_ms).dump() + " ms: " +
                           (fr.no_measurement.empty() ? "queued" : "no measurement: " + fr.no_measurement));
-        record([&] { recorder->add_frame(f->t_ms, f->bgr); });
+        record([&] {
+          recorder->add_frame(f->t_ms, f->bgr);
+          recorder->add_frame_time(FrameTimeRow{f->t_ms, f->time_source, f->handover_ms >= 0 ? f->handover_ms : now_ms});
+        });
         if (io.observer.on_frame) io.observer.on_frame(*f);
         last_frame_ms = f->t_ms;
         ++report.frames;
@@ -281,7 +322,15 @@ struct Daemon::Impl {
     s.reconnects = report.reconnects;
     if (!record_dir.empty()) s.recording = recorder ? "on" : "stopped";
     s.recording_failures = report.recording_failures;
-    const std::string line = status_line(s);
+    std::string line = status_line(s);
+    if (board_clock.last().epoch > 0) {  // the board's clock against the daemon's (board_clock.hpp)
+      char clk[160];
+      const BoardClockEstimate& c = board_clock.last();
+      std::snprintf(clk, sizeof clk, " clk_offset=%+.3fms clk_drift=%+.1fppm clk_sigma=%.2fms%s clk_resets=%llu",
+                    c.offset_ms, c.drift_ppm, c.uncertainty_ms, c.converged ? "" : " clk=settling",
+                    static_cast<unsigned long long>(board_clock.resets()));
+      line += clk;
+    }
     io.logger.info(line);
     if (io.observer.on_status) io.observer.on_status(line);
     windows_at_status = report.windows;
@@ -417,21 +466,31 @@ struct Daemon::Impl {
       }
       try {
         if (const auto w = client->next_window(kTelemetryWait)) {
-          if (!connection_offset_ms) {
-            // A session's first window may be stale: the board streams on while the link is down,
-            // so windows wait in the link for the session to open. The newest one that has arrived
-            // is the one that arrived now: the session's clock is anchored on it, the others keep
-            // their board times before it.
+          const double arrival = clock.now_ms();
+          if (!session_started) {
+            // A session's first windows may be stale: the board streams on while the link is down,
+            // so windows wait in the link for the session to open and arrive at once. The clock
+            // model takes them all first (their lower envelope is the newest one), then gives each
+            // its time: on the very first connection that anchors on the newest one, after a
+            // reconnect the line from before holds.
+            session_started = true;
             std::vector<SessionWindow> queued{*w};
             while (queued.size() < kMaxQueuedAtOpen) {
               auto more = client->next_window(std::chrono::milliseconds(0));
               if (!more) break;
               queued.push_back(*more);
             }
-            connection_offset_ms = clock.now_ms() - queued.back().board_ms;
-            for (const SessionWindow& q : queued) on_board_window(q);
+            const double read_at = clock.now_ms();
+            continue_board_time(queued.back(), read_at);
+            for (std::size_t i = 0; i < queued.size(); ++i)
+              (void)board_clock.add(scaled_board_ms(queued[i]), i == 0 ? arrival : read_at);
+            for (const SessionWindow& q : queued) {
+              BoardClockEstimate e = board_clock.map(scaled_board_ms(q));
+              e.host_ms = std::min(e.host_ms, read_at);
+              on_board_window(q, e);
+            }
           } else {
-            on_board_window(*w);
+            on_board_window(*w, board_clock.add(scaled_board_ms(*w), arrival));
           }
         } else if (clock.now_ms() - last_window_clock_ms > kBoardSilentMs) {
           throw TransportError(TransportErrorKind::kIo, "no telemetry for 250 ms");

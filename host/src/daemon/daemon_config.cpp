@@ -24,6 +24,7 @@ const config::KeyTable<DaemonConfig>& daemon_config_keys() {
       key("camera", &D::camera, opt, "none | V4L2 index | device path | video file"),
       key("camera_fps", &D::camera_fps, opt, "camera frames per second"),
       key("camera_timeout_ms", &D::camera_timeout_ms, opt, "no frame for this long: odometry only"),
+      key("camera_latency_ms", &D::camera_latency_ms, opt, "exposure to hand-over of a frame without a driver timestamp"),
       key("field", &D::field, opt, "field geometry name or path"),
       key("camera_model", &D::camera_model, opt, "camera model name or path"),
       key("robot", &D::robot, opt, "robot config name or path"),
@@ -63,6 +64,8 @@ void DaemonConfig::validate(const config::Origin& at) const {
   require(camera_fps > 0 && camera_fps <= 240, at / "camera_fps", "must be in (0, 240]", camera_fps);
   require(camera_timeout_ms >= 10 && camera_timeout_ms <= 60'000, at / "camera_timeout_ms", "must be in [10, 60000]",
           camera_timeout_ms);
+  require(camera_latency_ms >= 0 && camera_latency_ms <= 1000, at / "camera_latency_ms", "must be in [0, 1000]",
+          camera_latency_ms);
   require(!field.empty(), at / "field", "must not be empty", show(field));
   require(!camera_model.empty(), at / "camera_model", "must not be empty", show(camera_model));
   require(!robot.empty(), at / "robot", "must not be empty", show(robot));

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <stdexcept>
 
 #include <opencv2/videoio.hpp>
@@ -35,9 +36,21 @@ OpenCvCamera::~OpenCvCamera() {
   if (thread_.joinable()) thread_.join();
 }
 
+// A V4L2 buffer timestamp older than this (or in the future) is not taken: it is not on the
+// monotonic clock (some drivers stamp on the wall clock) or not a capture time at all.
+constexpr double kMaxBufferAgeMs = 1000.0;
+
 void OpenCvCamera::run() {
+  using Ms = std::chrono::duration<double, std::milli>;
+  using Steady = std::chrono::steady_clock;
   const auto period = std::chrono::duration<double>(1.0 / fps_);
-  auto next = std::chrono::steady_clock::now();
+  auto next = Steady::now();
+  // A file's own times: frame k is handed over at first_steady + (pos_k - first_pos), stamped
+  // first_daemon + (pos_k - first_pos). Until a frame shows the file has none (0, not increasing):
+  // then the configured rate paces it and frames are stamped when read.
+  bool file_times = is_file_;
+  Steady::time_point first_steady{};
+  double first_pos_ms = -1.0, first_daemon_ms = 0.0, last_pos_ms = -1.0;
   while (!stop_) {
     cv::Mat frame;
     if (!capture_->cap.read(frame) || frame.empty()) {
@@ -46,13 +59,45 @@ void OpenCvCamera::run() {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
       continue;
     }
-    const double t = clock_.now_ms();
+    // CAP_PROP_POS_MSEC: for a file, the frame's presentation time; for a V4L2 device, OpenCV's
+    // V4L2 backend gives the dequeued buffer's timestamp (CLOCK_MONOTONIC for uvcvideo and most
+    // drivers: the steady clock here), 0 before the first frame. docs/DAEMON.md "Camera time".
+    const double pos_ms = capture_->cap.get(cv::CAP_PROP_POS_MSEC);
+    CameraFrame f;
+    f.bgr = frame;
+    if (is_file_) {
+      const bool has_time = std::isfinite(pos_ms) && pos_ms >= 0.0 && (last_pos_ms < 0.0 ? true : pos_ms > last_pos_ms);
+      if (file_times && !has_time) file_times = false;
+      if (file_times) {
+        if (first_pos_ms < 0.0) {
+          first_pos_ms = pos_ms;
+          first_steady = Steady::now();
+          first_daemon_ms = clock_.now_ms();
+        }
+        last_pos_ms = pos_ms;
+        std::this_thread::sleep_until(first_steady + std::chrono::duration_cast<Steady::duration>(Ms(pos_ms - first_pos_ms)));
+        f.t_ms = first_daemon_ms + (pos_ms - first_pos_ms);
+      } else {
+        f.t_ms = clock_.now_ms();
+      }
+      f.time_source = "file";
+      f.handover_ms = clock_.now_ms();
+    } else {
+      f.handover_ms = clock_.now_ms();
+      f.t_ms = f.handover_ms;
+      f.time_source = "host";  // the daemon subtracts camera_latency_ms
+      const double age_ms = Ms(Steady::now().time_since_epoch()).count() - pos_ms;
+      if (std::isfinite(pos_ms) && pos_ms > 0.0 && age_ms >= -1.0 && age_ms <= kMaxBufferAgeMs) {
+        f.t_ms = f.handover_ms - std::max(age_ms, 0.0);
+        f.time_source = "buffer";
+      }
+    }
     {
       std::lock_guard lock(mu_);
-      latest_ = CameraFrame{t, frame};
+      latest_ = std::move(f);
     }
-    if (is_file_) {  // a file would otherwise be read as fast as the disk goes
-      next += std::chrono::duration_cast<std::chrono::steady_clock::duration>(period);
+    if (is_file_ && !file_times) {  // a file would otherwise be read as fast as the disk goes
+      next += std::chrono::duration_cast<Steady::duration>(period);
       std::this_thread::sleep_until(next);
     }
   }

@@ -514,10 +514,40 @@ void RecordingWriter::add_truth(double t_ms, const Pose2& pose) {
   truth_->add(t_ms, pose);
 }
 
+void RecordingWriter::add_clock(const ClockRow& c) {
+  check_usable();
+  char row[256];
+  std::snprintf(row, sizeof row, "%u,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%u\n", c.seq, c.board_ms, c.arrival_ms, c.t_ms,
+                c.offset_ms, c.drift_ppm, c.uncertainty_ms, c.epoch);
+  try {
+    if (!clock_)
+      clock_ = std::make_unique<CsvFile>(dir_ / "clock.csv", "seq,board_ms,arrival_ms,t_ms,offset_ms,drift_ppm,uncertainty_ms,epoch\n");
+    clock_->write_row(row);
+  } catch (const RecordingError& e) {
+    failed_ = e.what();
+    throw;
+  }
+}
+
+void RecordingWriter::add_frame_time(const FrameTimeRow& f) {
+  check_usable();
+  char row[128];
+  std::snprintf(row, sizeof row, "%.6f,%s,%.6f\n", f.t_ms, f.source.c_str(), f.handover_ms);
+  try {
+    if (!frame_times_) frame_times_ = std::make_unique<CsvFile>(dir_ / "frame_times.csv", "t_ms,source,handover_ms\n");
+    frame_times_->write_row(row);
+  } catch (const RecordingError& e) {
+    failed_ = e.what();
+    throw;
+  }
+}
+
 void RecordingWriter::close() {
   if (!encoders_) return;
   encoders_->close();
   camera_->close();
+  if (clock_) clock_->close();
+  if (frame_times_) frame_times_->close();
   if (truth_) truth_->close();
 }
 

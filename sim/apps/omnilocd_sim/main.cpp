@@ -1,7 +1,9 @@
 // omnilocd-sim: the robot's daemon (the same Daemon as omnilocd) on the simulated robot: the world
 // simulator drives the Verilated board, the camera renders the field at the true pose, and time is
-// the board's simulated time. Takes every omnilocd option (the camera is rendered unless
-// `--camera none`) plus the simulation's own: --trajectory NAME and --seed N. With --record-dir it
+// the simulation's host clock (realistic clocks by default, docs/SIMULATOR.md "Clocks";
+// --perfect-clocks: the board's simulated time). Takes every omnilocd option (the camera is
+// rendered unless `--camera none`) plus the simulation's own: --trajectory NAME, --seed N,
+// --perfect-clocks, --board-drift-ppm PPM. With --record-dir it
 // also writes the run's truth.csv beside the recording, so `omniloc replay` reports errors.
 #include <cstdio>
 #include <memory>
@@ -25,6 +27,8 @@ namespace {
 struct SimArgs {
   std::string trajectory = "figure_eight";
   std::uint64_t seed = 1;
+  bool perfect_clocks = false;
+  double board_drift_ppm = 50.0;
 };
 
 int run(const omniloc::daemon::DaemonConfig& config, const SimArgs& sim_args, const omniloc::Logger& log) {
@@ -35,6 +39,8 @@ int run(const omniloc::daemon::DaemonConfig& config, const SimArgs& sim_args, co
   o.seed = sim_args.seed;
   o.camera = config.camera != "none";
   o.camera_fps = config.camera_fps;
+  if (sim_args.perfect_clocks) o.clocks = sim::SimClockConfig::perfect();
+  else o.clocks.board_drift_ppm = sim_args.board_drift_ppm;
   sim::SimulatedRobot robot(models, sim::make_trajectory(sim_args.trajectory, sim_args.seed, sim::playing_area(models.field)), o);
   say(robot.describe() + "; trajectory " + sim_args.trajectory + ", seed " + std::to_string(sim_args.seed));
   daemon::DaemonIo io = robot.io();
@@ -73,6 +79,10 @@ int main(int argc, char** argv) {
   app.add_option("--trajectory", sim_args.trajectory, "the simulated drive: " + omniloc::sim::trajectory_names())
       ->default_str(sim_args.trajectory);
   omniloc::cli::add_number_option(app, "--seed", sim_args.seed, "world and sensor noise seed");
+  app.add_flag("--perfect-clocks", sim_args.perfect_clocks,
+               "every clock equal, no USB or camera delay (default: realistic clocks, docs/SIMULATOR.md)");
+  app.add_option("--board-drift-ppm", sim_args.board_drift_ppm, "the simulated board crystal against the host clock")
+      ->default_str("50")->check(CLI::Range(-1000.0, 1000.0));
   omniloc::cli::DaemonCommandLine cl;
   omniloc::cli::add_daemon_options(app, cl);
   return omniloc::cli::parse_and_run(app, argc, argv, "omnilocd-sim", [&] {

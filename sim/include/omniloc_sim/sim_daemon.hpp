@@ -1,7 +1,7 @@
 // The simulated robot behind the robot's own Daemon: world -> quadrature waveforms -> Verilated
 // board (rtl/omniloc_top.v) -> SimTransport, the simulated gyro as heading, a camera rendering the
-// field at the true pose, and the board's simulated time as the daemon's clock. `omnilocd-sim`,
-// `omniloc-sim demo` and the tests build their runs from it; truth reaches them through the truth
+// field at the true pose, and the simulation's host clock as the daemon's (realistic clocks by
+// default, sim_clocks.hpp). `omnilocd-sim`, `omniloc-sim demo` and the tests build their runs from it; truth reaches them through the truth
 // log and the daemon's observer, never through the daemon.
 #pragma once
 
@@ -13,6 +13,7 @@
 #include "omniloc/daemon.hpp"
 #include "omniloc/recording.hpp"
 #include "omniloc_sim/renderer.hpp"
+#include "omniloc_sim/sim_clocks.hpp"
 #include "omniloc_sim/sim_robot.hpp"
 #include "omniloc_sim/trajectory.hpp"
 #include "omniloc_sim/verilated_robot.hpp"
@@ -26,6 +27,9 @@ struct SimRobotOptions {
   double camera_fps = 60.0;          ///< frames per second of simulated time
   std::vector<SlipEvent> slips;      ///< wheel slips the world injects
   std::vector<KidnapEvent> kidnaps;  ///< kidnappings the world injects
+  /// The board's crystal, the USB latency and the camera's delays (sim_clocks.hpp): realistic by
+  /// default; SimClockConfig::perfect() for every clock equal and no delay.
+  SimClockConfig clocks = SimClockConfig::realistic();
 };
 
 class SimulatedRobot {

@@ -94,6 +94,23 @@ class SimCamera final : public FrameSource {
 
   /// Frames taken at or after t_ms are not delivered (a camera that stops): for tests and demos.
   void stop_at(double t_ms) { stop_ms_ = t_ms; }
+  /// A driver's delays (sim_clocks.hpp): frame k, exposed at k / fps, is handed over
+  /// `latency_ms + jitter_ms x u_k` later (u_k uniform 0..1 from the seed and k) and stamped then
+  /// (time_source "host": the daemon subtracts its camera_latency_ms); a fraction `drop` of frames
+  /// is lost. Without this call: no delay, stamped with the exposure time (time_source "sim").
+  void set_delays(double latency_ms, double jitter_ms, double drop, std::uint64_t seed) {
+    latency_ms_ = latency_ms;
+    jitter_ms_ = jitter_ms;
+    drop_ = drop;
+    delay_seed_ = seed;
+    delayed_ = latency_ms > 0.0 || jitter_ms > 0.0 || drop > 0.0;
+  }
+  /// When frame k is handed over (its exposure time with no delays), and whether it is lost.
+  [[nodiscard]] double handover_ms(std::int64_t k) const {
+    return static_cast<double>(k) * period_ms_ + (delayed_ ? latency_ms_ + jitter_ms_ * unit(k, 1) : 0.0);
+  }
+  [[nodiscard]] bool dropped(std::int64_t k) const { return delayed_ && unit(k, 2) < drop_; }
+  [[nodiscard]] double period_ms() const { return period_ms_; }
 
   std::optional<CameraFrame> poll(double now_ms) override;
   [[nodiscard]] std::string describe() const override { return "simulated omni camera"; }
@@ -108,6 +125,16 @@ class SimCamera final : public FrameSource {
   std::int64_t last_k_ = -1;       // last frame handed out
   std::int64_t next_job_k_ = 0;    // next frame to start rendering
   double stop_ms_ = 1e300;
+  bool delayed_ = false;
+  double latency_ms_ = 0.0, jitter_ms_ = 0.0, drop_ = 0.0;
+  std::uint64_t delay_seed_ = 0;
+  [[nodiscard]] double unit(std::int64_t k, std::uint64_t stream) const {
+    std::uint64_t z = delay_seed_ ^ (static_cast<std::uint64_t>(k) * 0x9E3779B97F4A7C15ULL) ^ (stream << 56);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;  // splitmix64's finaliser
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    z ^= z >> 31;
+    return static_cast<double>(z >> 11) * (1.0 / 9007199254740992.0);
+  }
   std::unique_ptr<Worker> worker_;
 };
 

@@ -1,10 +1,15 @@
 // The simulated robot on the Verilated board, for `omnilocd-sim` and `omniloc-sim demo`: the
 // world simulator's quadrature waveforms drive the Verilated rtl/omniloc_top.v (BoardSim) at 12 MHz,
-// the host reaches it through SimTransport, and the daemon's clock is the board's simulated time.
+// the host reaches it through SimTransport, and the daemon's clock is the host clock of the
+// simulation (sim_clocks.hpp): the board's simulated time over (1 + board_drift_ppm 1e-6), the
+// windows' bytes delivered after a USB latency (DelayedSimTransport). With SimClockConfig::perfect()
+// the daemon's clock is the board's time and bytes arrive as the UART delivers them.
 // Header-only; programs including it link omniloc_board_sim.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <string>
 #include <vector>
@@ -13,6 +18,7 @@
 #include "omniloc/robot_config.hpp"
 #include "omniloc_sim/board_sim.hpp"
 #include "omniloc_sim/encoder_waveform.hpp"
+#include "omniloc_sim/sim_clocks.hpp"
 #include "omniloc_sim/sim_robot.hpp"
 #include "omniloc_sim/trajectory.hpp"
 #include "omniloc_sim/world.hpp"
@@ -36,46 +42,119 @@ namespace omniloc::sim {
 /// (a block of BoardSim is shorter than a physics step, so every step is seen).
 class LoggingQuadratureSource final : public EncoderSource {
  public:
-  LoggingQuadratureSource(QuadratureStream& stream, SimTruthLog& log) : stream_(stream), log_(log) {}
+  /// `crystal`: truth is logged in host time (the board's cycles are its own time).
+  LoggingQuadratureSource(QuadratureStream& stream, SimTruthLog& log, BoardCrystal crystal = {})
+      : stream_(stream), log_(log), crystal_(crystal) {}
   void fill_levels(std::int64_t first_cycle, std::span<std::uint8_t> out) override {
     stream_.fill_levels(first_cycle, out);
     const World& w = stream_.world();
     constexpr double kCyclesPerMs = static_cast<double>(BoardSim::kClockHz) / 1000.0;
-    log_.add(static_cast<double>(w.cycle()) / kCyclesPerMs, w.truth(), w.gyro().report(w.gyro().raw_yaw_deg()));
+    log_.add(crystal_.host_ms(static_cast<double>(w.cycle()) / kCyclesPerMs), w.truth(),
+             w.gyro().report(w.gyro().raw_yaw_deg()));
   }
 
  private:
   QuadratureStream& stream_;
   SimTruthLog& log_;
+  BoardCrystal crystal_;
 };
 
-/// Daemon time = the board's simulated time; waiting runs the board.
+/// Daemon time = the simulation's host clock: the board's simulated time through its crystal
+/// (equal to it with a perfect crystal); waiting runs the board.
 class BoardSimClock final : public daemon::DaemonClock {
  public:
-  explicit BoardSimClock(BoardSim& board) : board_(board) {}
-  double now_ms() override { return board_.seconds() * 1000.0; }
+  explicit BoardSimClock(BoardSim& board, BoardCrystal crystal = {}) : board_(board), crystal_(crystal) {}
+  double now_ms() override { return crystal_.host_ms(board_.seconds() * 1000.0); }
   void wait_ms(double ms) override {
-    if (ms > 0) board_.run_cycles(static_cast<std::int64_t>(ms * (BoardSim::kClockHz / 1000)));
+    if (ms > 0)
+      board_.run_cycles(static_cast<std::int64_t>(ms * (1.0 + crystal_.drift_ppm * 1e-6) * (BoardSim::kClockHz / 1000)));
   }
 
  private:
   BoardSim& board_;
+  BoardCrystal crystal_;
+};
+
+/// SimTransport with a USB latency: each chunk of bytes the board sends is released to the host
+/// at the arrival time UsbArrivals gives it (host clock), in order. Writes go straight through.
+class DelayedSimTransport final : public Transport {
+ public:
+  DelayedSimTransport(BoardSim& board, daemon::DaemonClock& host, UsbArrivals& usb)
+      : board_(board), host_(host), usb_(usb), direct_(board) {}
+  void write(std::span<const std::uint8_t> bytes) override { direct_.write(bytes); }
+  std::size_t read(std::span<std::uint8_t> out, std::chrono::milliseconds timeout) override {
+    constexpr std::int64_t kSlice = BoardSim::kClockHz / 10'000;  // 100 us, as SimTransport
+    const std::int64_t deadline = board_.cycle() + timeout.count() * (BoardSim::kClockHz / 1000);
+    for (;;) {
+      take();
+      if (!held_.empty() && held_.front().release_ms <= host_.now_ms()) break;
+      if (board_.cycle() >= deadline) return 0;
+      board_.run_cycles(kSlice);
+    }
+    std::size_t n = 0;
+    while (n < out.size() && !held_.empty() && held_.front().release_ms <= host_.now_ms()) {
+      Chunk& c = held_.front();
+      const std::size_t k = std::min(out.size() - n, c.bytes.size() - c.used);
+      std::copy_n(c.bytes.begin() + static_cast<std::ptrdiff_t>(c.used), k, out.begin() + static_cast<std::ptrdiff_t>(n));
+      n += k;
+      c.used += k;
+      if (c.used == c.bytes.size()) held_.pop_front();
+    }
+    counters_.bytes_read += n;
+    return n;
+  }
+  [[nodiscard]] TransportStatus status() const override {
+    TransportStatus st = direct_.status();
+    st.counters.bytes_read = counters_.bytes_read;
+    st.description += ", USB latency simulated";
+    return st;
+  }
+  [[nodiscard]] std::chrono::steady_clock::time_point now() const override { return direct_.now(); }
+
+ private:
+  struct Chunk {
+    std::vector<std::uint8_t> bytes;
+    std::size_t used = 0;
+    double release_ms = 0.0;
+  };
+  void take() {
+    std::uint8_t buf[512];
+    for (std::size_t n; (n = board_.from_board(buf)) > 0;)
+      held_.push_back({std::vector<std::uint8_t>(buf, buf + n), 0, usb_.arrival_ms(host_.now_ms())});
+  }
+  BoardSim& board_;
+  daemon::DaemonClock& host_;
+  UsbArrivals& usb_;
+  SimTransport direct_;
+  std::deque<Chunk> held_;
+  TransportCounters counters_;
 };
 
 /// Everything of the simulated robot, wired: world -> encoders -> Verilated board -> transport.
 struct VerilatedRobot {
+  SimClockConfig clocks;
   QuadratureStream stream;
   SimTruthLog log;
   LoggingQuadratureSource source;
   BoardSim board;
   BoardSimClock clock;
+  UsbArrivals usb;
 
-  VerilatedRobot(const WorldConfig& world, Trajectory trajectory)
-      : stream(world, std::move(trajectory)), source(stream, log), board(&source), clock(board) {}
+  /// `clocks`: perfect() by default here (SimRobotOptions chooses realistic ones for the daemon).
+  VerilatedRobot(const WorldConfig& world, Trajectory trajectory, const SimClockConfig& clock_config = {},
+                 std::uint64_t clock_seed = 1)
+      : clocks(clock_config), stream(world, std::move(trajectory)),
+        source(stream, log, BoardCrystal{clock_config.board_drift_ppm, 0.0}), board(&source),
+        clock(board, BoardCrystal{clock_config.board_drift_ppm, 0.0}), usb(clock_config, clock_seed) {}
 
-  /// A fresh SimTransport each time (the board itself keeps running, as after a USB replug).
+  /// A fresh transport each time (the board itself keeps running, as after a USB replug): the
+  /// plain SimTransport with perfect clocks, else one with the USB latency.
   [[nodiscard]] daemon::TransportFactory transport_factory() {
-    return [this]() -> std::unique_ptr<Transport> { return std::make_unique<SimTransport>(board); };
+    const bool delayed = clocks.usb_jitter_mean_ms > 0.0 || clocks.burst_every_s > 0.0;
+    return [this, delayed]() -> std::unique_ptr<Transport> {
+      if (delayed) return std::make_unique<DelayedSimTransport>(board, clock, usb);
+      return std::make_unique<SimTransport>(board);
+    };
   }
 };
 
