@@ -8,7 +8,9 @@
 #   make formal     yosys + yosys-smtbmc (z3) proofs
 #   make bitstream  iCEBreaker bitstream with the open iCE40 flow
 #   make bench      benchmarks (each against a naive reference, ratio printed)
-#   make soak       long simulated runs of the localizer (SOAK_MINUTES, default 10)
+#   make soak       long simulated runs: the localizer (SOAK_MINUTES, default 10), the daemon with faults
+#                   (SOAK_DAEMON_MINUTES, default 60 simulated; SOAK_BOARD reference or verilated)
+#   make fuzz       the libFuzzer harnesses of tests/fuzz, FUZZ_SECONDS each (default 60; clang tree $(BUILD)/sanitize)
 #   make install    install the library, headers, programs and data under PREFIX (default /usr/local)
 #   make generate   regenerate headers and docs from common/regmap.json
 #   make clean      remove build/
@@ -20,7 +22,7 @@ CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 PREFIX     ?= /usr/local
 CTEST      := ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
 
-.PHONY: all deps configure build test demo lint formal bitstream bench soak install generate clean
+.PHONY: all deps configure build test demo lint formal bitstream bench soak fuzz install generate clean
 
 all: build
 
@@ -54,8 +56,16 @@ bench: build
 	@bash scripts/bench.sh $(BUILD)
 
 SOAK_MINUTES ?= 10
+SOAK_DAEMON_MINUTES ?= 60
+SOAK_BOARD ?= reference
 soak: build
 	$(BUILD)/soak/soak_localizer --minutes $(SOAK_MINUTES)
+	$(BUILD)/soak/soak_daemon --minutes $(SOAK_DAEMON_MINUTES) --board $(SOAK_BOARD) --out $(BUILD)/soak/daemon
+
+# ASan + UBSan + libFuzzer in a clang tree of its own (scripts/fuzz.sh, docs/TESTING.md "Fuzzing").
+FUZZ_SECONDS ?= 60
+fuzz: deps
+	@bash scripts/fuzz.sh run . $(BUILD)/sanitize $(FUZZ_SECONDS)
 
 install: build
 	cmake --install $(BUILD) --prefix $(PREFIX)

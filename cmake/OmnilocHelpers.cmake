@@ -14,6 +14,11 @@ function(omniloc_add_gtest name)
     WORKING_DIRECTORY ${CMAKE_BINARY_DIR}
     PROPERTIES LABELS "${ARG_LABELS}"
     DISCOVERY_TIMEOUT 60)
+  # The host (software) test executables, which the sanitizer tree also runs under ASan + UBSan
+  # (tests/CMakeLists.txt, scripts/fuzz.sh gtests).
+  if("host" IN_LIST ARG_LABELS)
+    set_property(GLOBAL APPEND PROPERTY OMNILOC_HOST_GTESTS ${name})
+  endif()
 endfunction()
 
 # omniloc_add_benchmark(NAME SOURCES... [LIBS ...])

@@ -10,6 +10,9 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   umockdev libumockdev-dev libglib2.0-dev
   ftdi-eeprom
+  cyclonedds-dev cyclonedds-tools
+  libcpp-httplib-dev chromium
+  clang libclang-rt-14-dev
 )
 
 missing=()

@@ -11,7 +11,8 @@ from typing import Iterator, Optional
 # The documented keys, in the order the daemon writes them; the two optional ones are absent
 # before the first image result.
 POSE_KEYS = ("seq", "t_ms", "x_cm", "y_cm", "yaw_deg", "source", "match_error", "search_range_cm",
-             "uncertainty_cm", "uncertainty_yaw_deg", "status")
+             "uncertainty_cm", "uncertainty_yaw_deg", "vx_cm_s", "vy_cm_s", "omega_deg_s", "mono_ms", "wall_ms",
+             "status")
 OPTIONAL_KEYS = ("match_error", "search_range_cm")
 SOURCES = ("none", "image", "integrated", "odometry", "lost")
 STATUSES = ("no_board", "degraded", "odometry_only", "starting", "lost", "ok")
@@ -33,6 +34,11 @@ class PoseDatagram:
     search_range_cm: Optional[float]
     uncertainty_cm: float
     uncertainty_yaw_deg: float
+    vx_cm_s: float
+    vy_cm_s: float
+    omega_deg_s: float
+    mono_ms: float
+    wall_ms: float
     status: str
 
 
@@ -74,7 +80,8 @@ def parse_pose(data: bytes | str) -> PoseDatagram:
         match_error=_number(obj, "match_error") if "match_error" in obj else None,
         search_range_cm=_number(obj, "search_range_cm") if "search_range_cm" in obj else None,
         uncertainty_cm=_number(obj, "uncertainty_cm"), uncertainty_yaw_deg=_number(obj, "uncertainty_yaw_deg"),
-        status=obj["status"])
+        vx_cm_s=_number(obj, "vx_cm_s"), vy_cm_s=_number(obj, "vy_cm_s"), omega_deg_s=_number(obj, "omega_deg_s"),
+        mono_ms=_number(obj, "mono_ms"), wall_ms=_number(obj, "wall_ms"), status=obj["status"])
 
 
 class PoseReceiver:

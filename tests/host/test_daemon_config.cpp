@@ -21,8 +21,9 @@ using test::error_of;
 const std::vector<std::string> kEveryKey = {
     "board_serial", "reconnect_period_ms", "camera",     "camera_fps",  "camera_timeout_ms", "field",
     "camera_model", "robot",               "localizer",  "database",    "grid_step_cm",      "udp_address",
-    "udp_port",     "publish_hz",          "record_dir", "record_overwrite", "record_format",
-    "status_period_s", "duration_s"};
+    "udp_port",     "control_port",        "publish_hz",          "record_dir", "record_overwrite", "record_format",
+    "status_period_s", "log_level", "duration_s", "ros2_domain_id", "ros2_namespace", "ros2_frame_id",
+    "http_port", "http_address"};
 
 // Every key set to a value that differs from its default (publish_hz has only one valid value).
 const std::string kEveryKeyJson = R"({
@@ -39,12 +40,19 @@ const std::string kEveryKeyJson = R"({
   "grid_step_cm": 20,
   "udp_address": "192.168.1.20",
   "udp_port": 6001,
+  "control_port": 6101,
   "publish_hz": 100,
   "record_dir": "/data/run1",
   "record_overwrite": true,
   "record_format": "png",
   "status_period_s": 2.5,
-  "duration_s": 12
+  "log_level": "debug",
+  "duration_s": 12,
+  "ros2_domain_id": 7,
+  "ros2_namespace": "/robot2/omniloc",
+  "ros2_frame_id": "field",
+  "http_port": 8080,
+  "http_address": "0.0.0.0"
 })";
 
 TEST(DaemonConfig, ShippedDefaultFileIsTheStructDefaultsEveryKey) {
@@ -81,6 +89,12 @@ TEST(DaemonConfig, EveryKeyReachesItsMember) {
   EXPECT_EQ(c.record_format, "png");
   EXPECT_EQ(c.status_period_s, 2.5);
   EXPECT_EQ(c.duration_s, 12.0);
+  EXPECT_EQ(c.control_port, 6101);
+  EXPECT_EQ(c.ros2_domain_id, 7);
+  EXPECT_EQ(c.ros2_namespace, "/robot2/omniloc");
+  EXPECT_EQ(c.ros2_frame_id, "field");
+  EXPECT_EQ(c.http_port, 8080);
+  EXPECT_EQ(c.http_address, "0.0.0.0");
 }
 
 TEST(DaemonConfig, EachKeyOfTheFullFileMatters) {
@@ -130,7 +144,14 @@ TEST(DaemonConfig, BadFilesNameTheFileAndTheField) {
                           {R"({"publish_hz": 50})", "publish_hz", "must be 100"},
                           {R"({"camera_timeout_ms": 0})", "camera_timeout_ms", "[10, 60000] (got 0)"},
                           {R"({"duration_s": -1})", "duration_s", ">= 0 (got -1)"},
+                          {R"({"control_port": 70000})", "control_port", "must be 0 (off) or in [1, 65535] (got 70000)"},
+                          {R"({"ros2_domain_id": 233})", "ros2_domain_id", "must be -1 (off) or in [0, 232] (got 233)"},
+                          {R"({"ros2_namespace": "omniloc"})", "ros2_namespace", "absolute ROS 2 name"},
+                          {R"({"ros2_namespace": "/a//b"})", "ros2_namespace", "absolute ROS 2 name"},
                           {R"({"grid_step_cm": 1})", "grid_step_cm", "[2, 50] (got 1)"},
+                          {R"({"http_port": -1})", "http_port", "must be 0 (off) or in [1, 65535] (got -1)"},
+                          {R"({"http_port": 65536})", "http_port", "must be 0 (off) or in [1, 65535] (got 65536)"},
+                          {R"({"http_address": "localhost"})", "http_address", "dotted IPv4 address (got \"localhost\")"},
                           {R"({"camera": ""})", "camera", "must not be empty"},
                           {"{\"udp_port\" 5600}", "udp_port", "not valid JSON: parse error at line 1"},
                           {"{\"udp_port\": 5600 \"camera\": \"0\"}", "", "not valid JSON: parse error at line 1"},
@@ -184,6 +205,9 @@ TEST(DaemonConfig, FlagsOverrideTheFileWhateverTheirOrder) {
   EXPECT_EQ(a.camera_fps, 15.0);  // --key=value as well as --key value
   // A text key takes the flag's text as it is (a camera index is the string "1").
   EXPECT_EQ(parse_flags({"--camera", "1"}).camera, "1");
+  // --http is the short form of --http-port (the live view).
+  EXPECT_EQ(parse_flags({"--http", "8081"}).http_port, 8081);
+  EXPECT_EQ(parse_flags({"--http-port=8082"}).http_port, 8082);
   // No flag at all: the defaults, valid on their own.
   EXPECT_TRUE(parse_flags({}) == DaemonConfig{});
 }
@@ -217,6 +241,22 @@ TEST(DaemonConfig, HelpListsEveryKeyAsAFlagWithItsDefault) {
   EXPECT_NE(help.find("\"fira-robosot\""), std::string::npos);
   EXPECT_NE(help.find("\"\""), std::string::npos);  // an empty default is shown as ""
   for (const char* gone : {"--board ", "--sim-", "sim |"}) EXPECT_EQ(help.find(gone), std::string::npos) << gone;
+}
+
+// Issue 17.3: log levels from the key table (--log-level, the config file) and -v / -q on top.
+TEST(DaemonCommandLine, LogLevelFromTheKeyAndVerboseQuietFlags) {
+  const auto level = [](std::vector<std::string> args) {
+    CommandLine c;
+    const DaemonConfig cfg = c.parse(std::move(args));
+    return cli::daemon_logger(cfg, c.cl, "omnilocd").threshold();
+  };
+  EXPECT_EQ(level({}), LogLevel::kInfo);
+  EXPECT_EQ(level({"--log-level", "warning"}), LogLevel::kWarning);
+  EXPECT_EQ(level({"-v"}), LogLevel::kDebug);
+  EXPECT_EQ(level({"-q"}), LogLevel::kWarning);
+  EXPECT_EQ(level({"-qq"}), LogLevel::kError);
+  EXPECT_EQ(level({"--log-level=error", "-v"}), LogLevel::kWarning);
+  EXPECT_NE(flag_error({"--log-level", "loud"}).find("log_level"), std::string::npos);
 }
 
 }  // namespace

@@ -32,6 +32,11 @@ PoseMessage sample_message() {
   m.search_range_cm = 20;
   m.uncertainty_cm = 1.5;
   m.uncertainty_yaw_deg = 0.25;
+  m.vx_cm_s = 120.5;
+  m.vy_cm_s = -3.25;
+  m.omega_deg_s = 45.0;
+  m.mono_ms = 98765.4321;
+  m.wall_ms = 1796280000123.5;
   m.status = DaemonStatus::kOk;
   return m;
 }
@@ -40,6 +45,7 @@ TEST(DaemonPublish, DatagramTextIsExactlyTheDocumentedSchema) {
   EXPECT_EQ(omniloc::daemon::pose_json(sample_message()),
             R"({"seq":42,"t_ms":1234.500,"x_cm":375.125,"y_cm":-2.500,"yaw_deg":179.750,"source":"integrated",)"
             R"("match_error":7.250,"search_range_cm":20.0,"uncertainty_cm":1.500,"uncertainty_yaw_deg":0.250,)"
+            R"("vx_cm_s":120.50,"vy_cm_s":-3.25,"omega_deg_s":45.00,"mono_ms":98765.432,"wall_ms":1796280000123.500,)"
             R"("status":"ok"})");
   PoseMessage global = sample_message();  // the last image result came from a global search
   global.search_range_cm = -1;
@@ -52,7 +58,8 @@ TEST(DaemonPublish, DatagramTextIsExactlyTheDocumentedSchema) {
   none.status = DaemonStatus::kDegraded;
   EXPECT_EQ(omniloc::daemon::pose_json(none),
             R"({"seq":42,"t_ms":1234.500,"x_cm":375.125,"y_cm":-2.500,"yaw_deg":179.750,"source":"a\"b",)"
-            R"("uncertainty_cm":1.500,"uncertainty_yaw_deg":0.250,"status":"degraded"})");
+            R"("uncertainty_cm":1.500,"uncertainty_yaw_deg":0.250,"vx_cm_s":120.50,"vy_cm_s":-3.25,"omega_deg_s":45.00,)"
+            R"("mono_ms":98765.432,"wall_ms":1796280000123.500,"status":"degraded"})");
 }
 
 TEST(DaemonPublish, StatusNamesAreTheDocumentedOnes) {
@@ -183,7 +190,7 @@ TEST(DaemonPublish, StatusLineShowsEveryFigure) {
   s.send_failed = 2;
   s.reconnects = 1;
   EXPECT_EQ(omniloc::daemon::status_line(s),
-            "omnilocd t=12.0s odometry_only pose=(375.2,275.1,-90.0) src=odometry err=- sigma=3.2cm drift=-0.012deg/s win=100/s cam=0/s "
+            "t=12.0s odometry_only pose=(375.2,275.1,-90.0) src=odometry err=- sigma=3.2cm drift=-0.012deg/s win=100/s cam=0/s "
             "sent=1200 dropped=2 reconnects=1");
 }
 

@@ -365,7 +365,7 @@ TEST_F(FeatureDbTest, RefusesAValidChecksumOverANonsenseGridAndFilesThatAreNotFi
     const std::uint64_t payload = kFeatureBytes;
     patch_with_valid_checksum(bytes, 72, payload);  // payload_bytes is the last header field
     write_file(bytes);
-    expect_refused("is not the grid of field", *field_, *camera_);
+    expect_refused("fewer than 2 points along a side", *field_, *camera_);
   }
   // Not files.
   const fs::path dir = fs::path(path_ + ".d");
@@ -382,6 +382,44 @@ TEST_F(FeatureDbTest, RefusesAValidChecksumOverANonsenseGridAndFilesThatAreNotFi
     ADD_FAILURE() << "/dev/zero loaded";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("/dev/zero: not a regular file"), std::string::npos) << e.what();
+  }
+}
+
+// A grid with one point along a side (a step above half the carpet's side) cannot localise along
+// it; it used to load when it was the field's own covering grid (found by fuzz_feature_db, issue 16;
+// regression input tests/fuzz/regressions/feature_db/). Field: 40 x 30 cm carpet, as the harness's.
+TEST_F(FeatureDbTest, RefusesAGridWithOnePointAlongASideEvenWhenItIsTheFieldsOwnGrid) {
+  FieldSpec spec = field_->spec;
+  spec.name = "tiny";
+  spec.field_length_cm = 30;
+  spec.field_width_cm = 20;
+  spec.border_cm = 5;
+  spec.line_width_cm = 2;
+  spec.centre_circle_radius_cm = 5;
+  spec.goal = {8, 4, GoalColour::kUnknown};
+  spec.goal_area = {3, 10};
+  spec.penalty_area = {6, 14};
+  spec.penalty_arc = {0, 0};
+  spec.corner_arc_radius_cm = 0;
+  spec.marks_from_centre_cm.clear();
+  spec.validate("tiny");
+  const FieldGeometry tiny = build_field(spec, "tiny");
+  struct Case {
+    double step_cm;
+    int nx, ny;
+    bool loads;
+  };
+  for (const Case& c : {Case{30, 1, 1, false}, Case{20, 2, 1, false}, Case{15, 2, 2, true}, Case{10, 4, 3, true}}) {
+    SCOPED_TRACE(c.step_cm);
+    const GridSpec g = GridSpec::covering(tiny, c.step_cm);
+    ASSERT_EQ(g.nx, c.nx);
+    ASSERT_EQ(g.ny, c.ny);
+    save_feature_db(build_feature_db(tiny, *camera_, g, {}, 1), path_);
+    if (c.loads) {
+      EXPECT_EQ(load_feature_db(path_, tiny, *camera_).grid.cells(), c.nx * c.ny);
+    } else {
+      expect_refused("fewer than 2 points along a side", tiny, *camera_);
+    }
   }
 }
 

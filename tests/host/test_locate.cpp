@@ -279,7 +279,9 @@ TEST_F(LocateProgram, UnreadableImageAndCameraOfAnotherSizeExitOne) {
   EXPECT_EQ(run(exe + img.string() + " --camera " + cam.string() + " --yaw-deg nan", dir_, out, err), 2);
   EXPECT_EQ(run(exe + img.string(), dir_, out, err), 2);
   EXPECT_EQ(run(exe + "--help", dir_, out, err), 0);
-  EXPECT_NE(out.find("usage: omniloc locate IMAGE --camera"), std::string::npos) << out;
+  EXPECT_NE(out.find("Usage: omniloc locate [OPTIONS] IMAGE"), std::string::npos) << out;
+  for (const char* option : {"--camera", "--field", "--yaw-deg", "--db", "--config", "--overlay", "--json"})
+    EXPECT_NE(out.find(option), std::string::npos) << option << "\n" << out;
 }
 
 // The Localizer's own global search (no trusted heading) takes the same cue: with the goal colours

@@ -431,12 +431,45 @@ TEST_F(Matcher, FieldScanIsTheBearingsRotatedOnceWithTheSameResults) {
   MatchResult l1 = local_search(*db_, f, {460.0, 330.0}, 20.0, mo), l2 = local_search(*db_, s, {460.0, 330.0}, 20.0, mo);
   EXPECT_EQ(l1.cell, l2.cell);
   EXPECT_EQ(l1.error, l2.error);
+  // Robot ray j0 = round(71.6 * 4) = 286 became field ray 0: it points at 286 / 4 - 71.6 = -0.1 deg.
+  EXPECT_NEAR(f.bearing_offset_deg, -0.1, 1e-9);
+  FieldScan by_hand = make_field_scan(s);
+  by_hand.bearing_offset_deg = -0.1;
   apply_refinement(*db_, renderer_->field(), renderer_->camera(), f, l1, mo);
   interpolate_match(*db_, s, l2);
-  refine_match(renderer_->field(), renderer_->camera(), s, l2, mo);
+  refine_match(renderer_->field(), renderer_->camera(), by_hand, l2, mo);
   EXPECT_EQ(l1.position_cm, l2.position_cm);
   EXPECT_EQ(l1.refined_error, l2.refined_error);
   EXPECT_LT((l1.position_cm - truth.position_cm()).norm(), 2.0);
+}
+
+// A robot-frame scan at 2 rays per degree turned into the field frame at a heading of 10.3 deg:
+// field ray k is robot ray 2k - 21 (the nearest), which points at k - 0.2 deg. Cast at whole
+// degrees the refinement is pulled off by the 0.2 deg (up to ~1.5 cm at the boundary, where the
+// lines are far); cast where the rays point it is not. Noise-free frames, the paper's scan.
+TEST_F(Matcher, RefinementCastsWhereTheRotatedRaysPoint) {
+  const Eigen::Vector2d points[] = {{75.0, 75.0}, {380.0, 74.0}, {678.0, 71.0}, {90.0, 466.0}, {375.0, 475.0}, {662.0, 467.0}};
+  const double yaw = 10.3;
+  MatchOptions mo;
+  mo.refinement = Refinement::kRayCast;
+  double sum_at = 0.0, sum_whole = 0.0;
+  for (const auto& p : points) {
+    const BearingScan b = scan_image_bearings(renderer_->render({p.x(), p.y(), yaw}, sim::noise_free()), renderer_->camera(), 2);
+    const FieldScan at = make_field_scan(b, yaw);
+    ASSERT_NEAR(at.bearing_offset_deg, -0.2, 1e-9);
+    FieldScan whole = at;
+    whole.bearing_offset_deg = 0.0;
+    MatchResult m1 = global_search(*db_, at, mo), m2 = m1;
+    apply_refinement(*db_, renderer_->field(), renderer_->camera(), at, m1, mo);
+    apply_refinement(*db_, renderer_->field(), renderer_->camera(), whole, m2, mo);
+    const double e1 = (m1.position_cm - p).norm(), e2 = (m2.position_cm - p).norm();
+    std::printf("(%.0f, %.0f): cast where the rays point %.2f cm, at whole degrees %.2f cm\n", p.x(), p.y(), e1, e2);
+    sum_at += e1;
+    sum_whole += e2;
+  }
+  std::printf("mean: %.2f cm vs %.2f cm\n", sum_at / 6.0, sum_whole / 6.0);
+  EXPECT_LT(sum_at, sum_whole);
+  EXPECT_LT(sum_at / 6.0, 0.5);
 }
 
 // Where the shipped E_TH and ambiguity ratio come from (docs/VISION.md "Match error"): on noisy

@@ -61,6 +61,10 @@ TEST(OmnilocdProgram, RefusesACameraItCannotOpenAndABadFlag) {
   EXPECT_NE(out.find("--udp-port"), std::string::npos) << out;
   EXPECT_EQ(run("--udp-port=70000", out), 2) << out;  // --key=value as --key value
   EXPECT_NE(out.find("udp_port: must be in [1, 65535] (got 70000)"), std::string::npos) << out;
+  // Issue 16.7: a port far outside any int is refused by name and value, not wrapped or truncated.
+  EXPECT_EQ(run("--udp-port 56066666666660", out), 2) << out;
+  EXPECT_NE(out.find("udp_port: out of range"), std::string::npos) << out;
+  EXPECT_NE(out.find("(got 56066666666660)"), std::string::npos) << out;
   EXPECT_EQ(run("--no-such-flag 1", out), 2) << out;
   EXPECT_NE(out.find("--no-such-flag"), std::string::npos) << out;
   EXPECT_EQ(run("--version", out), 0) << out;

@@ -106,9 +106,11 @@ TEST(RealisticRoundTrip, CalibratedOnTheCentreSpotThenLocatedElsewhere) {
   EXPECT_LT(u_worst, 15.0);   // an accepted frame is never far off ...
   EXPECT_EQ(u_twin, 0);       // ... and never the twin
   // Heading known, a global search at that heading: what it accepts is right (within the same
-  // bound); it refuses more than it should (a second minimum elsewhere within the ambiguity ratio
-  // on these frames, whose mapping the radially symmetric camera model cannot follow exactly).
-  EXPECT_GE(k_acc, 1);
+  // bound). The second minimum the matcher flags on the grid errors is judged after refinement,
+  // as the best is (before that change 4 of these 12 were accepted, now 6); the rest are refused
+  // with a second place within the ambiguity ratio on these frames, whose mapping the radially
+  // symmetric camera model cannot follow exactly (one of them, 228 cm off, rightly).
+  EXPECT_GE(k_acc, 6);
   EXPECT_LT(k_worst, 15.0);
   EXPECT_EQ(k_twin, 0);
 }

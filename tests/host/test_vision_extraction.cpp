@@ -514,15 +514,19 @@ void expect_same(const BearingScan& a, const ExtractionReport& ra, const Bearing
   EXPECT_EQ(ra.carpet_estimated, rb.carpet_estimated);
 }
 
-// Two extractors of one camera, one fast and one reference, fed the same frames in order.
+// Three extractors of one camera, the fast walk (extract), the scalar bin walk and the reference,
+// fed the same frames in order.
 int expect_same_sequence(const CameraModel& cam, const std::vector<cv::Mat>& frames, int rpd, const std::string& what) {
-  LineExtractor fast(cam), ref(cam);
+  LineExtractor fast(cam), bins(cam), ref(cam);
   int crossings = 0;
   for (std::size_t i = 0; i < frames.size(); ++i) {
-    ExtractionReport rf, rr;
+    ExtractionReport rf, rb, rr;
     const BearingScan bf = fast.extract(frames[i], rpd, &rf);
+    const BearingScan bb = bins.extract_with(LineExtractor::Walk::kBinWalk, frames[i], rpd, &rb);
     const BearingScan br = ref.extract_reference(frames[i], rpd, &rr);
-    expect_same(bf, rf, br, rr, what + ", frame " + std::to_string(i) + ", " + std::to_string(rpd) + " rays/deg");
+    const std::string at = ", frame " + std::to_string(i) + ", " + std::to_string(rpd) + " rays/deg";
+    expect_same(bf, rf, br, rr, what + at + ", fast walk");
+    expect_same(bb, rb, br, rr, what + at + ", scalar bin walk");
     crossings += rr.crossings;
   }
   return crossings;
@@ -547,7 +551,7 @@ TEST_F(VisionRendered, FastExtractionEqualsTheReferenceByteForByte) {
   frames.push_back(frames[1]);
   const CameraModel& cam = renderer_->camera();
   int crossings = 0;
-  for (int rpd : {4, 1, 3}) crossings += expect_same_sequence(cam, frames, rpd, "rendered, carpet estimated");
+  for (int rpd : {4, 2, 1, 3}) crossings += expect_same_sequence(cam, frames, rpd, "rendered, carpet estimated");
   // The carpet and the steps given by the camera (no estimation, the value window per sector).
   CameraModel given = cam;
   {
@@ -558,6 +562,7 @@ TEST_F(VisionRendered, FastExtractionEqualsTheReferenceByteForByte) {
     given.vision.line_contrast = rep.contrast;
   }
   crossings += expect_same_sequence(given, frames, 4, "rendered, carpet given");
+  crossings += expect_same_sequence(given, frames, 2, "rendered, carpet given");
   EXPECT_GT(crossings, 1000);  // the frames do have lines in them
 }
 

@@ -7,6 +7,7 @@ import csv
 import json
 import os
 import shutil
+import socket
 import subprocess
 import sys
 import tempfile
@@ -14,7 +15,7 @@ import threading
 import unittest
 from pathlib import Path
 
-from omniloc_client import (ENCODERS_HEADER, DatagramError, PoseReceiver, RecordingError, parse_pose,
+from omniloc_client import (ENCODERS_HEADER, Control, ControlError, DatagramError, PoseReceiver, RecordingError, parse_pose,
                             read_recording, write_recording)
 
 OMNILOCD_SIM = os.environ["OMNILOCD_SIM"]
@@ -30,7 +31,9 @@ def replay(rec: Path, out: Path, db: Path) -> list:
 
 class ParsePose(unittest.TestCase):
     GOOD = ('{"seq":42,"t_ms":1234.500,"x_cm":375.125,"y_cm":-2.500,"yaw_deg":179.750,"source":"integrated",'
-            '"match_error":7.250,"search_range_cm":20.0,"uncertainty_cm":1.500,"uncertainty_yaw_deg":0.250,"status":"ok"}')
+            '"match_error":7.250,"search_range_cm":20.0,"uncertainty_cm":1.500,"uncertainty_yaw_deg":0.250,'
+            '"vx_cm_s":120.50,"vy_cm_s":-3.25,"omega_deg_s":45.00,"mono_ms":98765.432,"wall_ms":1796280000123.500,'
+            '"status":"ok"}')
 
     def test_documented_example(self):
         p = parse_pose(self.GOOD)
@@ -118,6 +121,47 @@ class AgainstTheSimulatedDaemon(unittest.TestCase):
             bad = subprocess.run([OMNILOC_CLI, "replay", str(copy), "--db", str(db)], capture_output=True, text=True)
             self.assertNotEqual(bad.returncode, 0)
             self.assertIn("encoders.csv:1", bad.stderr)
+
+
+class ControlAgainstTheSimulatedDaemon(unittest.TestCase):
+    def test_commands_and_errors(self):
+        with tempfile.TemporaryDirectory() as tmp, PoseReceiver(timeout_s=30.0) as rx:
+            probe = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+            probe.bind(("127.0.0.1", 0))
+            ctl_port = probe.getsockname()[1]
+            probe.close()
+            daemon = subprocess.Popen([OMNILOCD_SIM, "--duration-s", "6", "--udp-port", str(rx.port),
+                                       "--control-port", str(ctl_port), "--status-period-s", "0"],
+                                      stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+            try:
+                first = next(iter(rx))  # the daemon is up and publishing
+                with Control(ctl_port, timeout_s=5.0) as ctl:
+                    st = ctl.status()
+                    self.assertIn(st["status"], ("ok", "starting"))
+                    self.assertGreaterEqual(st["windows"], 1)
+                    reply = ctl.set_pose(200.0, 150.0, first.yaw_deg)
+                    self.assertEqual((reply["x_cm"], reply["y_cm"]), (200.0, 150.0))
+                    after = next(p for p in rx if p.seq == reply["last_seq"] + 1)
+                    self.assertLess(((after.x_cm - 200.0) ** 2 + (after.y_cm - 150.0) ** 2) ** 0.5, 3.0, after)
+                    with self.assertRaises(ControlError) as e:
+                        ctl.set_pose(float("inf"), 0.0, 0.0)  # json.dumps writes Infinity: not JSON
+                    self.assertIn("not valid JSON", str(e.exception))
+                    with self.assertRaises(ControlError) as e:
+                        ctl.record_stop()
+                    self.assertIn("record: not recording", str(e.exception))
+                    rec = Path(tmp) / "rec"
+                    self.assertEqual(ctl.record_start(rec)["dir"], str(rec))
+                    self.assertEqual(ctl.status()["recording"], "on")
+                    self.assertEqual(ctl.record_stop()["dir"], str(rec))
+                    self.assertEqual(ctl.relocalize()["status"], "lost")
+                self.assertTrue((rec / "meta.json").exists())
+            finally:
+                daemon.wait(timeout=600)
+            self.assertEqual(daemon.returncode, 0, daemon.stderr.read())
+            with self.assertRaises(ControlError) as e:
+                with Control(ctl_port, timeout_s=0.2) as ctl:
+                    ctl.status()
+            self.assertIn("no reply", str(e.exception))
 
 
 if __name__ == "__main__":

@@ -15,6 +15,7 @@
 
 #include "omniloc/config_reader.hpp"
 #include "omniloc/daemon_config.hpp"
+#include "omniloc/log.hpp"
 
 namespace omniloc::cli {
 
@@ -22,6 +23,8 @@ struct DaemonCommandLine {
   std::string config_path;
   std::vector<std::string> keys;                   ///< daemon_config_keys() order
   std::vector<std::optional<std::string>> values;  ///< the text given for each key, if any
+  int verbose = 0;                                 ///< -v given this many times
+  int quiet = 0;                                   ///< -q given this many times
 };
 
 /// "udp_port" -> "udp-port".
@@ -30,6 +33,12 @@ inline std::string flag_of(std::string_view key) {
   for (char& ch : flag)
     if (ch == '_') ch = '-';
   return flag;
+}
+
+/// Short forms of some keys' flags: `--http 8080` for `--http-port 8080` (the live view).
+inline std::string flag_names_of(std::string_view key) {
+  const std::string names = "--" + flag_of(key);
+  return key == "http_port" ? "--http," + names : names;
 }
 
 /// Adds --config and one option per daemon key to `app`; the values land in `cl` (which must
@@ -46,11 +55,19 @@ inline void add_daemon_options(CLI::App& app, DaemonCommandLine& cl) {
     const config::Json v = *k.write(defaults);
     const std::string shown = v.is_string() ? "\"" + v.get<std::string>() + "\"" : v.dump();
     std::optional<std::string>* slot = &cl.values[i];
-    app.add_option_function<std::string>("--" + flag_of(k.name), [slot](const std::string& text) { *slot = text; },
+    app.add_option_function<std::string>(flag_names_of(k.name), [slot](const std::string& text) { *slot = text; },
                                          std::string(k.help))
         ->type_name(k.kind == config::Kind::kText ? "TEXT" : "NUMBER")
         ->default_str(shown);
   }
+  app.add_flag("-v,--verbose", cl.verbose, "log one level more than log_level (repeatable: -vv)");
+  app.add_flag("-q,--quiet", cl.quiet, "log one level less than log_level (repeatable: -qq: errors only)");
+}
+
+/// The program's logger: the config's log_level moved by -v / -q, to standard error as "PROGRAM: ...".
+inline Logger daemon_logger(const daemon::DaemonConfig& config, const DaemonCommandLine& cl, std::string program) {
+  const LogLevel base = parse_log_level(config.log_level, "log_level");
+  return Logger(adjust_log_level(base, cl.verbose, cl.quiet), Logger::stderr_sink(std::move(program)));
 }
 
 /// The configuration the command line asks for: the defaults, the --config file over them, each

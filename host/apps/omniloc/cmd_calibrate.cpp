@@ -4,8 +4,8 @@
 // at the fitted pose.
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -14,39 +14,44 @@
 #include "commands.hpp"
 #include "omniloc/calibration.hpp"
 #include "omniloc/field.hpp"
+#include "omniloc/strict_number.hpp"
 
 namespace omniloc::cli {
 
 namespace {
-void calibrate_usage(std::FILE* out) {
-  std::fprintf(out,
-               "usage: omniloc calibrate IMAGE... --out CAMERA.json [--pose X,Y[,YAW]]... [--field NAME|PATH]\n"
-               "                         [--overlay OUT.png]\n"
-               "  --pose     where the robot stood (field frame, cm; YAW deg if known), one per image in order,\n"
-               "             or one for all; default: the field centre, heading unknown (searched, twins included)\n"
-               "  --field    geometry file or name in common/fields/ (default fira-robosot)\n"
-               "  --overlay  PNG of the frame with the detected line pixels and the field model at the fitted\n"
-               "             pose (frames after the first: OUT-2.png, OUT-3.png, ...)\n");
-}
+struct CalibrateArgs {
+  std::string field_name = "fira-robosot", out, overlay;
+  std::vector<std::string> images, poses;
+};
 
-bool parse_pose(std::string_view text, CalibrationFrame& f) {
-  std::vector<double> v;
-  std::string s(text);
-  std::size_t start = 0;
-  while (start <= s.size()) {
-    const std::size_t comma = s.find(',', start);
-    const std::string part = s.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    char* end = nullptr;
-    const double x = std::strtod(part.c_str(), &end);
-    if (part.empty() || end != part.c_str() + part.size()) return false;
-    v.push_back(x);
-    if (comma == std::string::npos) break;
-    start = comma + 1;
+/// "X,Y" or "X,Y,YAW" (cm, cm, deg), each part by the strict parser; throws NumberError naming the
+/// part and quoting the text.
+CalibrationFrame parse_pose(const std::string& text) {
+  std::vector<std::string> parts(1);
+  for (char ch : text) {
+    if (ch == ',') parts.emplace_back();
+    else parts.back() += ch;
   }
-  if (v.size() != 2 && v.size() != 3) return false;
+  if (parts.size() != 2 && parts.size() != 3) throw NumberError("'" + text + "' is not X,Y or X,Y,YAW");
+  const char* names[] = {"X", "Y", "YAW"};
+  const double limits[] = {1e6, 1e6, 360.0};  // cm, cm, deg
+  std::vector<double> v;
+  for (std::size_t i = 0; i < parts.size(); ++i)
+    v.push_back(parse_double(parts[i], std::string(names[i]) + " of '" + text + "'", -limits[i], limits[i]));
+  CalibrationFrame f;
   f.position_cm = {v[0], v[1]};
   if (v.size() == 3) f.yaw_deg = v[2];
-  return true;
+  return f;
+}
+
+/// The --pose check: "" or what is wrong (CLI11 puts "--pose: " before it).
+std::string pose_problem(const std::string& text) {
+  try {
+    (void)parse_pose(text);
+    return {};
+  } catch (const NumberError& e) {
+    return e.what();
+  }
 }
 
 std::string numbered(const std::string& path, std::size_t i) {
@@ -56,59 +61,17 @@ std::string numbered(const std::string& path, std::size_t i) {
   n += std::to_string(i + 1);  // (not "-" + ...: GCC 12 warns -Wrestrict on it)
   return dot == std::string::npos ? path + n : path.substr(0, dot) + n + path.substr(dot);
 }
-}  // namespace
-
-int cmd_calibrate(std::span<const std::string_view> args) {
-  std::string field_name = "fira-robosot", out, overlay;
-  std::vector<std::string> images;
+int run_calibrate(const CalibrateArgs& a) {
+  const std::vector<std::string>& images = a.images;
+  const std::string& out = a.out;
   std::vector<CalibrationFrame> poses;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string_view a = args[i];
-    if (a == "-h" || a == "--help") {
-      calibrate_usage(stdout);
-      return 0;
-    }
-    if (!a.starts_with("--")) {
-      images.emplace_back(a);
-      continue;
-    }
-    if (i + 1 >= args.size()) {
-      std::fprintf(stderr, "omniloc calibrate: '%.*s' needs a value\n", static_cast<int>(a.size()), a.data());
-      calibrate_usage(stderr);
-      return 2;
-    }
-    const std::string_view v = args[++i];
-    if (a == "--field") {
-      field_name = v;
-    } else if (a == "--out") {
-      out = v;
-    } else if (a == "--overlay") {
-      overlay = v;
-    } else if (a == "--pose") {
-      CalibrationFrame f;
-      if (!parse_pose(v, f)) {
-        std::fprintf(stderr, "omniloc calibrate: bad --pose '%.*s' (expected X,Y or X,Y,YAW)\n", static_cast<int>(v.size()),
-                     v.data());
-        return 2;
-      }
-      poses.push_back(f);
-    } else {
-      std::fprintf(stderr, "omniloc calibrate: unknown option '%.*s'\n", static_cast<int>(a.size()), a.data());
-      calibrate_usage(stderr);
-      return 2;
-    }
-  }
-  if (images.empty() || out.empty()) {
-    std::fprintf(stderr, "omniloc calibrate: at least one IMAGE and --out CAMERA.json are required\n");
-    calibrate_usage(stderr);
-    return 2;
-  }
+  for (const auto& p : a.poses) poses.push_back(parse_pose(p));
   if (!poses.empty() && poses.size() != 1 && poses.size() != images.size()) {
     std::fprintf(stderr, "omniloc calibrate: %zu --pose for %zu images (give one per image, or one for all)\n", poses.size(),
                  images.size());
     return 2;
   }
-  const FieldGeometry field = load_field(field_name);
+  const FieldGeometry field = load_field(a.field_name);
   std::vector<CalibrationFrame> frames;
   for (std::size_t i = 0; i < images.size(); ++i) {
     CalibrationFrame f;
@@ -174,9 +137,9 @@ int cmd_calibrate(std::span<const std::string_view> args) {
               f0.twin_score < 1.1 * f0.score ? " (a twin: the heading is not told apart)" : "");
   std::printf("residual rms %.2f px (%.2f cm) over %.0f %% of the line pixels; wrote %s in %.2f s\n", r.rms_px, r.rms_cm,
               100 * r.inlier_fraction, out.c_str(), seconds);
-  if (!overlay.empty()) {
+  if (!a.overlay.empty()) {
     for (std::size_t i = 0; i < frames.size(); ++i) {
-      const std::string p = numbered(overlay, i);
+      const std::string p = numbered(a.overlay, i);
       if (!cv::imwrite(p, calibration_overlay(frames[i], r.analyses[i], r.fits[i], r, field))) {
         std::fprintf(stderr, "omniloc calibrate: error: cannot write overlay '%s'\n", p.c_str());
         return 1;
@@ -185,6 +148,28 @@ int cmd_calibrate(std::span<const std::string_view> args) {
     }
   }
   return 0;
+}
+
+}  // namespace
+
+Subcommand add_calibrate(CLI::App& program) {
+  CLI::App* app = program.add_subcommand(
+      "calibrate", "estimate the camera (centre, mapping, yaw, mask) from frames at known poses");
+  auto a = std::make_shared<CalibrateArgs>();
+  app->add_option("IMAGE", a->images, "the frames (PNG, JPEG)")->required();
+  app->add_option("--out", a->out, "the camera file to write (CAMERA.json)")->required();
+  app->add_option("--pose", a->poses,
+                  "where the robot stood (field frame, cm; YAW deg if known), one per image in order,\n"
+                  "or one for all")
+      ->allow_extra_args(false)
+      ->type_name("X,Y[,YAW]")
+      ->check(CLI::Validator(pose_problem, ""))
+      ->default_str("the field centre, heading unknown (searched, twins included)");
+  app->add_option("--field", a->field_name, "geometry file or name in common/fields/")->capture_default_str();
+  app->add_option("--overlay", a->overlay,
+                  "PNG of the frame with the detected line pixels and the field model at the fitted pose\n"
+                  "(frames after the first: OUT-2.png, OUT-3.png, ...)");
+  return {app, [a] { return run_calibrate(*a); }};
 }
 
 }  // namespace omniloc::cli

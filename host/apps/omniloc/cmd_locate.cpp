@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -22,87 +23,11 @@ namespace omniloc::cli {
 
 namespace {
 
-void locate_usage(std::FILE* out) {
-  std::fprintf(out,
-               "usage: omniloc locate IMAGE --camera CAMERA.json [--field NAME|PATH] [--yaw-deg Y] [--db FILE]\n"
-               "                      [--config NAME|PATH] [--overlay OUT.png] [--json]\n"
-               "  --camera   camera file or name in common/cameras/ (its size must be the image's); its optional\n"
-               "             \"vision\" block's goal colours tell a pose from its twin\n"
-               "  --field    geometry file or name in common/fields/ (default fira-robosot)\n"
-               "  --yaw-deg  the robot's heading if known (field frame, deg); default: unknown, every heading searched\n"
-               "  --db       feature database file: used if it matches the field and camera, else built and written\n"
-               "             there (default: built in memory, progress on stderr)\n"
-               "  --config   localizer config (E_TH, refinement, ambiguity refusal), name in common/localizer/ or path\n"
-               "             (default: default)\n"
-               "  --overlay  PNG of the frame with the rays, crossings, ray ends and the field model at the pose\n"
-               "  --json     print one JSON object: x_cm, y_cm, yaw_deg, match_error, accepted, ambiguous, twin,\n"
-               "             rays_used, time_ms (and goal_cue: the goal colours' verdict)\n"
-               "exit 0 with a pose (accepted or not), 1 for an unreadable image or a camera of another size, 2 usage\n");
-}
-
 struct LocateArgs {
   std::string image, camera, field = "fira-robosot", db, config = "default", overlay;
   std::optional<double> yaw_deg;
   bool json = false;
 };
-
-// 0: parsed; else the exit code.
-int parse_args(std::span<const std::string_view> args, LocateArgs& out) {
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string_view a = args[i];
-    if (a == "-h" || a == "--help") {
-      locate_usage(stdout);
-      return -1;
-    }
-    if (a == "--json") {
-      out.json = true;
-      continue;
-    }
-    if (!a.starts_with("--")) {
-      if (!out.image.empty()) {
-        std::fprintf(stderr, "omniloc locate: more than one IMAGE given\n");
-        return 2;
-      }
-      out.image = a;
-      continue;
-    }
-    if (i + 1 >= args.size()) {
-      std::fprintf(stderr, "omniloc locate: '%.*s' needs a value\n", static_cast<int>(a.size()), a.data());
-      locate_usage(stderr);
-      return 2;
-    }
-    const std::string_view v = args[++i];
-    if (a == "--camera") {
-      out.camera = v;
-    } else if (a == "--field") {
-      out.field = v;
-    } else if (a == "--db") {
-      out.db = v;
-    } else if (a == "--config") {
-      out.config = v;
-    } else if (a == "--overlay") {
-      out.overlay = v;
-    } else if (a == "--yaw-deg") {
-      double y = 0.0;
-      if (!parse_number(v, y)) {
-        std::fprintf(stderr, "omniloc locate: bad value '%.*s' for --yaw-deg (a number of degrees)\n",
-                     static_cast<int>(v.size()), v.data());
-        return 2;
-      }
-      out.yaw_deg = y;
-    } else {
-      std::fprintf(stderr, "omniloc locate: unknown option '%.*s'\n", static_cast<int>(a.size()), a.data());
-      locate_usage(stderr);
-      return 2;
-    }
-  }
-  if (out.image.empty() || out.camera.empty()) {
-    std::fprintf(stderr, "omniloc locate: IMAGE and --camera CAMERA.json are required\n");
-    locate_usage(stderr);
-    return 2;
-  }
-  return 0;
-}
 
 FeatureDb feature_db_for(const LocateArgs& a, const FieldGeometry& field, const CameraModel& camera) {
   auto log = [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); };
@@ -149,11 +74,7 @@ void print_text(const SingleFrameResult& r, double e_th, double time_ms) {
   std::printf("located in %.1f ms\n", time_ms);
 }
 
-}  // namespace
-
-int cmd_locate(std::span<const std::string_view> args) {
-  LocateArgs a;
-  if (const int rc = parse_args(args, a); rc != 0) return rc < 0 ? 0 : rc;
+int run_locate(const LocateArgs& a) {
   const cv::Mat bgr = cv::imread(a.image, cv::IMREAD_COLOR);
   if (bgr.empty()) {
     std::fprintf(stderr, "omniloc locate: error: cannot read image '%s'\n", a.image.c_str());
@@ -202,6 +123,36 @@ int cmd_locate(std::span<const std::string_view> args) {
     if (!a.json) std::printf("overlay %s\n", a.overlay.c_str());
   }
   return 0;
+}
+
+}  // namespace
+
+Subcommand add_locate(CLI::App& program) {
+  CLI::App* app = program.add_subcommand(
+      "locate", "one frame to a pose: the localizer's global search and acceptance, JSON and overlay");
+  auto a = std::make_shared<LocateArgs>();
+  app->add_option("IMAGE", a->image, "the frame (PNG, JPEG)")->required();
+  app->add_option("--camera", a->camera,
+                  "camera file or name in common/cameras/ (its size must be the image's); its optional\n"
+                  "\"vision\" block's goal colours tell a pose from its twin")
+      ->required();
+  app->add_option("--field", a->field, "geometry file or name in common/fields/")->capture_default_str();
+  add_number_callback<double>(
+      *app, "--yaw-deg", [a](double v) { a->yaw_deg = v; }, "the robot's heading if known (field frame, deg)", -360.0,
+      360.0)
+      ->default_str("unknown: every heading searched");
+  app->add_option("--db", a->db,
+                  "feature database file: used if it matches the field and camera, else built and written there")
+      ->default_str("built in memory, progress on stderr");
+  app->add_option("--config", a->config,
+                  "localizer config (E_TH, refinement, ambiguity refusal), name in common/localizer/ or path")
+      ->capture_default_str();
+  app->add_option("--overlay", a->overlay, "PNG of the frame with the rays, crossings, ray ends and the field model at the pose");
+  app->add_flag("--json", a->json,
+                "print one JSON object: x_cm, y_cm, yaw_deg, match_error, accepted, ambiguous, twin,\n"
+                "rays_used, time_ms (and goal_cue: the goal colours' verdict)");
+  app->footer("Exit 0 with a pose (accepted or not), 1 for an unreadable image or a camera of another size, 2 usage.");
+  return {app, [a] { return run_locate(*a); }};
 }
 
 }  // namespace omniloc::cli

@@ -1,9 +1,9 @@
 // `omniloc probe`: finds omniloc boards on USB, prints ID, version and status, then a live table of
 // window counts and link errors (or one snapshot with --once).
 #include <atomic>
-#include <charconv>
 #include <csignal>
 #include <cstdio>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -20,22 +20,12 @@ namespace {
 std::atomic<bool> g_interrupted{false};
 extern "C" void on_sigint(int) { g_interrupted = true; }
 
-void usage(std::FILE* out) {
-  std::fprintf(out,
-               "usage: omniloc probe [--once] [--serial SERIAL] [--baud N] [--enable] [--seconds N]\n"
-               "  Finds omniloc encoder boards (FT2232H 0403:6010, product \"omniloc encoder board\"),\n"
-               "  prints ID, version and status, then streams windows and prints a table of counts and\n"
-               "  errors every 10 windows until Ctrl-C (or --seconds N). --once: one snapshot, then exit.\n"
-               "  --enable sets CONTROL.ENABLE if it is off (it is restored on exit).\n"
-               "  Exit status: 0 success, 1 no board or link failure, 2 bad usage.\n");
-}
-
-std::optional<unsigned long> parse_number(std::string_view s) {
-  unsigned long v = 0;
-  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  if (ec != std::errc() || p != s.data() + s.size()) return std::nullopt;
-  return v;
-}
+struct ProbeArgs {
+  bool once = false;
+  bool enable = false;
+  std::uint64_t seconds = 0;
+  UsbTransportOptions opt;
+};
 
 void print_row(const protocol::Window& w, const protocol::DecoderCounters& dc, const TransportCounters& tc,
                std::uint64_t retries) {
@@ -52,52 +42,10 @@ void print_header() {
               "count3", "dir", "stat", "lost", "badfrm", "resync", "lineerr", "retries");
 }
 
-}  // namespace
-
-int cmd_probe(std::span<const std::string_view> args) {
-  bool once = false;
-  bool enable = false;
-  unsigned long seconds = 0;
-  UsbTransportOptions opt;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const auto a = args[i];
-    auto value = [&]() -> std::optional<std::string_view> {
-      if (i + 1 >= args.size()) return std::nullopt;
-      return args[++i];
-    };
-    if (a == "--help" || a == "-h") {
-      usage(stdout);
-      return 0;
-    } else if (a == "--once") {
-      once = true;
-    } else if (a == "--enable") {
-      enable = true;
-    } else if (a == "--serial") {
-      const auto v = value();
-      if (!v) {
-        usage(stderr);
-        return 2;
-      }
-      opt.serial = std::string(*v);
-    } else if (a == "--baud" || a == "--seconds") {
-      const auto v = value();
-      const auto n = v ? parse_number(*v) : std::nullopt;
-      if (!n) {
-        std::fprintf(stderr, "omniloc probe: %.*s needs a number\n", static_cast<int>(a.size()), a.data());
-        return 2;
-      }
-      if (a == "--baud") {
-        opt.baud = static_cast<std::uint32_t>(*n);
-      } else {
-        seconds = *n;
-      }
-    } else {
-      std::fprintf(stderr, "omniloc probe: unknown argument '%.*s'\n", static_cast<int>(a.size()), a.data());
-      usage(stderr);
-      return 2;
-    }
-  }
-
+int run_probe(const ProbeArgs& a) {
+  const bool once = a.once, enable = a.enable;
+  const std::uint64_t seconds = a.seconds;
+  const UsbTransportOptions& opt = a.opt;
   const auto boards = find_usb_boards(opt.product);
   int found = 0;
   for (const auto& b : boards) {
@@ -164,7 +112,7 @@ int cmd_probe(std::span<const std::string_view> args) {
   std::signal(SIGINT, on_sigint);
   client.set_streaming(true);  // streaming on here, not in BoardSession: probe keeps the board's DECODE
   print_header();
-  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(seconds);
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(static_cast<std::int64_t>(seconds));
   try {
     while (!g_interrupted && (seconds == 0 || std::chrono::steady_clock::now() < until)) {
       const auto w = client.poll_telemetry(std::chrono::milliseconds(500));
@@ -184,6 +132,24 @@ int cmd_probe(std::span<const std::string_view> args) {
   client.write_register(r::kRegControl, control);  // streaming and ENABLE as they were
   std::signal(SIGINT, SIG_DFL);
   return 0;
+}
+
+}  // namespace
+
+Subcommand add_probe(CLI::App& program) {
+  CLI::App* app = program.add_subcommand("probe", "find omniloc boards on USB, print ID/version/status and live counts");
+  auto a = std::make_shared<ProbeArgs>();
+  app->add_flag("--once", a->once, "one snapshot, then exit");
+  app->add_option("--serial", a->opt.serial, "the board's USB serial")->default_str("the first omniloc board");
+  add_number_option(*app, "--baud", a->opt.baud, "the board's UART rate", 1u, 12'000'000u);
+  app->add_flag("--enable", a->enable, "set CONTROL.ENABLE if it is off (it is restored on exit)");
+  add_number_option(*app, "--seconds", a->seconds, "stream this long; 0: until Ctrl-C", std::uint64_t{0},
+                    std::uint64_t{31'536'000});
+  app->footer(
+      "Finds omniloc encoder boards (FT2232H 0403:6010, product \"omniloc encoder board\"), prints ID, version\n"
+      "and status, then streams windows and prints a table of counts and errors every 10 windows until Ctrl-C\n"
+      "(or --seconds N). Exit status: 0 success, 1 no board or link failure, 2 bad usage.");
+  return {app, [a] { return run_probe(*a); }};
 }
 
 }  // namespace omniloc::cli

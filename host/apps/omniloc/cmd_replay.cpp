@@ -1,6 +1,7 @@
 // `omniloc replay REC_DIR --out poses.csv`: the localizer over a recording (docs/LOCALIZER.md).
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <unistd.h>
 
@@ -14,73 +15,30 @@ namespace omniloc::cli {
 
 namespace {
 
-void replay_usage(std::FILE* out) {
-  std::fprintf(out,
-               "usage: omniloc replay REC_DIR [--out poses.csv] [--db FILE] [--config NAME|PATH] [--paper]\n"
-               "  --out     output poses (default REC_DIR/poses.csv)\n"
-               "  --db      feature database file: used if it matches the recording's field and camera,\n"
-               "            else built and written there; a file that is not a feature database is never\n"
-               "            overwritten (default: $XDG_CACHE_HOME/omniloc/, else ~/.cache/omniloc/)\n"
-               "  --config  localizer config, name in common/localizer/ or path (default: default)\n"
-               "  --paper   the paper's algorithm exactly (no refinement, no lost detection)\n");
-}
+struct ReplayArgs {
+  std::string dir, out, db_path, config_name = "default";
+  bool paper = false;
+};
 
 void print_summary(const char* what, const char* unit, const ErrorSummary& s) {
   std::printf("%-16s mean %7.2f  median %7.2f  p95 %7.2f  max %7.2f %s  (%zu poses)\n", what, s.mean, s.median, s.p95,
               s.max, unit, s.count);
 }
 
-}  // namespace
-
-int cmd_replay(std::span<const std::string_view> args) {
-  std::string dir, out, db_path, config_name = "default";
-  bool paper = false;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string_view a = args[i];
-    if (a == "-h" || a == "--help") {
-      replay_usage(stdout);
-      return 0;
-    }
-    if (a == "--paper") {
-      paper = true;
-      continue;
-    }
-    if (a == "--out" || a == "--db" || a == "--config") {
-      if (i + 1 >= args.size()) {
-        std::fprintf(stderr, "omniloc replay: '%.*s' needs a value\n", static_cast<int>(a.size()), a.data());
-        return 2;
-      }
-      const std::string v(args[++i]);
-      (a == "--out" ? out : a == "--db" ? db_path : config_name) = v;
-      continue;
-    }
-    if (!a.empty() && a[0] == '-') {
-      std::fprintf(stderr, "omniloc replay: unknown option '%.*s'\n", static_cast<int>(a.size()), a.data());
-      replay_usage(stderr);
-      return 2;
-    }
-    if (!dir.empty()) {
-      std::fprintf(stderr, "omniloc replay: more than one REC_DIR given\n");
-      return 2;
-    }
-    dir = a;
-  }
-  if (dir.empty()) {
-    replay_usage(stderr);
-    return 2;
-  }
-  if (out.empty()) out = (std::filesystem::path(dir) / "poses.csv").string();
-
+int run_replay(const ReplayArgs& a) {
+  const std::string& dir = a.dir;
+  const bool paper = a.paper;
+  const std::string out = a.out.empty() ? (std::filesystem::path(dir) / "poses.csv").string() : a.out;
   const Recording rec = load_recording(dir);
   const FieldGeometry field = recording_field(rec);
-  LocalizerConfig config = load_localizer_config(config_name);
+  LocalizerConfig config = load_localizer_config(a.config_name);
   if (paper) {
     const FuzzyConfig fuzzy = config.fuzzy;
     config = LocalizerConfig::paper();
     config.fuzzy = fuzzy;
   }
   const std::filesystem::path cache =
-      db_path.empty() ? user_cache_dir() / feature_db_cache_name(field, rec.meta.camera) : std::filesystem::path(db_path);
+      a.db_path.empty() ? user_cache_dir() / feature_db_cache_name(field, rec.meta.camera) : std::filesystem::path(a.db_path);
   const FeatureDb db = load_or_build_feature_db(field, rec.meta.camera, cache,
                                                 [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); });
   std::fprintf(stderr, "replaying %s: %zu windows, %zu frames%s, %s mode\n", dir.c_str(), rec.windows.size(),
@@ -105,6 +63,24 @@ int cmd_replay(std::span<const std::string_view> args) {
     std::printf("truth present but no pose with a fix inside its time span\n");
   }
   return 0;
+}
+
+}  // namespace
+
+Subcommand add_replay(CLI::App& program) {
+  CLI::App* app = program.add_subcommand(
+      "replay", "run the localizer over a recording directory, write poses.csv, errors vs truth");
+  auto a = std::make_shared<ReplayArgs>();
+  app->add_option("REC_DIR", a->dir, "the recording directory")->required();
+  app->add_option("--out", a->out, "output poses")->default_str("REC_DIR/poses.csv");
+  app->add_option("--db", a->db_path,
+                  "feature database file: used if it matches the recording's field and camera, else built and\n"
+                  "written there; a file that is not a feature database is never overwritten")
+      ->default_str("$XDG_CACHE_HOME/omniloc/, else ~/.cache/omniloc/");
+  app->add_option("--config", a->config_name, "localizer config, name in common/localizer/ or path")
+      ->capture_default_str();
+  app->add_flag("--paper", a->paper, "the paper's algorithm exactly (no refinement, no lost detection)");
+  return {app, [a] { return run_replay(*a); }};
 }
 
 }  // namespace omniloc::cli

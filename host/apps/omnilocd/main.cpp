@@ -12,6 +12,9 @@
 #include "omniloc/daemon.hpp"
 #include "omniloc/daemon_camera.hpp"
 #include "daemon_cli.hpp"
+#include "live_view_attach.hpp"
+#include "subcommand_cli.hpp"
+#include "ros2_attach.hpp"
 #include "omniloc/daemon_config.hpp"
 #include "omniloc/service_notify.hpp"
 #include "omniloc/usb_transport.hpp"
@@ -20,15 +23,16 @@
 
 namespace {
 
-int run(const omniloc::daemon::DaemonConfig& config) {
+int run(const omniloc::daemon::DaemonConfig& config, const omniloc::Logger& log) {
   using namespace omniloc;
   using namespace omniloc::daemon;
-  auto say = [](const std::string& s) { std::fprintf(stderr, "omnilocd: %s\n", s.c_str()); };
+  auto say = [&log](const std::string& s) { log.info(s); };
   const DaemonModels models = load_models(config, say);
 
   SteadyClock wall;
   WheelYawHeading wheel_yaw(models.robot);
   DaemonIo io;
+  io.logger = log;
   io.clock = &wall;
   UsbTransportOptions usb;
   usb.serial = config.board_serial;
@@ -39,6 +43,8 @@ int run(const omniloc::daemon::DaemonConfig& config) {
   io.camera = camera.get();
   say("publishing poses to udp://" + config.udp_address + ":" + std::to_string(config.udp_port) +
       (config.record_dir.empty() ? "" : ", recording to " + config.record_dir));
+  omniloc::cli::Ros2Attachment ros2(config, log);
+  omniloc::cli::LiveViewAttachment live_view(config, models, log);
   Daemon daemon(config, models, io);
   // Under systemd (Type=notify): ready once the models are loaded and the loop starts; the loop
   // feeds the watchdog whether or not a board is there.
@@ -46,12 +52,14 @@ int run(const omniloc::daemon::DaemonConfig& config) {
   DaemonObserver observer;
   observer.on_loop = [&service](double now_ms) { service.loop(now_ms); };
   observer.on_status = [&service](const std::string& line) { service.status(line); };
+  ros2.attach(observer, daemon);
+  live_view.attach(observer);
   daemon.set_observer(std::move(observer));
   omniloc::cli::install_stop_signal_handlers();
   service.ready();
   const DaemonReport r = daemon.run(&omniloc::cli::g_stop_requested);
   service.stopping();
-  std::fprintf(stderr, "omnilocd: %s\n", report_line(r).c_str());
+  log.info(report_line(r));
   return 0;
 }
 
@@ -62,8 +70,12 @@ int main(int argc, char** argv) {
                "Flags override the config file (JSON, docs/DAEMON.md).",
                "omnilocd"};
   app.set_version_flag("--version", omniloc::version_line("omnilocd"));
+  app.failure_message(omniloc::cli::failure_message_with_path);  // "omnilocd: error: ..."
   app.footer("SIGINT / SIGTERM stop it cleanly (recording closed, board streaming switched off).");
   omniloc::cli::DaemonCommandLine cl;
   omniloc::cli::add_daemon_options(app, cl);
-  return omniloc::cli::parse_and_run(app, argc, argv, "omnilocd", [&] { return run(omniloc::cli::daemon_config_from(cl)); });
+  return omniloc::cli::parse_and_run(app, argc, argv, "omnilocd", [&] {
+    const omniloc::daemon::DaemonConfig config = omniloc::cli::daemon_config_from(cl);
+    return run(config, omniloc::cli::daemon_logger(config, cl, "omnilocd"));
+  });
 }

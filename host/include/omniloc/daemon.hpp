@@ -16,12 +16,14 @@
 #include <opencv2/core/mat.hpp>
 
 #include "omniloc/camera.hpp"
+#include "omniloc/control.hpp"
 #include "omniloc/conventions.hpp"
 #include "omniloc/daemon_config.hpp"
 #include "omniloc/daemon_publish.hpp"
 #include "omniloc/feature_db.hpp"
 #include "omniloc/field.hpp"
 #include "omniloc/localizer.hpp"
+#include "omniloc/log.hpp"
 #include "omniloc/odometry.hpp"
 #include "omniloc/robot_config.hpp"
 #include "omniloc/transport.hpp"
@@ -152,7 +154,7 @@ struct DaemonIo {
   FrameSource* camera = nullptr;       ///< null: no camera (odometry only)
   HeadingSource* heading = nullptr;    ///< required (WheelYawHeading when there is no gyro)
   DaemonObserver observer;             ///< optional
-  std::function<void(const std::string&)> log;     ///< status lines and events (default: stderr)
+  Logger logger;                       ///< status lines and events (default: info and above to stderr)
 };
 
 class Daemon {
@@ -169,6 +171,10 @@ class Daemon {
   DaemonReport run(const volatile std::sig_atomic_t* stop);
   /// Replaces the observer given in DaemonIo (before run()).
   void set_observer(DaemonObserver observer);
+  /// Carries out one control command (control.hpp) on the daemon's thread, as the control channel
+  /// does for a datagram: from an observer callback (on_loop) while run() runs, or before it.
+  /// Returns the reply's fields; throws control::ControlError saying why it cannot be done.
+  nlohmann::json apply(const control::Command& command);
 
  private:
   struct Impl;

@@ -34,12 +34,21 @@ struct DaemonConfig {
   // --- output ---
   std::string udp_address = "127.0.0.1";  ///< IPv4 address of the pose consumer
   int udp_port = 5600;
+  int control_port = 5601;             ///< control channel (control.hpp) on 127.0.0.1; 0: off
   double publish_hz = 100.0;           ///< one datagram per board window; checked to be the window rate
   std::string record_dir;              ///< empty: no recording
   bool record_overwrite = false;       ///< replace an old recording in record_dir (else refused)
   std::string record_format = "jpeg";  ///< frame store: "jpeg" (compact) or "png" (lossless)
   double status_period_s = 1.0;        ///< status line on stderr; 0 disables it
+  std::string log_level = "info";      ///< error | warning | info | debug (log.hpp); -v / -q move it
   double duration_s = 0.0;             ///< stop after this much (daemon) time; 0: until SIGINT/SIGTERM
+  // --- ROS 2 topics (docs/ROS2.md; needs a build with Cyclone DDS) ---
+  int ros2_domain_id = -1;             ///< DDS domain (ROS_DOMAIN_ID) of the topics; -1: no ROS 2
+  std::string ros2_namespace = "/omniloc";  ///< topics <ns>/pose and <ns>/odom
+  std::string ros2_frame_id = "map";   ///< frame_id of the poses: the field frame, in metres
+  // --- live view (docs/DAEMON.md "Live view"; needs a build with cpp-httplib) ---
+  int http_port = 0;                   ///< TCP port of the live view's web page; 0: off
+  std::string http_address = "127.0.0.1";  ///< IPv4 address it listens on (0.0.0.0: every interface)
 
   /// Checks ranges; throws ConfigError "<at>.<key>: <why> (got <value>)".
   void validate(const config::Origin& at) const;

@@ -32,6 +32,11 @@ struct PoseMessage {
   double search_range_cm = -1; ///< search range of that image result; < 0: none (key omitted)
   double uncertainty_cm = 0.0; ///< 1-sigma position uncertainty
   double uncertainty_yaw_deg = 0.0;
+  double vx_cm_s = 0.0;        ///< robot-frame velocity (+x forward, +y left) from the odometry
+  double vy_cm_s = 0.0;
+  double omega_deg_s = 0.0;    ///< yaw rate, counter-clockwise positive
+  double mono_ms = 0.0;        ///< CLOCK_MONOTONIC (steady_clock) of the host when sent, ms
+  double wall_ms = 0.0;        ///< the host's wall clock (Unix time) when sent, ms
   DaemonStatus status = DaemonStatus::kStarting;
 };
 
@@ -83,7 +88,7 @@ struct StatusSnapshot {
 };
 
 /// One line, no newline, e.g.
-/// "omnilocd t=12.0s ok pose=(375.2,275.1,90.0) src=integrated err=3.1 sigma=1.2cm drift=+0.004deg/s win=100/s cam=60/s sent=1200".
+/// "t=12.0s ok pose=(375.2,275.1,90.0) src=integrated err=3.1 sigma=1.2cm drift=+0.004deg/s win=100/s cam=60/s sent=1200".
 [[nodiscard]] std::string status_line(const StatusSnapshot& s);
 
 }  // namespace omniloc::daemon

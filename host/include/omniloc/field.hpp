@@ -143,6 +143,11 @@ class WhiteLineIndex {
 /// True when p lies on the carpet (playing area or border).
 [[nodiscard]] bool on_carpet(const FieldGeometry& field, const Eigen::Vector2d& p_cm);
 
+/// How far off the carpet a robot may be put down (a start pose, an operator's set_pose).
+inline constexpr double kPlacementMarginCm = 100.0;
+/// True when p lies on the carpet or within kPlacementMarginCm of it.
+[[nodiscard]] bool placeable(const FieldGeometry& field, const Eigen::Vector2d& p_cm);
+
 /// A stretch [enter, exit] of a ray p + t * dir (t in cm, dir a unit vector) that is white.
 struct WhiteInterval {
   double enter_cm;

@@ -104,8 +104,11 @@ void crossings_of_runs(int k0, int k1, int min_gap_px, const Runs& runs, RadiiPx
   }
 }
 
-/// As expected_scan, writing the 1440 radii to `out`; `scratch` is reused between calls.
+/// As expected_scan, writing the 1440 radii to `out`; `scratch` is reused between calls. Ray k is
+/// cast at field bearing k + bearing_offset_deg (a scan rotated from the robot frame at a step of
+/// 1 / rays_per_degree sees its rays that far from the whole degrees: FieldScan::bearing_offset_deg).
 void expected_features(const FieldGeometry& field, const CameraModel& camera, const Eigen::Vector2d& position_cm,
-                       std::uint8_t* out, std::vector<WhiteInterval>& scratch, int min_gap_px = ScanParams{}.min_gap_px);
+                       std::uint8_t* out, std::vector<WhiteInterval>& scratch, int min_gap_px = ScanParams{}.min_gap_px,
+                       double bearing_offset_deg = 0.0);
 
 }  // namespace omniloc

@@ -66,7 +66,7 @@ struct LocalizerConfig {
   double ambiguity_ratio = MatchOptions{}.ambiguity_ratio;  ///< ambiguous when 2nd error <= ratio * best
   double reset_period_ms = 125.0;  ///< odometry origin reset period (paper: 125 ms)
   double history_ms = 1000.0;      ///< odometry history kept for late frames; older frames are dropped
-  int scan_rays_per_degree = 4;    ///< on_image(): robot-frame scan step (for re-rotating by yaw)
+  int scan_rays_per_degree = 2;    ///< on_image(): robot-frame scan step (for re-rotating by yaw)
   // --- kFull only ---
   Refinement refinement = Refinement::kRayCast;  ///< kRayCast: E_TH judged at the refined position
   double min_range_cm = 10.0;      ///< local search at least this wide (0 would pin to one grid point)
@@ -156,6 +156,9 @@ struct LocalizedPose {
   double sigma_yaw_deg = 0.0;
   double image_age_ms = 0.0;       ///< t_ms minus the time of the last image applied (inf: none)
   bool slip = false;               ///< the odometry saw a wheel slip in this window
+  double vx_cm_s = 0.0;            ///< robot-frame velocity from the odometry's last window
+  double vy_cm_s = 0.0;
+  double omega_deg_s = 0.0;        ///< yaw rate over the last window (the gyro's)
 };
 
 /// What happened to one frame.
@@ -223,6 +226,15 @@ class Localizer {
   /// (reconnect): the current pose becomes the odometry origin and the next window may have any
   /// time. The gyro is assumed to have kept its alignment with the field.
   void resync();
+
+  /// An operator's pose (the control channel's set_pose, ROS 2's /initialpose): from the last
+  /// window on, the robot is at `pose` with the given uncertainty, tracking; the next frames refine
+  /// it by local search as after an image fix. The gyro keeps its own alignment (the odometry's
+  /// yaw offset absorbs the new heading).
+  void set_pose(const Pose2& pose, double sigma_xy_cm, double sigma_yaw_deg);
+  /// Forgets the fix (the control channel's relocalize): lost, so the next usable frame makes a
+  /// global search; the odometry goes on meanwhile.
+  void force_global_search();
 
   /// The pose at the last window (source kNone before any).
   [[nodiscard]] const LocalizedPose& pose() const { return last_pose_; }

@@ -39,6 +39,11 @@ struct PreparedScan {
 /// take a plain Scan make one on the spot.
 struct FieldScan {
   double yaw_deg = 0.0;  // the heading the robot-frame scan was rotated by (0 for a field-frame Scan)
+  /// Where its rays really point: field ray k is the robot-frame ray nearest to bearing k, which
+  /// at 1 / rays_per_degree steps lies this far off (the same for every k, at most half a step).
+  /// The grid search ignores it (the database is cast at whole degrees); the ray-cast refinement
+  /// casts at k + bearing_offset_deg, so a frame far from the lines is not off by the rounding.
+  double bearing_offset_deg = 0.0;
   Scan scan;             // field frame
   PreparedScan prepared;
 };
@@ -134,7 +139,8 @@ struct MatchResult {
 
 /// Normalised error (match_error) of the scan against the expected scan at any position (ray cast on the fly).
 [[nodiscard]] double error_at(const FieldGeometry& field, const CameraModel& camera, const PreparedScan& scan,
-                              const Eigen::Vector2d& position_cm, const MatchOptions& options = {});
+                              const Eigen::Vector2d& position_cm, const MatchOptions& options = {},
+                              double bearing_offset_deg = 0.0);
 
 /// Sub-grid position from the database errors at the best grid point and its four neighbours,
 /// fitting a V (the shape of a sum of absolute differences, and of the bounded cost near its minimum) along x and along y; updates
@@ -154,6 +160,10 @@ void refine_match(const FieldGeometry& field, const CameraModel& camera, const F
 /// better): the reference refine_match is measured against (bench_frame_path).
 void refine_match_reference(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan,
                             MatchResult& result, const MatchOptions& options = {});
+/// refine_match as it stood before the speed work of issue 13 item 8 (the same walk and result):
+/// the reference bench_frame_path measures refine_match against.
+void refine_match_previous(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan,
+                           MatchResult& result, const MatchOptions& options = {});
 void refine_match(const FieldGeometry& field, const CameraModel& camera, const Scan& scan, MatchResult& result,
                   const MatchOptions& options = {});
 

@@ -51,6 +51,8 @@ struct OdometryEstimate {
   double sigma_yaw_deg = 0.0;
   double speed_cm_per_s = 0.0;    ///< over the last window
   double yaw_rate_deg_per_s = 0.0;
+  double vx_cm_per_s = 0.0;       ///< robot-frame velocity over the last window (+x forward)
+  double vy_cm_per_s = 0.0;       ///< (+y to the left)
   double distance_cm = 0.0;       ///< path length since the last origin reset
   double wheel_yaw_deg = 0.0;     ///< heading integrated from the wheels alone (cross-check)
   SlipReport slip;

@@ -170,6 +170,15 @@ class LineExtractor {
   /// reference extract() must equal byte for byte (tests) and is measured against (bench_vision).
   [[nodiscard]] BearingScan extract_reference(const cv::Mat& bgr, int rays_per_degree, ExtractionReport* report = nullptr);
 
+  /// The ways of walking the rays; all give the same bytes (scan and report, frame after frame).
+  enum class Walk {
+    kFast,       ///< extract(): the code plane converted 8 pixels at a time (AVX2) and 8 rays walked in lockstep
+    kBinWalk,    ///< the scalar code plane and the scalar bin-by-bin walk (extract() before the lockstep walk)
+    kReference,  ///< extract_reference()
+  };
+  [[nodiscard]] BearingScan extract_with(Walk how, const cv::Mat& bgr, int rays_per_degree,
+                                         ExtractionReport* report = nullptr);
+
   struct RayTable {
     std::vector<std::int32_t> offset;  // byte offset of each pixel in the image
     std::vector<std::uint8_t> bin;     // its integer radius
@@ -187,19 +196,30 @@ class LineExtractor {
     std::vector<std::int32_t> bin_begin, bin_pixel;
     std::vector<std::int16_t> bin_second;  // 0, +-1 or +-width: a 4-connected neighbour
     std::vector<std::uint8_t> first_bin;
+    // Where along the ray each pixel's centre lies (px), and per bin its outer pixel's (a bin b
+    // holds the centres in (b - 1, b] and reports its brighter pixel, the outer one on a rising
+    // edge): where a line's edge is placed between two bins.
+    std::vector<float> along, bin_centre;
+    // The lockstep walk's layout: the rays that are not hidden, 8 to a group (one per lane, the
+    // last group padded with empty lanes). Group g's steps are [lock_begin[g], lock_begin[g + 1]);
+    // step s of lane l reads lock_pixel0/1[8 s + l] (the bin's two pixels, equal for a one-pixel
+    // bin; past the lane's bins, pixel 0). Per lane (8 g + l): its ray (-1: padding) and bins.
+    std::vector<std::int32_t> lock_begin, lock_pixel0, lock_pixel1, lock_ray, lock_bins;
   };
 
  private:
   struct Frame;
   const RayTable& table(int rays_per_degree, std::size_t step_bytes);
   bool ensure_carpet(const cv::Mat& bgr, std::string* why);
-  BearingScan extract_impl(const cv::Mat& bgr, int rays_per_degree, ExtractionReport* report, bool fast);
+  BearingScan extract_impl(const cv::Mat& bgr, int rays_per_degree, ExtractionReport* report, Walk how);
   template <class Pixel>
   void walk_rays(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr, Pixel px) const;
   void walk(const cv::Mat& bgr, const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const;
   void bin_layout(RayTable& t, int n) const;
   void code_pixels(const cv::Mat& bgr, const RayTable& t, int sat_min);
+  bool code_pixels_avx2(const cv::Mat& bgr, const RayTable& t, int sat_min);
   void walk_fast(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const;
+  bool walk_lockstep(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const;
   void adapt(const Frame& fr);
   void mark_tall_obstacles(const BearingScan& scan, ExtractionReport& rep) const;
   void mark_tall_obstacles_fast(const BearingScan& scan, ExtractionReport& rep) const;

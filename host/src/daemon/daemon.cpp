@@ -3,11 +3,14 @@
 // one loop keeps the order of windows and frames obvious.
 #include "omniloc/daemon.hpp"
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <utility>
+#include <vector>
 
 #include "omniloc/board_session.hpp"
+#include "omniloc/control.hpp"
 #include "omniloc/recording.hpp"
 
 namespace omniloc::daemon {
@@ -19,6 +22,7 @@ constexpr double kBoardSilentMs = 250.0;
 // While the board is gone, a degraded pose goes out every window period, so consumers see the state.
 constexpr double kDegradedTickMs = 10.0;
 constexpr std::chrono::milliseconds kTelemetryWait{20};
+constexpr std::size_t kMaxQueuedAtOpen = 1024;  // the board client's telemetry queue
 
 }  // namespace
 
@@ -29,6 +33,8 @@ struct Daemon::Impl {
   UdpPublisher publisher;
   Localizer localizer;
   std::unique_ptr<RecordingWriter> recorder;
+  std::string record_dir;  // of the recording now open (config.record_dir, or one started by command)
+  std::unique_ptr<control::ControlSocket> control_socket;
 
   // Board connection.
   std::unique_ptr<BoardSession> client;
@@ -60,19 +66,41 @@ struct Daemon::Impl {
         localizer(localizer_config(c, m, io), m.robot, m.field, m.camera, m.db, m.initial_pose) {
     if (!io.clock || !io.open_board || !io.heading)
       throw std::invalid_argument("Daemon: clock, open_board and heading are required");
-    if (!io.log) io.log = [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); };
-    if (!config.record_dir.empty()) {
-      RecordingMeta meta;
-      meta.field = config.field;
-      meta.field_geometry = models.field.spec;  // self-contained: replays without the field file
-      meta.camera = models.camera;
-      meta.robot = models.robot;
-      meta.initial_pose = models.initial_pose;
-      RecordingOptions ro;
-      ro.overwrite = config.record_overwrite;
-      ro.frame_format = config.record_format == "png" ? FrameFormat::kPng : FrameFormat::kJpeg;
-      recorder = std::make_unique<RecordingWriter>(config.record_dir, meta, false, ro);
+    if (!config.record_dir.empty()) start_recording(config.record_dir, config.record_overwrite);
+    if (config.control_port > 0) {
+      try {
+        control_socket = std::make_unique<control::ControlSocket>("127.0.0.1", config.control_port);
+      } catch (const std::exception& e) {
+        // The poses matter more than the commands: the daemon runs on without them, and says so.
+        io.logger.warning(std::string("control channel off: ") + e.what());
+      }
     }
+  }
+
+  void start_recording(const std::string& dir, bool overwrite) {
+    RecordingMeta meta;
+    meta.field = config.field;
+    meta.field_geometry = models.field.spec;  // self-contained: replays without the field file
+    meta.camera = models.camera;
+    meta.robot = models.robot;
+    meta.initial_pose = models.initial_pose;
+    RecordingOptions ro;
+    ro.overwrite = overwrite;
+    ro.frame_format = config.record_format == "png" ? FrameFormat::kPng : FrameFormat::kJpeg;
+    recorder = std::make_unique<RecordingWriter>(dir, meta, false, ro);
+    record_dir = dir;
+  }
+
+  void close_recording() {
+    if (!recorder) return;
+    try {
+      recorder->close();
+    } catch (const RecordingError& e) {
+      ++report.recording_failures;
+      report.recording_error = e.what();
+      io.logger.error(std::string("recording could not be closed: ") + e.what());
+    }
+    recorder.reset();
   }
 
   static LocalizerConfig localizer_config(const DaemonConfig&, const DaemonModels& m, const DaemonIo& io) {
@@ -82,7 +110,6 @@ struct Daemon::Impl {
     return lc;
   }
 
-  void log(const std::string& s) const { io.log(s); }
 
   // A recording that cannot be written (disk full, file size limit) stops; the pose stream goes on.
   template <class Write>
@@ -94,7 +121,7 @@ struct Daemon::Impl {
       ++report.recording_failures;
       report.recording_error = e.what();
       recorder.reset();  // closes what is open; whole rows only are on disk
-      log(std::string("omnilocd: recording stopped: ") + e.what() + "; poses are still sent");
+      io.logger.error(std::string("recording stopped: ") + e.what() + "; poses are still sent");
     }
   }
 
@@ -121,6 +148,14 @@ struct Daemon::Impl {
     m.search_range_cm = std::isfinite(lp.match_error) ? lp.search_range_cm : -1.0;
     m.uncertainty_cm = lp.sigma_xy_cm;
     m.uncertainty_yaw_deg = lp.sigma_yaw_deg;
+    m.vx_cm_s = lp.vx_cm_s;
+    m.vy_cm_s = lp.vy_cm_s;
+    m.omega_deg_s = lp.omega_deg_s;
+    // The host's own clocks at the send (not the daemon clock, which is the simulator's in
+    // simulation): what a consumer on this host compares with its receive time.
+    using Ms = std::chrono::duration<double, std::milli>;
+    m.mono_ms = Ms(std::chrono::steady_clock::now().time_since_epoch()).count();
+    m.wall_ms = Ms(std::chrono::system_clock::now().time_since_epoch()).count();
     m.status = st;
     publisher.send(pose_json(m));
     last_message = m;
@@ -139,21 +174,21 @@ struct Daemon::Impl {
       o.window_period_ms = models.robot.window_period_ms;
       client = std::make_unique<BoardSession>(io.open_board(), o);
       if (version_differs(client->identity()))
-        log("omnilocd: warning: board register map " + client->identity().version_text() + " differs from the host's");
+        io.logger.warning("board register map " + client->identity().version_text() + " differs from the host's");
       connection_offset_ms.reset();
       last_window_clock_ms = io.clock->now_ms();
       if (ever_connected) {
         ++report.reconnects;
-        log("omnilocd: board back (" + client->describe() + "), streaming again");
+        io.logger.info("board back (" + client->describe() + "), streaming again");
       } else {
-        log("omnilocd: board open (" + client->describe() + "), streaming");
+        io.logger.info("board open (" + client->describe() + "), streaming");
       }
       ever_connected = true;
       board_gone = false;
       last_open_error.clear();
     } catch (const std::exception& e) {
       client.reset();
-      if (e.what() != last_open_error) log(std::string("omnilocd: board not available: ") + e.what());
+      if (e.what() != last_open_error) io.logger.warning(std::string("board not available: ") + e.what());
       last_open_error = e.what();
     }
   }
@@ -169,7 +204,7 @@ struct Daemon::Impl {
     client.reset();
     if (!board_gone) {
       ++report.board_losses;
-      log("omnilocd: board lost (" + why + "): status degraded, reconnecting every " +
+      io.logger.warning("board lost (" + why + "): status degraded, reconnecting every " +
           std::to_string(static_cast<int>(config.reconnect_period_ms)) + " ms");
     }
     board_gone = true;
@@ -198,7 +233,10 @@ struct Daemon::Impl {
     // Frames wait while the board is gone: the localizer can only place them between windows.
     if (!board_gone && client) {
       if (auto f = io.camera->poll(now_ms)) {
-        (void)localizer.on_image(f->t_ms, f->bgr);
+        const FrameReport fr = localizer.on_image(f->t_ms, f->bgr);
+        if (io.logger.enabled(LogLevel::kDebug))
+          io.logger.debug("frame t=" + nlohmann::json(f->t_ms).dump() + " ms: " +
+                          (fr.no_measurement.empty() ? "queued" : "no measurement: " + fr.no_measurement));
         record([&] { recorder->add_frame(f->t_ms, f->bgr); });
         if (io.observer.on_frame) io.observer.on_frame(*f);
         last_frame_ms = f->t_ms;
@@ -208,9 +246,9 @@ struct Daemon::Impl {
     const bool fresh = now_ms - last_frame_ms <= config.camera_timeout_ms;
     if (camera_fresh && !fresh && !board_gone) {
       ++report.camera_losses;
-      log("omnilocd: camera stopped delivering (" + io.camera->describe() + "): odometry only");
+      io.logger.warning("camera stopped delivering (" + io.camera->describe() + "): odometry only");
     } else if (!camera_fresh && fresh && report.camera_losses > 0) {
-      log("omnilocd: camera delivering again");
+      io.logger.info("camera delivering again");
     }
     camera_fresh = fresh;
   }
@@ -234,15 +272,101 @@ struct Daemon::Impl {
     s.send_failed = publisher.failed();
     s.send_error = publisher.last_error();
     s.reconnects = report.reconnects;
-    if (!config.record_dir.empty()) s.recording = recorder ? "on" : "stopped";
+    if (!record_dir.empty()) s.recording = recorder ? "on" : "stopped";
     s.recording_failures = report.recording_failures;
     const std::string line = status_line(s);
-    log(line);
+    io.logger.info(line);
     if (io.observer.on_status) io.observer.on_status(line);
     windows_at_status = report.windows;
     frames_at_status = report.frames;
     status_from_ms = now_ms;
     next_status_ms = now_ms + config.status_period_s * 1000.0;
+  }
+
+  // --- control channel (control.hpp): requests are served between windows, a few per turn ---
+  nlohmann::json apply(const control::Command& command) {
+    using nlohmann::json;
+    const auto fail = [&](const std::string& why) {
+      return control::ControlError(std::nullopt, std::string(control::command_name(command)) + ": " + why);
+    };
+    if (std::holds_alternative<control::Status>(command)) return status_json();
+    if (const auto* p = std::get_if<control::SetPose>(&command)) {
+      const FieldGeometry& f = models.field;
+      if (!placeable(f, {p->x_cm, p->y_cm}))  // as for an initial pose: on the carpet, or just off it
+        throw fail("(" + json(p->x_cm).dump() + ", " + json(p->y_cm).dump() + ") cm is not on the carpet of field '" +
+                   f.name + "' (0 .. " + json(f.total_x_cm()).dump() + " x 0 .. " + json(f.total_y_cm()).dump() +
+                   " cm, 100 cm margin)");
+      const Pose2 pose{p->x_cm, p->y_cm, wrap_deg(p->yaw_deg)};
+      localizer.set_pose(pose, models.localizer.image_sigma_cm, models.localizer.image_sigma_yaw_deg);
+      last_localized = localizer.pose();
+      io.logger.info("pose set by command to (" + json(pose.x_cm).dump() + ", " + json(pose.y_cm).dump() + ") cm, " +
+          json(pose.yaw_deg).dump() + " deg");
+      return {{"x_cm", pose.x_cm}, {"y_cm", pose.y_cm}, {"yaw_deg", pose.yaw_deg}, {"last_seq", seq}};
+    }
+    if (std::holds_alternative<control::SetSide>(command))
+      throw fail("not supported yet: the daemon has no notion of the team's side (issue 15.2)");
+    if (std::holds_alternative<control::Relocalize>(command)) {
+      localizer.force_global_search();
+      io.logger.info("relocalizing by command: global search on the next frames");
+      return {{"status", std::string(to_string(DaemonStatus::kLost))}, {"last_seq", seq}};
+    }
+    if (const auto* r = std::get_if<control::RecordStart>(&command)) {
+      if (recorder) throw fail("already recording to " + record_dir);
+      try {
+        start_recording(r->dir, false);
+      } catch (const std::exception& e) {
+        throw fail(e.what());
+      }
+      io.logger.info("recording to " + r->dir + " (by command)");
+      return {{"dir", r->dir}};
+    }
+    if (!recorder) throw fail("not recording");
+    const std::string dir = record_dir;
+    close_recording();
+    io.logger.info("recording to " + dir + " stopped by command");
+    return {{"dir", dir}};
+  }
+
+  nlohmann::json status_json() const {
+    const double now = io.clock->now_ms();
+    nlohmann::json j = {{"status", std::string(to_string(status(now)))},
+                        {"x_cm", last_message.x_cm},
+                        {"y_cm", last_message.y_cm},
+                        {"yaw_deg", last_message.yaw_deg},
+                        {"source", last_message.source},
+                        {"uncertainty_cm", last_message.uncertainty_cm},
+                        {"windows", report.windows},
+                        {"frames", report.frames},
+                        {"published", publisher.sent()},
+                        {"recording", recorder ? "on" : record_dir.empty() ? "off" : "stopped"}};
+    if (!record_dir.empty()) j["record_dir"] = record_dir;
+    if (last_message.match_error >= 0) j["match_error"] = last_message.match_error;
+    return j;
+  }
+
+  void poll_control() {
+    if (!control_socket) return;
+    for (int i = 0; i < 8; ++i) {  // bounded: a flood of requests cannot starve the windows
+      const auto d = control_socket->receive();
+      if (!d) return;
+      std::string reply;
+      try {
+        if (d->truncated)
+          throw control::ControlError(std::nullopt, "request of " + std::to_string(d->size) +
+                                                        " bytes is larger than " +
+                                                        std::to_string(control::kMaxRequestBytes));
+        const control::Request q = control::parse_request(d->text);
+        try {
+          reply = control::ok_reply(q.id, apply(q.command));
+        } catch (const control::ControlError& e) {
+          throw control::ControlError(q.id, e.what());
+        }
+      } catch (const control::ControlError& e) {
+        reply = control::error_reply(e.id(), e.what());
+      }
+      io.logger.debug("control: " + d->text + " -> " + reply);
+      control_socket->reply(*d, reply);
+    }
   }
 
   DaemonReport run(const volatile std::sig_atomic_t* stop) {
@@ -255,6 +379,7 @@ struct Daemon::Impl {
     for (;;) {
       const double now = clock.now_ms();
       if (io.observer.on_loop) io.observer.on_loop(now);
+      poll_control();
       if (stop && *stop) {
         report.stop_reason = "signal";
         break;
@@ -278,7 +403,22 @@ struct Daemon::Impl {
       }
       try {
         if (const auto w = client->next_window(kTelemetryWait)) {
-          on_board_window(*w);
+          if (!connection_offset_ms) {
+            // A session's first window may be stale: the board streams on while the link is down,
+            // so windows wait in the link for the session to open. The newest one that has arrived
+            // is the one that arrived now: the session's clock is anchored on it, the others keep
+            // their board times before it.
+            std::vector<SessionWindow> queued{*w};
+            while (queued.size() < kMaxQueuedAtOpen) {
+              auto more = client->next_window(std::chrono::milliseconds(0));
+              if (!more) break;
+              queued.push_back(*more);
+            }
+            connection_offset_ms = clock.now_ms() - queued.back().board_ms;
+            for (const SessionWindow& q : queued) on_board_window(q);
+          } else {
+            on_board_window(*w);
+          }
         } else if (clock.now_ms() - last_window_clock_ms > kBoardSilentMs) {
           throw TransportError(TransportErrorKind::kIo, "no telemetry for 250 ms");
         }
@@ -293,18 +433,10 @@ struct Daemon::Impl {
       status_tick(clock.now_ms(), start);
     }
     if (client) {
-      if (const auto err = client->stop_streaming()) log("omnilocd: could not switch streaming off: " + *err);
+      if (const auto err = client->stop_streaming()) io.logger.warning("could not switch streaming off: " + *err);
       count_link_errors();
     }
-    if (recorder) {
-      try {
-        recorder->close();
-      } catch (const RecordingError& e) {
-        ++report.recording_failures;
-        report.recording_error = e.what();
-        log(std::string("omnilocd: recording could not be closed: ") + e.what());
-      }
-    }
+    close_recording();
     report.run_ms = clock.now_ms() - start;
     report.localizer = localizer.stats();
     report.published = publisher.sent();
@@ -337,5 +469,7 @@ Daemon::~Daemon() = default;
 DaemonReport Daemon::run(const volatile std::sig_atomic_t* stop) { return impl_->run(stop); }
 
 void Daemon::set_observer(DaemonObserver observer) { impl_->io.observer = std::move(observer); }
+
+nlohmann::json Daemon::apply(const control::Command& command) { return impl_->apply(command); }
 
 }  // namespace omniloc::daemon

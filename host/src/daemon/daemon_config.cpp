@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "omniloc/config_reader.hpp"
+#include "omniloc/ros2_bridge.hpp"
 
 namespace omniloc::daemon {
 
@@ -32,12 +33,21 @@ const config::KeyTable<DaemonConfig>& daemon_config_keys() {
       key("udp_address", &D::udp_address, opt, "IPv4 address the poses are sent to"),
       key("udp_port", &D::udp_port, opt, "UDP port the poses are sent to"),
       key("publish_hz", &D::publish_hz, opt, "pose rate (the board window rate, 100)"),
+      key("control_port", &D::control_port, opt, "UDP port of the control channel on 127.0.0.1; 0: off"),
       key("record_dir", &D::record_dir, opt, "record the session here (a new or empty directory); empty: no recording"),
       key("record_overwrite", &D::record_overwrite, opt, "replace an old recording in record_dir (its frames too)"),
       config::choice<D, std::string>("record_format", &D::record_format, {{"jpeg", "jpeg"}, {"png", "png"}}, opt,
                                      "recorded frames: jpeg (~2 MB/s at 30 Hz 640 x 480) or png (lossless, ~12 MB/s)"),
       key("status_period_s", &D::status_period_s, opt, "seconds between status lines; 0: none"),
+      config::choice<D, std::string>("log_level", &D::log_level,
+                                     {{"error", "error"}, {"warning", "warning"}, {"info", "info"}, {"debug", "debug"}},
+                                     opt, "least severe messages logged: error, warning, info (status lines), debug"),
       key("duration_s", &D::duration_s, opt, "stop after this many seconds; 0: run until SIGINT/SIGTERM"),
+      key("ros2_domain_id", &D::ros2_domain_id, opt, "ROS 2 topics in this DDS domain (ROS_DOMAIN_ID); -1: off"),
+      key("ros2_namespace", &D::ros2_namespace, opt, "ROS 2 namespace of the topics: <ns>/pose, <ns>/odom"),
+      key("ros2_frame_id", &D::ros2_frame_id, opt, "frame_id of the published poses (the field frame)"),
+      key("http_port", &D::http_port, opt, "live view: a web page on this TCP port (http://ADDRESS:PORT/); 0: off"),
+      key("http_address", &D::http_address, opt, "IPv4 address the live view listens on; 0.0.0.0: every interface"),
   };
   return table;
 }
@@ -60,11 +70,24 @@ void DaemonConfig::validate(const config::Origin& at) const {
   require(inet_pton(AF_INET, udp_address.c_str(), &addr) == 1, at / "udp_address", "must be a dotted IPv4 address",
           show(udp_address));
   require(udp_port >= 1 && udp_port <= 65535, at / "udp_port", "must be in [1, 65535]", udp_port);
+  require(control_port >= 0 && control_port <= 65535, at / "control_port", "must be 0 (off) or in [1, 65535]",
+          control_port);
   // One datagram per board window: the rate is the board's, so the only value accepted is 100.
   require(publish_hz == 100.0, at / "publish_hz", "must be 100 (one pose per 10 ms board window)", publish_hz);
   require(status_period_s >= 0 && status_period_s <= 3600, at / "status_period_s", "must be in [0, 3600]",
           status_period_s);
   require(std::isfinite(duration_s) && duration_s >= 0, at / "duration_s", "must be >= 0", duration_s);
+  require(ros2_domain_id >= -1 && ros2_domain_id <= 232, at / "ros2_domain_id", "must be -1 (off) or in [0, 232]",
+          ros2_domain_id);
+  try {
+    (void)ros2::dds_topic_name(ros2_namespace + "/pose");
+  } catch (const std::invalid_argument&) {
+    require(false, at / "ros2_namespace", "must be an absolute ROS 2 name such as /omniloc", show(ros2_namespace));
+  }
+  require(!ros2_frame_id.empty(), at / "ros2_frame_id", "must not be empty", show(ros2_frame_id));
+  require(http_port >= 0 && http_port <= 65535, at / "http_port", "must be 0 (off) or in [1, 65535]", http_port);
+  require(inet_pton(AF_INET, http_address.c_str(), &addr) == 1, at / "http_address", "must be a dotted IPv4 address",
+          show(http_address));
 }
 
 void validate_daemon_config(const DaemonConfig& c, const std::string& source) { c.validate(source); }

@@ -87,6 +87,16 @@ std::string pose_json(const PoseMessage& m) {
   put_number(out, m.uncertainty_cm, 3);
   out += ",\"uncertainty_yaw_deg\":";
   put_number(out, m.uncertainty_yaw_deg, 3);
+  out += ",\"vx_cm_s\":";
+  put_number(out, m.vx_cm_s, 2);
+  out += ",\"vy_cm_s\":";
+  put_number(out, m.vy_cm_s, 2);
+  out += ",\"omega_deg_s\":";
+  put_number(out, m.omega_deg_s, 2);
+  out += ",\"mono_ms\":";
+  put_number(out, m.mono_ms, 3);
+  out += ",\"wall_ms\":";
+  put_number(out, m.wall_ms, 3);
   out += ",\"status\":";
   put_string(out, to_string(m.status));
   out += '}';
@@ -137,7 +147,7 @@ std::string status_line(const StatusSnapshot& s) {
   if (s.match_error < 0) std::snprintf(err, sizeof err, "-");
   else std::snprintf(err, sizeof err, "%.1f", s.match_error);
   std::snprintf(buf, sizeof buf,
-                "omnilocd t=%.1fs %s pose=(%.1f,%.1f,%.1f) src=%s err=%s sigma=%.1fcm drift=%+.3fdeg/s win=%.0f/s cam=%.0f/s "
+                "t=%.1fs %s pose=(%.1f,%.1f,%.1f) src=%s err=%s sigma=%.1fcm drift=%+.3fdeg/s win=%.0f/s cam=%.0f/s "
                 "sent=%llu dropped=%llu%s%s reconnects=%llu",
                 s.t_s, std::string(to_string(s.status)).c_str(), s.x_cm, s.y_cm, s.yaw_deg,
                 s.source.empty() ? "-" : s.source.c_str(), err, s.uncertainty_cm, s.gyro_drift_deg_per_s, s.windows_per_s, s.frames_per_s,

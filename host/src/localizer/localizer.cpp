@@ -255,6 +255,29 @@ void Localizer::resync() {
   disagree_run_ = 0;
 }
 
+void Localizer::set_pose(const Pose2& pose, double sigma_xy_cm, double sigma_yaw_deg) {
+  const double t_ms = history_.empty() ? 0.0 : history_.back().window.t_end_ms;
+  reset_origin_at(t_ms, pose, sigma_xy_cm, sigma_yaw_deg);
+  set_anchor(t_ms, pose, kNoError);
+  state_ = State::kTracking;
+  bad_run_ = 0;
+  disagree_run_ = 0;
+  last_good_ = true;
+  last_pose_.pose = odometry_.estimate().pose;
+  last_pose_.sigma_xy_cm = sigma_xy_cm;
+  last_pose_.sigma_yaw_deg = sigma_yaw_deg;
+}
+
+void Localizer::force_global_search() {
+  if (state_ == State::kTracking) {
+    state_ = State::kLost;
+    ++stats_.lost_events;
+  }
+  anchor_.valid = false;
+  bad_run_ = 0;
+  disagree_run_ = 0;
+}
+
 std::vector<FrameReport> Localizer::take_frame_reports() {
   std::vector<FrameReport> out;
   out.swap(reports_);
@@ -456,6 +479,9 @@ LocalizedPose Localizer::make_pose(const EncoderWindow& window) {
   p.t_ms = window.t_end_ms;
   p.seq = window.seq;
   p.slip = e.slip.detected;
+  p.vx_cm_s = e.vx_cm_per_s;
+  p.vy_cm_s = e.vy_cm_per_s;
+  p.omega_deg_s = e.yaw_rate_deg_per_s;
   p.match_error = last_error_;
   p.search_range_cm = last_range_cm_;
   p.image_age_ms = anchor_.valid && anchor_.t_ms > 0.0 ? window.t_end_ms - anchor_.t_ms : kNoError;

@@ -47,18 +47,30 @@ Candidate refine_second(const LocalizerConfig& config, const FieldGeometry& fiel
 // The other candidate the goal colours are asked about, if the lines alone cannot rule it out:
 // without a heading, the twin (centre * 2 - p, yaw + 180: the same lines on a point-symmetric
 // field, even at the centre spot where it shares the position); else, or when the twin is clearly
-// worse, the matcher's second distinct minimum when it flagged the result ambiguous.
-std::optional<Candidate> contender(const LocalizerConfig& config, const FieldGeometry& field, const CameraModel& camera,
+// worse, the matcher's second distinct minimum when it flagged the result ambiguous and it stays
+// within the ambiguity ratio once refined (or replaces the best when clearly better).
+struct Contender {
+  Candidate candidate;
+  bool replaces_best = false;  ///< clearly better than the best: the best is dropped, nothing is ambiguous
+};
+
+std::optional<Contender> contender(const LocalizerConfig& config, const FieldGeometry& field, const CameraModel& camera,
                                    const FeatureDb& db, const BearingScan& bearings, const Candidate& best,
                                    double second_yaw_deg, bool yaw_searched) {
   const double ratio = match_options_of(config).ambiguity_ratio;
   if (yaw_searched) {
     const Eigen::Vector2d mirrored = 2.0 * field.centre_cm() - best.match.position_cm;
     Candidate twin = refine_second(config, field, camera, db, bearings, mirrored, wrap_deg(best.pose.yaw_deg + 180.0), true);
-    if (twin.match.cell >= 0 && twin.match.error <= ratio * best.match.error) return twin;
+    if (twin.match.cell >= 0 && twin.match.error <= ratio * best.match.error) return Contender{twin, false};
   }
-  if (best.match.ambiguous && std::isfinite(best.match.second_error))
-    return refine_second(config, field, camera, db, bearings, best.match.second_position_cm, second_yaw_deg, yaw_searched);
+  if (best.match.ambiguous && std::isfinite(best.match.second_error)) {
+    // Flagged on the grid errors; compared as the best is judged, after the refinement (a grid
+    // point 5 cm from the robot often scores well above its refined error, so the grid errors
+    // alone say little): a clearly worse second is no contender, a clearly better one replaces it.
+    const Candidate second = refine_second(config, field, camera, db, bearings, best.match.second_position_cm, second_yaw_deg, yaw_searched);
+    if (second.match.cell < 0 || second.match.error > ratio * best.match.error) return std::nullopt;
+    return Contender{second, second.match.error * ratio < best.match.error};
+  }
   return std::nullopt;
 }
 
@@ -88,8 +100,14 @@ SingleFrameResult locate_frame(const LocalizerConfig& config, const FieldGeometr
     second_yaw_deg = at_yaw->yaw_deg;
   }
   best.match.error = judged_error(config, best.match);
+  std::optional<Contender> found;
+  if (best.match.cell >= 0) found = contender(config, field, camera, db, bearings, best, second_yaw_deg, r.yaw_searched);
   std::optional<Candidate> other;
-  if (best.match.cell >= 0) other = contender(config, field, camera, db, bearings, best, second_yaw_deg, r.yaw_searched);
+  if (found && found->replaces_best) {
+    best = found->candidate;
+  } else if (found) {
+    other = found->candidate;
+  }
   r.lines_ambiguous = other.has_value();
   r.ambiguous = r.lines_ambiguous;
   if (other) {

@@ -208,6 +208,8 @@ const OdometryEstimate& Odometry::update(const EncoderWindow& window) {
   est_.pose.yaw_deg = wrap_deg(window.gyro_yaw_deg + yaw_offset_deg_);
   est_.speed_cm_per_s = step_cm / dt_s;
   est_.yaw_rate_deg_per_s = dyaw_deg / dt_s;
+  est_.vx_cm_per_s = body.x() / dt_s;
+  est_.vy_cm_per_s = body.y() / dt_s;
   est_.distance_cm += step_cm;
   est_.wheel_yaw_deg = wrap_deg(est_.wheel_yaw_deg + rad_to_deg(wheel_dyaw_rad));
   // Uncertainty: a fraction of the wheel travel, the heading uncertainty acting on it, and the

@@ -253,8 +253,7 @@ void RecordingMeta::validate(const config::Origin& at) const {
 namespace {
 void check_initial_pose(const Pose2& pose, const FieldGeometry& field, const config::Origin& at) {
   // On the carpet or near it (a robot put down just outside): 1e9 cm was accepted once.
-  constexpr double kMarginCm = 100.0;
-  const auto inside = [&](double v, double total) { return v >= -kMarginCm && v <= total + kMarginCm; };
+  const auto inside = [&](double v, double total) { return v >= -kPlacementMarginCm && v <= total + kPlacementMarginCm; };
   config::require(inside(pose.x_cm, field.total_x_cm()), at / "initial_pose" / "x_cm",
                   "must lie on the carpet of field '" + field.name + "' (0 .. " + config::show(field.total_x_cm()) +
                       " cm, 100 cm margin)",

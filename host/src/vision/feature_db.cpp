@@ -181,6 +181,13 @@ void check_grid(const Header& h, const FieldGeometry& field, const std::string& 
     throw std::runtime_error(where + "corrupt grid (origin (" + show(h.x0_cm) + ", " + show(h.y0_cm) + ") cm, step " +
                              show(h.step_cm) + " cm; the step must be 1 .. 100 cm)");
   }
+  // A grid with a single point along a side cannot tell positions along it apart (and has no
+  // neighbours to interpolate between): a step of more than half the carpet's side.
+  if (h.nx < 2 || h.ny < 2) {
+    throw std::runtime_error(where + "grid " + std::to_string(h.nx) + " x " + std::to_string(h.ny) + " at " +
+                             show(h.step_cm) + " cm has fewer than 2 points along a side: rebuild it with a smaller "
+                             "`omniloc builddb --step`");
+  }
   const GridSpec g = GridSpec::covering(field, h.step_cm);
   constexpr double kTolCm = 1e-6;
   if (g.nx != h.nx || g.ny != h.ny || std::abs(g.x0_cm - h.x0_cm) > kTolCm || std::abs(g.y0_cm - h.y0_cm) > kTolCm) {

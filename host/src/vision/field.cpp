@@ -285,6 +285,11 @@ bool on_carpet(const FieldGeometry& field, const Eigen::Vector2d& p) {
   return p.x() >= 0.0 && p.y() >= 0.0 && p.x() <= field.total_x_cm() && p.y() <= field.total_y_cm();
 }
 
+bool placeable(const FieldGeometry& field, const Eigen::Vector2d& p) {
+  const double m = kPlacementMarginCm;
+  return p.x() >= -m && p.y() >= -m && p.x() <= field.total_x_cm() + m && p.y() <= field.total_y_cm() + m;
+}
+
 bool is_white(const FieldGeometry& field, const Eigen::Vector2d& p) {
   const double h = field.line_width_cm / 2.0;
   // Bounding-box rejects first: most points are far from most lines (the renderer calls this per pixel).

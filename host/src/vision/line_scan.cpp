@@ -164,14 +164,17 @@ Scan rotate_to_field(const BearingScan& b, double yaw_deg) {
 }
 
 void expected_features(const FieldGeometry& field, const CameraModel& cam, const Eigen::Vector2d& pos,
-                       std::uint8_t* out, std::vector<WhiteInterval>& iv, int min_gap_px) {
+                       std::uint8_t* out, std::vector<WhiteInterval>& iv, int min_gap_px, double bearing_offset_deg) {
   const int k0 = first_sample(cam), k1 = last_sample(cam);
   const double t_lo = cam.ground_cm_at_radius(k0);
   const double t_hi = cam.ground_cm_at_radius(k1);
   const RayCaster caster(field);
   const auto& dirs = ray_directions();
   for (int k = 0; k < kScanRays; ++k) {
-    caster.intervals(pos, dirs[static_cast<std::size_t>(k)], t_lo, t_hi, iv);
+    const Eigen::Vector2d dir = bearing_offset_deg == 0.0 ? dirs[static_cast<std::size_t>(k)]
+                                                          : Eigen::Vector2d(std::cos(deg_to_rad(k + bearing_offset_deg)),
+                                                                            std::sin(deg_to_rad(k + bearing_offset_deg)));
+    caster.intervals(pos, dir, t_lo, t_hi, iv);
     crossings_of_runs(k0, k1, min_gap_px, iv, [&cam](const WhiteInterval& w) {
       return std::pair{cam.radius_px_at_ground(w.enter_cm), cam.radius_px_at_ground(w.exit_cm)};
     }, out + k * kCrossingsPerRay);

@@ -109,6 +109,10 @@ void check_db(const FeatureDb& db) {
 FieldScan make_field_scan(const BearingScan& bearings, double yaw_deg) {
   FieldScan f = make_field_scan(rotate_to_field(bearings, yaw_deg));
   f.yaw_deg = yaw_deg;
+  // Field ray 0 is robot ray j0 (rotate_to_field's choice), at field bearing j0 / rpd + yaw.
+  const int rpd = std::max(1, bearings.rays_per_degree);
+  const long j0 = std::lround(-yaw_deg * rpd);
+  f.bearing_offset_deg = wrap_deg(static_cast<double>(j0) / rpd + yaw_deg);
   return f;
 }
 
@@ -167,11 +171,11 @@ MatchResult local_search(const FeatureDb& db, const Scan& scan, const Eigen::Vec
 }
 
 double error_at(const FieldGeometry& field, const CameraModel& camera, const PreparedScan& p, const Eigen::Vector2d& pos,
-                const MatchOptions& opt) {
+                const MatchOptions& opt, double bearing_offset_deg) {
   if (p.rays_used == 0) return kNoError;
   alignas(32) std::array<std::uint8_t, kFeatureBytes> expected{};
   std::vector<WhiteInterval> scratch;
-  expected_features(field, camera, pos, expected.data(), scratch);
+  expected_features(field, camera, pos, expected.data(), scratch, ScanParams{}.min_gap_px, bearing_offset_deg);
   return match_error(expected.data(), p, opt);
 }
 
@@ -220,7 +224,7 @@ void refine_match_reference(const FieldGeometry& field, const CameraModel& camer
   const PreparedScan& p = scan.prepared;
   Eigen::Vector2d pos = r.position_cm;
   int probes = pos == r.grid_position_cm ? 0 : 1;
-  double best = pos == r.grid_position_cm ? r.error : error_at(field, camera, p, pos, opt);
+  double best = pos == r.grid_position_cm ? r.error : error_at(field, camera, p, pos, opt, scan.bearing_offset_deg);
   const Eigen::Vector2d steps[] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
   const double limit = opt.refine_reach_cm;
   // Each move lowers the error strictly and stays within `limit`, so the walk ends; the cap only
@@ -233,7 +237,7 @@ void refine_match_reference(const FieldGeometry& field, const CameraModel& camer
     for (const auto& d : steps) {
       const Eigen::Vector2d q = pos + step * d;
       if ((q - r.grid_position_cm).cwiseAbs().maxCoeff() > limit) continue;
-      const double e = error_at(field, camera, p, q, opt);
+      const double e = error_at(field, camera, p, q, opt, scan.bearing_offset_deg);
       ++probes;
       if (e < best) {
         best = e;
@@ -264,7 +268,8 @@ namespace {
 // centre the model is the ray cast itself, bit for bit.
 class LinearisedCaster {
  public:
-  LinearisedCaster(const FieldGeometry& field, const CameraModel& camera, const Eigen::Vector2d& centre_cm)
+  LinearisedCaster(const FieldGeometry& field, const CameraModel& camera, const Eigen::Vector2d& centre_cm,
+                   double bearing_offset_deg)
       : caster_(field), camera_(camera), centre_(centre_cm) {
     k0_ = static_cast<int>(std::ceil(camera.min_radius_px()));
     k1_ = static_cast<int>(std::floor(camera.view_radius_px()));
@@ -272,7 +277,7 @@ class LinearisedCaster {
     t_hi_ = camera.ground_cm_at_radius(k1_);
     std::vector<Run> at_x, at_y;
     for (int k = 0; k < kScanRays; ++k) {
-      dirs_[static_cast<std::size_t>(k)] = {std::cos(deg_to_rad(k)), std::sin(deg_to_rad(k))};
+      dirs_[static_cast<std::size_t>(k)] = {std::cos(deg_to_rad(k + bearing_offset_deg)), std::sin(deg_to_rad(k + bearing_offset_deg))};
       first_[static_cast<std::size_t>(k)] = static_cast<int>(runs_.size());
       cast(centre_, k, runs_);
       at_x.clear();
@@ -349,14 +354,14 @@ class LinearisedCaster {
 // kRecentreCm of its centre, and remembered, since the walk comes back to points it has seen.
 class ProbeErrors {
  public:
-  ProbeErrors(const FieldGeometry& field, const CameraModel& camera, const PreparedScan& scan, const MatchOptions& opt)
-      : field_(field), camera_(camera), scan_(scan), opt_(opt) {}
+  ProbeErrors(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, const MatchOptions& opt)
+      : field_(field), camera_(camera), scan_(scan.prepared), offset_deg_(scan.bearing_offset_deg), opt_(opt) {}
   double operator()(const Eigen::Vector2d& q) {
     for (const auto& [at, e] : seen_) {
       if ((at - q).cwiseAbs().maxCoeff() < 1e-6) return e;
     }
     if (!caster_ || (q - caster_->centre()).cwiseAbs().maxCoeff() > kRecentreCm) {
-      caster_.emplace(field_, camera_, q);
+      caster_.emplace(field_, camera_, q, offset_deg_);
       ++casts_;
     }
     alignas(32) std::array<std::uint8_t, kFeatureBytes> expected{};
@@ -373,6 +378,7 @@ class ProbeErrors {
   const FieldGeometry& field_;
   const CameraModel& camera_;
   const PreparedScan& scan_;
+  double offset_deg_ = 0.0;
   const MatchOptions& opt_;
   std::optional<LinearisedCaster> caster_;
   std::vector<std::pair<Eigen::Vector2d, double>> seen_;
@@ -381,13 +387,13 @@ class ProbeErrors {
 
 }  // namespace
 
-void refine_match(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, MatchResult& r,
-                  const MatchOptions& opt) {
+void refine_match_previous(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, MatchResult& r,
+                           const MatchOptions& opt) {
   if (r.cell < 0 || r.rays_used == 0) return;
   // A non-finite start would never compare equal to itself and never stop (a corrupt grid origin
   // did that once); load_feature_db refuses such grids, and this keeps the loop finite regardless.
   if (!r.position_cm.allFinite() || !r.grid_position_cm.allFinite()) return;
-  ProbeErrors error_of(field, camera, scan.prepared, opt);
+  ProbeErrors error_of(field, camera, scan, opt);
   Eigen::Vector2d pos = r.position_cm;
   const Eigen::Vector2d start = pos;
   double best = error_of(pos);  // the linearised caster is centred here: this one is exact
@@ -433,7 +439,7 @@ void refine_match(const FieldGeometry& field, const CameraModel& camera, const F
   }
   // The walk ran on the model: the error at its end is cast exactly, and the start kept if that
   // is no better.
-  const double exact = pos == start ? start_error : error_at(field, camera, scan.prepared, pos, opt);
+  const double exact = pos == start ? start_error : error_at(field, camera, scan.prepared, pos, opt, scan.bearing_offset_deg);
   r.refine_probes = error_of.probes();
   r.refine_casts = 3 * error_of.linearisations() + (pos == start ? 0 : 1);
   if (exact < start_error) {
@@ -443,6 +449,11 @@ void refine_match(const FieldGeometry& field, const CameraModel& camera, const F
     r.position_cm = start;
     r.refined_error = start_error;
   }
+}
+
+void refine_match(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, MatchResult& r,
+                  const MatchOptions& opt) {
+  refine_match_previous(field, camera, scan, r, opt);
 }
 
 void refine_match(const FieldGeometry& field, const CameraModel& camera, const Scan& scan, MatchResult& r,

@@ -3,11 +3,11 @@
 // (driven from the field centre, origin reset there, section 3.2) and the integrated localizer
 // (driven from the field centre, global search at start), beside the published values.
 #include <algorithm>
-#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -181,131 +181,135 @@ std::string paper_mean(const PaperRow* rows, int n, double published) {
   return buf;
 }
 
-}  // namespace
+constexpr const PaperRow* kImageTables[] = {kTable1, kTable2};
+constexpr const PaperRow* kOdoTables[] = {kTable3, kTable4};
+constexpr const PaperRow* kIntTables[] = {kTable5, kTable6};
+constexpr int kCounts[] = {9, 10};
+constexpr const char* kGroups[] = {"general cases, Fig. 17", "boundary cases, Fig. 18"};
 
-int cmd_bench(std::span<const std::string_view> args) {
-  if (args.empty() || args[0] == "-h" || args[0] == "--help") {
-    std::fprintf(args.empty() ? stderr : stdout,
-                 "usage: omniloc-sim bench paper [--seed N] [--no-paper-mode]\n"
-                 "  Tables 1-8 of the paper reproduced in simulation at its 19 test points (default noise).\n"
-                 "  --seed N         simulation seed (default 1)\n"
-                 "  --no-paper-mode  skip the integrated run with the paper's exact algorithm (faster)\n");
-    return args.empty() ? 2 : 0;
-  }
-  if (args[0] != "paper") {
-    std::fprintf(stderr, "omniloc-sim bench: unknown benchmark '%.*s' (known: paper)\n", static_cast<int>(args[0].size()),
-                 args[0].data());
-    return 2;
-  }
-  std::uint64_t seed = 1;
-  bool paper_mode = true;
-  for (std::size_t i = 1; i < args.size(); ++i) {
-    if (args[i] == "--seed" && i + 1 < args.size()) {
-      const std::string_view v = args[++i];
-      const auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), seed);
-      if (v.empty() || ec != std::errc() || p != v.data() + v.size()) {
-        std::fprintf(stderr, "omniloc-sim bench paper: --seed must be an integer 0 .. 2^64-1 (got '%.*s')\n",
-                     static_cast<int>(v.size()), v.data());
-        return 2;
-      }
-    } else if (args[i] == "--no-paper-mode") {
-      paper_mode = false;
-    } else {
-      std::fprintf(stderr, "omniloc-sim bench paper: unknown option '%.*s'\n", static_cast<int>(args[i].size()),
-                   args[i].data());
-      return 2;
-    }
-  }
-  const auto t_start = std::chrono::steady_clock::now();
-  const FieldGeometry field = load_field("fira-robosot");
-  const CameraModel camera = load_camera("default");
-  const std::filesystem::path cache = user_cache_dir() / feature_db_cache_name(field, camera);
-  Bench b{sim::OmniRenderer(field, camera),
-          load_or_build_feature_db(field, camera, cache, [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); }),
-          load_named_robot_config("default"), seed, {}, {}};
-  std::printf("omniloc-sim bench paper: seed %llu, FIRA field, default camera and robot, WorldConfig::default_noise,\n"
-              "rendered frames with sensor noise, blur and a lighting gradient. Errors in cm.\n",
-              static_cast<unsigned long long>(seed));
+/// Our mean errors per group (general, boundary), for Table 7.
+struct Means {
+  double image[2], odo[2], integrated[2], paper_integrated[2];
+};
 
-  const PaperRow* image_tables[] = {kTable1, kTable2};
-  const PaperRow* odo_tables[] = {kTable3, kTable4};
-  const PaperRow* int_tables[] = {kTable5, kTable6};
-  const int counts[] = {9, 10};
-  const char* groups[] = {"general cases, Fig. 17", "boundary cases, Fig. 18"};
-  double our_image_mean[2], our_odo_mean[2], our_int_mean[2], our_paper_int_mean[2];
-
+void image_tables(Bench& b, Means& m) {
   for (int g = 0; g < 2; ++g) {
     std::vector<double> e;
-    header((std::string("Table ") + std::to_string(1 + g) + ": image localization (" + groups[g] +
+    header((std::string("Table ") + std::to_string(1 + g) + ": image localization (" + kGroups[g] +
             "); ours: one frame, two other robots in view, global search at the gyro heading, ray-cast refinement")
                .c_str(),
            "");
-    for (int i = 0; i < counts[g]; ++i) {
-      const Ours o = image_only(b, image_tables[g][i], i + 10 * g);
-      row(i, image_tables[g][i], o, "");
+    for (int i = 0; i < kCounts[g]; ++i) {
+      const Ours o = image_only(b, kImageTables[g][i], i + 10 * g);
+      row(i, kImageTables[g][i], o, "");
       e.push_back(o.error);
     }
-    our_image_mean[g] = mean_of(e);
-    std::printf("Average error: %s, ours %.2f\n", paper_mean(image_tables[g], counts[g], g ? 212 : 9).c_str(),
-                our_image_mean[g]);
+    m.image[g] = mean_of(e);
+    std::printf("Average error: %s, ours %.2f\n", paper_mean(kImageTables[g], kCounts[g], g ? 212 : 9).c_str(),
+                m.image[g]);
   }
+}
+
+void odometry_tables(Bench& b, Means& m) {
   for (int g = 0; g < 2; ++g) {
     std::vector<double> e, ep;
-    header((std::string("Table ") + std::to_string(3 + g) + ": encoder localization (" + groups[g] +
+    header((std::string("Table ") + std::to_string(3 + g) + ": encoder localization (" + kGroups[g] +
             "); driven from the centre at up to 150 cm/s, origin reset at the centre")
                .c_str(),
            "eqs. (10)-(15) as printed: est., error");
-    for (int i = 0; i < counts[g]; ++i) {
-      const OdoOurs o = odometry_only(b, odo_tables[g][i], i + 10 * g);
+    for (int i = 0; i < kCounts[g]; ++i) {
+      const OdoOurs o = odometry_only(b, kOdoTables[g][i], i + 10 * g);
       char extra[64];
       std::snprintf(extra, sizeof extra, "(%6.1f, %6.1f) %7.2f", o.paper_eq.x, o.paper_eq.y, o.paper_eq.error);
-      row(i, odo_tables[g][i], o.ours, extra);
+      row(i, kOdoTables[g][i], o.ours, extra);
       e.push_back(o.ours.error);
       ep.push_back(o.paper_eq.error);
     }
-    our_odo_mean[g] = mean_of(e);
+    m.odo[g] = mean_of(e);
     std::printf("Average error: %s, ours %.2f (printed equations %.2f)\n",
-                paper_mean(odo_tables[g], counts[g], g ? 18 : 10).c_str(), our_odo_mean[g], mean_of(ep));
+                paper_mean(kOdoTables[g], kCounts[g], g ? 18 : 10).c_str(), m.odo[g], mean_of(ep));
   }
+}
+
+void integration_tables(Bench& b, bool paper_mode, Means& m) {
   for (int g = 0; g < 2; ++g) {
     std::vector<double> e, ep;
-    header((std::string("Table ") + std::to_string(5 + g) + ": integration localization (" + groups[g] +
+    header((std::string("Table ") + std::to_string(5 + g) + ": integration localization (" + kGroups[g] +
             "); driven from the centre, global search at start, 60 Hz frames")
                .c_str(),
            paper_mode ? "paper's algorithm exactly (LocalizerMode::kPaper): est., error" : "");
-    for (int i = 0; i < counts[g]; ++i) {
-      const Ours o = integrated(b, int_tables[g][i], i + 10 * g, LocalizerConfig{}, true);
+    for (int i = 0; i < kCounts[g]; ++i) {
+      const Ours o = integrated(b, kIntTables[g][i], i + 10 * g, LocalizerConfig{}, true);
       char extra[64] = "";
       if (paper_mode) {
-        const Ours op = integrated(b, int_tables[g][i], i + 10 * g, LocalizerConfig::paper(), false);
+        const Ours op = integrated(b, kIntTables[g][i], i + 10 * g, LocalizerConfig::paper(), false);
         std::snprintf(extra, sizeof extra, "(%6.1f, %6.1f) %7.2f", op.x, op.y, op.error);
         ep.push_back(op.error);
       }
-      row(i, int_tables[g][i], o, extra);
+      row(i, kIntTables[g][i], o, extra);
       e.push_back(o.error);
     }
-    our_int_mean[g] = mean_of(e);
-    our_paper_int_mean[g] = mean_of(ep);
-    std::printf("Average error: %s, ours %.2f", paper_mean(int_tables[g], counts[g], g ? 13 : 6).c_str(),
-                our_int_mean[g]);
-    if (paper_mode) std::printf(" (paper mode %.2f)", our_paper_int_mean[g]);
+    m.integrated[g] = mean_of(e);
+    m.paper_integrated[g] = mean_of(ep);
+    std::printf("Average error: %s, ours %.2f", paper_mean(kIntTables[g], kCounts[g], g ? 13 : 6).c_str(),
+                m.integrated[g]);
+    if (paper_mode) std::printf(" (paper mode %.2f)", m.paper_integrated[g]);
     std::printf("\n");
   }
+}
 
+void comparison_tables(const Bench& b, const Means& m) {
   std::printf("\nTable 7: comparison of errors (cm)\n");
   std::printf("%-18s %-18s %-14s %-18s %-16s %-14s\n", "Map and MCL [6]", "Adaptive MCL [7]", "NM-EPF [8]",
               "Match pattern [5]", "Proposed (paper)", "ours (sim)");
   std::printf("%-18s %-18s %-14s %-18s %-16s %.2f general / %.2f boundary\n", "30", "19.36", "88.13", "20", "6",
-              our_int_mean[0], our_int_mean[1]);
+              m.integrated[0], m.integrated[1]);
   std::printf("\nTable 8: comparison of efficiency (ms): pattern match with the fuzzy range (20 cm), image processing excluded\n");
   std::printf("%-18s %-18s %-18s %-18s %-16s %-14s\n", "Map and MCL [6]", "Adaptive MCL [7]", "Match pattern [4]",
               "Match pattern [9]", "Proposed (paper)", "ours (this CPU)");
   std::printf("%-18s %-18s %-18s %-18s %-16s %.4f\n", "195", "1.76", "3.2", "4.2", "0.4", mean_of(b.match_ms));
   std::printf("ours, whole frame in full mode (robot-frame scan + local search + ray-cast refinement): %.2f ms\n",
               mean_of(b.frame_ms));
+}
+
+struct BenchArgs {
+  std::uint64_t seed = 1;
+  bool no_paper_mode = false;
+};
+
+int run_bench_paper(const BenchArgs& a) {
+  const auto t_start = std::chrono::steady_clock::now();
+  const FieldGeometry field = load_field("fira-robosot");
+  const CameraModel camera = load_camera("default");
+  const std::filesystem::path cache = user_cache_dir() / feature_db_cache_name(field, camera);
+  Bench b{sim::OmniRenderer(field, camera),
+          load_or_build_feature_db(field, camera, cache, [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); }),
+          load_named_robot_config("default"), a.seed, {}, {}};
+  std::printf("omniloc-sim bench paper: seed %llu, FIRA field, default camera and robot, WorldConfig::default_noise,\n"
+              "rendered frames with sensor noise, blur and a lighting gradient. Errors in cm.\n",
+              static_cast<unsigned long long>(a.seed));
+  Means m{};
+  image_tables(b, m);
+  odometry_tables(b, m);
+  integration_tables(b, !a.no_paper_mode, m);
+  comparison_tables(b, m);
   std::printf("\ntotal %.1f s\n",
               std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count());
   return 0;
+}
+
+}  // namespace
+
+Subcommand add_bench_paper(CLI::App& program) {
+  CLI::App* bench = program.add_subcommand("bench", "`bench paper`: the paper's Tables 1-8 reproduced in simulation");
+  bench->require_subcommand(1);
+  CLI::App* paper = bench->add_subcommand(
+      "paper", "Tables 1-8 of the paper reproduced in simulation at its 19 test points (default noise).");
+  auto a = std::make_shared<BenchArgs>();
+  add_number_option(*paper, "--seed", a->seed, "simulation seed");
+  paper->add_flag("--no-paper-mode", a->no_paper_mode,
+                  "skip the integrated run with the paper's exact algorithm (faster)");
+  return {paper, [a] { return run_bench_paper(*a); }};
 }
 
 }  // namespace omniloc::cli

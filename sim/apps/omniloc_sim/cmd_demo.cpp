@@ -12,11 +12,11 @@
 #include <time.h>
 
 #include <algorithm>
-#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -26,6 +26,7 @@
 
 #include "commands.hpp"
 #include "omniloc/daemon.hpp"
+#include "omniloc/log.hpp"
 #include "omniloc/daemon_config.hpp"
 #include "omniloc/field.hpp"
 #include "omniloc/line_scan.hpp"
@@ -55,19 +56,6 @@ struct DemoOptions {
   std::uint64_t seed = 1;
   double table_period_s = 2.0;
 };
-
-void demo_usage(std::FILE* out) {
-  std::fprintf(out,
-               "usage: omniloc-sim demo [--out DIR] [--camera-hz HZ] [--camera none] [--seed N] [--duration S]\n"
-               "  The robot's daemon on the simulated robot (Verilated board, rendered camera), watched\n"
-               "  against the simulator's truth.\n"
-               "  --out        output directory for paths.png and errors.csv (default build/demo)\n"
-               "  --camera-hz  rendered camera rate in simulated time, 1..120 (default 60, the paper's)\n"
-               "  --camera     none: no camera (no fix: the run fails, exit status 1)\n"
-               "  --seed       world and sensor noise seed, 0 .. 2^64-1 (default 1)\n"
-               "  --duration   simulated seconds, up to 30 (default 30; the scripted drive lasts 30)\n"
-               "  Exit status: 0 fix and kidnapping recovered, 1 no fix / not recovered / failure, 2 bad usage.\n");
-}
 
 // ---- statistics ----
 struct Series {
@@ -275,53 +263,6 @@ class DemoObserver {
   Clock::time_point wall0_ = Clock::now();
 };
 
-std::optional<double> parse_double(const std::string& v) {
-  double d = 0;
-  const auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), d);
-  if (v.empty() || ec != std::errc() || p != v.data() + v.size() || !std::isfinite(d)) return std::nullopt;
-  return d;
-}
-
-std::optional<std::uint64_t> parse_u64(const std::string& v) {
-  std::uint64_t n = 0;
-  const auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
-  if (v.empty() || ec != std::errc() || p != v.data() + v.size()) return std::nullopt;
-  return n;
-}
-
-/// nullopt after printing the problem: bad usage.
-std::optional<DemoOptions> parse_demo_args(std::span<const std::string_view> args, bool& help) {
-  DemoOptions o;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string_view a = args[i];
-    if (a == "-h" || a == "--help") {
-      help = true;
-      return o;
-    }
-    if (i + 1 >= args.size()) {
-      std::fprintf(stderr, "omniloc-sim demo: %.*s needs a value\n", static_cast<int>(a.size()), a.data());
-      return std::nullopt;
-    }
-    const std::string v(args[++i]);
-    const auto num = parse_double(v);
-    if (a == "--out") {
-      o.out_dir = v;
-    } else if (a == "--camera-hz" && num && *num >= 1 && *num <= 120) {
-      o.camera_hz = *num;
-    } else if (a == "--camera" && v == "none") {
-      o.camera = false;
-    } else if (a == "--seed" && parse_u64(v)) {
-      o.seed = *parse_u64(v);
-    } else if (a == "--duration" && num && *num > 0 && *num <= 30) {
-      o.duration_s = *num;
-    } else {
-      std::fprintf(stderr, "omniloc-sim demo: bad option %.*s %s\n", static_cast<int>(a.size()), a.data(), v.c_str());
-      return std::nullopt;
-    }
-  }
-  return o;
-}
-
 void print_summary(const DemoObserver& ob, const sim::DemoDrive& drive, const DemoOptions& o,
                    const daemon::DaemonReport& r) {
   std::printf("\n  mean / median / p95 / max position error over the run [cm]:\n");
@@ -370,20 +311,7 @@ int verdict(const DemoObserver& ob, const DemoOptions& o) {
   return 0;
 }
 
-}  // namespace
-
-int cmd_demo(std::span<const std::string_view> args) {
-  bool help = false;
-  const auto parsed = parse_demo_args(args, help);
-  if (help) {
-    demo_usage(stdout);
-    return 0;
-  }
-  if (!parsed) {
-    demo_usage(stderr);
-    return 2;
-  }
-  const DemoOptions& o = *parsed;
+int run_demo(const DemoOptions& o) {
   const auto wall0 = Clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - wall0).count(); };
   std::filesystem::create_directories(o.out_dir);
@@ -418,7 +346,9 @@ int cmd_demo(std::span<const std::string_view> args) {
   DemoObserver observer(m, robot, o, drive, csv);
   daemon::DaemonIo io = robot.io();
   io.observer = observer.callbacks();
-  io.log = [](const std::string& s) { std::printf("  [daemon] %s\n", s.c_str()); };
+  io.logger = Logger(LogLevel::kInfo, [](LogLevel level, std::string_view s) {
+    std::printf("  [daemon] %s\n", format_log_line("omnilocd", level, s).c_str());
+  });
   daemon::Daemon d(dc, m, io);
   observer.print_header();
   const double cpu0 = process_cpu_s();
@@ -437,6 +367,28 @@ int cmd_demo(std::span<const std::string_view> args) {
   write_plot(png, m.field, observer.path_truth, observer.path_int, observer.path_odo, observer.path_img, drive);
   std::printf("  wrote %s and %s; total wall time %.1f s\n", png.c_str(), csv_path.c_str(), elapsed());
   return verdict(observer, o);
+}
+
+}  // namespace
+
+Subcommand add_demo(CLI::App& program) {
+  CLI::App* demo = program.add_subcommand(
+      "demo", "the robot's daemon on the simulated robot: 30 s drive, error table, paths.png");
+  demo->footer(
+      "The robot's daemon on the simulated robot (Verilated board, rendered camera), watched against the\n"
+      "simulator's truth. Exit status: 0 fix and kidnapping recovered, 1 no fix / not recovered / failure,\n"
+      "2 bad usage.");
+  auto o = std::make_shared<DemoOptions>();
+  demo->add_option("--out", o->out_dir, "output directory for paths.png and errors.csv")->capture_default_str();
+  add_number_option(*demo, "--camera-hz", o->camera_hz, "rendered camera rate in simulated time (the paper's: 60)",
+                    1.0, 120.0);
+  demo->add_option_function<std::string>(
+          "--camera", [o](const std::string&) { o->camera = false; }, "none: no camera (no fix: the run fails, exit status 1)")
+      ->check(CLI::IsMember({"none"}))
+      ->default_str("rendered");
+  add_number_option(*demo, "--seed", o->seed, "world and sensor noise seed");
+  add_number_option(*demo, "--duration", o->duration_s, "simulated seconds (the scripted drive lasts 30)", 0.01, 30.0);
+  return {demo, [o] { return run_demo(*o); }};
 }
 
 }  // namespace omniloc::cli

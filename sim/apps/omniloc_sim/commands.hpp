@@ -1,14 +1,13 @@
-// Subcommands of `omniloc-sim`, the simulator's command line; one file each, dispatched from main.cpp.
+// Subcommands of `omniloc-sim`, the simulator's command line (CLI11, subcommand_cli.hpp); one file
+// each, registered on the program's app by main.cpp.
 #pragma once
 
-#include <span>
-#include <string_view>
-
-#include "command_table.hpp"
+#include "subcommand_cli.hpp"
 
 namespace omniloc::cli {
 
-int cmd_bench(std::span<const std::string_view> args);
-int cmd_demo(std::span<const std::string_view> args);
+/// `bench paper` (`bench` holds the benchmarks; `paper` is the one there is).
+Subcommand add_bench_paper(CLI::App& program);
+Subcommand add_demo(CLI::App& program);
 
 }  // namespace omniloc::cli

@@ -3,13 +3,14 @@
 // the board's simulated time. Takes every omnilocd option (the camera is rendered unless
 // `--camera none`) plus the simulation's own: --trajectory NAME and --seed N. With --record-dir it
 // also writes the run's truth.csv beside the recording, so `omniloc replay` reports errors.
-#include <charconv>
 #include <cstdio>
 #include <memory>
 #include <string>
 #include <string_view>
 
 #include "daemon_cli.hpp"
+#include "live_view_attach.hpp"
+#include "ros2_attach.hpp"
 #include "omniloc/daemon.hpp"
 #include "omniloc/daemon_config.hpp"
 #include "omniloc/version.hpp"
@@ -17,6 +18,7 @@
 #include "omniloc_sim/playing_area.hpp"
 #include "omniloc_sim/sim_daemon.hpp"
 #include "stop_signal.hpp"
+#include "subcommand_cli.hpp"
 
 namespace {
 
@@ -25,18 +27,9 @@ struct SimArgs {
   std::uint64_t seed = 1;
 };
 
-std::uint64_t parse_seed(std::string_view v) {
-  std::uint64_t n = 0;
-  const auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
-  if (v.empty() || ec != std::errc() || p != v.data() + v.size())
-    throw omniloc::ConfigError("command line: --seed: must be an integer 0 .. 18446744073709551615 (got '" +
-                               std::string(v) + "')");
-  return n;
-}
-
-int run(const omniloc::daemon::DaemonConfig& config, const SimArgs& sim_args) {
+int run(const omniloc::daemon::DaemonConfig& config, const SimArgs& sim_args, const omniloc::Logger& log) {
   using namespace omniloc;
-  auto say = [](const std::string& s) { std::fprintf(stderr, "omnilocd-sim: %s\n", s.c_str()); };
+  auto say = [&log](const std::string& s) { log.info(s); };
   const daemon::DaemonModels models = daemon::load_models(config, say);
   sim::SimRobotOptions o;
   o.seed = sim_args.seed;
@@ -45,17 +38,22 @@ int run(const omniloc::daemon::DaemonConfig& config, const SimArgs& sim_args) {
   sim::SimulatedRobot robot(models, sim::make_trajectory(sim_args.trajectory, sim_args.seed, sim::playing_area(models.field)), o);
   say(robot.describe() + "; trajectory " + sim_args.trajectory + ", seed " + std::to_string(sim_args.seed));
   daemon::DaemonIo io = robot.io();
+  io.logger = log;
   say("publishing poses to udp://" + config.udp_address + ":" + std::to_string(config.udp_port) +
       (config.record_dir.empty() ? "" : ", recording to " + config.record_dir));
+  omniloc::cli::Ros2Attachment ros2(config, log);
+  omniloc::cli::LiveViewAttachment live_view(config, models, log);
   daemon::Daemon d(config, models, io);
   // After the daemon has made the recording directory (and removed an old truth.csv).
   std::unique_ptr<TruthCsvWriter> truth_csv;
+  daemon::DaemonObserver observer;
   if (!config.record_dir.empty()) {
     truth_csv = std::make_unique<TruthCsvWriter>(std::filesystem::path(config.record_dir) / "truth.csv");
-    daemon::DaemonObserver observer;
     observer.on_window = sim::truth_recorder(robot.truth(), *truth_csv);
-    d.set_observer(std::move(observer));
   }
+  ros2.attach(observer, d);
+  live_view.attach(observer);
+  d.set_observer(std::move(observer));
   omniloc::cli::install_stop_signal_handlers();
   const daemon::DaemonReport r = d.run(&omniloc::cli::g_stop_requested);
   if (truth_csv) truth_csv->close();
@@ -70,15 +68,15 @@ int main(int argc, char** argv) {
                "(--camera none: no camera, odometry only; any other camera value means the rendered one).",
                "omnilocd-sim"};
   app.set_version_flag("--version", omniloc::version_line("omnilocd-sim"));
+  app.failure_message(omniloc::cli::failure_message_with_path);  // "omnilocd-sim: error: ..."
   SimArgs sim_args;
-  std::string seed_text;
   app.add_option("--trajectory", sim_args.trajectory, "the simulated drive: " + omniloc::sim::trajectory_names())
       ->default_str(sim_args.trajectory);
-  app.add_option("--seed", seed_text, "world and sensor noise seed, 0 .. 2^64-1")->default_str("1");
+  omniloc::cli::add_number_option(app, "--seed", sim_args.seed, "world and sensor noise seed");
   omniloc::cli::DaemonCommandLine cl;
   omniloc::cli::add_daemon_options(app, cl);
   return omniloc::cli::parse_and_run(app, argc, argv, "omnilocd-sim", [&] {
-    if (!seed_text.empty()) sim_args.seed = parse_seed(seed_text);
-    return run(omniloc::cli::daemon_config_from(cl), sim_args);
+    const omniloc::daemon::DaemonConfig config = omniloc::cli::daemon_config_from(cl);
+    return run(config, sim_args, omniloc::cli::daemon_logger(config, cl, "omnilocd-sim"));
   });
 }

@@ -36,6 +36,9 @@ struct ReferenceBoardConfig {
   std::uint32_t tick_hz = regmap::kTickHz;
   std::uint32_t initial_timestamp_cycles = 0;
   std::array<std::uint32_t, regmap::kChannels> initial_position{};  ///< to exercise wrap-around
+  /// Keep every emitted frame, window and applied write for windows() / emitted() /
+  /// applied_writes(); false keeps only the last window (a soak of hours, tests/soak/soak_daemon).
+  bool keep_history = true;
 };
 
 /// Counts of one window for a window sequence number.
@@ -180,7 +183,7 @@ class ReferenceBoard final : public UartSide {
     const std::size_t before = tx_.size();
     protocol::encode_into(f, tx_);
     const std::size_t n = tx_.size() - before;
-    emitted_.push_back(EmittedFrame{tx_total_, n, f});
+    if (cfg_.keep_history) emitted_.push_back(EmittedFrame{tx_total_, n, f});
     tx_total_ += n;
   }
 
@@ -200,6 +203,7 @@ class ReferenceBoard final : public UartSide {
     w.dir = dir_;
     if (!consumed_ && !windows_.empty()) status_ = regmap::kStatusOverrun.put(status_, 1);
     w.status = static_cast<std::uint8_t>(status_ & 0xFF);
+    if (!cfg_.keep_history) windows_.clear();
     windows_.push_back(w);
     last_positions_ = position_;
     consumed_ = false;
@@ -273,7 +277,7 @@ class ReferenceBoard final : public UartSide {
       case r::kRegStatus: status_ &= ~v; break;
       default: return r::kErrReadOnly;
     }
-    writes_.push_back(AppliedWrite{addr, v});
+    if (cfg_.keep_history) writes_.push_back(AppliedWrite{addr, v});
     return 0;
   }
 
