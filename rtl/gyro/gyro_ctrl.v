@@ -234,6 +234,7 @@ always @(posedge clk_i) begin
         wait_q <= 1'b0;
         run_q <= {RUN_W{1'b0}};
         pend_q <= 1'b0;
+        prev_q <= 16'd0;
     end else begin
         pend_q <= sample_ok && !accum_taken;
         state_q <= state_d;
@@ -251,15 +252,16 @@ always @(posedge clk_i) begin
             wait_q <= 1'b0;
             byte_q <= txn_end ? 2'd0 : byte_q + 2'd1;
         end
-        if (sample_end) run_q <= !same ? {RUN_W{1'b0}}
-                               : run_q == RUN_MAX[RUN_W-1:0] ? run_q : run_q + 1'b1;
+        if (sample_end) begin
+            run_q <= !same ? {RUN_W{1'b0}} : run_q == RUN_MAX[RUN_W-1:0] ? run_q : run_q + 1'b1;
+            prev_q <= sample;
+        end
     end
 end
 
 // Pure data registers (no reset needed).
 always @(posedge clk_i) begin
     if (spi_done && state_q == S_DATA && byte_q == 2'd1) z1_q <= spi_rx;
-    if (sample_end) prev_q <= sample;
 end
 
 assign gyro_running_o = state_q == S_POLL || state_q == S_DATA;
