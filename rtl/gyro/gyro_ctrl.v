@@ -60,7 +60,7 @@ module gyro_ctrl #(
     output wire                       gyro_id_fault_o
 );
 
-// ---- Register map, bank 0 (DS-000347 section 14) ----
+// ---- Register map, user bank 0 (DS-000347 "Register map"; docs/GYRO.md) ----
 localparam [7:0] REG_DEVICE_CONFIG = 8'h11;
 localparam [7:0] REG_GYRO_DATA_Z1 = 8'h29;
 localparam [7:0] REG_INT_STATUS = 8'h2D;

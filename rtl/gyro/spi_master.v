@@ -1,6 +1,6 @@
 // spi_master: a small SPI mode-0 master (CPOL = 0, CPHA = 0), one byte per request.
 //
-// Mode 0 as the ICM-42688-P expects it (datasheet DS-000347, section 9.3 "SPI interface"): SCLK
+// Mode 0 as the ICM-42688-P expects it (datasheet DS-000347, "SPI interface"; docs/GYRO.md): SCLK
 // idles low, the slave samples MOSI on the rising SCLK edge and changes MISO after the falling
 // edge, bytes are sent MSB first, CS is active low and held low over a whole transaction.
 //
