@@ -4,6 +4,8 @@
 #   yosys: read_verilog -formal, chparam, prep, async2sync, dffunmap, write_smt2
 #   prove: BMC base case to DEPTH, then k-induction with DEPTH
 #   bmc:   bounded model check to DEPTH only (used where induction does not close)
+#   cover: with COVER_DEPTH (environment) > 0, afterwards every `cover` statement must be reached
+#          within COVER_DEPTH steps (a trace each), so that no property holds vacuously
 # On failure it prints the counterexample VCD path and exits 1.
 #
 # usage: run_formal.sh NAME TOP MODE DEPTH OUTDIR INCLUDE_DIR "CHPARAMS" FILE...
@@ -33,23 +35,29 @@ if ! yosys -q -l "$log.yosys" -p "read_verilog -formal -I$incdir ${files[*]}; $c
   exit 1
 fi
 
-run_smtbmc() {  # $1 = label, rest = extra yosys-smtbmc args
-  local label=$1; shift
+run_smtbmc() {  # $1 = label, $2 = depth, rest = extra yosys-smtbmc args
+  local label=$1 d=$2; shift 2
   local vcd="$outdir/${name}_${label}_cex.vcd"
-  rm -f "$vcd"
-  if yosys-smtbmc -s z3 ${SMTBMC_FLAGS:-} "$@" -t "$depth" --dump-vcd "$vcd" "$smt2" > "$log.$label" 2>&1 \
+  local start=$SECONDS
+  rm -f "$outdir/${name}_${label}"*.vcd
+  if yosys-smtbmc -s z3 ${SMTBMC_FLAGS:-} "$@" -t "$d" --dump-vcd "$vcd" "$smt2" > "$log.$label" 2>&1 \
       && grep -q "Status: PASSED" "$log.$label"; then
-    echo "FORMAL $name: $label depth $depth PASSED"
+    echo "FORMAL $name: $label depth $d PASSED ($((SECONDS - start)) s)"
   else
     tail -n 20 "$log.$label"
-    echo "FORMAL $name: $label depth $depth FAILED"
-    if [[ -f $vcd ]]; then echo "counterexample trace: $vcd"; fi
+    echo "FORMAL $name: $label depth $d FAILED"
+    ls "$outdir/${name}_${label}"*.vcd 2>/dev/null | sed 's/^/trace: /' || true
     echo "full log: $log.$label"
     exit 1
   fi
 }
 
-run_smtbmc bmc
+run_smtbmc bmc "$depth"
 if [[ $mode == prove ]]; then
-  run_smtbmc induction -i
+  run_smtbmc induction "$depth" -i
+fi
+cover_depth=${COVER_DEPTH:-0}
+if [[ $cover_depth -gt 0 ]]; then
+  run_smtbmc cover "$cover_depth" -c  # passes only if every cover was reached
+  echo "FORMAL $name: covers reached: $(grep -c 'Reached cover statement' "$log.cover")"
 fi
