@@ -23,12 +23,24 @@
 namespace omniloc {
 
 /// One board window, as in a recording's encoders.csv row (t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg).
+/// What the board's gyroscope measured over one window (regmap.json "frames": the window's gyro
+/// fields), raw: the sum of the part's yaw-rate samples in LSB, how many, and the fault flags.
+/// The scale (LSB per deg/s) and the output rate come from the part's configuration
+/// (GyroScale in gyro_heading.hpp), not from here.
+struct WindowGyro {
+  bool present = false;         ///< false: the board has no gyro (or a board of before v0.2)
+  std::int64_t sum_lsb = 0;     ///< sum of the accepted Z-rate samples (two's complement LSB)
+  std::uint32_t samples = 0;    ///< samples summed
+  std::uint8_t flags = 0;       ///< fault kinds seen in this window (0: none); see regmap.json
+};
+
 struct EncoderWindow {
   std::uint32_t seq = 0;
   double t_end_ms = 0.0;                 ///< end of the window (board time)
   std::array<std::int32_t, 4> counts{};  ///< wheel 1..4 counts in this window (eq. (9) signs); a
                                          ///< three-wheel robot leaves counts[3] unused (ignored)
   double gyro_yaw_deg = 0.0;             ///< gyro's integrated yaw, field frame, at t_end_ms
+  WindowGyro gyro;                       ///< the board's raw gyro window (present only on a v0.2 board)
 };
 
 /// Per-wheel slip finding for one window.
