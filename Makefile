@@ -6,6 +6,8 @@
 #   make demo       the whole system on the simulated robot and board
 #   make lint       verilator --lint-only -Wall on every RTL file
 #   make formal     yosys + yosys-smtbmc (z3) proofs
+#   make mutate     every mutation of tests/mutate/mutations.txt against the proofs and cycle tests
+#                   ("N of N mutations killed"; MUTATE_ARGS, e.g. --formal-only or --only NAME,...)
 #   make bitstream  iCEBreaker bitstream with the open iCE40 flow
 #   make bench      benchmarks (each against a naive reference, ratio printed)
 #   make soak       long simulated runs: the localizer (SOAK_MINUTES, default 10), the daemon with faults
@@ -22,7 +24,7 @@ CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 PREFIX     ?= /usr/local
 CTEST      := ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
 
-.PHONY: all deps configure build test demo lint formal bitstream bench soak fuzz install generate clean
+.PHONY: all deps configure build test demo lint formal mutate bitstream bench soak fuzz install generate clean
 
 all: build
 
@@ -45,6 +47,11 @@ lint: configure
 
 formal: configure
 	$(CTEST) -L formal
+
+# The mutations run on a copy of rtl/ (build/mutate/), never on the repository's files.
+MUTATE_ARGS ?=
+mutate: configure
+	python3 tests/mutate/run_mutate.py --build $(BUILD) $(MUTATE_ARGS)
 
 demo: build
 	@bash scripts/demo.sh $(BUILD)

@@ -123,6 +123,44 @@ always @(posedge clk_i) begin
         if (dir_q != $past(dir_q)) assert ($past(en_i) && $past(primed_q) && (($past(a_i) != $past(f_a_q)) != ($past(b_i) != $past(f_b_q))));
     end
 end
+
+// Iff-properties: exactly which samples count, in which direction, per mode, from the A/B levels
+// alone (f_*: A or B changed, the change is legal, A leads B; previous-cycle values via $past).
+wire f_a_ch = a_i != f_a_q;
+wire f_b_ch = b_i != f_b_q;
+wire f_legal = f_a_ch != f_b_ch;
+// A leads B (forward): A changes to differ from B, or B changes to equal A.
+wire f_fwd = f_a_ch ? (a_i != b_i) : (a_i == b_i);
+wire f_en = en_i && primed_q;
+// The edges each mode counts: X4 every legal one, X2 the A edges, X1 the A edges while B is low.
+wire f_counted = f_legal && ((mode_i == `OMNILOC_CONTROL_DECODE_X1) ? (f_a_ch && !b_i)
+                           : (mode_i == `OMNILOC_CONTROL_DECODE_X2) ? f_a_ch : 1'b1);
+always @(posedge clk_i) begin
+    if (f_past_valid && !$past(rst_i) && !rst_i) begin
+        assert (up_q == $past(f_en && f_counted && f_fwd));
+        assert (down_q == $past(f_en && f_counted && !f_fwd));
+        // The direction is that of the last legal transition while enabled, in every mode.
+        if ($past(f_en && f_legal)) assert (dir_q == !$past(f_fwd));
+        else assert (dir_q == $past(dir_q));
+    end
+end
+
+// Each property reachable: counts both ways in every mode, an error, a reversal of direction.
+always @(posedge clk_i) begin
+    if (f_past_valid && !$past(rst_i) && !rst_i) begin
+        cover (up_q && $past(mode_i) == `OMNILOC_CONTROL_DECODE_X1);
+        cover (down_q && $past(mode_i) == `OMNILOC_CONTROL_DECODE_X1);
+        cover (up_q && $past(mode_i) == `OMNILOC_CONTROL_DECODE_X2);
+        cover (down_q && $past(mode_i) == `OMNILOC_CONTROL_DECODE_X2);
+        cover (up_q && $past(mode_i) == `OMNILOC_CONTROL_DECODE_X4 && $past(b_i));
+        cover (down_q && $past(mode_i) == `OMNILOC_CONTROL_DECODE_X4 && !$past(a_i) && $past(b_i));
+        cover (err_q);
+        cover (dir_q && !$past(dir_q));
+        cover (!dir_q && $past(dir_q));
+        // A legal X1 transition on the other edge pair is not counted.
+        cover ($past(f_en && f_legal && f_a_ch && b_i) && $past(mode_i) == `OMNILOC_CONTROL_DECODE_X1 && !up_q && !down_q);
+    end
+end
 `endif
 
 endmodule

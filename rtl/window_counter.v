@@ -139,10 +139,25 @@ always @(posedge clk_i) begin
             // Across the capture: window count + new counter = edges seen.
             assert (win_count_q + count_q == $past(count_q) + $past(delta));
             assert (count_q == {W{1'b0}});
+            // The window's direction is the decoder's at the capture.
+            assert (win_dir_q == $past(dir_i));
         end else begin
             assert (count_q == $past(count_q) + $past(delta));
             assert (win_count_q == $past(win_count_q));
+            assert (win_dir_q == $past(win_dir_q));
         end
+    end
+end
+
+// Each property reachable: a capture with a pulse in its cycle (both ways), a negative window,
+// a window ending forward and one ending backward, the position moving back past zero.
+always @(posedge clk_i) begin
+    if (f_past_valid && !$past(rst_i) && !rst_i) begin
+        cover ($past(capture_i) && $past(up_i) && win_count_q == {{(W-2){1'b0}}, 2'd2});
+        cover ($past(capture_i) && $past(down_i) && win_count_q == {W{1'b1}});
+        cover ($past(capture_i) && win_dir_q && win_count_q == {W{1'b1}});
+        cover ($past(capture_i) && !win_dir_q && win_count_q == {{(W-1){1'b0}}, 1'b1});
+        cover (position_o == {W{1'b1}} && $past(position_o) == {W{1'b0}});
     end
 end
 `endif
