@@ -385,6 +385,166 @@ always @(posedge clk_i) begin
         assert (win_valid_q == $past(capture_i));
     end
 end
+
+// ---- Independent reference of the bus, the snapshot, OVERRUN and the timestamp ----
+localparam integer ADDR_W = `OMNILOC_ADDR_W;
+// The request as it takes effect (stage E), from the bus wires alone.
+reg              f_rq_rd = 1'b0, f_rq_wr = 1'b0;
+reg [ADDR_W-1:0] f_rq_addr = {ADDR_W{1'b0}};
+reg [DATA_W-1:0] f_rq_wdata = {DATA_W{1'b0}};
+always @(posedge clk_i) begin
+    f_rq_rd <= !rst_i && reg_rd_i && !reg_wr_i;
+    f_rq_wr <= !rst_i && reg_wr_i && !reg_rd_i;
+    f_rq_addr <= reg_addr_i;
+    f_rq_wdata <= reg_wdata_i;
+end
+// The frozen bank is latched by a read of SNAP_SEQ or by the link consuming the window.
+// (In the very first cycle, during the reset, the request register still holds its power-up value,
+// which the reference cannot know: there it follows the design.)
+wire f_latch = (f_rq_rd && f_rq_addr == `OMNILOC_REG_SNAP_SEQ) || win_consumed_i
+            || (!f_past_valid && latch_snapshot);
+// What the snapshot must hold: the live bank of one latch edge.
+reg [DATA_W-1:0]    f_s_seq = {DATA_W{1'b0}}, f_s_ts = {DATA_W{1'b0}};
+reg [CH*DATA_W-1:0] f_s_count = {CH*DATA_W{1'b0}}, f_s_pos = {CH*DATA_W{1'b0}};
+reg [DIR_W-1:0]     f_s_dir = {DIR_W{1'b0}};
+reg [BYTE_W-1:0]    f_s_status = {BYTE_W{1'b0}};
+// A window captured and not yet latched; the timestamp of the last capture.
+reg                 f_pending = 1'b0;
+reg [DATA_W-1:0]    f_win_ts = {DATA_W{1'b0}};
+always @(posedge clk_i) begin
+    if (f_latch) begin
+        f_s_seq <= seq_q;
+        f_s_ts <= win_ts_q;
+        f_s_count <= win_count_i;
+        f_s_pos <= win_position_i;
+        f_s_dir <= win_dir_i;
+        f_s_status <= win_status_q;
+    end
+    if (rst_i) begin
+        f_pending <= 1'b0;
+        f_win_ts <= {DATA_W{1'b0}};
+    end else begin
+        if (capture_i) f_pending <= 1'b1;
+        else if (f_latch) f_pending <= 1'b0;
+        if (capture_i) f_win_ts <= timestamp_i;
+    end
+end
+// OVERRUN must be set exactly by a capture while the previous window is still pending.
+wire f_overrun = capture_i && f_pending && !f_latch;
+reg [ST_W-1:0] f_set;
+always @(*) begin
+    f_set = {ST_W{1'b0}};
+    f_set[ILL_LSB +: ILL_W] = illegal_i;
+    f_set[OVR_BIT] = f_overrun;
+    f_set[BAD_BIT] = refused;
+end
+wire [ST_W-1:0] f_clr = (f_rq_wr && f_rq_addr == `OMNILOC_REG_STATUS) ? f_rq_wdata[ST_W-1:0] : {ST_W{1'b0}};
+
+// The word each readable address must return, at the edge the read takes effect.
+reg [DATA_W-1:0] f_word;
+always @(*) begin
+    f_word = {DATA_W{1'b0}};
+    case (f_rq_addr)
+        `OMNILOC_REG_ID: f_word = `OMNILOC_ID;
+        `OMNILOC_REG_VERSION: f_word = `OMNILOC_VERSION;
+        `OMNILOC_REG_CONTROL: begin
+            f_word[`OMNILOC_CONTROL_ENABLE_LSB] = enable_q;
+            f_word[DEC_LSB +: DEC_W] = decode_q;
+            f_word[`OMNILOC_CONTROL_STREAM_LSB] = stream_q;
+        end
+        `OMNILOC_REG_FILTER: f_word[FLT_W-1:0] = filter_q;
+        `OMNILOC_REG_PERIOD: f_word = period_q;
+        `OMNILOC_REG_STATUS: f_word[ST_W-1:0] = status_q;
+        `OMNILOC_REG_TIMESTAMP: f_word = timestamp_i;
+        `OMNILOC_REG_SNAP_SEQ: f_word = seq_q;
+        `OMNILOC_REG_SNAP_TIMESTAMP: f_word = f_s_ts;
+        `OMNILOC_REG_SNAP_DIR: f_word[DIR_W-1:0] = f_s_dir;
+        `OMNILOC_REG_SNAP_STATUS: f_word[BYTE_W-1:0] = f_s_status;
+        `OMNILOC_REG_SNAP_COUNT0: f_word = f_s_count[31:0];
+        `OMNILOC_REG_SNAP_COUNT1: f_word = f_s_count[63:32];
+        `OMNILOC_REG_SNAP_COUNT2: f_word = f_s_count[95:64];
+        `OMNILOC_REG_SNAP_COUNT3: f_word = f_s_count[127:96];
+        `OMNILOC_REG_SNAP_POSITION0: f_word = f_s_pos[31:0];
+        `OMNILOC_REG_SNAP_POSITION1: f_word = f_s_pos[63:32];
+        `OMNILOC_REG_SNAP_POSITION2: f_word = f_s_pos[95:64];
+        `OMNILOC_REG_SNAP_POSITION3: f_word = f_s_pos[127:96];
+        `OMNILOC_REG_ERROR_COUNT0: f_word = err_count_i[31:0];
+        `OMNILOC_REG_ERROR_COUNT1: f_word = err_count_i[63:32];
+        `OMNILOC_REG_ERROR_COUNT2: f_word = err_count_i[95:64];
+        `OMNILOC_REG_ERROR_COUNT3: f_word = err_count_i[127:96];
+        default: f_word = {DATA_W{1'b0}};
+    endcase
+end
+wire f_known = `OMNILOC_ADDR_KNOWN(f_rq_addr) && (f_rq_addr != `OMNILOC_REG_LINK_ERRORS);
+// ... carried to the answer two edges later.
+reg              f_rd1 = 1'b0, f_rd2 = 1'b0;
+reg [DATA_W-1:0] f_exp1 = {DATA_W{1'b0}}, f_exp2 = {DATA_W{1'b0}};
+reg [ADDR_W-1:0] f_addr1 = {ADDR_W{1'b0}}, f_addr2 = {ADDR_W{1'b0}};
+always @(posedge clk_i) begin
+    f_rd1 <= !rst_i && f_rq_rd && f_known;
+    f_rd2 <= !rst_i && f_rd1;
+    f_exp1 <= f_word;
+    f_exp2 <= f_exp1;
+    f_addr1 <= f_rq_addr;
+    f_addr2 <= f_addr1;
+end
+
+// The body of the frozen bank in the WINDOW layout, from the shadows.
+reg [8*BODY_BYTES-1:0] f_body;
+always @(*) begin
+    f_body = {8*BODY_BYTES{1'b0}};
+    f_body[W_SEQ +: DATA_W] = f_s_seq;
+    f_body[W_TS +: DATA_W] = f_s_ts;
+    f_body[W_COUNT +: CH*DATA_W] = f_s_count;
+    f_body[W_DIR +: DIR_W] = f_s_dir;
+    f_body[W_STAT +: BYTE_W] = f_s_status;
+end
+
+always @(*) begin
+    // The pipeline registers are what the reference says (auxiliary invariants for the induction;
+    // also in a reset cycle, when a request still in the pipeline may latch the bank).
+    if (f_past_valid) begin
+        assert (rq_rd == f_rq_rd && rq_wr == f_rq_wr);
+        assert (rq_snap_seq == (f_rq_addr == `OMNILOC_REG_SNAP_SEQ));
+        assert (rq_status == (f_rq_addr == `OMNILOC_REG_STATUS));
+        assert (rq_known == f_known && rq_wdata == f_rq_wdata);
+        assert (rq_word == f_rq_addr[MUX_LO+MUX_HI-1:0]);
+        assert (rd_e == f_rd1);
+        if (rd_e) assert (grp_sel_q == f_addr1[MUX_LO +: MUX_HI] && grp_q[grp_sel_q] == f_exp1);
+        // Snapshot coherence: every field of the frozen bank is from the same latch edge.
+        assert (fz_body_q == f_body);
+        assert (fz_pos_q == f_s_pos);
+        // The bank read out byte by byte.
+        assert (bank_byte_o == ((bank_idx_i < LAST_IDX) ? f_body[8*bank_idx_i +: 8] : 8'd0));
+        // OVERRUN bookkeeping and the window timestamp: the time of the capture.
+        assert (pending_q == f_pending);
+        assert (win_ts_q == f_win_ts);
+        assert (win_timestamp_o == f_win_ts);
+        // The read answer: the register of the address read, 0 for anything else.
+        if (reg_ack_q) assert (reg_rdata_q == (f_rd2 ? f_exp2 : {DATA_W{1'b0}}));
+    end
+end
+
+always @(posedge clk_i) begin
+    if (f_past_valid && !$past(rst_i) && !rst_i) begin
+        // STATUS exactly: the flags of the cycle set, a write of ones clears (set wins).
+        assert (status_q == (($past(status_q) & ~$past(f_clr)) | $past(f_set)));
+        if ($past(f_overrun)) assert (status_q[OVR_BIT]);
+    end
+end
+
+// Each property reachable.
+always @(posedge clk_i) begin
+    if (f_past_valid && !$past(rst_i) && !rst_i) begin
+        cover (reg_ack_q && f_rd2 && f_addr2 == `OMNILOC_REG_SNAP_COUNT1 && reg_rdata_q != f_s_count[31:0]);
+        cover (reg_ack_q && f_rd2 && f_addr2 == `OMNILOC_REG_SNAP_TIMESTAMP && reg_rdata_q != 0);
+        cover (status_q[OVR_BIT] && !$past(status_q[OVR_BIT]));
+        cover ($past(status_q[OVR_BIT]) && !status_q[OVR_BIT]);
+        cover ($past(capture_i && f_pending && f_latch) && !status_q[OVR_BIT]);
+        cover (bank_idx_i == 8'd12 && bank_byte_o != 8'd0);
+        cover (win_ts_q != 0 && f_s_ts == win_ts_q);
+    end
+end
 `endif
 
 endmodule
