@@ -224,6 +224,14 @@ module frame_rx #(
             end
         end
     end
+
+    // Each property reachable: a request served, an error event raised.
+    always @(posedge clk_i) begin
+        if (f_past_valid && !$past(rst_i) && !rst_i) begin
+            cover (ev_valid_o && !ev_error_o && ev_code_o == `OMNILOC_FRAME_SNAPSHOT_REQ);
+            cover (ev_valid_o && ev_error_o && ev_code_o == `OMNILOC_ERR_MALFORMED);
+        end
+    end
 `endif
 
 endmodule

@@ -131,6 +131,13 @@ module frame_tx #(
             assert(left_q <= MAX_BODY_BYTES);
         end
     end
+
+// Each property reachable: a frame with a body of two bytes sent to its last CRC byte.
+always @(posedge clk_i) begin
+    if (f_past_valid && !$past(rst_i) && !rst_i) begin
+        cover (state_q == S_IDLE && $past(state_q) == S_CRC_LO && len_q == 8'd3);
+    end
+end
 `endif
 
 endmodule

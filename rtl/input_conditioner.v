@@ -149,6 +149,17 @@ always @(posedge clk_i) begin
             assert (out_q == $past(sync2_q));
     end
 end
+
+// Each property reachable: a level passing the filter of length 3, a glitch of 2 cycles held back
+// by it, a level passing with the filter off.
+always @(posedge clk_i) begin
+    if (f_past_valid && !$past(rst_i) && !rst_i && $past(prime_q[2])) begin
+        cover (out_q != $past(out_q) && $past(len_i) == 3);
+        cover ($past(len_i) == 3 && $past(f_held) == 2 && $past(sync1_q) != $past(sync2_q)
+               && $past(differs) && out_q == $past(out_q));
+        cover (out_q != $past(out_q) && $past(len_i) == 0);
+    end
+end
 `endif
 
 endmodule

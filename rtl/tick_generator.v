@@ -142,6 +142,16 @@ always @(posedge clk_i) begin
         assert (timestamp_q == $past(timestamp_q) + 32'd1);
     end
 end
+
+// Each property reachable: a window of the shortest and one of the longest period, a period
+// change taking effect at a tick.
+always @(posedge clk_i) begin
+    if (f_past_valid && !$past(rst_i) && !rst_i) begin
+        cover (tick_q && f_since == 32'd2);
+        cover (tick_q && f_since == 32'd12);
+        cover (tick_q && period_q != $past(period_q));
+    end
+end
 `endif
 
 endmodule

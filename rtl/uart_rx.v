@@ -126,6 +126,14 @@ module uart_rx #(
             assert(div_q <= BIT_LAST);
         end
     end
+
+    // Each property reachable: a byte delivered, a framing error counted.
+    always @(posedge clk_i) begin
+        if (f_past_valid && !$past(rst_i) && !rst_i) begin
+            cover (valid_q && !$past(valid_q));
+            cover (framing_q == {{(FE_W-1){1'b0}}, 1'b1});
+        end
+    end
 `endif
 
 endmodule

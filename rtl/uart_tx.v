@@ -93,6 +93,13 @@ module uart_tx #(
         end
         if (f_past_valid && $past(rst_i)) assert(tx_q && !busy_q);
     end
+
+// Each property reachable: a byte sent to its stop bit and the transmitter free again.
+always @(posedge clk_i) begin
+    if (f_past_valid && !$past(rst_i) && !rst_i) begin
+        cover (!busy_q && $past(busy_q));
+    end
+end
 `endif
 
 endmodule
