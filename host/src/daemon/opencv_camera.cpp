@@ -71,12 +71,15 @@ void OpenCvCamera::run() {
       if (file_times) {
         if (first_pos_ms < 0.0) {
           first_pos_ms = pos_ms;
+          first_daemon_ms = clock_.now_ms();  // read before the steady clock: never hand over early
           first_steady = Steady::now();
-          first_daemon_ms = clock_.now_ms();
         }
         last_pos_ms = pos_ms;
-        std::this_thread::sleep_until(first_steady + std::chrono::duration_cast<Steady::duration>(Ms(pos_ms - first_pos_ms)));
         f.t_ms = first_daemon_ms + (pos_ms - first_pos_ms);
+        std::this_thread::sleep_until(first_steady + std::chrono::duration_cast<Steady::duration>(Ms(pos_ms - first_pos_ms)));
+        // The daemon clock need not tick with the steady one: a frame is handed over no earlier
+        // than it was taken (under a sanitizer the two reads above lie ~0.1 ms apart).
+        while (!stop_ && clock_.now_ms() < f.t_ms) std::this_thread::sleep_for(std::chrono::microseconds(100));
       } else {
         f.t_ms = clock_.now_ms();
       }
