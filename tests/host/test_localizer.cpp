@@ -425,6 +425,57 @@ TEST_F(LocalizerSim, TheSideGivenDecidesTheTwinAtKickOff) {
   }
 }
 
+TEST_F(LocalizerSim, ARelativeGyroAlignedAtTheFirstFixKnowsTheHeadingAfterwards) {
+  // Issue 15.1/15.2: the board's gyro starts at 0, not aligned with the field (trust kRelative).
+  // The first fix (its twin decided by the side) aligns it; a later global search (relocalize)
+  // then runs at the gyro's heading and is not ambiguous. With the wheels' heading (kNone) the same
+  // search stays ambiguous, and a gyro fault (a window of kNone) forgets the alignment.
+  FieldGeometry field = renderer_->field();
+  field.goal.colour_at_x_max = GoalColour::kYellow;
+  const Pose2 truth{250, 200, 30};
+  const cv::Mat img = renderer_->render(truth, sim::RenderOptions{});
+  const double gyro_deg = -40.0;  // what the unaligned gyro reads while the robot faces 30 deg
+  const auto run = [&](HeadingTrust later_trust) {
+    Localizer loc(LocalizerConfig{}, robot_, field, renderer_->camera(), *db_);
+    loc.set_side(GoalColour::kBlue);
+    EncoderWindow w;
+    w.gyro_yaw_deg = gyro_deg;
+    w.heading_trust = HeadingTrust::kRelative;
+    double t = 10.0;
+    const auto window = [&](HeadingTrust trust) {
+      w.t_end_ms = t;
+      w.heading_trust = trust;
+      ++w.seq;
+      t += 10.0;
+      return loc.on_window(w);
+    };
+    (void)window(HeadingTrust::kRelative);
+    EXPECT_FALSE(loc.heading_known());
+    const FrameReport first = loc.on_image(t - 15.0, img);
+    const LocalizedPose p = window(HeadingTrust::kRelative);
+    EXPECT_EQ(first.outcome, FrameOutcome::kRelocalized);
+    EXPECT_EQ(loc.stats().decided_by_side, 1);
+    EXPECT_LT(position_error(p, truth), 3.0);
+    EXPECT_LT(std::abs(angle_diff_deg(p.pose.yaw_deg, truth.yaw_deg)), 2.0);
+    EXPECT_TRUE(loc.heading_known());
+    (void)window(later_trust);
+    loc.force_global_search();
+    const FrameReport again = loc.on_image(t - 15.0, img);
+    const LocalizedPose q = window(later_trust);
+    std::printf("later trust %s: %s, pose (%.1f, %.1f, %.1f), heading known %d, decided by side %d\n",
+                heading_trust_name(later_trust), frame_outcome_name(again.outcome), q.pose.x_cm, q.pose.y_cm,
+                q.pose.yaw_deg, loc.heading_known(), loc.stats().decided_by_side);
+    return std::make_pair(again, q);
+  };
+  const auto [gyro_report, gyro_pose] = run(HeadingTrust::kRelative);
+  EXPECT_TRUE(gyro_report.global);
+  EXPECT_EQ(gyro_report.outcome, FrameOutcome::kRelocalized);  // at the gyro heading: no twin
+  EXPECT_LT(position_error(gyro_pose, truth), 3.0);
+  const auto [wheel_report, wheel_pose] = run(HeadingTrust::kNone);  // e.g. a gyro fault
+  EXPECT_EQ(wheel_report.outcome, FrameOutcome::kAmbiguous);
+  EXPECT_EQ(wheel_pose.source, PoseSource::kLost);
+}
+
 TEST_F(LocalizerSim, WindowsMustMoveForwardInTime) {
   Localizer loc(LocalizerConfig{}, robot_, renderer_->field(), renderer_->camera(), *db_, Pose2{300, 275, 0});
   EncoderWindow w;

@@ -18,6 +18,16 @@
 namespace omniloc {
 namespace {
 
+/// One window: seq, end time, counts, gyro yaw (the rest as a board without a gyro gives it).
+EncoderWindow win(std::uint32_t seq, double t_end_ms, const std::array<std::int32_t, 4>& counts, double gyro_yaw_deg) {
+  EncoderWindow w;
+  w.seq = seq;
+  w.t_end_ms = t_end_ms;
+  w.counts = counts;
+  w.gyro_yaw_deg = gyro_yaw_deg;
+  return w;
+}
+
 const double kS = std::sin(deg_to_rad(45.0));
 
 // Rim travel (cm) of each wheel for a body-frame motion (cm, cm, rad), from the wheel geometry.
@@ -96,7 +106,7 @@ TEST(Odometry, ForwardWindowMovesForwardInTheFieldFrame) {
   Odometry odo(r);
   odo.reset({100.0, 200.0, 90.0});
   // 1.5 cm forward in 10 ms at heading 90: the field y grows by 1.5.
-  const auto& e = odo.update({0, 10.0, counts_for(r, 1.5, 0.0, 0.0), 90.0});
+  const auto& e = odo.update(win(0, 10.0, counts_for(r, 1.5, 0.0, 0.0), 90.0));
   EXPECT_NEAR(e.pose.x_cm, 100.0, 1e-3);
   EXPECT_NEAR(e.pose.y_cm, 201.5, 1e-3);
   EXPECT_DOUBLE_EQ(e.pose.yaw_deg, 90.0);
@@ -113,7 +123,7 @@ TEST(Odometry, DiagonalWindowAt30Degrees) {
     const RobotConfig r = robot_at(tm);
     Odometry odo(r);
     odo.reset({10.0, 20.0, 0.0});
-    const auto& e = odo.update({0, 10.0, counts_for(r, 0.6, 0.8, 0.0), 0.0});
+    const auto& e = odo.update(win(0, 10.0, counts_for(r, 0.6, 0.8, 0.0), 0.0));
     EXPECT_NEAR(e.pose.x_cm, 10.6, 2e-3);
     EXPECT_NEAR(e.pose.y_cm, 20.8, 2e-3);
     EXPECT_NEAR(e.speed_cm_per_s, 100.0, 0.2);
@@ -134,7 +144,7 @@ TEST(Odometry, MidWindowHeadingGivesTheExactChord) {
   const Eigen::Vector2d expect = robot_to_field(chord_body, 30.0);
   Odometry odo(r);
   odo.reset({0.0, 0.0, 30.0});
-  const auto& e = odo.update({0, 10.0, counts_for(r, v.x() * t, v.y() * t, a), 30.0 + rad_to_deg(a)});
+  const auto& e = odo.update(win(0, 10.0, counts_for(r, v.x() * t, v.y() * t, a), 30.0 + rad_to_deg(a)));
   EXPECT_NEAR(e.pose.x_cm, expect.x(), 2e-3);
   EXPECT_NEAR(e.pose.y_cm, expect.y(), 2e-3);
   EXPECT_NEAR(e.wheel_yaw_deg, 30.0 + 1.2, 2e-3);
@@ -147,30 +157,30 @@ TEST(Odometry, TimeComesFromWindowTimestamps) {
   const RobotConfig r;
   Odometry odo(r);
   odo.reset({0.0, 0.0, 0.0});
-  (void)odo.update({0, 10.0, counts_for(r, 1.0, 0.0, 0.0), 0.0});
-  const auto& e = odo.update({1, 18.0, counts_for(r, 1.0, 0.0, 0.0), 0.0});  // an 8 ms window
+  (void)odo.update(win(0, 10.0, counts_for(r, 1.0, 0.0, 0.0), 0.0));
+  const auto& e = odo.update(win(1, 18.0, counts_for(r, 1.0, 0.0, 0.0), 0.0));  // an 8 ms window
   EXPECT_NEAR(e.speed_cm_per_s, 125.0, 0.1);
   try {
-    (void)odo.update({2, 18.0, counts_for(r, 1.0, 0.0, 0.0), 0.0});
+    (void)odo.update(win(2, 18.0, counts_for(r, 1.0, 0.0, 0.0), 0.0));
     FAIL() << "no throw";
   } catch (const std::invalid_argument& err) {
     EXPECT_NE(std::string(err.what()).find("seq 2"), std::string::npos) << err.what();
   }
-  EXPECT_THROW((void)odo.update({3, NAN, {}, 0.0}), std::invalid_argument);
+  EXPECT_THROW((void)odo.update(win(3, NAN, {}, 0.0)), std::invalid_argument);
 }
 
 TEST(Odometry, GyroWrapAndOriginReset) {
   const RobotConfig r;
   Odometry odo(r);
   odo.reset({0.0, 0.0, 179.0});
-  (void)odo.update({0, 10.0, counts_for(r, 0.0, 0.0, deg_to_rad(2.0)), -179.0});  // across +-180
+  (void)odo.update(win(0, 10.0, counts_for(r, 0.0, 0.0, deg_to_rad(2.0)), -179.0));  // across +-180
   EXPECT_NEAR(odo.estimate().pose.yaw_deg, -179.0, 1e-9);
   EXPECT_NEAR(odo.estimate().yaw_rate_deg_per_s, 200.0, 1e-6);
   // The gyro reads -179 but the image says the robot faces 10 deg at (50, 60): yaw follows.
   odo.reset({50.0, 60.0, 10.0}, 2.0, 0.5);
   EXPECT_DOUBLE_EQ(odo.estimate().sigma_xy_cm, 2.0);
   EXPECT_DOUBLE_EQ(odo.estimate().distance_cm, 0.0);
-  const auto& e = odo.update({1, 20.0, counts_for(r, 1.0, 0.0, deg_to_rad(1.0)), -178.0});
+  const auto& e = odo.update(win(1, 20.0, counts_for(r, 1.0, 0.0, deg_to_rad(1.0)), -178.0));
   EXPECT_NEAR(e.pose.yaw_deg, 11.0, 1e-9);
   EXPECT_NEAR(e.pose.x_cm, 50.0 + std::cos(deg_to_rad(10.5)), 2e-3);
   EXPECT_NEAR(e.pose.y_cm, 60.0 + std::sin(deg_to_rad(10.5)), 2e-3);
@@ -187,8 +197,8 @@ TEST(Odometry, UncertaintyGrowsWithDistanceAndMoreWithSlip) {
     const auto c = counts_for(r, 1.0, 0.0, 0.0);
     auto s = c;
     if (k >= 50 && k < 55) s[1] += 600;  // ~0.5 cm of spin on wheel 2
-    const auto& e = clean.update({k, 10.0 * (k + 1), c, 0.0});
-    (void)slipping.update({k, 10.0 * (k + 1), s, 0.0});
+    const auto& e = clean.update(win(k, 10.0 * (k + 1), c, 0.0));
+    (void)slipping.update(win(k, 10.0 * (k + 1), s, 0.0));
     EXPECT_GT(e.sigma_xy_cm, prev);
     prev = e.sigma_xy_cm;
   }
@@ -209,7 +219,7 @@ TEST(Odometry, SlipIsIsolatedToTheRightWheelAndRejected) {
       auto c = counts_for(r, 0.8, 0.6, 0.0);
       const bool slip = k == 12;
       if (slip) c[static_cast<std::size_t>(wheel - 1)] += static_cast<std::int32_t>(std::lround((wheel % 2 ? -0.4 : 0.4) / cm_per_count(r)));
-      const auto& e = odo.update({k, 10.0 * (k + 1), c, 0.0});
+      const auto& e = odo.update(win(k, 10.0 * (k + 1), c, 0.0));
       EXPECT_EQ(e.slip.detected, slip);
       if (slip) {
         EXPECT_EQ(e.slip.wheel, wheel);
@@ -226,7 +236,7 @@ TEST(PaperOdometry, PureTranslationCancelsInEquation13) {
   const RobotConfig r;
   PaperOdometry p(r);
   p.reset({100.0, 100.0, 0.0});
-  (void)p.update({0, 10.0, counts_for(r, 1.0, 0.0, 0.0), 0.0});
+  (void)p.update(win(0, 10.0, counts_for(r, 1.0, 0.0, 0.0), 0.0));
   EXPECT_NEAR(p.estimate().pose.x_cm, 100.0, 1e-9);
   EXPECT_NEAR(p.estimate().pose.y_cm, 100.0, 1e-9);
 }
@@ -240,7 +250,7 @@ TEST(PaperOdometry, RotationInPlaceMovesTheRobot) {
   p.reset({100.0, 100.0, 0.0});
   const double th = deg_to_rad(1.0);
   const auto c = counts_for(r, 0.0, 0.0, th);
-  (void)p.update({0, 10.0, c, 1.0});
+  (void)p.update(win(0, 10.0, c, 1.0));
   const double d_i = c[0] * cm_per_count(r);  // eq. (10) with T = 0.01 s
   const double len = std::sqrt(2.0) * 2.0 * kS * (d_i - 20.0 * th / 2.0);
   EXPECT_NEAR(p.estimate().pose.x_cm, 100.0 + len * std::cos(deg_to_rad(46.0)), 1e-9);
@@ -255,7 +265,7 @@ TEST(PaperOdometry, Equation10UsesTheNominalPeriod) {
   PaperOdometry p(r);
   p.reset({0.0, 0.0, 0.0});
   const double th = deg_to_rad(1.0);
-  (void)p.update({0, 8.0, counts_for(r, 0.0, 0.0, th), 1.0});
+  (void)p.update(win(0, 8.0, counts_for(r, 0.0, 0.0, th), 1.0));
   const double d_i = counts_for(r, 0.0, 0.0, th)[0] * cm_per_count(r) * 0.8;
   EXPECT_NEAR(std::hypot(p.estimate().pose.x_cm, p.estimate().pose.y_cm), 2.0 * (d_i - 20.0 * th / 2.0), 1e-9);
 }

@@ -8,6 +8,7 @@
 #include "commands.hpp"
 #include "omniloc/cache_dir.hpp"
 #include "omniloc/field.hpp"
+#include "omniloc/gyro_heading.hpp"
 #include "omniloc/localizer.hpp"
 #include "omniloc/recording.hpp"
 
@@ -18,6 +19,7 @@ namespace {
 struct ReplayArgs {
   std::string dir, out, db_path, config_name = "default";
   bool paper = false;
+  std::string heading = "recorded", side = "unknown";
 };
 
 void print_summary(const char* what, const char* unit, const ErrorSummary& s) {
@@ -43,10 +45,23 @@ int run_replay(const ReplayArgs& a) {
                                                 [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); });
   std::fprintf(stderr, "replaying %s: %zu windows, %zu frames%s, %s mode\n", dir.c_str(), rec.windows.size(),
                rec.frames.size(), rec.truth.empty() ? "" : ", with truth", paper ? "paper" : "full");
-  const ReplayResult r = replay_recording(rec, config, field, db, [](std::size_t done, std::size_t total) {
-    std::fprintf(stderr, "\r  %zu / %zu events (%3.0f%%)", done, total, 100.0 * static_cast<double>(done) / static_cast<double>(total));
-    if (done == total) std::fprintf(stderr, "\n");
-  });
+  ReplaySettings settings;
+  if (a.heading != "recorded") settings.heading = parse_heading_trust(a.heading);
+  if (a.side != "unknown") settings.side = a.side == "blue" ? GoalColour::kBlue : GoalColour::kYellow;
+  ReplayResult r;
+  try {
+    r = replay_recording(
+        rec, config, field, db,
+        [](std::size_t done, std::size_t total) {
+          std::fprintf(stderr, "\r  %zu / %zu events (%3.0f%%)", done, total,
+                       100.0 * static_cast<double>(done) / static_cast<double>(total));
+          if (done == total) std::fprintf(stderr, "\n");
+        },
+        settings);
+  } catch (const std::invalid_argument& e) {  // a side the field cannot place
+    std::fprintf(stderr, "omniloc replay: %s\n", e.what());
+    return 2;
+  }
   PosesCsvWriter writer(out);
   for (const LocalizedPose& p : r.poses) writer.write(p);
   writer.close();
@@ -56,6 +71,12 @@ int run_replay(const ReplayArgs& a) {
               "relocalizations %d, lost events %d, origin resets %d; poses without a fix %zu\n",
               s.frames, s.accepted, s.rejected, s.ambiguous, s.dropped, s.global_searches, s.relocalizations,
               s.lost_events, s.origin_resets, r.poses_without_fix);
+  if (r.time_to_first_fix_ms) {
+    std::printf("first fix %.2f s after the first window; decided by the side %d time(s)\n", *r.time_to_first_fix_ms / 1000.0,
+                s.decided_by_side);
+  } else {
+    std::printf("no fix in the whole recording\n");
+  }
   if (r.position_error_cm) {
     print_summary("position error", "cm", *r.position_error_cm);
     print_summary("yaw error", "deg", *r.yaw_error_deg);
@@ -80,6 +101,15 @@ Subcommand add_replay(CLI::App& program) {
   app->add_option("--config", a->config_name, "localizer config, name in common/localizer/ or path")
       ->capture_default_str();
   app->add_flag("--paper", a->paper, "the paper's algorithm exactly (no refinement, no lost detection)");
+  app->add_option("--heading", a->heading,
+                  "how far the windows' heading is trusted: recorded (each window's own, heading.csv; absolute\n"
+                  "without one), absolute (aligned with the field), relative (a gyro, aligned at the first fix),\n"
+                  "none (the wheels: every heading tried)")
+      ->check(CLI::IsMember({"recorded", "absolute", "relative", "none"}))
+      ->capture_default_str();
+  app->add_option("--side", a->side, "the goal the team defends, as omnilocd's `side` key: decides the first fix's twin")
+      ->check(CLI::IsMember({"unknown", "blue", "yellow"}))
+      ->capture_default_str();
   return {app, [a] { return run_replay(*a); }};
 }
 

@@ -30,14 +30,15 @@ int run(const omniloc::daemon::DaemonConfig& config, const omniloc::Logger& log)
   const DaemonModels models = load_models(config, say);
 
   SteadyClock wall;
-  WheelYawHeading wheel_yaw(models.robot);
+  // The board's gyro when its windows carry one, else the wheels' rotation (gyro_heading.hpp).
+  GyroHeading heading(models.robot, GyroScale::of_board());
   DaemonIo io;
   io.logger = log;
   io.clock = &wall;
   UsbTransportOptions usb;
   usb.serial = config.board_serial;
   io.open_board = [usb]() -> std::unique_ptr<Transport> { return std::make_unique<UsbTransport>(usb); };
-  io.heading = &wheel_yaw;
+  io.heading = &heading;
   std::unique_ptr<FrameSource> camera;
   if (config.camera != "none") camera = std::make_unique<OpenCvCamera>(config.camera, config.camera_fps, wall);
   io.camera = camera.get();

@@ -22,6 +22,7 @@
 #include "omniloc/daemon_publish.hpp"
 #include "omniloc/feature_db.hpp"
 #include "omniloc/field.hpp"
+#include "omniloc/gyro_heading.hpp"
 #include "omniloc/localizer.hpp"
 #include "omniloc/log.hpp"
 #include "omniloc/odometry.hpp"
@@ -71,29 +72,11 @@ class FrameSource {
   [[nodiscard]] virtual std::string describe() const = 0;
 };
 
-/// What the board's windows lack: a heading reference (the board has no gyro yet).
-class HeadingSource {
- public:
-  virtual ~HeadingSource() = default;
-  /// The gyro's integrated field-frame yaw at the end of `window` (its counts are filled in).
-  [[nodiscard]] virtual double gyro_yaw_deg(const EncoderWindow& window) = 0;
-  /// True if gyro_yaw_deg is an absolute heading (a gyro aligned at kick-off), false if it only
-  /// follows the wheels (the localizer then recovers without trusting it).
-  [[nodiscard]] virtual bool is_absolute() const = 0;
-};
-
-/// Without a gyro: the heading integrated from the wheels (eq. (9) least squares), starting at 0.
-class WheelYawHeading final : public HeadingSource {
- public:
-  explicit WheelYawHeading(const RobotConfig& robot);
-  double gyro_yaw_deg(const EncoderWindow& window) override;
-  [[nodiscard]] bool is_absolute() const override { return false; }
-
- private:
-  RobotConfig robot_;
-  Eigen::Matrix<double, 3, 4> pinv_;
-  double yaw_deg_ = 0.0;
-};
+/// The windows' heading (gyro_heading.hpp): GyroHeading on a real board, the simulator's gyro in
+/// the simulated robot.
+using omniloc::GyroHeading;
+using omniloc::HeadingSource;
+using omniloc::WheelYawHeading;
 
 /// Opens the board's byte pipe; throws TransportError (kNotFound / kDeviceGone / kConfig) when it
 /// is not there.
@@ -157,7 +140,7 @@ struct DaemonIo {
   DaemonClock* clock = nullptr;        ///< required
   TransportFactory open_board;         ///< required
   FrameSource* camera = nullptr;       ///< null: no camera (odometry only)
-  HeadingSource* heading = nullptr;    ///< required (WheelYawHeading when there is no gyro)
+  HeadingSource* heading = nullptr;    ///< required (GyroHeading: the board's gyro, else the wheels)
   DaemonObserver observer;             ///< optional
   Logger logger;                       ///< status lines and events (default: info and above to stderr)
 };

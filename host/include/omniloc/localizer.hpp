@@ -199,6 +199,7 @@ struct LocalizerStats {
   int lost_events = 0;
   int yaw_corrections = 0;
   int decided_by_side = 0;  ///< ambiguous global results decided by the kick-off rule (set_side)
+  int heading_alignments_dropped = 0;  ///< a relative gyro's alignment forgotten after failed searches
 };
 
 class Localizer {
@@ -243,6 +244,11 @@ class Localizer {
   /// std::invalid_argument when neither the field nor the camera's vision block says which goal is
   /// which colour (goal_colour_at_x_max), or for GoalColour::kUnknown.
   void set_side(GoalColour defended);
+  /// How far the windows' heading is trusted now (the last window's heading_trust, docs/LOCALIZER.md
+  /// "Heading"); gyro_yaw_known false in the config: always kNone.
+  [[nodiscard]] HeadingTrust heading_trust() const { return trust_; }
+  /// True when a global search now takes the window heading as known.
+  [[nodiscard]] bool heading_known() const;
   /// The side given, if any.
   [[nodiscard]] std::optional<GoalColour> side() const { return side_; }
 
@@ -258,6 +264,13 @@ class Localizer {
   [[nodiscard]] double yaw_drift_deg_per_s() const { return heading_filter_.rate_deg_per_s(); }
 
  private:
+  /// Each window's heading_trust (the daemon's heading source, a replay's recording): kAbsolute:
+  /// global searches use the window heading. kRelative (a working gyro, not aligned with the
+  /// field): every heading is tried until a fix (an unambiguous global result, the kick-off rule of
+  /// set_side, set_pose, a known start pose) aligns it, then the gyro's heading is used as known;
+  /// lost_after_bad_frames failed global searches in a row at that heading forget the alignment.
+  /// kNone (the wheels): every heading is always tried. A drop to kNone forgets the alignment.
+  void set_heading_trust(HeadingTrust trust);
   enum class State { kSearching, kTracking, kLost };
   struct HistoryEntry {
     EncoderWindow window;
@@ -339,6 +352,9 @@ class Localizer {
   MatchOptions match_options_;
   GoalColourModels goal_colours_;
   std::optional<GoalColour> side_;  ///< the defended goal's colour (set_side)
+  HeadingTrust trust_ = HeadingTrust::kAbsolute;  ///< set_heading_trust (gyro_yaw_known false: kNone)
+  bool heading_aligned_ = false;  ///< kRelative: a fix has aligned the gyro with the field since
+  int bad_aligned_searches_ = 0;  ///< failed global searches in a row at the aligned heading
   bool kickoff_pending_ = false;     ///< set_side given and no fix since: the kick-off rule applies
   /// The candidate of an ambiguous global result that the kick-off rule picks, as an accepted
   /// result; nullopt when the rule does not apply or cannot decide.

@@ -16,13 +16,13 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <string>
 
 #include "omniloc/conventions.hpp"
 #include "omniloc/robot_config.hpp"
 
 namespace omniloc {
 
-/// One board window, as in a recording's encoders.csv row (t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg).
 /// What the board's gyroscope measured over one window (regmap.json "frames": the window's gyro
 /// fields), raw: the sum of the part's yaw-rate samples in LSB, how many, and the fault flags.
 /// The scale (LSB per deg/s) and the output rate come from the part's configuration
@@ -34,6 +34,17 @@ struct WindowGyro {
   std::uint8_t flags = 0;       ///< fault kinds seen in this window (0: none); see regmap.json
 };
 
+/// How far a window's gyro_yaw_deg can be trusted, as the heading source says (gyro_heading.hpp):
+///  kAbsolute  aligned with the field from the start (the simulator's gyro; a replay of one);
+///  kRelative  a working gyro, not aligned: once a fix (or the kick-off rule, or set_pose) has
+///             given the field heading, the gyro keeps it and global searches may use it;
+///  kNone      the wheels' own rotation (slip turns it): every global search tries every heading.
+enum class HeadingTrust { kAbsolute, kRelative, kNone };
+[[nodiscard]] const char* heading_trust_name(HeadingTrust trust);  ///< "absolute", "relative", "none"
+/// The inverse of heading_trust_name; nullopt for any other text.
+[[nodiscard]] std::optional<HeadingTrust> parse_heading_trust(const std::string& name);
+
+/// One board window, as in a recording's encoders.csv row (t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg).
 struct EncoderWindow {
   std::uint32_t seq = 0;
   double t_end_ms = 0.0;                 ///< end of the window (board time)
@@ -41,6 +52,7 @@ struct EncoderWindow {
                                          ///< three-wheel robot leaves counts[3] unused (ignored)
   double gyro_yaw_deg = 0.0;             ///< gyro's integrated yaw, field frame, at t_end_ms
   WindowGyro gyro;                       ///< the board's raw gyro window (present only on a v0.2 board)
+  HeadingTrust heading_trust = HeadingTrust::kAbsolute;  ///< how far gyro_yaw_deg can be trusted
 };
 
 /// Per-wheel slip finding for one window.

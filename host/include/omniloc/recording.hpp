@@ -175,6 +175,9 @@ class RecordingWriter {
   RecordingWriter(const RecordingWriter&) = delete;
   RecordingWriter& operator=(const RecordingWriter&) = delete;
 
+  /// The encoders.csv row; and, from the first window whose heading_trust is not kAbsolute or that
+  /// carries a board gyro, a heading.csv row (`t_ms,trust,gyro_sum_lsb,gyro_samples,gyro_flags`,
+  /// samples -1: no gyro) for it and every later window.
   void add_window(const EncoderWindow& window);
   /// Writes frames/NNNNNN.jpg (or .png) and the camera.csv row.
   void add_frame(double t_ms, const cv::Mat& bgr);
@@ -195,7 +198,7 @@ class RecordingWriter {
   std::unique_ptr<CsvFile> encoders_;
   std::unique_ptr<CsvFile> camera_;
   std::unique_ptr<TruthCsvWriter> truth_;
-  std::unique_ptr<CsvFile> clock_, frame_times_;
+  std::unique_ptr<CsvFile> clock_, frame_times_, heading_;
   int frame_count_ = 0;
   std::uint64_t frame_bytes_ = 0;
   std::string failed_;  // the first write error; the writer is unusable after it
@@ -244,13 +247,26 @@ struct ReplayResult {
   std::size_t poses_without_fix = 0;  ///< source "none" (left out of the error figures)
   std::optional<ErrorSummary> position_error_cm;  ///< with truth.csv, over poses that have a fix
   std::optional<ErrorSummary> yaw_error_deg;
+  /// Board time from the first window to the first pose with a fix (nullopt: never fixed; 0 with a
+  /// known start pose).
+  std::optional<double> time_to_first_fix_ms;
+};
+
+/// What a replay may change of the run it replays.
+struct ReplaySettings {
+  /// Every window's heading trust (else each window's own: heading.csv, absolute without one).
+  std::optional<HeadingTrust> heading;
+  /// The team's side (Localizer::set_side), as the daemon's `side` key.
+  std::optional<GoalColour> side;
 };
 
 /// Runs the localizer over a recording: windows and frames merged by time (a frame before the
 /// window that covers it), one pose per window; errors against truth.csv when present.
-/// `progress(done, total)` is called now and then with events processed.
+/// `progress(done, total)` is called now and then with events processed. Throws
+/// std::invalid_argument for a side the field and camera cannot place (Localizer::set_side).
 [[nodiscard]] ReplayResult replay_recording(const Recording& recording, const LocalizerConfig& config,
                                             const FieldGeometry& field, const FeatureDb& db,
-                                            const std::function<void(std::size_t, std::size_t)>& progress = {});
+                                            const std::function<void(std::size_t, std::size_t)>& progress = {},
+                                            const ReplaySettings& settings = {});
 
 }  // namespace omniloc

@@ -65,6 +65,8 @@ struct Daemon::Impl {
   PoseMessage last_message;
   LocalizedPose last_localized;
 
+  std::string heading_described;  ///< io.heading->describe() as last logged
+
   // Status line.
   double next_status_ms = 0.0;
   std::uint64_t windows_at_status = 0, frames_at_status = 0;
@@ -72,9 +74,10 @@ struct Daemon::Impl {
 
   Impl(const DaemonConfig& c, const DaemonModels& m, DaemonIo i)
       : config(c), models(m), io(std::move(i)), publisher(c.udp_address, c.udp_port),
-        localizer(localizer_config(c, m, io), m.robot, m.field, m.camera, m.db, m.initial_pose) {
+        localizer(m.localizer, m.robot, m.field, m.camera, m.db, m.initial_pose) {
     if (!io.clock || !io.open_board || !io.heading)
       throw std::invalid_argument("Daemon: clock, open_board and heading are required");
+    heading_described = io.heading->describe();
     if (config.side != "unknown") {
       try {
         localizer.set_side(config.side == "blue" ? GoalColour::kBlue : GoalColour::kYellow);
@@ -119,12 +122,6 @@ struct Daemon::Impl {
     recorder.reset();
   }
 
-  static LocalizerConfig localizer_config(const DaemonConfig&, const DaemonModels& m, const DaemonIo& io) {
-    LocalizerConfig lc = m.localizer;
-    // Without a real gyro the heading is only the wheels' own: do not trust it to recover.
-    if (io.heading && !io.heading->is_absolute()) lc.gyro_yaw_known = false;
-    return lc;
-  }
 
 
   // A recording that cannot be written (disk full, file size limit) stops; the pose stream goes on.
@@ -246,6 +243,21 @@ struct Daemon::Impl {
 
   double scaled_board_ms(const SessionWindow& w) const { return session_base_ms + w.board_ms; }
 
+  // A change of what the heading comes from (a gyro fault and its end, a board without a gyro)
+  // is an event worth a line of its own.
+  void note_heading() {
+    std::string now = io.heading->describe();
+    if (now == heading_described) return;
+    const bool worse = io.heading->trust() == HeadingTrust::kNone;
+    const std::string line = "heading: " + now + " (was " + heading_described + ")";
+    if (worse) {
+      io.logger.warning(line);
+    } else {
+      io.logger.info(line);
+    }
+    heading_described = std::move(now);
+  }
+
   void on_board_window(const SessionWindow& w, const BoardClockEstimate& clock_at) {
     const double now = io.clock->now_ms();
     last_window_clock_ms = now;
@@ -255,6 +267,10 @@ struct Daemon::Impl {
     if (ew.t_end_ms <= last_window_t_ms) ew.t_end_ms = last_window_t_ms + 1e-3;  // the localizer needs increasing times
     last_window_t_ms = ew.t_end_ms;
     ew.gyro_yaw_deg = io.heading->gyro_yaw_deg(ew);
+    // How far the heading can be trusted is the heading source's to say, window by window: the
+    // wheels never (slip), a working gyro once a fix has aligned it (gyro_heading.hpp).
+    ew.heading_trust = io.heading->trust();
+    note_heading();
     const LocalizedPose lp = localizer.on_window(ew);
     ++report.windows;
     last_localized = lp;
@@ -323,6 +339,7 @@ struct Daemon::Impl {
     if (!record_dir.empty()) s.recording = recorder ? "on" : "stopped";
     s.recording_failures = report.recording_failures;
     std::string line = status_line(s);
+    line += " heading=" + io.heading->status_token() + (localizer.heading_known() ? " heading_known=yes" : " heading_known=no");
     if (board_clock.last().epoch > 0) {  // the board's clock against the daemon's (board_clock.hpp)
       char clk[160];
       const BoardClockEstimate& c = board_clock.last();
@@ -401,7 +418,9 @@ struct Daemon::Impl {
                         {"windows", report.windows},
                         {"frames", report.frames},
                         {"published", publisher.sent()},
-                        {"recording", recorder ? "on" : record_dir.empty() ? "off" : "stopped"}};
+                        {"recording", recorder ? "on" : record_dir.empty() ? "off" : "stopped"},
+                        {"heading", io.heading->describe()},
+                        {"heading_known", localizer.heading_known()}};
     if (!record_dir.empty()) j["record_dir"] = record_dir;
     if (last_message.match_error >= 0) j["match_error"] = last_message.match_error;
     return j;

@@ -1,4 +1,4 @@
-// The daemon's small helpers: the wall clock, the wheel-yaw stand-in for a gyro, model loading.
+// The daemon's small helpers: the wall clock, model loading.
 #include <chrono>
 #include <filesystem>
 #include <thread>
@@ -19,16 +19,6 @@ double SteadyClock::now_ms() { return static_cast<double>(steady_ns() - start_ns
 
 void SteadyClock::wait_ms(double ms) {
   if (ms > 0) std::this_thread::sleep_for(std::chrono::microseconds(static_cast<std::int64_t>(ms * 1000.0)));
-}
-
-WheelYawHeading::WheelYawHeading(const RobotConfig& robot) : robot_(robot), pinv_(wheel_pseudo_inverse(robot)) {}
-
-double WheelYawHeading::gyro_yaw_deg(const EncoderWindow& window) {
-  // The rotation row of eq. (9)'s least-squares inverse: what a gyro would have measured, with the
-  // wheels' slip in it (the reason a real gyro is better).
-  const Eigen::Vector3d motion = least_squares_motion(pinv_, wheel_travel_cm(robot_, window.counts));
-  yaw_deg_ = wrap_deg(yaw_deg_ + rad_to_deg(motion.z()));
-  return yaw_deg_;
 }
 
 DaemonModels load_models(const DaemonConfig& config, const std::function<void(const std::string&)>& progress) {

@@ -45,11 +45,10 @@ void OpenCvCamera::run() {
   using Steady = std::chrono::steady_clock;
   const auto period = std::chrono::duration<double>(1.0 / fps_);
   auto next = Steady::now();
-  // A file's own times: frame k is handed over at first_steady + (pos_k - first_pos), stamped
-  // first_daemon + (pos_k - first_pos). Until a frame shows the file has none (0, not increasing):
-  // then the configured rate paces it and frames are stamped when read.
+  // A file's own times: frame k is stamped and handed over at first_daemon + (pos_k - first_pos),
+  // until a frame shows the file has none (0, not increasing): then the configured rate paces it
+  // and frames are stamped when read.
   bool file_times = is_file_;
-  Steady::time_point first_steady{};
   double first_pos_ms = -1.0, first_daemon_ms = 0.0, last_pos_ms = -1.0;
   while (!stop_) {
     cv::Mat frame;
@@ -71,12 +70,14 @@ void OpenCvCamera::run() {
       if (file_times) {
         if (first_pos_ms < 0.0) {
           first_pos_ms = pos_ms;
-          first_steady = Steady::now();
           first_daemon_ms = clock_.now_ms();
         }
         last_pos_ms = pos_ms;
-        std::this_thread::sleep_until(first_steady + std::chrono::duration_cast<Steady::duration>(Ms(pos_ms - first_pos_ms)));
         f.t_ms = first_daemon_ms + (pos_ms - first_pos_ms);
+        // Waited on the daemon clock itself, so a frame is never handed over before it was taken
+        // (a steady-clock deadline set beside it was 0.08 ms early under a sanitizer).
+        for (double left_ms; !stop_ && (left_ms = f.t_ms - clock_.now_ms()) > 0.0;)
+          std::this_thread::sleep_for(Ms(std::min(left_ms, 20.0)));
       } else {
         f.t_ms = clock_.now_ms();
       }

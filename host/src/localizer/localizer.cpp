@@ -90,7 +90,9 @@ Localizer::Localizer(const LocalizerConfig& config, const RobotConfig& robot, co
     throw std::invalid_argument("Localizer: the feature database was built for another field or camera");
   validate_search_ranges(config_, db.grid, "localizer config");
   match_options_ = match_options_of(config_);
+  if (!config_.gyro_yaw_known) trust_ = HeadingTrust::kNone;
   if (initial_pose) {
+    heading_aligned_ = true;  // a known start pose is a known heading
     odometry_.reset(*initial_pose, 0.0, 0.0);
     state_ = State::kTracking;
     anchor_ = {true, 0.0, *initial_pose, *initial_pose, kNoError};
@@ -188,6 +190,7 @@ LocalizedPose Localizer::on_window(const EncoderWindow& window) {
        << history_.back().window.t_end_ms << " ms)";
     throw std::invalid_argument(os.str());
   }
+  set_heading_trust(window.heading_trust);
   odometry_.update(window);
   history_.push_back({window, odometry_});
   applied_this_window_ = false;
@@ -261,6 +264,8 @@ void Localizer::set_pose(const Pose2& pose, double sigma_xy_cm, double sigma_yaw
   reset_origin_at(t_ms, pose, sigma_xy_cm, sigma_yaw_deg);
   set_anchor(t_ms, pose, kNoError, sigma_xy_cm);
   kickoff_pending_ = false;
+  heading_aligned_ = true;  // the operator's heading: the gyro holds it from here
+  bad_aligned_searches_ = 0;
   state_ = State::kTracking;
   bad_run_ = 0;
   disagree_run_ = 0;
@@ -268,6 +273,19 @@ void Localizer::set_pose(const Pose2& pose, double sigma_xy_cm, double sigma_yaw
   last_pose_.pose = odometry_.estimate().pose;
   last_pose_.sigma_xy_cm = sigma_xy_cm;
   last_pose_.sigma_yaw_deg = sigma_yaw_deg;
+}
+
+void Localizer::set_heading_trust(HeadingTrust trust) {
+  if (!config_.gyro_yaw_known) trust = HeadingTrust::kNone;
+  if (trust == trust_) return;
+  // A heading that was not trusted for a while (a gyro fault: the wheels stood in) has lost the
+  // alignment the last fix gave it.
+  if (trust != HeadingTrust::kRelative) heading_aligned_ = false;
+  trust_ = trust;
+}
+
+bool Localizer::heading_known() const {
+  return trust_ == HeadingTrust::kAbsolute || (trust_ == HeadingTrust::kRelative && heading_aligned_);
 }
 
 void Localizer::set_side(GoalColour defended) {
@@ -376,6 +394,13 @@ void Localizer::search(const Frame& frame, FrameReport& rep) {
   } else {
     rep.outcome = FrameOutcome::kRejected;
     ++stats_.rejected;
+    // The gyro's alignment may be what is wrong (a wrong twin at the first fix): after this many
+    // failures at its heading, try every heading again.
+    if (trust_ == HeadingTrust::kRelative && heading_aligned_ && ++bad_aligned_searches_ >= config_.lost_after_bad_frames) {
+      heading_aligned_ = false;
+      bad_aligned_searches_ = 0;
+      ++stats_.heading_alignments_dropped;
+    }
   }
 }
 
@@ -476,13 +501,16 @@ void Localizer::relocalize(double t_ms, const SingleFrameResult& global, FrameRe
   last_image_ms_ = t_ms;
   ++stats_.relocalizations;
   kickoff_pending_ = false;  // the kick-off rule has served (or was not needed)
+  heading_aligned_ = true;   // a relative gyro holds the fix's heading from here
+  bad_aligned_searches_ = 0;
   rep.outcome = FrameOutcome::kRelocalized;
 }
 
 SingleFrameResult Localizer::global_match(const Frame& frame, FrameReport& rep) {
   ++stats_.global_searches;
   rep.global = true;
-  const std::optional<double> yaw = policy_.search_any_yaw ? std::nullopt : std::optional<double>(frame.scan.yaw_deg);
+  const bool any_yaw = policy_.search_any_yaw || !heading_known();
+  const std::optional<double> yaw = any_yaw ? std::nullopt : std::optional<double>(frame.scan.yaw_deg);
   return locate_frame(config_, field_, camera_, db_, *frame.bearings, yaw, frame.goals, &frame.scan);
 }
 

@@ -18,6 +18,7 @@
 
 #include "omniloc/config_reader.hpp"
 #include "omniloc/file_read.hpp"
+#include "omniloc/gyro_heading.hpp"
 #include "omniloc/strict_number.hpp"
 
 namespace omniloc {
@@ -300,12 +301,52 @@ RecordingMeta read_meta(const fs::path& meta_json) {
   }
 }
 
+namespace {
+
+/// heading.csv (RecordingWriter::add_window) into the windows it belongs to.
+void read_heading_csv(const fs::path& path, std::vector<EncoderWindow>& windows) {
+  std::vector<std::pair<int, EncoderWindow>> rows;  // (line, window with the heading fields)
+  read_csv(path, {"t_ms", "trust", "gyro_sum_lsb", "gyro_samples", "gyro_flags"}, [&](const auto& f, int line) {
+    EncoderWindow w;
+    w.t_end_ms = parse_double(f[0], path, line, "t_ms");
+    const std::optional<HeadingTrust> trust = parse_heading_trust(f[1]);
+    if (!trust) fail_at(path, line, "column 'trust': must be absolute, relative or none (got '" + f[1] + "')");
+    w.heading_trust = *trust;
+    w.gyro.sum_lsb = parse_int(f[2], path, line, "gyro_sum_lsb", std::numeric_limits<std::int64_t>::min(),
+                               std::numeric_limits<std::int64_t>::max());
+    const long long samples = parse_int(f[3], path, line, "gyro_samples", -1, 0xFFFFFFFFLL);  // -1: no gyro
+    w.gyro.present = samples >= 0;
+    w.gyro.samples = w.gyro.present ? static_cast<std::uint32_t>(samples) : 0U;
+    w.gyro.flags = static_cast<std::uint8_t>(parse_int(f[4], path, line, "gyro_flags", 0, 255));
+    rows.emplace_back(line, w);
+  });
+  // The file starts at the first window whose heading was not the default and then has a row for
+  // every window: it lines up with the end of encoders.csv.
+  if (rows.size() > windows.size())
+    fail_at(path, static_cast<int>(windows.size()) + 2,
+            "more rows (" + std::to_string(rows.size()) + ") than encoders.csv has windows (" +
+                std::to_string(windows.size()) + ")");
+  const std::size_t first = windows.size() - rows.size();
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    EncoderWindow& w = windows[first + i];
+    const auto& [line, h] = rows[i];
+    if (std::abs(h.t_end_ms - w.t_end_ms) > 1e-3)
+      fail_at(path, line, "column 't_ms': " + std::to_string(h.t_end_ms) + " is not the time of encoders.csv's window " +
+                              std::to_string(first + i + 1) + " (" + std::to_string(w.t_end_ms) + ")");
+    w.heading_trust = h.heading_trust;
+    w.gyro = h.gyro;
+  }
+}
+
+}  // namespace
+
 Recording load_recording(const fs::path& dir) {
   if (!fs::is_directory(dir)) throw RecordingError(dir.string() + ": not a recording directory");
   Recording r;
   r.dir = dir;
   r.meta = read_meta(dir / "meta.json");
   r.windows = read_encoders_csv(dir / "encoders.csv");
+  if (fs::exists(dir / "heading.csv")) read_heading_csv(dir / "heading.csv", r.windows);
   r.frames = read_camera_csv(dir / "camera.csv");
   for (std::size_t i = 0; i < r.frames.size(); ++i)
     if (!fs::is_regular_file(dir / r.frames[i].file))  // a device there would be read without end
@@ -479,6 +520,16 @@ void RecordingWriter::add_window(const EncoderWindow& w) {
                 w.counts[3], w.gyro_yaw_deg);
   try {
     encoders_->write_row(row);
+    // heading.csv from the first window whose heading is not the simulator's aligned gyro, then
+    // for every window (the reader lines it up with the end of encoders.csv).
+    if (!heading_ && (w.heading_trust != HeadingTrust::kAbsolute || w.gyro.present))
+      heading_ = std::make_unique<CsvFile>(dir_ / "heading.csv", "t_ms,trust,gyro_sum_lsb,gyro_samples,gyro_flags\n");
+    if (heading_) {
+      std::snprintf(row, sizeof row, "%.6f,%s,%lld,%lld,%u\n", w.t_end_ms, heading_trust_name(w.heading_trust),
+                    static_cast<long long>(w.gyro.sum_lsb), w.gyro.present ? static_cast<long long>(w.gyro.samples) : -1LL,
+                    static_cast<unsigned>(w.gyro.flags));
+      heading_->write_row(row);
+    }
   } catch (const RecordingError& e) {
     failed_ = e.what();
     throw;
@@ -547,6 +598,7 @@ void RecordingWriter::close() {
   encoders_->close();
   camera_->close();
   if (clock_) clock_->close();
+  if (heading_) heading_->close();
   if (frame_times_) frame_times_->close();
   if (truth_) truth_->close();
 }

@@ -58,8 +58,10 @@ ErrorSummary summarize_errors(std::vector<double> e) {
 }
 
 ReplayResult replay_recording(const Recording& rec, const LocalizerConfig& config, const FieldGeometry& field,
-                              const FeatureDb& db, const std::function<void(std::size_t, std::size_t)>& progress) {
+                              const FeatureDb& db, const std::function<void(std::size_t, std::size_t)>& progress,
+                              const ReplaySettings& settings) {
   Localizer loc(config, rec.meta.robot, field, rec.meta.camera, db, rec.meta.initial_pose);
+  if (settings.side) loc.set_side(*settings.side);
   ReplayResult out;
   out.poses.reserve(rec.windows.size());
   const std::size_t total = rec.windows.size() + rec.frames.size();
@@ -70,7 +72,11 @@ ReplayResult replay_recording(const Recording& rec, const LocalizerConfig& confi
       (void)loc.on_image(rec.frames[fi].t_ms, load_frame(rec, fi));
       ++fi;
     } else {
-      out.poses.push_back(loc.on_window(rec.windows[wi]));
+      EncoderWindow w = rec.windows[wi];
+      if (settings.heading) w.heading_trust = *settings.heading;
+      out.poses.push_back(loc.on_window(w));
+      if (!out.time_to_first_fix_ms && out.poses.back().source != PoseSource::kNone)
+        out.time_to_first_fix_ms = w.t_end_ms - rec.windows.front().t_end_ms;
       ++wi;
     }
     if (progress && (++done % 200 == 0 || done == total)) progress(done, total);
