@@ -124,9 +124,13 @@ class Runner:
         self.base_secs = {}
 
     def fresh_copy(self):
+        """The copy equal to rtl/, every file written now (shutil.copyfile, not copy2): a file left
+        mutated by an earlier, interrupted run and copied back with rtl/'s older mtime would leave
+        the mutation tree's testbenches, built from the mutated file, looking up to date. The
+        rebuild this costs per run is mostly ccache hits."""
         if os.path.exists(self.copy):
             shutil.rmtree(self.copy)
-        shutil.copytree(RTL, self.copy)
+        shutil.copytree(RTL, self.copy, copy_function=shutil.copyfile)
 
     def write(self, rel, text):
         # rel is rtl/..., the copy is rtl/ itself
