@@ -216,7 +216,7 @@ TEST(FuzzyConfig, ClearErrorsNameTheFieldPath) {
 const std::vector<std::string> kEveryLocalizerKey = {
     "mode", "match_cost", "crossing_cap_px", "e_th", "ambiguity_ratio", "reset_period_ms", "history_ms", "scan_rays_per_degree", "refinement", "min_range_cm",
     "refuse_ambiguous", "image_sigma_cm", "image_sigma_yaw_deg", "lost_after_bad_frames", "check_period_ms",
-    "disagree_min_cm", "disagree_sigmas", "disagree_error_ratio", "disagree_frames", "gyro_yaw_known",
+    "disagree_min_cm", "disagree_sigmas", "disagree_error_ratio", "disagree_frames", "cross_check_worker", "gyro_yaw_known",
     "yaw_correction", "yaw_search_deg", "yaw_gain", "yaw_rate_gain", "yaw_rate_max_deg_per_s", "fuzzy"};
 const std::vector<std::string> kEveryFuzzyKey = {"speed_max_cm_per_s", "speed_terms", "range_max_cm", "range_terms",
                                                  "rules", "resolution_cm", "snap_ranges_cm"};

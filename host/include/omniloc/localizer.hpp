@@ -20,12 +20,15 @@
 //
 // Every global search is locate_frame (locate.hpp), which `omniloc locate` runs on one frame.
 // One class serves omnilocd (live), `omniloc replay` and the demo. Not thread-safe: call it from
-// one thread (scan images elsewhere and pass the BearingScan to on_bearings() if needed).
+// one thread (scan images elsewhere and pass the BearingScan to on_bearings() if needed). It runs
+// the cross-check's global search on a thread of its own (cross_check_worker), on copies of the
+// frame's scan and the const field, camera and database; nothing else is shared.
 #pragma once
 
 #include <cstdint>
 #include <deque>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -79,6 +82,13 @@ struct LocalizerConfig {
   double disagree_sigmas = 4.0;    ///< ... (k) with the global result clearly better ...
   double disagree_error_ratio = 0.7;  ///< ... (global error < ratio * local error) ...
   int disagree_frames = 3;         ///< ... this many frames in a row -> relocalize there
+  /// The cross-check's global search runs on a worker thread, off the frame's path to its pose: it
+  /// is started with the frame it checks and judged when the next frame is processed (waiting for
+  /// it there if it is not done, so the outcome never depends on timing). A disagreement it finds
+  /// makes the next frames' local results untrusted, as the check on the frame itself would; a
+  /// relocalization is applied at the checked frame's time, one frame later. false: the search runs
+  /// inline on the frame that triggers it (the reference for the latency bench).
+  bool cross_check_worker = true;
   bool gyro_yaw_known = true;      ///< false: recover with global_search_any_yaw (no trusted heading)
   // Heading from the image (kFull): a MEMS gyro's bias drifts (tenths of a degree a minute, more
   // after a bad start-up calibration) and over a match the scan would no longer line up with the
@@ -207,6 +217,9 @@ class Localizer {
   /// The references must outlive the localizer (the database is large and shared).
   Localizer(const LocalizerConfig& config, const RobotConfig& robot, const FieldGeometry& field,
             const CameraModel& camera, const FeatureDb& db, std::optional<Pose2> initial_pose = std::nullopt);
+  ~Localizer();  // joins the cross-check worker (cross_check_worker)
+  Localizer(const Localizer&) = delete;
+  Localizer& operator=(const Localizer&) = delete;
 
   /// Integrates one encoder window (times must increase), applies any waiting frames whose time
   /// it covers, and returns the pose at the window's end.
@@ -303,7 +316,15 @@ class Localizer {
     double predicted_sigma_cm = 0.0;
     FieldScan scan;              // the bearings in the field frame at the gyro heading (rotated once)
   };
-  enum class CrossCheck { kNotRun, kAgrees, kContradicts, kRelocalized };
+  enum class CrossCheck { kNotRun, kStarted, kAgrees, kContradicts, kRelocalized };
+  /// What judging a cross-check needs of the frame it checked.
+  struct CheckContext {
+    double t_ms = 0.0;
+    Eigen::Vector2d predicted_cm{0.0, 0.0};
+    double predicted_sigma_cm = 0.0;
+    double local_error = kNoError;
+  };
+  class CheckWorker;  // localizer.cpp: one thread, one job at a time
 
   // --- the steps of one frame (process) ---
   FrameReport process(double t_ms, const BearingScan& bearings, const GoalObservation* goals);
@@ -314,8 +335,14 @@ class Localizer {
   /// accept or reject.
   void track(const Frame& frame, FrameReport& rep);
   /// A global search compared with the tracked result: a consistent, clearly better match far
-  /// from the prediction (a kidnapping) relocalizes there after disagree_frames frames.
+  /// from the prediction (a kidnapping) relocalizes there after disagree_frames frames. With the
+  /// worker the search is only started here (kStarted) and judged by judge_started_check.
   CrossCheck cross_check(const Frame& frame, const MatchResult& local, FrameReport& rep);
+  CrossCheck judge_check(const CheckContext& checked, const SingleFrameResult& global, FrameReport& rep);
+  /// The worker's check of an earlier frame, judged now (before the frame `rep` reports is matched).
+  CrossCheck judge_started_check(FrameReport& rep);
+  /// Forgets a check still running (the pose was set or the time base restarted).
+  void discard_started_check();
   void accept(const Frame& frame, const MatchResult& local, FrameReport& rep);
   void reject(FrameReport& rep);
   void relocalize(double t_ms, const SingleFrameResult& global, FrameReport& rep);
@@ -379,6 +406,8 @@ class Localizer {
   int disagree_run_ = 0;
   Eigen::Vector2d disagree_position_cm_{0.0, 0.0};
   HeadingFilter heading_filter_;
+  std::unique_ptr<CheckWorker> worker_;     ///< cross_check_worker: started on the first check
+  std::optional<CheckContext> started_check_;  ///< a check running on the worker, to be judged
   LocalizedPose last_pose_;
   LocalizerStats stats_;
 };

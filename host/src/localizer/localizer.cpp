@@ -15,13 +15,87 @@
 
 #include <algorithm>
 #include <cmath>
+#include <condition_variable>
+#include <exception>
+#include <functional>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 #include <utility>
 
 #include "omniloc/locate.hpp"
 
 namespace omniloc {
+
+/// One thread that runs one global search at a time for the cross-check (cross_check_worker). The
+/// job holds copies of the frame's scans; locate_frame reads the field, camera and database, which
+/// nothing writes while the localizer lives. start() and wait() alternate (the localizer judges a
+/// check before it starts the next).
+class Localizer::CheckWorker {
+ public:
+  CheckWorker() : thread_([this] { loop(); }) {}
+  ~CheckWorker() {
+    {
+      std::lock_guard lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    thread_.join();
+  }
+  CheckWorker(const CheckWorker&) = delete;
+  CheckWorker& operator=(const CheckWorker&) = delete;
+
+  void start(std::function<SingleFrameResult()> job) {
+    {
+      std::lock_guard lock(mutex_);
+      job_ = std::move(job);
+      result_.reset();
+      error_ = nullptr;
+    }
+    wake_.notify_all();
+  }
+  /// The result of the job started last (rethrowing what it threw).
+  SingleFrameResult wait() {
+    std::unique_lock lock(mutex_);
+    done_.wait(lock, [&] { return result_.has_value() || error_ != nullptr; });
+    if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
+    SingleFrameResult r = std::move(*result_);
+    result_.reset();
+    return r;
+  }
+
+ private:
+  void loop() {
+    std::unique_lock lock(mutex_);
+    for (;;) {
+      wake_.wait(lock, [&] { return stop_ || job_ != nullptr; });
+      if (stop_) return;
+      std::function<SingleFrameResult()> job = std::move(job_);
+      job_ = nullptr;
+      lock.unlock();
+      std::optional<SingleFrameResult> r;
+      std::exception_ptr e;
+      try {
+        r = job();
+      } catch (...) {
+        e = std::current_exception();
+      }
+      lock.lock();
+      result_ = std::move(r);
+      error_ = e;
+      done_.notify_all();
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable wake_, done_;
+  std::function<SingleFrameResult()> job_;
+  std::optional<SingleFrameResult> result_;
+  std::exception_ptr error_;
+  bool stop_ = false;
+  std::thread thread_;  // last: started once the members above exist
+};
 
 namespace {
 
@@ -101,6 +175,8 @@ Localizer::Localizer(const LocalizerConfig& config, const RobotConfig& robot, co
   last_pose_.pose = initial_pose.value_or(Pose2{});
   last_pose_.source = initial_pose ? PoseSource::kIntegrated : PoseSource::kNone;
 }
+
+Localizer::~Localizer() = default;
 
 bool Localizer::covered(double t_ms) const { return !history_.empty() && history_.back().window.t_end_ms >= t_ms; }
 
@@ -246,6 +322,7 @@ FrameReport Localizer::on_bearings(double t_ms, BearingScan bearings, std::optio
 }
 
 void Localizer::resync() {
+  discard_started_check();
   const Pose2 pose = last_pose_.pose;
   const double sigma = last_pose_.sigma_xy_cm;
   odometry_ = Odometry(robot_);
@@ -260,6 +337,7 @@ void Localizer::resync() {
 }
 
 void Localizer::set_pose(const Pose2& pose, double sigma_xy_cm, double sigma_yaw_deg) {
+  discard_started_check();
   const double t_ms = history_.empty() ? 0.0 : history_.back().window.t_end_ms;
   reset_origin_at(t_ms, pose, sigma_xy_cm, sigma_yaw_deg);
   set_anchor(t_ms, pose, kNoError, sigma_xy_cm);
@@ -329,6 +407,7 @@ std::optional<SingleFrameResult> Localizer::choose_by_side(const SingleFrameResu
 }
 
 void Localizer::force_global_search() {
+  discard_started_check();
   if (state_ == State::kTracking) {
     state_ = State::kLost;
     ++stats_.lost_events;
@@ -348,6 +427,9 @@ FrameReport Localizer::process(double t_ms, const BearingScan& bearings, const G
   FrameReport rep;
   rep.t_ms = t_ms;
   ++stats_.frames;
+  // The worker's check of the previous checked frame first: a relocalization it decides moves the
+  // prediction this frame is matched around (and this frame then only reports it).
+  if (started_check_ && judge_started_check(rep) == CrossCheck::kRelocalized) return rep;
   if (trimmed_ && t_ms < history_.front().window.t_end_ms) {
     rep.outcome = FrameOutcome::kDropped;
     ++stats_.dropped;
@@ -416,6 +498,9 @@ void Localizer::track(const Frame& frame, FrameReport& rep) {
   last_range_cm_ = range;
   last_image_ms_ = frame.t_ms;
   bool good = m.error < config_.e_th;
+  // A disagreement found by the worker's check of an earlier frame runs on: the local result is
+  // not trusted until a check agrees again (the inline check refuses the frame it contradicts).
+  if (policy_.cross_check && config_.cross_check_worker && disagree_run_ > 0) good = false;
   if (policy_.cross_check) {
     const CrossCheck check = cross_check(frame, m, rep);
     if (check == CrossCheck::kRelocalized) return;
@@ -435,11 +520,28 @@ Localizer::CrossCheck Localizer::cross_check(const Frame& frame, const MatchResu
   const bool good = local.error < config_.e_th;
   if (good && disagree_run_ == 0 && frame.t_ms - last_check_ms_ < config_.check_period_ms) return CrossCheck::kNotRun;
   last_check_ms_ = frame.t_ms;
-  const SingleFrameResult g = global_match(frame, rep);
-  const Eigen::Vector2d predicted = frame.predicted.position_cm();
-  const double gate = std::max(config_.disagree_min_cm, config_.disagree_sigmas * frame.predicted_sigma_cm);
-  const bool far = (g.match.position_cm - predicted).norm() > gate;
-  const bool better = g.match.error < config_.disagree_error_ratio * local.error;
+  const CheckContext checked{frame.t_ms, frame.predicted.position_cm(), frame.predicted_sigma_cm, local.error};
+  if (config_.cross_check_worker) {
+    if (started_check_) return CrossCheck::kNotRun;  // judged at the start of process(): never here
+    if (!worker_) worker_ = std::make_unique<CheckWorker>();
+    ++stats_.global_searches;
+    rep.global = true;
+    // Copies: the frame's scans go away with it. The references are to what outlives the worker.
+    worker_->start([this, bearings = *frame.bearings, scan = frame.scan,
+                    goals = frame.goals ? std::optional<GoalObservation>(*frame.goals) : std::nullopt]() {
+      const std::optional<double> yaw = policy_.search_any_yaw ? std::nullopt : std::optional<double>(scan.yaw_deg);
+      return locate_frame(config_, field_, camera_, db_, bearings, yaw, goals ? &*goals : nullptr, &scan);
+    });
+    started_check_ = checked;
+    return CrossCheck::kStarted;
+  }
+  return judge_check(checked, global_match(frame, rep), rep);
+}
+
+Localizer::CrossCheck Localizer::judge_check(const CheckContext& checked, const SingleFrameResult& g, FrameReport& rep) {
+  const double gate = std::max(config_.disagree_min_cm, config_.disagree_sigmas * checked.predicted_sigma_cm);
+  const bool far = (g.match.position_cm - checked.predicted_cm).norm() > gate;
+  const bool better = g.match.error < config_.disagree_error_ratio * checked.local_error;
   if (!(g.match.error < config_.e_th && !g.ambiguous && far && better)) {
     disagree_run_ = 0;
     return CrossCheck::kAgrees;
@@ -451,8 +553,31 @@ Localizer::CrossCheck Localizer::cross_check(const Frame& frame, const MatchResu
   if (disagree_run_ < config_.disagree_frames) return CrossCheck::kContradicts;
   ++stats_.lost_events;
   note_global(rep, g);
-  relocalize(frame.t_ms, g, rep);
+  relocalize(checked.t_ms, g, rep);
   return CrossCheck::kRelocalized;
+}
+
+Localizer::CrossCheck Localizer::judge_started_check(FrameReport& rep) {
+  const CheckContext checked = *started_check_;
+  started_check_.reset();
+  const SingleFrameResult g = worker_->wait();
+  // Only while still tracking, and only within the history (its relocalization is applied at the
+  // checked frame's time); otherwise the pose has moved on without it.
+  if (state_ != State::kTracking || history_.empty() || (trimmed_ && checked.t_ms < history_.front().window.t_end_ms))
+    return CrossCheck::kNotRun;
+  const CrossCheck c = judge_check(checked, g, rep);
+  if (c == CrossCheck::kRelocalized) rep.global = true;
+  return c;
+}
+
+void Localizer::discard_started_check() {
+  if (!started_check_) return;
+  started_check_.reset();
+  try {
+    (void)worker_->wait();  // the worker is free for the next check; its answer is about the old pose
+  } catch (const std::exception&) {
+    // About the old pose too: a search that failed is as irrelevant now as one that succeeded.
+  }
 }
 
 void Localizer::accept(const Frame& frame, const MatchResult& local, FrameReport& rep) {

@@ -108,6 +108,7 @@ const config::KeyTable<LocalizerConfig>& localizer_config_keys() {
       key("disagree_sigmas", &L::disagree_sigmas),
       key("disagree_error_ratio", &L::disagree_error_ratio),
       key("disagree_frames", &L::disagree_frames),
+      key("cross_check_worker", &L::cross_check_worker),
       key("gyro_yaw_known", &L::gyro_yaw_known),
       key("yaw_correction", &L::yaw_correction),
       key("yaw_search_deg", &L::yaw_search_deg),
