@@ -350,6 +350,9 @@ class Localizer {
   // --- matching ---
   /// locate_frame (locate.hpp) at the gyro heading (or over all headings, by policy).
   [[nodiscard]] SingleFrameResult global_match(const Frame& frame, FrameReport& rep);
+  /// The heading a global search of `frame` holds fixed: none (all headings) by policy or while the
+  /// heading is not known. Counts the search in the stats and in `rep` (inline or on the worker).
+  [[nodiscard]] std::optional<double> begin_global_search(const Frame& frame, FrameReport& rep);
   [[nodiscard]] MatchResult local_match(const Frame& frame, double range_cm) const;
   [[nodiscard]] double search_range_cm(double speed_cm_per_s) const;
   void note_global(FrameReport& rep, const SingleFrameResult& global);

@@ -524,12 +524,11 @@ Localizer::CrossCheck Localizer::cross_check(const Frame& frame, const MatchResu
   if (config_.cross_check_worker) {
     if (started_check_) return CrossCheck::kNotRun;  // judged at the start of process(): never here
     if (!worker_) worker_ = std::make_unique<CheckWorker>();
-    ++stats_.global_searches;
-    rep.global = true;
-    // Copies: the frame's scans go away with it. The references are to what outlives the worker.
-    worker_->start([this, bearings = *frame.bearings, scan = frame.scan,
+    const std::optional<double> yaw = begin_global_search(frame, rep);
+    // Copies: the frame's scans go away with it. The members read are the const configuration,
+    // field, camera and database, which outlive the worker.
+    worker_->start([this, yaw, bearings = *frame.bearings, scan = frame.scan,
                     goals = frame.goals ? std::optional<GoalObservation>(*frame.goals) : std::nullopt]() {
-      const std::optional<double> yaw = policy_.search_any_yaw ? std::nullopt : std::optional<double>(scan.yaw_deg);
       return locate_frame(config_, field_, camera_, db_, bearings, yaw, goals ? &*goals : nullptr, &scan);
     });
     started_check_ = checked;
@@ -631,11 +630,15 @@ void Localizer::relocalize(double t_ms, const SingleFrameResult& global, FrameRe
   rep.outcome = FrameOutcome::kRelocalized;
 }
 
-SingleFrameResult Localizer::global_match(const Frame& frame, FrameReport& rep) {
+std::optional<double> Localizer::begin_global_search(const Frame& frame, FrameReport& rep) {
   ++stats_.global_searches;
   rep.global = true;
   const bool any_yaw = policy_.search_any_yaw || !heading_known();
-  const std::optional<double> yaw = any_yaw ? std::nullopt : std::optional<double>(frame.scan.yaw_deg);
+  return any_yaw ? std::nullopt : std::optional<double>(frame.scan.yaw_deg);
+}
+
+SingleFrameResult Localizer::global_match(const Frame& frame, FrameReport& rep) {
+  const std::optional<double> yaw = begin_global_search(frame, rep);
   return locate_frame(config_, field_, camera_, db_, *frame.bearings, yaw, frame.goals, &frame.scan);
 }
 
