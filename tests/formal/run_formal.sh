@@ -5,7 +5,8 @@
 #   prove: BMC base case to DEPTH, then k-induction with DEPTH
 #   bmc:   bounded model check to DEPTH only (used where induction does not close)
 #   cover: with COVER_DEPTH (environment) > 0, afterwards every `cover` statement must be reached
-#          within COVER_DEPTH steps (a trace each), so that no property holds vacuously
+#          within COVER_DEPTH steps (a trace each), so that no property holds vacuously; no cover
+#          at all fails too (the properties were compiled out)
 # On failure it prints the counterexample VCD path and exits 1.
 #
 # usage: run_formal.sh NAME TOP MODE DEPTH OUTDIR INCLUDE_DIR "CHPARAMS" FILE...
@@ -62,5 +63,12 @@ fi
 cover_depth=${COVER_DEPTH:-0}
 if [[ $cover_depth -gt 0 ]]; then
   run_smtbmc cover "$cover_depth" -c  # passes only if every cover was reached
-  echo "FORMAL $name: covers reached: $(grep -c 'Reached cover statement' "$log.cover")"
+  reached=$(grep -c 'Reached cover statement' "$log.cover" || true)
+  # No cover at all passes yosys-smtbmc -c vacuously: the properties were compiled out (a wrong
+  # `ifdef, e.g. FORMAL_TOP_<TOP> misspelt), so every assertion above held vacuously too.
+  if [[ $reached -eq 0 ]]; then
+    echo "FORMAL $name: no cover statement reached: are the module's properties compiled in ($top_define)?" >&2
+    exit 1
+  fi
+  echo "FORMAL $name: covers reached: $reached"
 fi
