@@ -8,12 +8,12 @@ import socket
 from dataclasses import dataclass
 from typing import Iterator, Optional
 
-# The documented keys, in the order the daemon writes them; the two optional ones are absent
-# before the first image result.
-POSE_KEYS = ("seq", "t_ms", "x_cm", "y_cm", "yaw_deg", "source", "match_error", "search_range_cm",
+# The documented keys, in the order the daemon writes them. match_error and search_range_cm are
+# absent before the first image result, t_uncertainty_ms while t_ms is not a board time (no board).
+POSE_KEYS = ("seq", "t_ms", "t_uncertainty_ms", "x_cm", "y_cm", "yaw_deg", "source", "match_error", "search_range_cm",
              "uncertainty_cm", "uncertainty_yaw_deg", "vx_cm_s", "vy_cm_s", "omega_deg_s", "mono_ms", "wall_ms",
              "status")
-OPTIONAL_KEYS = ("match_error", "search_range_cm")
+OPTIONAL_KEYS = ("t_uncertainty_ms", "match_error", "search_range_cm")
 SOURCES = ("none", "image", "integrated", "odometry", "lost")
 STATUSES = ("no_board", "degraded", "odometry_only", "starting", "lost", "ok")
 
@@ -26,6 +26,7 @@ class DatagramError(ValueError):
 class PoseDatagram:
     seq: int
     t_ms: float
+    t_uncertainty_ms: Optional[float]
     x_cm: float
     y_cm: float
     yaw_deg: float
@@ -74,8 +75,11 @@ def parse_pose(data: bytes | str) -> PoseDatagram:
         raise DatagramError(f"status: must be one of {', '.join(STATUSES)} (got {obj['status']!r})")
     if ("match_error" in obj) != ("search_range_cm" in obj):
         raise DatagramError("match_error and search_range_cm come together")
+    t_uncertainty_ms = _number(obj, "t_uncertainty_ms") if "t_uncertainty_ms" in obj else None
+    if t_uncertainty_ms is not None and t_uncertainty_ms < 0:
+        raise DatagramError(f"t_uncertainty_ms: must be >= 0 (got {t_uncertainty_ms!r})")
     return PoseDatagram(
-        seq=seq, t_ms=_number(obj, "t_ms"), x_cm=_number(obj, "x_cm"), y_cm=_number(obj, "y_cm"),
+        seq=seq, t_ms=_number(obj, "t_ms"), t_uncertainty_ms=t_uncertainty_ms, x_cm=_number(obj, "x_cm"), y_cm=_number(obj, "y_cm"),
         yaw_deg=_number(obj, "yaw_deg"), source=obj["source"],
         match_error=_number(obj, "match_error") if "match_error" in obj else None,
         search_range_cm=_number(obj, "search_range_cm") if "search_range_cm" in obj else None,

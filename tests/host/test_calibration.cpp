@@ -248,6 +248,46 @@ TEST(Calibration, CommandWritesACameraTheReaderLoadsAndAnOverlay) {
   std::filesystem::remove_all(dir);
 }
 
+// The hints a team rescues a step with: the mirror's disc given (the rim search skipped) and a
+// carpet pixel give the same camera on the real frame; half a disc or a pixel off the image is a
+// clear error naming the option.
+TEST(Calibration, CommandTakesTheDiscAndACarpetPixelAsHints) {
+  const auto path = test_data("tku-robosot-centre-spot.png");
+  ASSERT_FALSE(path.empty());
+  const cv::Mat img = cv::imread(path.string(), cv::IMREAD_COLOR);
+  const RimCircle rim = find_mirror_rim(img, "tku");
+  const auto dir = std::filesystem::temp_directory_path() / ("omniloc_hints_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto cam = dir / "cam.json", log = dir / "out.txt";
+  auto run = [&](const std::string& extra) {
+    const std::string cmd = std::string(OMNILOC_CLI_PATH) + " calibrate " + path.string() + " --pose 375,275 --out " +
+                            cam.string() + " " + extra + " >" + log.string() + " 2>&1";
+    std::printf("%s\n", cmd.c_str());
+    const int st = std::system(cmd.c_str());
+    std::stringstream t;
+    t << std::ifstream(log).rdbuf();
+    return std::pair{WIFEXITED(st) ? WEXITSTATUS(st) : -1, t.str()};
+  };
+  char disc[96];
+  std::snprintf(disc, sizeof disc, "--center %.2f,%.2f --rim-radius %.2f", rim.centre_px.x(), rim.centre_px.y(), rim.radius_px);
+  const auto [ok, text] = run(std::string(disc) + " --carpet-at 380,250 --mirrored no");
+  EXPECT_EQ(ok, 0) << text;
+  EXPECT_NE(text.find("residual rms"), std::string::npos) << text;
+  const CameraModel c = load_camera(cam.string());
+  EXPECT_FALSE(c.mirrored);
+  EXPECT_NEAR(c.center_px.x(), 320.6, 2.0);
+  EXPECT_NEAR(c.center_px.y(), 247.2, 2.0);
+  const auto [half, half_text] = run("--center 320,247");
+  EXPECT_EQ(half, 2) << half_text;
+  EXPECT_NE(half_text.find("--center and --rim-radius come together"), std::string::npos) << half_text;
+  const auto [off, off_text] = run("--carpet-at 5000,10");
+  EXPECT_EQ(off, 1) << off_text;
+  EXPECT_NE(off_text.find("outside the image"), std::string::npos) << off_text;
+  const auto [bad, bad_text] = run("--mirrored maybe");
+  EXPECT_EQ(bad, 2) << bad_text;
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Calibration, UniformGreyFrameIsAClearError) {
   const FieldGeometry field = load_field("fira-robosot");
   CalibrationFrame f{cv::Mat(480, 640, CV_8UC3, cv::Scalar::all(128)), "grey.png", {375.0, 275.0}, std::nullopt};
@@ -383,9 +423,14 @@ TEST_P(RealisticCalibration, ConvergesAgainstTheTrueOptics) {
   EXPECT_LT(e.centre_px, 3.0);
   // The camera file's model is radially symmetric; the true mirror is tilted 1.5 deg, which moves
   // a floor point seen 45 deg below the horizon by 1.5 deg / (sin 45 cos 45) = 5 % of its
-  // distance to one side and the other round the circle: the bound near the robot.
-  EXPECT_LT(e.map_median, 0.06);
-  EXPECT_LT(e.map_p95, 0.10);
+  // distance to one side and the other round the circle: the bound near the robot. The fitted
+  // centre absorbs part of the tilt: a centre e px off moves radii by up to e / r, which at the
+  // innermost measured radius adds e / r_min to the bound (at the penalty mark the lines measure
+  // only [64, 98] px and two fits of equal residual, 1.7 and 2.3 px off centre, are 4.6 % and 7 %
+  // off in mapping: the frame does not tell them apart).
+  const double centre_share = e.centre_px / r.measured_min_px;
+  EXPECT_LT(e.map_median, 0.05 + centre_share);
+  EXPECT_LT(e.map_p95, 0.10 + centre_share);
   EXPECT_LT(std::abs(e.yaw_deg), 2.0);
   EXPECT_EQ(e.rods_found, static_cast<int>(truth.rods.size()));
   EXPECT_LT(r.rms_px, 1.5);

@@ -24,6 +24,7 @@ PoseMessage sample_message() {
   PoseMessage m;
   m.seq = 42;
   m.t_ms = 1234.5;
+  m.t_uncertainty_ms = 0.12;
   m.x_cm = 375.125;
   m.y_cm = -2.5;
   m.yaw_deg = 179.75;
@@ -43,7 +44,8 @@ PoseMessage sample_message() {
 
 TEST(DaemonPublish, DatagramTextIsExactlyTheDocumentedSchema) {
   EXPECT_EQ(omniloc::daemon::pose_json(sample_message()),
-            R"({"seq":42,"t_ms":1234.500,"x_cm":375.125,"y_cm":-2.500,"yaw_deg":179.750,"source":"integrated",)"
+            R"({"seq":42,"t_ms":1234.500,"t_uncertainty_ms":0.120,"x_cm":375.125,"y_cm":-2.500,"yaw_deg":179.750,)"
+            R"("source":"integrated",)"
             R"("match_error":7.250,"search_range_cm":20.0,"uncertainty_cm":1.500,"uncertainty_yaw_deg":0.250,)"
             R"("vx_cm_s":120.50,"vy_cm_s":-3.25,"omega_deg_s":45.00,"mono_ms":98765.432,"wall_ms":1796280000123.500,)"
             R"("status":"ok"})");
@@ -56,6 +58,7 @@ TEST(DaemonPublish, DatagramTextIsExactlyTheDocumentedSchema) {
   none.search_range_cm = -1;
   none.source = "a\"b";
   none.status = DaemonStatus::kDegraded;
+  none.t_uncertainty_ms.reset();  // not a board time: the key is left out
   EXPECT_EQ(omniloc::daemon::pose_json(none),
             R"({"seq":42,"t_ms":1234.500,"x_cm":375.125,"y_cm":-2.500,"yaw_deg":179.750,"source":"a\"b",)"
             R"("uncertainty_cm":1.500,"uncertainty_yaw_deg":0.250,"vx_cm_s":120.50,"vy_cm_s":-3.25,"omega_deg_s":45.00,)"

@@ -15,8 +15,9 @@ import threading
 import unittest
 from pathlib import Path
 
-from omniloc_client import (ENCODERS_HEADER, Control, ControlError, DatagramError, PoseReceiver, RecordingError, parse_pose,
+from omniloc_client import (ENCODERS_HEADER, POSE_KEYS, Control, ControlError, DatagramError, PoseReceiver, RecordingError, parse_pose,
                             read_recording, write_recording)
+from omniloc_client.datagrams import OPTIONAL_KEYS
 
 OMNILOCD_SIM = os.environ["OMNILOCD_SIM"]
 OMNILOC_CLI = os.environ["OMNILOC_CLI"]
@@ -29,11 +30,37 @@ def replay(rec: Path, out: Path, db: Path) -> list:
         return list(csv.reader(f))
 
 
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def daemon_doc_datagram_section() -> str:
+    text = (ROOT / "docs" / "DAEMON.md").read_text()
+    start = text.index("## UDP pose datagrams")
+    return text[start:text.index("\n## ", start + 1)]
+
+
 class ParsePose(unittest.TestCase):
-    GOOD = ('{"seq":42,"t_ms":1234.500,"x_cm":375.125,"y_cm":-2.500,"yaw_deg":179.750,"source":"integrated",'
-            '"match_error":7.250,"search_range_cm":20.0,"uncertainty_cm":1.500,"uncertainty_yaw_deg":0.250,'
-            '"vx_cm_s":120.50,"vy_cm_s":-3.25,"omega_deg_s":45.00,"mono_ms":98765.432,"wall_ms":1796280000123.500,'
-            '"status":"ok"}')
+    # The example datagram of docs/DAEMON.md, as documented (the C++ test checks the daemon writes it).
+    GOOD = next(l.strip("`") for l in daemon_doc_datagram_section().splitlines() if l.startswith('`{"seq"'))
+
+    def test_documented_table_is_the_client_schema(self):
+        rows = [l for l in daemon_doc_datagram_section().splitlines() if l.startswith("| `")]
+        keys, optional = [], []
+        for row in rows:
+            cells = [c.strip() for c in row.strip("|").split("|")]
+            names = [n.strip().strip("`") for n in cells[0].split(",")]
+            keys += names
+            if "optional" in cells[1]:
+                optional += names
+        self.assertEqual(tuple(keys), POSE_KEYS)
+        self.assertEqual(tuple(optional), OPTIONAL_KEYS)
+
+    def test_optional_clock_uncertainty(self):
+        self.assertAlmostEqual(parse_pose(self.GOOD).t_uncertainty_ms, 0.12)
+        self.assertIsNone(parse_pose(self.GOOD.replace(',"t_uncertainty_ms":0.120', '')).t_uncertainty_ms)
+        with self.assertRaises(DatagramError) as e:
+            parse_pose(self.GOOD.replace('"t_uncertainty_ms":0.120', '"t_uncertainty_ms":-1.000'))
+        self.assertIn("t_uncertainty_ms", str(e.exception))
 
     def test_documented_example(self):
         p = parse_pose(self.GOOD)
@@ -58,9 +85,8 @@ class ParsePose(unittest.TestCase):
 
 class ReadmeCommand(unittest.TestCase):
     def test_the_readme_line_runs(self):
-        root = Path(__file__).resolve().parents[2]
-        line = next(l for l in (root / "python" / "README.md").read_text().splitlines() if l.startswith("PYTHONPATH="))
-        out = subprocess.run(line, shell=True, cwd=root, capture_output=True, text=True, timeout=60)
+        line = next(l for l in (ROOT / "python" / "README.md").read_text().splitlines() if l.startswith("PYTHONPATH="))
+        out = subprocess.run(line, shell=True, cwd=ROOT, capture_output=True, text=True, timeout=60)
         self.assertEqual(out.returncode, 0, out.stderr)
         self.assertIn(out.stdout.strip().split("(")[0], ("None", "PoseDatagram"))
 

@@ -22,7 +22,32 @@ namespace {
 struct CalibrateArgs {
   std::string field_name = "fira-robosot", out, overlay;
   std::vector<std::string> images, poses;
+  std::string carpet_at, centre, mirrored;
+  double rim_radius_px = 0.0;
 };
+
+/// "X,Y" in image pixels, each part by the strict parser (NumberError naming the option).
+Eigen::Vector2d parse_pixel(const std::string& text, const std::string& option) {
+  const auto comma = text.find(',');
+  if (comma == std::string::npos || text.find(',', comma + 1) != std::string::npos) {
+    throw NumberError(option + ": '" + text + "' is not X,Y (pixels)");
+  }
+  return {parse_double(text.substr(0, comma), "X of " + option + " '" + text + "'", 0.0, 1e5),
+          parse_double(text.substr(comma + 1), "Y of " + option + " '" + text + "'", 0.0, 1e5)};
+}
+
+/// The hints of --carpet-at, --center, --rim-radius, --mirrored; throws NumberError.
+AnalysisHints hints_of(const CalibrateArgs& a) {
+  AnalysisHints h;
+  if (!a.carpet_at.empty()) h.carpet_at_px = parse_pixel(a.carpet_at, "--carpet-at");
+  if (!a.centre.empty()) h.centre_px = parse_pixel(a.centre, "--center");
+  if (a.rim_radius_px > 0.0) h.rim_radius_px = a.rim_radius_px;
+  if (h.centre_px.has_value() != h.rim_radius_px.has_value()) {
+    throw NumberError("--center and --rim-radius come together (the mirror's disc replaces the rim search)");
+  }
+  if (!a.mirrored.empty()) h.mirrored = a.mirrored == "yes";
+  return h;
+}
 
 /// "X,Y" or "X,Y,YAW" (cm, cm, deg), each part by the strict parser; throws NumberError naming the
 /// part and quoting the text.
@@ -89,6 +114,12 @@ int run_calibrate(const CalibrateArgs& a) {
   }
   const auto t0 = std::chrono::steady_clock::now();
   CalibrationOptions opt;
+  try {
+    opt.hints = hints_of(a);
+  } catch (const NumberError& e) {
+    std::fprintf(stderr, "omniloc calibrate: %s\n", e.what());
+    return 2;
+  }
   opt.progress = [t0](const std::string& m) {
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::fprintf(stderr, "[%6.2f s] %s\n", s, m.c_str());
@@ -169,6 +200,16 @@ Subcommand add_calibrate(CLI::App& program) {
   app->add_option("--overlay", a->overlay,
                   "PNG of the frame with the detected line pixels and the field model at the fitted pose\n"
                   "(frames after the first: OUT-2.png, OUT-3.png, ...)");
+  app->add_option("--carpet-at", a->carpet_at,
+                  "a pixel that is carpet: its colour is the carpet's (when the carpet step fails)")
+      ->type_name("X,Y");
+  app->add_option("--center", a->centre, "the mirror's centre in px (with --rim-radius: replaces the rim search)")
+      ->type_name("X,Y");
+  app->add_option("--rim-radius", a->rim_radius_px, "the mirror's rim radius in px (with --center)")
+      ->type_name("PX")
+      ->check(CLI::Range(16.0, 1e5));
+  app->add_option("--mirrored", a->mirrored, "the camera's handedness, when the frames do not tell it")
+      ->check(CLI::IsMember({"yes", "no"}));
   return {app, [a] { return run_calibrate(*a); }};
 }
 

@@ -133,9 +133,21 @@ struct CalibrationResult {
   GoalColour goal_colour_at_x_max = GoalColour::kUnknown;
 };
 
+
+
+/// What a team can tell the analysis when a step fails on its frames (`omniloc calibrate --carpet-at`).
+struct AnalysisHints {
+  std::optional<Eigen::Vector2d> carpet_at_px;  ///< a pixel that is carpet: its colour cluster is the carpet
+  /// The mirror's disc (`--center` with `--rim-radius`): replaces the rim search.
+  std::optional<Eigen::Vector2d> centre_px;
+  std::optional<double> rim_radius_px;
+  std::optional<bool> mirrored;  ///< the handedness (`--mirrored yes|no`) when the lines do not tell it
+};
+
 struct CalibrationOptions {
   std::function<void(const std::string&)> progress;  // stage messages for a long run
   GoalColourOptions goal_colours;
+  AnalysisHints hints;  // the same for every frame
 };
 
 /// The goal colours of one analysed frame: pixels inside the rim and outside the body that are
@@ -157,7 +169,7 @@ struct CalibrationOptions {
 
 /// Rim, carpet colour, line pixels, body, masts, view radius of one frame. Throws when the frame
 /// shows no carpet or no lines.
-[[nodiscard]] FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& context);
+[[nodiscard]] FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& context, const AnalysisHints& hints = {});
 
 /// The whole calibration (all frames share one camera). Throws std::runtime_error with the frame's
 /// name and the reason when nothing fits.

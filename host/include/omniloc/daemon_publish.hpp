@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -24,6 +25,7 @@ enum class DaemonStatus {
 struct PoseMessage {
   std::uint64_t seq = 0;       ///< datagram counter (gaps at the receiver = lost datagrams)
   double t_ms = 0.0;           ///< daemon time of the pose (board time of the encoder window)
+  std::optional<double> t_uncertainty_ms;  ///< 1-sigma of t_ms from the board-clock fit; none: no board window (key omitted)
   double x_cm = 0.0;
   double y_cm = 0.0;
   double yaw_deg = 0.0;

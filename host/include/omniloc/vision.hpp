@@ -22,6 +22,7 @@
 #include <vector>
 
 #include <opencv2/core/mat.hpp>
+#include <opencv2/core/types.hpp>
 
 #include "omniloc/config.hpp"
 
@@ -129,7 +130,32 @@ struct CarpetColour {
 /// the robot (it stands on the carpet). nullopt with `why` set when no colour dominates or it is
 /// grey. Hue window: 3 robust sigmas (4..20 units); saturation down to 3 sigmas or a quarter below
 /// the median; value 0.5 to 1.5 times the median.
-[[nodiscard]] std::optional<CarpetColour> carpet_colour_from_samples(const std::vector<cv::Vec3b>& hsv, std::string* why);
+/// With allow_grey a dominant grey (median saturation below 20) is a carpet of brightness alone:
+/// every hue, no saturation floor (a carpet chosen by its structure, estimate_carpet_colour).
+[[nodiscard]] std::optional<CarpetColour> carpet_colour_from_samples(const std::vector<cv::Vec3b>& hsv, std::string* why,
+                                                                     bool allow_grey = false);
+
+/// True for a carpet window of brightness alone (a grey carpet: every hue, no saturation floor).
+[[nodiscard]] inline bool is_grey_carpet(double hue_half_width) { return hue_half_width >= 90.0; }
+
+/// Where estimate_carpet_colour looks: the ring [inner_px, outer_px] about centre_px (inner 0: the
+/// robot's body is not known and the run from the centre is taken as the robot), pixels where
+/// `mask` (CV_8U, optional) is 0 left out, and optionally a pixel the team knows is carpet.
+struct CarpetSearch {
+  cv::Point2d centre_px{0.0, 0.0};
+  double inner_px = 0.0;
+  double outer_px = 0.0;
+  cv::Mat mask;
+  std::optional<cv::Point2d> carpet_at;
+};
+
+/// The carpet from the frame's structure (carpet_estimate.cpp): k-means of the ring's colours in
+/// CIELAB; along 180 bearings the cluster of the longest run beyond the robot gets the bearing's
+/// vote (lines as wide as a fortieth of the ring bridged); the winner must be seen on 40 % of the
+/// bearings; its window from its own pixels (carpet_colour_from_samples, grey allowed). nullopt
+/// with `why` ("no carpet: ...") when no colour qualifies.
+[[nodiscard]] std::optional<CarpetColour> estimate_carpet_colour(const cv::Mat& bgr, const CarpetSearch& search,
+                                                                 std::string* why);
 
 /// The q-quantile (0..1) and the robust sigma (1.4826 MAD) of samples.
 [[nodiscard]] double percentile(std::vector<double> v, double q);

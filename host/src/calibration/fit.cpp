@@ -510,7 +510,7 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, 
   CalibrationResult res;
   for (const auto& f : frames) {
     say(f.name + ": finding the mirror rim, carpet, lines, body and masts");
-    res.analyses.push_back(analyse_frame(f.image, f.name));
+    res.analyses.push_back(analyse_frame(f.image, f.name, options.hints));
     const auto& a = res.analyses.back();
     say(f.name + ": rim (" + std::to_string(a.rim.centre_px.x()) + ", " + std::to_string(a.rim.centre_px.y()) +
         ") r " + std::to_string(a.rim.radius_px) + " px, " + std::to_string(a.line_pixels.size()) + " line pixels");
@@ -523,10 +523,13 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, 
   const CoarseResult coarse = coarse_search(a0, frames.front(), fd, say);
   res.unmirrored_score = coarse.best[0].score;
   res.mirrored_score = coarse.best[1].score;
-  const int mir = res.mirrored_score < res.unmirrored_score ? 1 : 0;
-  // Within 3 %: the lines seen do not tell the handedness (a view symmetric about the robot).
+  // Within 3 %: the lines seen do not tell the handedness (a view symmetric about the robot); the
+  // team's --mirrored then decides (and overrides the lines when given).
   res.mirrored_ambiguous = std::abs(res.mirrored_score - res.unmirrored_score) <
                            0.03 * std::min(res.mirrored_score, res.unmirrored_score);
+  const int mir = options.hints.mirrored ? (*options.hints.mirrored ? 1 : 0)
+                                         : (res.mirrored_score < res.unmirrored_score ? 1 : 0);
+  if (options.hints.mirrored) res.mirrored_ambiguous = false;
   const CoarseHit& hit = coarse.best[mir];
   say("coarse best: " + std::string(mir ? "mirrored" : "not mirrored") + ", heading term " +
       std::to_string(rad_to_deg(hit.alpha)) + " deg, d(" + std::to_string(rv) + " px) = " +

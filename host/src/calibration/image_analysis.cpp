@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <random>
 #include <stdexcept>
 
@@ -38,9 +39,11 @@ struct EdgeCandidate {
   double contrast;
 };
 
-// Bright-to-dark steps (outwards) along 360 rays from `origin`: local maxima of
-// mean(inside window) - mean(outside window) above `min_contrast`, sub-pixel by a parabola.
-std::vector<EdgeCandidate> rim_candidates(const cv::Mat1f& gray, const Eigen::Vector2d& origin, int w, double min_contrast) {
+// Steps along 360 rays from `origin`: local maxima of polarity x (mean(inside window) -
+// mean(outside window)) above `min_contrast`, sub-pixel by a parabola (polarity +1: bright to dark
+// outwards, the usual rim against a dark housing; -1: dark to bright, a light housing).
+std::vector<EdgeCandidate> rim_candidates(const cv::Mat1f& gray, const Eigen::Vector2d& origin, int w, double min_contrast,
+                                          double polarity) {
   std::vector<EdgeCandidate> out;
   const double rmax = std::hypot(gray.cols, gray.rows);
   std::vector<double> prof, pre;
@@ -57,8 +60,8 @@ std::vector<EdgeCandidate> rim_candidates(const cv::Mat1f& gray, const Eigen::Ve
     pre.assign(static_cast<std::size_t>(n) + 1, 0.0);
     for (int i = 0; i < n; ++i) pre[static_cast<std::size_t>(i) + 1] = pre[static_cast<std::size_t>(i)] + prof[static_cast<std::size_t>(i)];
     auto contrast = [&](int r) {
-      return (pre[static_cast<std::size_t>(r)] - pre[static_cast<std::size_t>(r - w)]) / w -
-             (pre[static_cast<std::size_t>(r + w + 1)] - pre[static_cast<std::size_t>(r + 1)]) / w;
+      return polarity * ((pre[static_cast<std::size_t>(r)] - pre[static_cast<std::size_t>(r - w)]) / w -
+                         (pre[static_cast<std::size_t>(r + w + 1)] - pre[static_cast<std::size_t>(r + 1)]) / w);
     };
     for (int r = w + 1; r + w + 2 < n; ++r) {
       const double c0 = contrast(r);
@@ -122,8 +125,8 @@ double circle_support(const std::vector<std::vector<int>>& by_ray, const std::ve
   return score;
 }
 
-// Fraction of a circle's circumference inside the image. The rim is seen round most of its
-// circumference (the frame is at most cropped to it); a large circle centred near the image's edge
+// Fraction of a circle's circumference inside the image. The rim is seen round much of its
+// circumference (a frame may crop it, but keeps at least 40 % of it); a large circle centred near the image's edge
 // that passes along one arc of the rim and through stray steps elsewhere is not (on rendered
 // frames with dark walls at the rim such circles got half the rim's support and, being larger,
 // were taken as the rim).
@@ -163,7 +166,7 @@ bool ransac_rim(const std::vector<EdgeCandidate>& cand, const cv::Size& size, Ei
     double rr = 0;
     if (!circle_through(a.p, b.p, c.p, cc, rr) || rr < min_r) continue;
     if (cc.x() < 0 || cc.y() < 0 || cc.x() >= size.width || cc.y() >= size.height) continue;
-    if (inside_fraction(cc, rr, size) < 0.5) continue;
+    if (inside_fraction(cc, rr, size) < 0.4) continue;
     hyps.push_back({cc, rr, circle_support(by_ray, cand, cc, rr, 2.0, nullptr)});
   }
   if (hyps.empty()) return false;
@@ -182,6 +185,36 @@ bool ransac_rim(const std::vector<EdgeCandidate>& cand, const cv::Size& size, Ei
   (void)circle_support(by_ray, cand, centre, radius, 1.5, &pts);
   rays = static_cast<int>(pts.size());
   return fit_circle(pts, centre, radius);
+}
+
+// The rim from steps of one polarity: RANSAC from the image centre, then again from the circle's
+// centre (its rays cross the rim squarely). A quarter of the rays on which the circle lies inside
+// the image must see it: the masts hide some, and where the rim leaves the image none are seen.
+std::optional<RimCircle> rim_of_polarity(const cv::Mat1f& gray, const cv::Size& size, int w, double min_contrast,
+                                         double polarity, std::string* why) {
+  Eigen::Vector2d origin(0.5 * (size.width - 1), 0.5 * (size.height - 1));
+  double radius = 0.0;
+  int rays = 0;
+  for (int pass = 0; pass < 2; ++pass) {
+    const auto cand = rim_candidates(gray, origin, w, min_contrast, polarity);
+    Eigen::Vector2d c;
+    if (!ransac_rim(cand, size, c, radius, rays)) {
+      if (why->empty()) *why = "no circle of bright-to-dark (or dark-to-bright) steps found";
+      return std::nullopt;
+    }
+    origin = c;
+  }
+  const int inside = static_cast<int>(std::lround(kRimRays * inside_fraction(origin, radius, size)));
+  if (rays < inside / 4 || rays < kRimRays / 8) {
+    *why = "the best circle is seen on only " + std::to_string(rays) + " of the " + std::to_string(inside) +
+           " rays on which it lies inside the image";
+    return std::nullopt;
+  }
+  RimCircle rim;
+  rim.centre_px = origin;
+  rim.radius_px = radius;
+  rim.rays_on_circle = rays;
+  return rim;
 }
 
 }  // namespace
@@ -210,44 +243,28 @@ RimCircle find_mirror_rim(const cv::Mat& bgr, const std::string& ctx) {
   }
   const int w = rim_window_px(bgr);
   Eigen::Vector2d origin(0.5 * (bgr.cols - 1), 0.5 * (bgr.rows - 1));
-  RimCircle rim;
-  double radius = 0.0;
-  int rays = 0;
-  for (int pass = 0; pass < 2; ++pass) {  // second pass: rays from the found centre cross the rim squarely
-    const auto cand = rim_candidates(gray, origin, w, min_contrast);
-    Eigen::Vector2d c;
-    if (!ransac_rim(cand, bgr.size(), c, radius, rays)) {
-      throw std::runtime_error(ctx + ": no mirror rim: no circle of bright-to-dark steps found");
-    }
-    origin = c;
+  // Bright-to-dark first (a dark housing round the mirror, the usual case); a light housing steps
+  // the other way.
+  std::string why;
+  for (const double polarity : {1.0, -1.0}) {
+    if (const auto rim = rim_of_polarity(gray, bgr.size(), w, min_contrast, polarity, &why)) return *rim;
   }
-  // A quarter of the rays on the circle: the masts and a cropped image may hide the rest.
-  if (rays < kRimRays / 4) {
-    throw std::runtime_error(ctx + ": no mirror rim: the best circle is seen on only " + std::to_string(rays) +
-                             " of 360 rays");
-  }
-  rim.centre_px = origin;
-  rim.radius_px = radius;
-  rim.rays_on_circle = rays;
-  return rim;
+  throw std::runtime_error(ctx + ": no mirror rim: " + why);
 }
 
 namespace {
 
-// Carpet: the ring just outside the body (the robot stands on the carpet, so the floor next to it
-// is carpet; walls and furniture, which may share its hue under a colour cast, are farther out),
-// classified by the robot library's estimate (vision.hpp).
-CarpetColour carpet_colour(const cv::Mat& hsv, const RimCircle& rim, const std::string& ctx) {
-  std::vector<cv::Vec3b> samples;
-  const double r_in = 0.15 * rim.radius_px, r_out = 0.5 * rim.radius_px;
-  for (int v = 0; v < hsv.rows; ++v) {
-    for (int u = 0; u < hsv.cols; ++u) {
-      const double r = std::hypot(u - rim.centre_px.x(), v - rim.centre_px.y());
-      if (r >= r_in && r <= r_out) samples.push_back(hsv.at<cv::Vec3b>(v, u));
-    }
-  }
+// Carpet: the colour cluster that reaches out from the robot on most bearings (vision.hpp,
+// estimate_carpet_colour), searched over the whole disc: no ring, hue or fraction of the rim is
+// assumed, so a large body, a person next to the robot or a light floor beyond the carpet does not
+// decide it.
+CarpetColour carpet_colour(const cv::Mat& bgr, const RimCircle& rim, const AnalysisHints& hints, const std::string& ctx) {
+  CarpetSearch search;
+  search.centre_px = {rim.centre_px.x(), rim.centre_px.y()};
+  search.outer_px = rim.radius_px;
+  if (hints.carpet_at_px) search.carpet_at = cv::Point2d(hints.carpet_at_px->x(), hints.carpet_at_px->y());
   std::string why;
-  const auto c = carpet_colour_from_samples(samples, &why);
+  const auto c = estimate_carpet_colour(bgr, search, &why);
   if (!c) throw std::runtime_error(ctx + ": " + why);
   return *c;
 }
@@ -261,14 +278,39 @@ cv::Mat1f normalised_box(const cv::Mat1f& value, const cv::Mat1f& weight, int k)
 
 }  // namespace
 
-FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx) {
+namespace {
+
+// The rim from the team's hint when given (both --center and --rim-radius), else searched.
+RimCircle rim_of(const cv::Mat& bgr, const AnalysisHints& hints, const std::string& ctx) {
+  if (!hints.centre_px || !hints.rim_radius_px) return find_mirror_rim(bgr, ctx);
+  const Eigen::Vector2d c = *hints.centre_px;
+  const double r = *hints.rim_radius_px;
+  if (c.x() < 0 || c.y() < 0 || c.x() >= bgr.cols || c.y() >= bgr.rows) {
+    throw std::runtime_error(ctx + ": the centre given (" + std::to_string(c.x()) + ", " + std::to_string(c.y()) +
+                             ") is outside the " + std::to_string(bgr.cols) + " x " + std::to_string(bgr.rows) + " image");
+  }
+  const double max_r = std::hypot(bgr.cols, bgr.rows);
+  if (!(r >= 16.0 && r <= max_r)) {
+    throw std::runtime_error(ctx + ": the rim radius given (" + std::to_string(r) + " px) must be 16 to " +
+                             std::to_string(static_cast<int>(max_r)) + " px");
+  }
+  RimCircle rim;
+  rim.centre_px = c;
+  rim.radius_px = r;
+  rim.rays_on_circle = 0;  // not measured: given
+  return rim;
+}
+
+}  // namespace
+
+FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx, const AnalysisHints& hints) {
   FrameAnalysis fa;
-  fa.rim = find_mirror_rim(bgr, ctx);
+  fa.rim = rim_of(bgr, hints, ctx);
   const RimCircle& rim = fa.rim;
   cv::Mat hsv;
   cv::cvtColor(bgr, hsv, cv::COLOR_BGR2HSV);
   CarpetColour& cc = fa.carpet;
-  cc = carpet_colour(hsv, rim, ctx);
+  cc = carpet_colour(bgr, rim, hints, ctx);
   const int w = rim_window_px(bgr);
 
   cv::Mat1f hue, sat, val;
@@ -307,7 +349,8 @@ FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx) {
       }
   // Four robust sigmas of the carpet's own spread (at least 2 levels: 8-bit quantisation).
   cc.line_val_step = std::max(4.0 * robust_sigma(ev), 2.0);
-  cc.line_sat_step = std::max(2.0 * robust_sigma(es), 2.0);
+  // A grey carpet's saturation is noise: its lines are told by brightness alone.
+  cc.line_sat_step = is_grey_carpet(cc.hue_half_width) ? 0.0 : std::max(2.0 * robust_sigma(es), 2.0);
   fa.line_mask = cv::Mat::zeros(bgr.size(), CV_8U);
   for (int v = 0; v < bgr.rows; ++v) {
     for (int u = 0; u < bgr.cols; ++u) {

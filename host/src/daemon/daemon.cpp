@@ -149,10 +149,13 @@ struct Daemon::Impl {
     return DaemonStatus::kOk;
   }
 
-  void publish(const LocalizedPose& lp, DaemonStatus st, double t_ms, bool from_window) {
+  // t_uncertainty_ms none: t_ms is not a board time (no board: the daemon's own clock).
+  void publish(const LocalizedPose& lp, DaemonStatus st, double t_ms, bool from_window,
+               std::optional<double> t_uncertainty_ms = std::nullopt) {
     PoseMessage m;
     m.seq = ++seq;
     m.t_ms = t_ms;
+    m.t_uncertainty_ms = t_uncertainty_ms;
     m.x_cm = lp.pose.x_cm;
     m.y_cm = lp.pose.y_cm;
     m.yaw_deg = lp.pose.yaw_deg;
@@ -280,7 +283,7 @@ struct Daemon::Impl {
                                    clock_at.uncertainty_ms, clock_at.epoch});
     });
     if (io.observer.on_window) io.observer.on_window(ew);
-    publish(lp, status(now), ew.t_end_ms, true);
+    publish(lp, status(now), ew.t_end_ms, true, clock_at.uncertainty_ms);
   }
 
   void poll_camera(double now_ms) {

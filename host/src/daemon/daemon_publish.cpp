@@ -67,6 +67,10 @@ std::string pose_json(const PoseMessage& m) {
   out += std::to_string(m.seq);
   out += ",\"t_ms\":";
   put_number(out, m.t_ms, 3);
+  if (m.t_uncertainty_ms) {
+    out += ",\"t_uncertainty_ms\":";
+    put_number(out, *m.t_uncertainty_ms, 3);
+  }
   out += ",\"x_cm\":";
   put_number(out, m.x_cm, 3);
   out += ",\"y_cm\":";

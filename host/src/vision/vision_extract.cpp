@@ -580,27 +580,16 @@ void LineExtractor::bin_layout(RayTable& t, int n) const {
   }
 }
 
-// The carpet colour from the frame when the camera has none: the pixels of the inner half of the
-// visible ring (the robot stands on the carpet), classified by carpet_colour_from_samples.
+// The carpet colour from the frame when the camera has none: the colour cluster that reaches out
+// from the robot's body on most bearings of the view (estimate_carpet_colour; the camera gives the
+// body and the view's end, so no ring or colour is assumed).
 bool LineExtractor::ensure_carpet(const cv::Mat& bgr, std::string* why) {
   if (carpet_) return true;
-  const RayTable& t = table(1, bgr.step[0]);
-  const int r_hi = k0_ + (k1_ - k0_) / 2;
-  cv::Mat px(1, 0, CV_8UC3);
-  std::vector<cv::Vec3b> bgr_samples;
-  for (std::size_t i = 0; i < t.offset.size(); i += 2) {
-    if (t.bin[i] > r_hi) continue;
-    const std::uint8_t* p = bgr.data + t.offset[i];
-    bgr_samples.emplace_back(p[0], p[1], p[2]);
-  }
-  if (bgr_samples.empty()) {
-    *why = "no carpet: no pixels in the view";
-    return false;
-  }
-  cv::Mat in(1, static_cast<int>(bgr_samples.size()), CV_8UC3, bgr_samples.data()), hsv;
-  cv::cvtColor(in, hsv, cv::COLOR_BGR2HSV);
-  std::vector<cv::Vec3b> samples(hsv.begin<cv::Vec3b>(), hsv.end<cv::Vec3b>());
-  const auto c = carpet_colour_from_samples(samples, why);
+  CarpetSearch search;
+  search.centre_px = {cx_, cy_};
+  search.inner_px = k0_;
+  search.outer_px = k1_;
+  const auto c = estimate_carpet_colour(bgr, search, why);
   if (!c) return false;
   carpet_ = CarpetHsv{c->hue, c->hue_half_width, c->sat_min, c->val_min, c->val_max};
   ref_val_ = c->median_val;
@@ -1031,8 +1020,10 @@ void LineExtractor::adapt(const Frame& fr) {
     sector_sat_[k] += x.light_follow * (s - sector_sat_[k]);
   }
   if (!vision_.line_contrast) {
-    const LineContrast seen{std::max(x.val_sigmas * hist_sigma(fr.dev_v), x.min_val_step),
+    LineContrast seen{std::max(x.val_sigmas * hist_sigma(fr.dev_v), x.min_val_step),
                             std::max(x.sat_sigmas * hist_sigma(fr.dev_s), x.min_sat_step)};
+    // A grey carpet's saturation is noise: its lines are told by brightness alone.
+    if (carpet_ && is_grey_carpet(carpet_->hue_half_width)) seen.sat_step = 0.0;
     if (!contrast_) {
       contrast_ = seen;
     } else {

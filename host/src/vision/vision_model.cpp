@@ -194,7 +194,7 @@ double robust_sigma(std::vector<double> v) {
   return 1.4826 * percentile(std::move(v), 0.5);
 }
 
-std::optional<CarpetColour> carpet_colour_from_samples(const std::vector<cv::Vec3b>& samples, std::string* why) {
+std::optional<CarpetColour> carpet_colour_from_samples(const std::vector<cv::Vec3b>& samples, std::string* why, bool allow_grey) {
   constexpr int kHb = 45, kSb = 16, kVb = 16;  // 8 deg hue, 16 levels of S and V
   if (samples.empty()) {
     if (why) *why = "no carpet: no pixels next to the robot";
@@ -228,6 +228,24 @@ std::optional<CarpetColour> carpet_colour_from_samples(const std::vector<cv::Vec
   c.sat_min = c.median_sat - std::max(3.0 * robust_sigma(ss), 0.25 * c.median_sat);
   c.val_min = 0.5 * c.median_val;
   c.val_max = std::min(255.0, 1.5 * c.median_val);
+  if (allow_grey) {
+    // Grey: the hue of a barely saturated pixel is noise (it scatters the histogram's peak), so the
+    // samples (one colour cluster already) are judged whole and the window is of brightness alone.
+    std::vector<double> all_s, all_v;
+    for (const auto& p : samples) {
+      all_s.push_back(p[1]);
+      all_v.push_back(p[2]);
+    }
+    if (percentile(all_s, 0.5) < 20.0) {
+      CarpetColour g;
+      g.hue_half_width = 90.0;
+      g.median_sat = percentile(all_s, 0.5);
+      g.median_val = percentile(all_v, 0.5);
+      g.val_min = 0.5 * g.median_val;
+      g.val_max = std::min(255.0, 1.5 * g.median_val);
+      return g;
+    }
+  }
   if (static_cast<double>(hs.size()) < 0.05 * static_cast<double>(samples.size()) || c.median_sat < 20.0) {
     if (why) {
       *why = "no carpet: no dominant colour around the robot (hue " + std::to_string(static_cast<int>(2 * c.hue)) +

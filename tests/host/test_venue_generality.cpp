@@ -1,0 +1,43 @@
+// Generality of the camera front end on sampled venues (issue [1/4] item 4, the short version of
+// `bench_venues`): 30 venues of a fixed seed list through calibrate (known spot, heading unknown)
+// and locate (a second frame at a random pose), judged against the venues' true cameras and poses.
+// The floors are what the front end reaches today (the goal, 28 calibrated and 27 located, is
+// bench_venues's to measure): a change that loses a venue fails here. Seeds that failed once
+// and were mended join kRegressions.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <vector>
+
+#include "venue_trial.hpp"
+
+namespace omniloc {
+namespace {
+
+constexpr std::uint64_t kSeed = 2026;
+constexpr int kVenues = 30;
+// What the front end reached on these venues when the floors were set (docs/CALIBRATION.md,
+// "Generality"): raise them as it improves, never lower them.
+constexpr int kMinCalibrated = CALIB_FLOOR;
+constexpr int kMinLocated = LOCATE_FLOOR;
+
+TEST(VenueGenerality, ThirtySampledVenuesCalibrateAndLocate) {
+  std::printf("venues %d of seed %llu (bench_venues: VENUES_COUNT=%d VENUES_SEED=%llu)\n", kVenues,
+              static_cast<unsigned long long>(kSeed), kVenues, static_cast<unsigned long long>(kSeed));
+  int calib_good = 0, located = 0, wild = 0;
+  for (int i = 0; i < kVenues; ++i) {
+    const test::VenueOutcome o = test::run_venue(sim::venue_seed(kSeed, static_cast<std::uint64_t>(i)));
+    test::print_outcome(o);
+    calib_good += o.calib_good;
+    located += o.located_good();
+    wild += o.wild();
+  }
+  std::printf("calibrated within the goal %d of %d, located %d of %d, accepted more than 20 cm off %d\n", calib_good,
+              kVenues, located, kVenues, wild);
+  EXPECT_GE(calib_good, kMinCalibrated);
+  EXPECT_GE(located, kMinLocated);
+  EXPECT_EQ(wild, 0);
+}
+
+}  // namespace
+}  // namespace omniloc
