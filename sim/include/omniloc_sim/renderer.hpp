@@ -148,7 +148,8 @@ enum class MirrorProfile : std::uint8_t { kHyperbolic, kTangent, kSpherical, kCo
 [[nodiscard]] const char* mirror_profile_name(MirrorProfile p);
 
 /// The camera as it really is (the realistic renderer's truth), separate from the CameraModel the
-/// database uses. A central catadioptric camera with a hyperbolic mirror (unified projection model,
+/// database uses. A central catadioptric camera whose mirror follows `profile` (MirrorProfile; the
+/// default, and what follows, is the hyperbolic mirror of the unified projection model,
 /// Geyer & Daniilidis 2000, Barreto & Araujo 2001): a ray leaving the mirror's effective
 /// viewpoint at angle theta from the mirror's (downward) axis appears at image radius
 ///     r(theta) = focal_px sin(theta) / (cos(theta) + xi),   xi = e / sqrt(e^2 + 4 p^2) in (0, 1)
@@ -163,7 +164,8 @@ enum class MirrorProfile : std::uint8_t { kHyperbolic, kTangent, kSpherical, kCo
 /// (rotation about the horizontal axis perpendicular to it), so the mapping is not radially
 /// symmetric; the image centre (where the axis meets the sensor) is centre_px. Image angle =
 /// bearing + yaw_offset_deg, u = cx + r cos (cx - r cos when mirrored), v = cy - r sin, as in
-/// CameraModel.
+/// CameraModel. The other profiles replace r(theta) only (theta_rad_at_radius and back); the tilt,
+/// centre, yaw offset and mirroring are the same for all.
 struct TrueOptics {
   int width_px = 640;
   int height_px = 480;
