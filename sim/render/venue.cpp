@@ -21,7 +21,7 @@ namespace {
 constexpr int kMinWidthPx = 400, kMaxWidthPx = 1280, kMinHeightPx = 400, kMaxHeightPx = 1024;
 constexpr double kMaxCentreOffsetFraction = 0.10;  // of the image's width and height
 constexpr double kMaxTiltDeg = 3.0;
-constexpr double kMinRimThetaDeg = 75.0, kMaxRimThetaDeg = 112.0;  // the rim's ray from the axis
+constexpr double kMinRimThetaDeg = 80.0, kMaxRimThetaDeg = 105.0;  // the rim's ray from the axis
 constexpr double kMinBodyFraction = 0.05, kMaxBodyFraction = 0.35;
 constexpr int kMaxRods = 4;
 constexpr double kMinRodPx = 2.0, kMaxRodPx = 15.0;
@@ -75,7 +75,8 @@ void sample_profile(Draw& d, TrueOptics& o) {
   const double rim = o.mirror_radius_px;
   switch (o.profile) {
     case MirrorProfile::kHyperbolic:
-      o.xi = d.uni(0.5, 0.95);
+      // Away from the hyperbola's asymptote (cos theta = -xi), where the walls would fill the image.
+      o.xi = d.uni(std::max(0.5, 0.35 - std::cos(theta_rim)), 0.95);
       o.focal_px = rim * (std::cos(theta_rim) + o.xi) / std::sin(theta_rim);
       break;
     case MirrorProfile::kTangent:

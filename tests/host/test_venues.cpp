@@ -136,8 +136,8 @@ void expect_in_ranges(const sim::Venue& v) {
   EXPECT_LE(hue, 185.0 + 1e-3);
   EXPECT_GT(lk.line[0], 200.0f);  // white, tinted
   const double rim_theta_deg = rad_to_deg(o.theta_rad_at_radius(o.mirror_radius_px));
-  EXPECT_GE(rim_theta_deg, 75.0 - 1e-6);
-  EXPECT_LE(rim_theta_deg, 112.0 + 1e-6);
+  EXPECT_GE(rim_theta_deg, 80.0 - 1e-6);
+  EXPECT_LE(rim_theta_deg, 105.0 + 1e-6);
   const sim::VenueShots s = sim::venue_poses(v);  // a known spot and a pose, both on the carpet
   EXPECT_TRUE(sim::on_look_carpet(v.field, lk, s.spot.position_cm));
   EXPECT_TRUE(sim::on_look_carpet(v.field, lk, {s.frame_pose.x_cm, s.frame_pose.y_cm}));

@@ -42,7 +42,7 @@ struct Venue {
 };
 
 /// The venue of `seed`. Ranges (venue.cpp's constants): image 400 x 400 .. 1280 x 1024 at 1:1, 5:4,
-/// 4:3, 16:10 and 16:9; every MirrorProfile with the rim at 75..112 deg from the axis; mirror
+/// 4:3, 16:10 and 16:9; every MirrorProfile with the rim at 80..105 deg from the axis; mirror
 /// centre up to 10 % of the image size off its centre (the rim partly outside the image at times);
 /// tilt 0..3 deg; mirrored or not; body 5..35 % of the mirror radius; 0..4 rods 2..15 px wide;
 /// carpets green to teal to blue-green and dark green, plain or textured; lines 5..12.5 cm, bluish
