@@ -271,13 +271,24 @@ std::vector<KnownSpot> known_spots(const Venue& v) {
 config::Json pose_json(const Pose2& p) { return {{"x_cm", p.x_cm}, {"y_cm", p.y_cm}, {"yaw_deg", p.yaw_deg}}; }
 config::Json bgr_json(const cv::Vec3f& c) { return config::Json::array({c[0], c[1], c[2]}); }
 
+// The parameters the profile uses (the others keep their defaults and mean nothing here).
+config::Json profile_json(const TrueOptics& o) {
+  switch (o.profile) {
+    case MirrorProfile::kHyperbolic: return {{"focal_px", o.focal_px}, {"xi", o.xi}};
+    case MirrorProfile::kTangent: return {{"tan_a_cm", o.tan_a_cm}, {"tan_b_per_px", o.tan_b_per_px}};
+    case MirrorProfile::kSpherical: return {{"sphere_radius_px", o.sphere_radius_px}};
+    case MirrorProfile::kConical:
+      return {{"cone_tip_deg", o.cone_tip_deg}, {"cone_tip_px", o.cone_tip_px}, {"cone_deg_per_px", o.cone_deg_per_px}};
+  }
+  return config::Json::object();
+}
+
 config::Json optics_json(const TrueOptics& o) {
   config::Json rods = config::Json::array();
   for (const auto& r : o.rods) rods.push_back({{"image_angle_deg", r.image_angle_deg}, {"width_px", r.width_px}});
-  return {{"profile", mirror_profile_name(o.profile)}, {"width_px", o.width_px}, {"height_px", o.height_px},
-          {"centre_px", {o.centre_px.x(), o.centre_px.y()}}, {"focal_px", o.focal_px}, {"xi", o.xi},
-          {"tan_a_cm", o.tan_a_cm}, {"tan_b_per_px", o.tan_b_per_px}, {"sphere_radius_px", o.sphere_radius_px},
-          {"cone_tip_deg", o.cone_tip_deg}, {"cone_tip_px", o.cone_tip_px}, {"cone_deg_per_px", o.cone_deg_per_px},
+  return {{"profile", mirror_profile_name(o.profile)}, {"profile_parameters", profile_json(o)},
+          {"rim_theta_deg", rad_to_deg(o.theta_rad_at_radius(o.mirror_radius_px))}, {"width_px", o.width_px},
+          {"height_px", o.height_px}, {"centre_px", {o.centre_px.x(), o.centre_px.y()}},
           {"viewpoint_height_cm", o.viewpoint_height_cm}, {"tilt_deg", o.tilt_deg}, {"tilt_towards_deg", o.tilt_towards_deg},
           {"yaw_offset_deg", o.yaw_offset_deg}, {"mirrored", o.mirrored}, {"mirror_radius_px", o.mirror_radius_px},
           {"ring_px", o.ring_px}, {"body_radius_cm", o.body_radius_cm}, {"lens_fraction", o.lens_fraction}, {"rods", rods}};
