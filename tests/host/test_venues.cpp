@@ -11,9 +11,11 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -240,54 +242,54 @@ TEST(Venues, EveryProfileInvertsAndProjectsConsistently) {
 // Line points of one venue, cleaned of what would hide the floor (robots, the ball, goals, worn
 // lines, noise), at its two poses: how many were checked and how many were bright.
 std::pair<int, int> line_points_bright(sim::Venue v) {
-    sim::RenderOptions& r = v.render;
-    r.noise_sigma = 0.0;
-    r.realism.jpeg_quality = 0;
-    r.realism.robots = 0;
-    r.realism.ball = false;
-    r.realism.look.goals = false;
-    r.realism.look.line_wear = 0.0;
-    const sim::TrueOptics& o = v.optics;
-    const sim::RealisticRenderer rr(v.field, o);
-    const sim::VenueShots shots = sim::venue_poses(v);
-    int checked = 0, bright = 0;
-    for (const Pose2& pose : {shots.calib_pose, shots.frame_pose}) {
-      cv::Mat gray;
-      cv::cvtColor(rr.render(pose, r), gray, cv::COLOR_BGR2GRAY);
-      const auto pixel = [&](const Eigen::Vector2d& q) -> std::optional<Eigen::Vector2d> {
-        const Eigen::Vector2d rel(q.x() - pose.x_cm, q.y() - pose.y_cm);
-        const double c = std::cos(deg_to_rad(-pose.yaw_deg)), s = std::sin(deg_to_rad(-pose.yaw_deg));
-        const double d = rel.norm();
-        if (d < o.body_radius_cm + 30.0 || !sim::on_look_carpet(v.field, r.realism.look, q)) return std::nullopt;
-        const auto px = o.pixel_of_robot_point({c * rel.x() - s * rel.y(), s * rel.x() + c * rel.y(), 0.0});
-        if (!px || px->x() < 3 || px->y() < 3 || px->x() > o.width_px - 4 || px->y() > o.height_px - 4) return std::nullopt;
-        const Eigen::Vector2d rc = *px - o.centre_px;
-        if (rc.norm() > 0.9 * o.mirror_radius_px) return std::nullopt;
-        for (const auto& rod : o.rods) {
-          const Eigen::Vector2d e(std::cos(deg_to_rad(rod.image_angle_deg)), -std::sin(deg_to_rad(rod.image_angle_deg)));
-          if (rc.dot(e) > 0.0 && std::abs(e.x() * rc.y() - e.y() * rc.x()) < rod.width_px / 2.0 + 4.0) return std::nullopt;
-        }
-        // The line must cover three pixels radially, so blur and lateral colour leave its middle white.
-        const double rr_px = rc.norm();
-        const double cm_per_px = o.ground_cm_at_radius(rr_px + 0.5) - o.ground_cm_at_radius(rr_px - 0.5);
-        if (!(cm_per_px * 3.0 < v.field.line_width_cm * 0.7)) return std::nullopt;
-        return px;
-      };
-      const auto level = [&](const Eigen::Vector2d& px) {
-        return static_cast<int>(gray.at<std::uint8_t>(static_cast<int>(std::lround(px.y())), static_cast<int>(std::lround(px.x()))));
-      };
-      for (const auto& seg : v.field.segments) {
-        const Eigen::Vector2d ab = seg.b_cm - seg.a_cm, e = ab.normalized(), n(-e.y(), e.x());
-        for (double t = 20.0; t < ab.norm() - 20.0; t += 15.0) {
-          const Eigen::Vector2d q = seg.a_cm + t * e;
-          const Eigen::Vector2d side = q + n * (2.5 * v.field.line_width_cm + 12.0);
-          const auto pl = pixel(q), ps = pixel(side);
-          if (!pl || !ps || is_white(v.field, side)) continue;
-          ++checked;
-          if (level(*pl) > level(*ps) + 20) ++bright;
-        }
+  sim::RenderOptions& r = v.render;
+  r.noise_sigma = 0.0;
+  r.realism.jpeg_quality = 0;
+  r.realism.robots = 0;
+  r.realism.ball = false;
+  r.realism.look.goals = false;
+  r.realism.look.line_wear = 0.0;
+  const sim::TrueOptics& o = v.optics;
+  const sim::RealisticRenderer rr(v.field, o);
+  const sim::VenueShots shots = sim::venue_poses(v);
+  int checked = 0, bright = 0;
+  for (const Pose2& pose : {shots.calib_pose, shots.frame_pose}) {
+    cv::Mat gray;
+    cv::cvtColor(rr.render(pose, r), gray, cv::COLOR_BGR2GRAY);
+    const auto pixel = [&](const Eigen::Vector2d& q) -> std::optional<Eigen::Vector2d> {
+      const Eigen::Vector2d rel(q.x() - pose.x_cm, q.y() - pose.y_cm);
+      const double c = std::cos(deg_to_rad(-pose.yaw_deg)), s = std::sin(deg_to_rad(-pose.yaw_deg));
+      const double d = rel.norm();
+      if (d < o.body_radius_cm + 30.0 || !sim::on_look_carpet(v.field, r.realism.look, q)) return std::nullopt;
+      const auto px = o.pixel_of_robot_point({c * rel.x() - s * rel.y(), s * rel.x() + c * rel.y(), 0.0});
+      if (!px || px->x() < 3 || px->y() < 3 || px->x() > o.width_px - 4 || px->y() > o.height_px - 4) return std::nullopt;
+      const Eigen::Vector2d rc = *px - o.centre_px;
+      if (rc.norm() > 0.9 * o.mirror_radius_px) return std::nullopt;
+      for (const auto& rod : o.rods) {
+        const Eigen::Vector2d e(std::cos(deg_to_rad(rod.image_angle_deg)), -std::sin(deg_to_rad(rod.image_angle_deg)));
+        if (rc.dot(e) > 0.0 && std::abs(e.x() * rc.y() - e.y() * rc.x()) < rod.width_px / 2.0 + 4.0) return std::nullopt;
+      }
+      // The line must cover three pixels radially, so blur and lateral colour leave its middle white.
+      const double rr_px = rc.norm();
+      const double cm_per_px = o.ground_cm_at_radius(rr_px + 0.5) - o.ground_cm_at_radius(rr_px - 0.5);
+      if (!(cm_per_px * 3.0 < v.field.line_width_cm * 0.7)) return std::nullopt;
+      return px;
+    };
+    const auto level = [&](const Eigen::Vector2d& px) {
+      return static_cast<int>(gray.at<std::uint8_t>(static_cast<int>(std::lround(px.y())), static_cast<int>(std::lround(px.x()))));
+    };
+    for (const auto& seg : v.field.segments) {
+      const Eigen::Vector2d ab = seg.b_cm - seg.a_cm, e = ab.normalized(), n(-e.y(), e.x());
+      for (double t = 20.0; t < ab.norm() - 20.0; t += 15.0) {
+        const Eigen::Vector2d q = seg.a_cm + t * e;
+        const Eigen::Vector2d side = q + n * (2.5 * v.field.line_width_cm + 12.0);
+        const auto pl = pixel(q), ps = pixel(side);
+        if (!pl || !ps || is_white(v.field, side)) continue;
+        ++checked;
+        if (level(*pl) > level(*ps) + 20) ++bright;
       }
     }
+  }
   return {checked, bright};
 }
 
