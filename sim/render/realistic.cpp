@@ -19,21 +19,7 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// Colours (BGR, 0..255 before lighting). Chosen to look like the real frames (tests/data/): a
-// green-teal carpet, bluish-white lines, a black floor beyond the carpet, saturated goal paint.
-const cv::Vec3f kCarpet(70.0f, 140.0f, 35.0f);
-const cv::Vec3f kLine(245.0f, 232.0f, 216.0f);
-const cv::Vec3f kDarkFloor(34.0f, 32.0f, 36.0f);
-const cv::Vec3f kGoalBlue(190.0f, 80.0f, 20.0f);     // OpenCV hue ~109
-const cv::Vec3f kGoalYellow(30.0f, 200.0f, 230.0f);  // OpenCV hue ~26
-const cv::Vec3f kBall(20.0f, 110.0f, 250.0f);        // orange, hue ~11
-const cv::Vec3f kRobotDark(26.0f, 25.0f, 30.0f);
-const cv::Vec3f kBody(52.0f, 48.0f, 48.0f);
-const cv::Vec3f kLens(14.0f, 14.0f, 16.0f);
-const cv::Vec3f kRod(24.0f, 24.0f, 27.0f);
-const cv::Vec3f kRing(9.0f, 9.0f, 10.0f);
-const cv::Vec3f kHousing(58.0f, 56.0f, 62.0f);
-const cv::Vec3f kCeiling(190.0f, 190.0f, 196.0f);
+// The colours are SceneLook's (renderer.hpp): today's defaults, or a sampled venue's.
 
 // Deterministic hash of integer cell coordinates to [0, 1): procedural textures.
 double cell_hash(std::int64_t a, std::int64_t b, std::uint64_t seed) {
@@ -56,6 +42,48 @@ float block_factor(double s_cm, double z_cm, double cell_s, double cell_z, std::
 Eigen::Matrix3d tilt_rotation(const TrueOptics& o) {
   const double t = deg_to_rad(o.tilt_towards_deg);
   return Eigen::AngleAxisd(deg_to_rad(o.tilt_deg), Eigen::Vector3d(-std::sin(t), std::cos(t), 0.0)).toRotationMatrix();
+}
+
+// The profiles other than the hyperbola (whose unit-sphere form is kept as it was): the pixel's
+// radius gives theta, its image angle the azimuth; then the tilt and the yaw offset as for it.
+Eigen::Vector3d profile_ray_of_pixel(const TrueOptics& o, const Eigen::Vector2d& px) {
+  const double ua = (px.x() - o.centre_px.x()) * (o.mirrored ? -1.0 : 1.0);
+  const double vb = o.centre_px.y() - px.y();
+  const double r = std::hypot(ua, vb);
+  const double theta = o.theta_rad_at_radius(r);
+  const Eigen::Vector3d local =
+      r > 1e-12 ? Eigen::Vector3d(std::sin(theta) * ua / r, std::sin(theta) * vb / r, std::cos(theta)) : Eigen::Vector3d(0.0, 0.0, 1.0);
+  const Eigen::Vector3d img = tilt_rotation(o) * local;
+  const double c = std::cos(deg_to_rad(-o.yaw_offset_deg)), s = std::sin(deg_to_rad(-o.yaw_offset_deg));
+  return Eigen::Vector3d(c * img.x() - s * img.y(), s * img.x() + c * img.y(), img.z()).normalized();
+}
+
+std::optional<Eigen::Vector2d> profile_pixel_of_robot_point(const TrueOptics& o, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d d = Eigen::Vector3d(p.x(), p.y(), o.viewpoint_height_cm - p.z()).normalized();
+  const double c = std::cos(deg_to_rad(o.yaw_offset_deg)), s = std::sin(deg_to_rad(o.yaw_offset_deg));
+  const Eigen::Vector3d x = tilt_rotation(o).transpose() * Eigen::Vector3d(c * d.x() - s * d.y(), s * d.x() + c * d.y(), d.z());
+  const double theta = std::acos(std::clamp(x.z(), -1.0, 1.0));
+  if (theta >= o.max_theta_rad() - 1e-9) return std::nullopt;
+  const double r = o.radius_px_at_theta(theta), n = std::hypot(x.x(), x.y());
+  const double ma = n > 1e-15 ? r * x.x() / n : 0.0, mb = n > 1e-15 ? r * x.y() / n : 0.0;
+  return Eigen::Vector2d(o.centre_px.x() + ma * (o.mirrored ? -1.0 : 1.0), o.centre_px.y() - mb);
+}
+
+// The profile's own parameters must describe a mapping that increases from the centre outwards.
+void check_optics(const TrueOptics& o) {
+  if (o.width_px < 1 || o.height_px < 1 || !(o.viewpoint_height_cm > 0.0) || !(o.mirror_radius_px > 0.0))
+    throw std::invalid_argument("TrueOptics: size, viewpoint_height_cm > 0 and mirror_radius_px > 0 are required");
+  bool ok = true;
+  switch (o.profile) {
+    case MirrorProfile::kHyperbolic: ok = o.focal_px > 0.0 && o.xi > 0.0 && o.xi < 1.0; break;
+    case MirrorProfile::kTangent: ok = o.tan_a_cm > 0.0 && o.tan_b_per_px > 0.0 && o.tan_b_per_px * o.mirror_radius_px < kPi; break;
+    case MirrorProfile::kSpherical: ok = o.sphere_radius_px > o.mirror_radius_px; break;
+    case MirrorProfile::kConical: ok = o.cone_tip_deg >= 0.0 && o.cone_tip_px > 0.0 && o.cone_deg_per_px > 0.0; break;
+  }
+  if (!ok)
+    throw std::invalid_argument(std::string("TrueOptics: bad parameters for the ") + mirror_profile_name(o.profile) +
+                                " profile (hyperbolic: focal_px > 0, 0 < xi < 1; tangent: a, b > 0, b x rim < pi; "
+                                "spherical: sphere radius > rim; conical: tip >= 0, tip_px > 0, deg_per_px > 0)");
 }
 
 struct Hit {
@@ -111,7 +139,7 @@ bool in_goal_box(const FieldGeometry& f, const Eigen::Vector2d& q, bool& at_x_ma
   return false;
 }
 
-cv::Vec3f goal_paint(GoalColour c) { return c == GoalColour::kYellow ? kGoalYellow : kGoalBlue; }
+cv::Vec3f goal_paint(const SceneLook& look, GoalColour c) { return c == GoalColour::kYellow ? look.goal_yellow : look.goal_blue; }
 
 GoalColour colour_at_x_max(const FieldGeometry& f, const RealismOptions& r) {
   return f.goal.colour_at_x_max != GoalColour::kUnknown ? f.goal.colour_at_x_max : r.goal_colour_at_x_max;
@@ -119,11 +147,91 @@ GoalColour colour_at_x_max(const FieldGeometry& f, const RealismOptions& r) {
 
 GoalColour other(GoalColour c) { return c == GoalColour::kYellow ? GoalColour::kBlue : GoalColour::kYellow; }
 
+// The carpet at q with its lines: grain (3 cm), patches (40 cm) on a textured carpet, and lines
+// worn in 25 cm stretches (dimmer, or gone where the wear is worst) as on an old venue's carpet.
+cv::Vec3f carpet_colour(const FieldGeometry& f, const Scene& sc, const SceneLook& lk, const Eigen::Vector2d& q,
+                        double footprint_cm, std::uint64_t tex_seed) {
+  const double sd = line_distance_cm(f, sc.line_width_cm, q);
+  float cover = static_cast<float>(std::clamp(0.5 - sd / footprint_cm, 0.0, 1.0));
+  if (lk.line_wear > 0.0 && cover > 0.0f) {
+    const double w = cell_hash(std::lround(q.x() / 25.0), std::lround(q.y() / 25.0), tex_seed + 9);
+    if (w < lk.line_wear) cover *= w < lk.line_wear / 3.0 ? 0.0f : static_cast<float>(0.35 + 0.4 * w / lk.line_wear);
+  }
+  const float g = static_cast<float>(lk.carpet_grain);
+  const float grain = static_cast<float>(1.0 - lk.carpet_grain / 2.0) +
+                      g * static_cast<float>(cell_hash(std::lround(q.x() / 3.0), std::lround(q.y() / 3.0), tex_seed));
+  cv::Vec3f carpet = lk.carpet * grain;
+  if (lk.carpet_patch_contrast > 0.0) {
+    const double p = cell_hash(static_cast<std::int64_t>(std::floor(q.x() / 40.0)), static_cast<std::int64_t>(std::floor(q.y() / 40.0)), tex_seed + 13);
+    carpet *= static_cast<float>(1.0 + lk.carpet_patch_contrast * (2.0 * p - 1.0));
+  }
+  return carpet * (1.0f - cover) + lk.line * cover;
+}
+
 }  // namespace
+
+bool on_look_carpet(const FieldGeometry& f, const SceneLook& look, const Eigen::Vector2d& q) {
+  if (!on_carpet(f, q)) return false;
+  const double* in = look.carpet_inset_cm;
+  return q.x() >= in[0] && q.x() <= f.total_x_cm() - in[1] && q.y() >= in[2] && q.y() <= f.total_y_cm() - in[3];
+}
 
 // --- optics ---------------------------------------------------------------------------------------
 
+const char* mirror_profile_name(MirrorProfile p) {
+  switch (p) {
+    case MirrorProfile::kHyperbolic: return "hyperbolic";
+    case MirrorProfile::kTangent: return "tangent";
+    case MirrorProfile::kSpherical: return "spherical";
+    case MirrorProfile::kConical: return "conical";
+  }
+  return "unknown";
+}
+
+double TrueOptics::max_theta_rad() const {
+  // The hyperbola maps rays up to its asymptote, cos theta = -xi; the others up to straight up.
+  return profile == MirrorProfile::kHyperbolic ? std::acos(-xi) : kPi;
+}
+
+double TrueOptics::theta_rad_at_radius(double r) const {
+  switch (profile) {
+    case MirrorProfile::kHyperbolic: {
+      const double m = r / focal_px;
+      const double lambda = (xi + std::sqrt(1.0 + (1.0 - xi * xi) * m * m)) / (1.0 + m * m);
+      return std::atan2(lambda * m, lambda - xi);
+    }
+    case MirrorProfile::kTangent: {
+      const double br = std::clamp(tan_b_per_px * r, 0.0, kPi);
+      return std::atan2(tan_a_cm / viewpoint_height_cm * std::sin(br), std::cos(br));
+    }
+    case MirrorProfile::kSpherical: return 2.0 * std::asin(std::clamp(r / sphere_radius_px, 0.0, 1.0));
+    case MirrorProfile::kConical:
+      return std::min(kPi, deg_to_rad(cone_tip_deg * std::tanh(r / cone_tip_px) + cone_deg_per_px * r));
+  }
+  return 0.0;
+}
+
+double TrueOptics::radius_px_at_theta(double theta) const {
+  switch (profile) {
+    case MirrorProfile::kHyperbolic: return focal_px * std::sin(theta) / (std::cos(theta) + xi);
+    case MirrorProfile::kTangent:
+      return std::atan2(viewpoint_height_cm / tan_a_cm * std::sin(theta), std::cos(theta)) / tan_b_per_px;
+    case MirrorProfile::kSpherical: return sphere_radius_px * std::sin(theta / 2.0);
+    case MirrorProfile::kConical: {
+      // No closed form: theta(r) increases strictly, so bisect to the last bit.
+      double lo = 0.0, hi = 180.0 / cone_deg_per_px;
+      for (int i = 0; i < 200 && hi - lo > 1e-12 * hi; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (theta_rad_at_radius(mid) < theta ? lo : hi) = mid;
+      }
+      return 0.5 * (lo + hi);
+    }
+  }
+  return 0.0;
+}
+
 Eigen::Vector3d TrueOptics::ray_of_pixel(const Eigen::Vector2d& px) const {
+  if (profile != MirrorProfile::kHyperbolic) return profile_ray_of_pixel(*this, px);
   const double ma = (px.x() - centre_px.x()) / focal_px * (mirrored ? -1.0 : 1.0);
   const double mb = (centre_px.y() - px.y()) / focal_px;
   const double m2 = ma * ma + mb * mb;
@@ -135,6 +243,7 @@ Eigen::Vector3d TrueOptics::ray_of_pixel(const Eigen::Vector2d& px) const {
 }
 
 std::optional<Eigen::Vector2d> TrueOptics::pixel_of_robot_point(const Eigen::Vector3d& p) const {
+  if (profile != MirrorProfile::kHyperbolic) return profile_pixel_of_robot_point(*this, p);
   const Eigen::Vector3d d = Eigen::Vector3d(p.x(), p.y(), viewpoint_height_cm - p.z()).normalized();
   const double c = std::cos(deg_to_rad(yaw_offset_deg)), s = std::sin(deg_to_rad(yaw_offset_deg));
   const Eigen::Vector3d img(c * d.x() - s * d.y(), s * d.x() + c * d.y(), d.z());
@@ -145,11 +254,20 @@ std::optional<Eigen::Vector2d> TrueOptics::pixel_of_robot_point(const Eigen::Vec
 }
 
 double TrueOptics::radius_px_at_ground(double d) const {
+  if (profile != MirrorProfile::kHyperbolic) return radius_px_at_theta(std::atan2(d, viewpoint_height_cm));
   const double h = viewpoint_height_cm;
   return focal_px * d / (h + xi * std::sqrt(d * d + h * h));
 }
 
 double TrueOptics::ground_cm_at_radius(double r) const {
+  if (profile == MirrorProfile::kTangent) {
+    const double br = tan_b_per_px * r;  // the model's own form, exact where it is defined
+    return br < kPi / 2.0 ? tan_a_cm * std::tan(br) : std::numeric_limits<double>::quiet_NaN();
+  }
+  if (profile != MirrorProfile::kHyperbolic) {
+    const double theta = theta_rad_at_radius(r);
+    return theta < kPi / 2.0 ? viewpoint_height_cm * std::tan(theta) : std::numeric_limits<double>::quiet_NaN();
+  }
   const double m = r / focal_px;
   const double lambda = (xi + std::sqrt(1.0 + (1.0 - xi * xi) * m * m)) / (1.0 + m * m);
   if (lambda - xi <= 1e-12) return std::numeric_limits<double>::quiet_NaN();  // at or above the horizon
@@ -193,16 +311,20 @@ Scene realistic_scene(const FieldGeometry& f, const Pose2& pose, const RenderOpt
   // Room: each wall 60..250 cm beyond the carpet, bright, middling or dark, textured.
   const double m0 = uni(60, 250), m1 = uni(60, 250), m2 = uni(60, 250), m3 = uni(60, 250);
   const Eigen::Vector2d c00(-m0, -m2), c10(X + m1, -m2), c11(X + m1, Y + m3), c01(-m0, Y + m3);
-  const cv::Vec3f palette[] = {{205, 208, 212}, {140, 132, 122}, {70, 64, 60}, {120, 150, 170}};
+  const std::vector<cv::Vec3f>& palette = r.look.walls;
+  if (palette.empty()) throw std::invalid_argument("SceneLook: no wall colours");
+  // (n - 0.001: today's uni(0, 3.999) for the four default paints.)
+  const double n_walls = static_cast<double>(palette.size()) - 0.001;
   for (const auto& [a, b] : {std::pair{c00, c10}, std::pair{c10, c11}, std::pair{c11, c01}, std::pair{c01, c00}})
-    sc.panels.push_back({a, b, r.wall_height_cm, palette[static_cast<int>(uni(0, 3.999))], true});
+    sc.panels.push_back({a, b, r.wall_height_cm, palette[static_cast<std::size_t>(uni(0, n_walls))], true});
   // Goal boxes: back wall and two sides behind each goal line, painted.
   const double cy = f.centre_cm().y(), gw = f.goal.width_cm / 2.0, gd = f.goal.depth_cm;
   const GoalColour at_max = colour_at_x_max(f, r);
   for (const bool x_max : {false, true}) {
+    if (!r.look.goals) break;
     const double xg = x_max ? f.border_cm + f.field_length_cm : f.border_cm;
     const double xb = x_max ? xg + gd : xg - gd;
-    const cv::Vec3f paint = goal_paint(x_max ? at_max : other(at_max));
+    const cv::Vec3f paint = goal_paint(r.look, x_max ? at_max : other(at_max));
     sc.panels.push_back({{xb, cy - gw}, {xb, cy + gw}, r.goal_height_cm, paint, false});
     sc.panels.push_back({{xg, cy - gw}, {xb, cy - gw}, r.goal_height_cm, paint, false});
     sc.panels.push_back({{xg, cy + gw}, {xb, cy + gw}, r.goal_height_cm, paint, false});
@@ -226,22 +348,23 @@ Scene realistic_scene(const FieldGeometry& f, const Pose2& pose, const RenderOpt
       ++k;
     }
   };
-  for (const auto& o : opt.obstacles) sc.columns.push_back({o.position_cm, o.radius_cm, 60.0, kRobotDark, kRobotDark, false});
+  const cv::Vec3f dark = r.look.robot_dark;
+  for (const auto& o : opt.obstacles) sc.columns.push_back({o.position_cm, o.radius_cm, 60.0, dark, dark, false});
   // Robots: dark bodies, some with a coloured top (team markers), 60..250 cm away on the carpet.
-  const cv::Vec3f tops[] = {kRobotDark, {180, 40, 200}, {200, 190, 40}, {60, 60, 200}};
+  const cv::Vec3f tops[] = {dark, {180, 40, 200}, {200, 190, 40}, {60, 60, 200}};
   for (int k = 0, attempt = 0; k < r.robots && attempt < 2000; ++attempt) {
     const double d = uni(60, 250), a = uni(0, 2 * kPi);
     const Eigen::Vector2d q = p + d * Eigen::Vector2d(std::cos(a), std::sin(a));
-    if (!on_carpet(f, q) || !clear_of(q, 22.0)) continue;
-    sc.columns.push_back({q, 22.0, uni(55, 75), kRobotDark, tops[static_cast<int>(uni(0, 3.999))], false});
+    if (!on_look_carpet(f, r.look, q) || !clear_of(q, 22.0)) continue;
+    sc.columns.push_back({q, 22.0, uni(55, 75), dark, tops[static_cast<int>(uni(0, 3.999))], false});
     ++k;
   }
   if (r.ball) {
     for (int attempt = 0; attempt < 2000; ++attempt) {
       const double d = uni(45, 160), a = uni(0, 2 * kPi);
       const Eigen::Vector2d q = p + d * Eigen::Vector2d(std::cos(a), std::sin(a));
-      if (!on_carpet(f, q) || !clear_of(q, 11.0)) continue;
-      sc.columns.push_back({q, 11.0, 21.0, kBall, kBall, false});
+      if (!on_look_carpet(f, r.look, q) || !clear_of(q, 11.0)) continue;
+      sc.columns.push_back({q, 11.0, 21.0, r.look.ball, r.look.ball, false});
       sc.ball_cm = q;
       break;
     }
@@ -265,8 +388,7 @@ Scene realistic_scene(const FieldGeometry& f, const Pose2& pose, const RenderOpt
 
 RealisticRenderer::RealisticRenderer(FieldGeometry field, TrueOptics optics) : field_(std::move(field)), optics_(std::move(optics)) {
   const TrueOptics& o = optics_;
-  if (o.width_px < 1 || o.height_px < 1 || !(o.focal_px > 0.0) || !(o.xi > 0.0 && o.xi < 1.0) || !(o.viewpoint_height_cm > 0.0))
-    throw std::invalid_argument("TrueOptics: size, focal_px > 0, 0 < xi < 1 and viewpoint_height_cm > 0 are required");
+  check_optics(o);
   const double body_px = o.radius_px_at_ground(o.body_radius_cm);
   rays_.resize(static_cast<std::size_t>(o.width_px) * static_cast<std::size_t>(o.height_px));
   for (int v = 0; v < o.height_px; ++v) {
@@ -326,6 +448,8 @@ cv::Mat RealisticRenderer::render(const Pose2& pose, const RenderOptions& opt, c
   if (!opt.realism.enabled) throw std::invalid_argument("RealisticRenderer: options.realism.enabled is not set (use realistic(seed))");
   const TrueOptics& o = optics_;
   const RealismOptions& rz = opt.realism;
+  const SceneLook& lk = rz.look;
+  const bool cast = lk.colour_cast != cv::Vec3f(1.0f, 1.0f, 1.0f);
   const double h = o.viewpoint_height_cm;
   const Eigen::Vector2d p(pose.x_cm, pose.y_cm);
   const double cy = std::cos(deg_to_rad(pose.yaw_deg)), sy = std::sin(deg_to_rad(pose.yaw_deg));
@@ -352,11 +476,11 @@ cv::Mat RealisticRenderer::render(const Pose2& pose, const RenderOptions& opt, c
       const PixelRay& pr = prs[u];
       cv::Vec3f colour;
       switch (pr.kind) {
-        case Kind::kHousing: colour = kHousing; break;
-        case Kind::kRing: colour = kRing; break;
-        case Kind::kRod: colour = kRod; break;
+        case Kind::kHousing: colour = lk.housing; break;
+        case Kind::kRing: colour = lk.ring; break;
+        case Kind::kRod: colour = lk.rod; break;
         case Kind::kBody:
-          colour = pr.radius_frac * o.mirror_radius_px < 0.35 * o.radius_px_at_ground(o.body_radius_cm) ? kLens : kBody;
+          colour = pr.radius_frac * o.mirror_radius_px < o.lens_fraction * o.radius_px_at_ground(o.body_radius_cm) ? lk.lens : lk.body;
           break;
         case Kind::kScene: {
           const Eigen::Vector2d dir(cy * pr.dx - sy * pr.dy, sy * pr.dx + cy * pr.dy);
@@ -394,19 +518,16 @@ cv::Mat RealisticRenderer::render(const Pose2& pose, const RenderOptions& opt, c
             }
           }
           switch (hit.type) {
-            case Hit::kNone: colour = kCeiling; break;
+            case Hit::kNone: colour = lk.ceiling; break;
             case Hit::kFloor: {
               const Eigen::Vector2d q = p + hit.t * dir;
               bool x_max = false;
-              if (in_goal_box(field_, q, x_max)) {
-                colour = goal_paint(x_max ? at_max : other(at_max)) * 0.85f;
-              } else if (on_carpet(field_, q)) {
-                const double sd = line_distance_cm(field_, sc.line_width_cm, q);
-                const float cover = static_cast<float>(std::clamp(0.5 - sd / pr.footprint_cm, 0.0, 1.0));
-                const float grain = 0.96f + 0.08f * static_cast<float>(cell_hash(std::lround(q.x() / 3.0), std::lround(q.y() / 3.0), tex_seed));
-                colour = (kCarpet * grain) * (1.0f - cover) + kLine * cover;
+              if (lk.goals && in_goal_box(field_, q, x_max)) {
+                colour = goal_paint(lk, x_max ? at_max : other(at_max)) * 0.85f;
+              } else if (on_look_carpet(field_, lk, q)) {
+                colour = carpet_colour(field_, sc, lk, q, pr.footprint_cm, tex_seed);
               } else {
-                colour = kDarkFloor * (0.8f + 0.4f * static_cast<float>(cell_hash(std::lround(q.x() / 20.0), std::lround(q.y() / 20.0), tex_seed + 1)));
+                colour = lk.floor_beyond * (0.8f + 0.4f * static_cast<float>(cell_hash(std::lround(q.x() / 20.0), std::lround(q.y() / 20.0), tex_seed + 1)));
               }
               colour *= light(q);
               break;
@@ -432,7 +553,7 @@ cv::Mat RealisticRenderer::render(const Pose2& pose, const RenderOptions& opt, c
         const double along = ((u - o.centre_px.x()) * std::cos(gd) + (v - o.centre_px.y()) * std::sin(gd)) / half_diag;
         gain *= static_cast<float>(1.0 + opt.gradient_strength * along);
       }
-      row[u] = colour * gain;
+      row[u] = cast ? cv::Vec3f(colour.mul(lk.colour_cast)) * gain : colour * gain;
     }
   }
   // Lateral colour: red and blue imaged at slightly different magnifications about the centre.

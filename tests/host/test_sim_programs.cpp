@@ -581,8 +581,9 @@ TEST(Programs, HelpListsEveryOptionAndItsDefault) {
   TempDir dir("help");
   const std::string sim = OMNILOC_SIM_PATH, cli = OMNILOC_CLI_PATH;
   const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
-      {sim + " --help", {"demo", "bench", "--version"}},
-      {sim + " help", {"demo", "bench"}},
+      {sim + " --help", {"demo", "bench", "venues", "--version"}},
+      {sim + " help", {"demo", "bench", "venues"}},
+      {sim + " venues --help", {"--count INT in [1, 100000]=10", "--seed UINT=1", "--out TEXT REQUIRED"}},
       {sim + " demo --help", {"--out TEXT=build/demo", "--camera-hz NUMBER in [1, 120]=60", "--camera", "=rendered",
                               "--seed UINT=1", "--duration NUMBER in [0.01, 30]=30"}},
       {sim + " bench paper --help", {"--seed UINT=1", "--no-paper-mode"}},

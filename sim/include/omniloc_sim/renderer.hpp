@@ -30,6 +30,39 @@ struct Obstacle {
   double radius_cm = 20.0;
 };
 
+/// How a venue looks (RealisticRenderer): paint colours (BGR, 0..255 before lighting) and the
+/// carpet, line and room details a venue varies. The defaults are today's realistic frames (chosen to
+/// look like tests/data/: a green-teal carpet, bluish-white lines, a black floor beyond the carpet,
+/// saturated goal paint), unchanged byte for byte; venue.hpp samples other venues.
+struct SceneLook {
+  cv::Vec3f carpet{70.0f, 140.0f, 35.0f};
+  cv::Vec3f line{245.0f, 232.0f, 216.0f};
+  cv::Vec3f floor_beyond{34.0f, 32.0f, 36.0f};  // the floor beyond the carpet (dark or light)
+  cv::Vec3f goal_blue{190.0f, 80.0f, 20.0f};     // OpenCV hue ~109
+  cv::Vec3f goal_yellow{30.0f, 200.0f, 230.0f};  // OpenCV hue ~26
+  cv::Vec3f ball{20.0f, 110.0f, 250.0f};         // orange, hue ~11
+  cv::Vec3f robot_dark{26.0f, 25.0f, 30.0f};
+  cv::Vec3f body{52.0f, 48.0f, 48.0f};
+  cv::Vec3f lens{14.0f, 14.0f, 16.0f};
+  cv::Vec3f rod{24.0f, 24.0f, 27.0f};
+  cv::Vec3f ring{9.0f, 9.0f, 10.0f};
+  cv::Vec3f housing{58.0f, 56.0f, 62.0f};
+  cv::Vec3f ceiling{190.0f, 190.0f, 196.0f};
+  /// Wall paints the room's four walls are drawn from (bright, middling, dark, bluish by default).
+  std::vector<cv::Vec3f> walls{{205, 208, 212}, {140, 132, 122}, {70, 64, 60}, {120, 150, 170}};
+  double carpet_grain = 0.08;            // carpet brightness x (1 - grain/2 + grain h), 3 cm cells
+  double carpet_patch_contrast = 0.0;    // textured carpet: 40 cm patches x (1 +- this)
+  double line_wear = 0.0;                // fraction of each line's length worn (dimmer or gone)
+  cv::Vec3f colour_cast{1.0f, 1.0f, 1.0f};  // per-channel gain (B, G, R) on the whole frame
+  bool goals = true;                     // coloured goal boxes (and their painted floor)
+  /// How far the carpet stops short of the full carpet (playing area + border) on the sides
+  /// x = 0, x = max, y = 0, y = max (cm): a lab field shows only part of a field.
+  double carpet_inset_cm[4] = {0.0, 0.0, 0.0, 0.0};
+};
+
+/// True when q (field frame, cm) is on the carpet as the look cuts it (on_carpet() less the insets).
+[[nodiscard]] bool on_look_carpet(const FieldGeometry& field, const SceneLook& look, const Eigen::Vector2d& q_cm);
+
 /// The realistic frame's extras (RealisticRenderer; OmniRenderer refuses options with enabled set).
 /// The defaults are the `realistic()` preset's; every amount 0 turns its effect off.
 struct RealismOptions {
@@ -46,6 +79,7 @@ struct RealismOptions {
   double vignetting = 0.35;          // brightness x (1 - this (r / mirror radius)^2)
   double light_unevenness = 0.25;    // ceiling lights: floor brightness varies by about +-this
   int jpeg_quality = 70;             // 0: no JPEG round trip
+  SceneLook look;
 };
 
 struct RenderOptions {
@@ -98,8 +132,24 @@ struct MirrorRod {
   double width_px = 4.0;
 };
 
+/// The mirror's radial mapping: how the angle theta of a ray from the (downward) mirror axis maps to
+/// the image radius r. Every one is central (a single effective viewpoint), so a floor point at
+/// ground distance D has tan theta = D / h.
+///  - kHyperbolic: the unified model below (xi, focal_px).
+///  - kTangent: D(r) = tan_a_cm tan(tan_b_per_px r), the ground-distance model many teams fit
+///    (theta = atan2((a / h) sin(b r), cos(b r)), so it continues past the horizon at b r = pi / 2).
+///  - kSpherical: a spherical mirror seen from far below (orthographic): the normal at image radius
+///    r leans asin(r / R) from the axis and the reflected ray 2 asin(r / R), R = sphere_radius_px.
+///  - kConical: a cone with a rounded tip: theta = cone_tip_deg tanh(r / cone_tip_px) +
+///    cone_deg_per_px r (the tip bends rays quickly, the flank adds a near-constant angle per px).
+enum class MirrorProfile : std::uint8_t { kHyperbolic, kTangent, kSpherical, kConical };
+
+/// "hyperbolic", "tangent", "spherical", "conical".
+[[nodiscard]] const char* mirror_profile_name(MirrorProfile p);
+
 /// The camera as it really is (the realistic renderer's truth), separate from the CameraModel the
-/// database uses. A central catadioptric camera with a hyperbolic mirror (unified projection model,
+/// database uses. A central catadioptric camera whose mirror follows `profile` (MirrorProfile; the
+/// default, and what follows, is the hyperbolic mirror of the unified projection model,
 /// Geyer & Daniilidis 2000, Barreto & Araujo 2001): a ray leaving the mirror's effective
 /// viewpoint at angle theta from the mirror's (downward) axis appears at image radius
 ///     r(theta) = focal_px sin(theta) / (cos(theta) + xi),   xi = e / sqrt(e^2 + 4 p^2) in (0, 1)
@@ -114,7 +164,8 @@ struct MirrorRod {
 /// (rotation about the horizontal axis perpendicular to it), so the mapping is not radially
 /// symmetric; the image centre (where the axis meets the sensor) is centre_px. Image angle =
 /// bearing + yaw_offset_deg, u = cx + r cos (cx - r cos when mirrored), v = cy - r sin, as in
-/// CameraModel.
+/// CameraModel. The other profiles replace r(theta) only (theta_rad_at_radius and back); the tilt,
+/// centre, yaw offset and mirroring are the same for all.
 struct TrueOptics {
   int width_px = 640;
   int height_px = 480;
@@ -130,6 +181,21 @@ struct TrueOptics {
   double ring_px = 12.0;            // width of the dark ring just beyond the mirror's view
   double body_radius_cm = 22.0;     // the robot's own body hides the floor closer than this
   std::vector<MirrorRod> rods{{100.0, 4.0}, {220.0, 4.0}, {340.0, 4.0}};
+  double lens_fraction = 0.35;  // the dark lens hole: this fraction of the body's image radius
+  MirrorProfile profile = MirrorProfile::kHyperbolic;  // the other profiles ignore focal_px and xi
+  double tan_a_cm = 100.0;      // kTangent
+  double tan_b_per_px = 0.006;  // kTangent: the horizon is at r = pi / (2 b)
+  double sphere_radius_px = 300.0;  // kSpherical: the view ends at r = R (theta = 180 deg)
+  double cone_tip_deg = 30.0;       // kConical
+  double cone_tip_px = 20.0;        // kConical
+  double cone_deg_per_px = 0.3;     // kConical
+
+  /// Angle (rad) from the downward axis of the ray at untilted image radius r, and back; the
+  /// profile's own mapping (r beyond its domain is clamped to it).
+  [[nodiscard]] double theta_rad_at_radius(double radius_px) const;
+  [[nodiscard]] double radius_px_at_theta(double theta_rad) const;
+  /// The largest ray angle (rad) the mirror maps at all (pi for most; the hyperbola's asymptote).
+  [[nodiscard]] double max_theta_rad() const;
 
   /// Unit direction of the ray seen at pixel px, robot frame (x forward, y left, z DOWN).
   [[nodiscard]] Eigen::Vector3d ray_of_pixel(const Eigen::Vector2d& px) const;
