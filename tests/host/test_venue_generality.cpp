@@ -18,8 +18,8 @@ constexpr std::uint64_t kSeed = 2026;
 constexpr int kVenues = 30;
 // What the front end reached on these venues when the floors were set (docs/CALIBRATION.md,
 // "Generality"): raise them as it improves, never lower them.
-constexpr int kMinCalibrated = CALIB_FLOOR;
-constexpr int kMinLocated = LOCATE_FLOOR;
+constexpr int kMinCalibrated = 13;
+constexpr int kMinLocated = 0;  // with the true camera too: see bench_venues
 
 TEST(VenueGenerality, ThirtySampledVenuesCalibrateAndLocate) {
   std::printf("venues %d of seed %llu (bench_venues: VENUES_COUNT=%d VENUES_SEED=%llu)\n", kVenues,

@@ -101,8 +101,13 @@ inline VenueOutcome run_venue(std::uint64_t seed) {
   const sim::VenueShots shots = sim::render_venue(v);
   out.field = v.field_name;
   out.spot = shots.spot.name;
-  const CameraModel truth_camera = sim::nominal_camera(v.optics, std::hypot(v.field.total_x_cm(), v.field.total_y_cm()));
-  out.reference = locate_with(v, truth_camera, shots.frame, shots.frame_pose);
+  try {
+    const CameraModel truth_camera = sim::nominal_camera(v.optics, std::hypot(v.field.total_x_cm(), v.field.total_y_cm()));
+    truth_camera.validate(config::Origin("the venue's true camera"));
+    out.reference = locate_with(v, truth_camera, shots.frame, shots.frame_pose);
+  } catch (const std::exception& e) {
+    out.reference.why = e.what();  // e.g. a view beyond what the camera format holds
+  }
   CalibrationResult cal;
   try {
     const CalibrationFrame f{shots.calib, "venue-" + std::to_string(seed), shots.spot.position_cm, std::nullopt};
