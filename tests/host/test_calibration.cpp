@@ -21,6 +21,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "omniloc/calibration.hpp"
+#include "handedness.hpp"
 #include "omniloc/camera.hpp"
 #include "test_data_path.hpp"
 #include "omniloc/conventions.hpp"
@@ -98,12 +99,22 @@ TEST(Calibration, RoundTripMirroredUnknownHeadingOnTheCentreSpot) {
   std::printf("seed %llu\n", static_cast<unsigned long long>(opt.seed));
   const Pose2 pose{375.0, 275.0, 0.0};
   CalibrationFrame f{sim::render_omni(field, truth, pose, opt), "rendered", {pose.x_cm, pose.y_cm}, std::nullopt};
-  const CalibrationResult r = calibrate_camera({f}, field);
-  // From the centre spot the view is symmetric about the robot: the handedness is not seen, and a
-  // mirrored camera fits as an unmirrored one turned round. The mapping and centre are seen.
+  // From the centre spot the view is symmetric about the robot: the handedness is not seen (a
+  // mirrored camera fits as an unmirrored one turned round), so no camera without the team's word.
+  try {
+    (void)calibrate_camera({f}, field);
+    ADD_FAILURE() << "calibrated without knowing the handedness";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("handedness unknown"), std::string::npos) << e.what();
+  }
+  CalibrationOptions told;
+  told.hints.mirrored = true;
+  const CalibrationResult r = calibrate_camera({f}, field, told);
+  // The mapping and centre are seen.
   std::printf("centre (%.2f, %.2f) vs (%.2f, %.2f), rms %.2f px\n", r.camera.center_px.x(), r.camera.center_px.y(),
               truth.center_px.x(), truth.center_px.y(), r.rms_px);
-  EXPECT_TRUE(r.mirrored_ambiguous);
+  EXPECT_TRUE(r.camera.mirrored);
+  EXPECT_EQ(r.handedness_from, "given (--mirrored)");
   EXPECT_NEAR(r.camera.center_px.x(), truth.center_px.x(), 1.0);
   EXPECT_NEAR(r.camera.center_px.y(), truth.center_px.y(), 1.0);
   double worst = 0.0;
@@ -191,7 +202,9 @@ TEST(Calibration, RealTkuFrameOnTheCentreSpotHeadingUnknown) {
   CalibrationFrame f{cv::imread(path.string(), cv::IMREAD_COLOR), "tku-robosot-centre-spot.png", {375.0, 275.0}, std::nullopt};
   ASSERT_FALSE(f.image.empty());
   const auto t0 = std::chrono::steady_clock::now();
-  const CalibrationResult r = calibrate_camera({f}, field);
+  CalibrationOptions told;  // the centre spot cannot tell the handedness: the team's word (unmirrored)
+  told.hints.mirrored = false;
+  const CalibrationResult r = calibrate_camera({f}, field, told);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const CameraModel& c = r.camera;
   std::printf("real frame: %.2f s, centre (%.2f, %.2f), rim r %.1f, a = [%.5g %.5g %.5g %.5g], yaw offset %.2f, "
@@ -223,12 +236,23 @@ TEST(Calibration, CommandWritesACameraTheReaderLoadsAndAnOverlay) {
   const auto dir = std::filesystem::temp_directory_path() / ("omniloc_calib_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const auto cam = dir / "cam.json", png = dir / "overlay.png", log = dir / "out.txt";
-  const std::string cmd = std::string(OMNILOC_CLI_PATH) + " calibrate " + path.string() + " --pose 375,275 --out " +
+  // From the centre spot the handedness cannot be seen: no camera without --mirrored.
+  const std::string cmd0 = std::string(OMNILOC_CLI_PATH) + " calibrate " + path.string() + " --pose 375,275 --out " +
+                           cam.string() + " >" + log.string() + " 2>&1";
+  const int st0 = std::system(cmd0.c_str());
+  EXPECT_TRUE(WIFEXITED(st0) && WEXITSTATUS(st0) == 1) << st0;
+  std::stringstream text0;
+  text0 << std::ifstream(log).rdbuf();
+  EXPECT_NE(text0.str().find("handedness unknown"), std::string::npos) << text0.str();
+  EXPECT_NE(text0.str().find("--mirrored"), std::string::npos) << text0.str();
+  EXPECT_FALSE(std::filesystem::exists(cam));
+  const std::string cmd = std::string(OMNILOC_CLI_PATH) + " calibrate " + path.string() + " --pose 375,275 --mirrored no --out " +
                           cam.string() + " --overlay " + png.string() + " >" + log.string() + " 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   std::stringstream text;
   text << std::ifstream(log).rdbuf();
   EXPECT_NE(text.str().find("residual rms"), std::string::npos) << text.str();
+  EXPECT_NE(text.str().find("mirrored no (given (--mirrored))"), std::string::npos) << text.str();
   const CameraModel c = load_camera(cam.string());
   EXPECT_EQ(c.width_px, 640);
   EXPECT_EQ(c.height_px, 480);
@@ -280,12 +304,52 @@ TEST(Calibration, CommandTakesTheDiscAndACarpetPixelAsHints) {
   const auto [half, half_text] = run("--center 320,247");
   EXPECT_EQ(half, 2) << half_text;
   EXPECT_NE(half_text.find("--center and --rim-radius come together"), std::string::npos) << half_text;
-  const auto [off, off_text] = run("--carpet-at 5000,10");
+  const auto [off, off_text] = run("--carpet-at 5000,10 --mirrored no");
   EXPECT_EQ(off, 1) << off_text;
   EXPECT_NE(off_text.find("outside the image"), std::string::npos) << off_text;
   const auto [bad, bad_text] = run("--mirrored maybe");
   EXPECT_EQ(bad, 2) << bad_text;
   std::filesystem::remove_all(dir);
+}
+
+// The handedness rule (docs/CALIBRATION.md, "Handedness"), against hand-worked cases: the
+// shipped fields are mirror-symmetric about both axes; a mark off the axes breaks the symmetry.
+TEST(Handedness, MirrorAxesAreMeasuredOnTheLines) {
+  for (const char* name : {"fira-robosot", "robocup-msl", "nubot-msl-lab"}) {
+    const detail::MirrorAxes a = detail::field_mirror_axes(load_field(name));
+    EXPECT_TRUE(a.long_axis) << name;
+    EXPECT_TRUE(a.halfway_line) << name;
+  }
+  FieldSpec spec = load_field("fira-robosot").spec;
+  spec.mark_radius_cm = 5.0;
+  spec.marks_from_centre_cm = {{100.0, 60.0}};  // one mark: neither axis maps it onto a mark
+  const detail::MirrorAxes a = detail::field_mirror_axes(build_field(spec, "one-mark"));
+  EXPECT_FALSE(a.long_axis);
+  EXPECT_FALSE(a.halfway_line);
+  spec.marks_from_centre_cm = {{100.0, 0.0}};  // on the long axis: that symmetry stays
+  const detail::MirrorAxes b = detail::field_mirror_axes(build_field(spec, "axis-mark"));
+  EXPECT_TRUE(b.long_axis);
+  EXPECT_FALSE(b.halfway_line);
+}
+
+TEST(Handedness, OnlyFramesOffTheAxesOrTwoKnownHeadingsTellIt) {
+  const FieldGeometry field = load_field("fira-robosot");  // centre (375, 275)
+  const cv::Mat img;
+  auto at = [&](double x, double y, std::optional<double> yaw, const char* name) {
+    return CalibrationFrame{img, name, {x, y}, yaw};
+  };
+  auto evidence = [&](std::vector<CalibrationFrame> f) { return detail::handedness_evidence(f, field, 50.0); };
+  EXPECT_FALSE(evidence({at(375, 275, std::nullopt, "centre")}));
+  EXPECT_FALSE(evidence({at(375, 275, 30.0, "centre, heading known")}));   // the yaw offset absorbs it
+  EXPECT_FALSE(evidence({at(150, 275, std::nullopt, "penalty mark")}));     // on the long axis
+  EXPECT_FALSE(evidence({at(375, 400, std::nullopt, "halfway line")}));     // on the halfway line
+  EXPECT_FALSE(evidence({at(150, 290, std::nullopt, "15 cm off")}));        // twin 30 cm away: too close
+  EXPECT_TRUE(evidence({at(150, 305, std::nullopt, "30 cm off")}));         // twin 60 cm away
+  EXPECT_TRUE(evidence({at(375, 275, std::nullopt, "c"), at(435, 235, std::nullopt, "off")}));
+  EXPECT_TRUE(evidence({at(375, 275, 0.0, "a"), at(375, 275, 45.0, "b")}));   // difference reversed
+  EXPECT_FALSE(evidence({at(375, 275, 0.0, "a"), at(375, 275, 180.0, "b")}));  // 180 reversed is 180
+  EXPECT_EQ(*evidence({at(375, 275, std::nullopt, "c"), at(435, 235, std::nullopt, "off")}),
+            "off stands off the field's mirror axes");
 }
 
 TEST(Calibration, UniformGreyFrameIsAClearError) {
@@ -408,8 +472,12 @@ TEST_P(RealisticCalibration, ConvergesAgainstTheTrueOptics) {
   std::printf("seed %llu\n", static_cast<unsigned long long>(c.seed));
   const CalibrationFrame f{renderer.render(c.pose, sim::realistic(c.seed)), c.name, {c.pose.x_cm, c.pose.y_cm},
                            c.heading_given ? std::optional<double>(c.pose.yaw_deg) : std::nullopt};
+  // On a mirror axis of the field the frame cannot tell the handedness: the team's word.
+  CalibrationOptions told;
+  if (std::abs(c.pose.y_cm - field.centre_cm().y()) < 25.0 || std::abs(c.pose.x_cm - field.centre_cm().x()) < 25.0)
+    told.hints.mirrored = truth.mirrored;
   const auto t0 = std::chrono::steady_clock::now();
-  const CalibrationResult r = calibrate_camera({f}, field);
+  const CalibrationResult r = calibrate_camera({f}, field, told);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   // Heading given: the yaw offset itself is found; unknown: the fit takes heading 0.
   const TrueOpticsErrors e = compare_with_truth(r, truth, c.heading_given ? 0.0 : c.pose.yaw_deg, c.symmetric);

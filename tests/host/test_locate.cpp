@@ -397,7 +397,7 @@ TEST(LocateRealFrame, TkuCentreSpotCalibratedThenLocated) {
   fs::create_directories(dir);
   const fs::path cam = dir / "tku-camera.json";
   std::string out, err;
-  ASSERT_EQ(run(std::string(OMNILOC_CLI_PATH) + " calibrate " + frame.string() + " --pose 375,275 --out " + cam.string(),
+  ASSERT_EQ(run(std::string(OMNILOC_CLI_PATH) + " calibrate " + frame.string() + " --pose 375,275 --mirrored no --out " + cam.string(),
                 dir, out, err),
             0)
       << out << err;

@@ -141,9 +141,10 @@ int run_calibrate(const CalibrateArgs& a) {
   std::printf("radial model d(r) = %.6g r + %.6g r^2 + %.6g r^3 + %.6g r^4 cm; d(50) %.1f, d(100) %.1f, d(view) %.1f cm\n",
               r.radial.a[0], r.radial.a[1], r.radial.a[2], r.radial.a[3], r.radial.ground_cm(50), r.radial.ground_cm(100),
               r.radial.ground_cm(r.view_radius_px));
-  std::printf("yaw offset %.2f deg%s, mirrored %s%s\n", c.yaw_offset_deg,
+  std::printf("yaw offset %.2f deg%s, mirrored %s (%s)%s\n", c.yaw_offset_deg,
               r.yaw_offset_ambiguous ? " (or 180 deg more: the view is symmetric; add a frame off the centre to tell)" : "",
-              c.mirrored ? "yes" : "no", r.mirrored_ambiguous ? " (ambiguous: the other handedness fits as well)" : "");
+              c.mirrored ? "yes" : "no", r.handedness_from.c_str(),
+              r.mirrored_ambiguous ? " (ambiguous: the other handedness fits as well)" : "");
   std::printf("view radius %.1f px, body radius %.1f px, %zu mast(s):", r.view_radius_px, c.body_radius_px, c.masts.size());
   for (const auto& m : c.masts) std::printf(" %.1f+-%.1f deg", m.bearing_deg, m.half_width_deg);
   std::printf("\n");

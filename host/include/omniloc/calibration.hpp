@@ -118,6 +118,7 @@ struct CalibrationResult {
   // polynomial is extrapolated outside (towards the body when no line crosses there).
   double measured_min_px = 0.0, measured_max_px = 0.0;
   bool mirrored_ambiguous = false;  // the other handedness fits as well (symmetric view)
+  std::string handedness_from;      // what decided it: "given (--mirrored)" or "the lines: <frame> ..."
   // Every frame was taken within the ambiguity separation (50 cm) of the centre of the
   // point-symmetric field: the yaw offset 180 deg away fits as well, so the offset is known only up
   // to 180 deg, and so is which goal is where (no goal_colour_at_x_max is written).
