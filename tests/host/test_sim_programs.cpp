@@ -30,6 +30,7 @@
 
 #include "omniloc/conventions.hpp"
 #include "omniloc/recording.hpp"
+#include "run_command.hpp"
 #include "temp_dir.hpp"
 #include "udp_receiver.hpp"
 
@@ -40,14 +41,8 @@ using namespace omniloc;
 
 using omniloc::test::TempDir;
 
-/// Runs a command line; returns the exit status, its stdout+stderr in `output`.
 int run(const std::string& cmd, const fs::path& log, std::string& output) {
-  const int status = std::system((cmd + " >" + log.string() + " 2>&1").c_str());
-  std::ifstream in(log);
-  std::ostringstream os;
-  os << in.rdbuf();
-  output = os.str();
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return omniloc::test::run_command(cmd, log, output);
 }
 
 std::vector<nlohmann::json> parse_all(const std::vector<std::string>& grams) {

@@ -25,6 +25,7 @@
 #include "omniloc/field.hpp"
 #include "omniloc_sim/renderer.hpp"
 #include "omniloc_sim/venue.hpp"
+#include "run_command.hpp"
 #include "temp_dir.hpp"
 
 namespace omniloc {
@@ -314,12 +315,7 @@ TEST(Venues, FieldLinesLandWhereEveryProfileProjectsThem) {
 }
 
 int run(const std::string& cmd, const fs::path& log, std::string& output) {
-  const int status = std::system((cmd + " >" + log.string() + " 2>&1").c_str());
-  std::ifstream in(log);
-  std::ostringstream os;
-  os << in.rdbuf();
-  output = os.str();
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return omniloc::test::run_command(cmd, log, output);
 }
 
 TEST(VenuesCommand, WritesEachVenuesFramesAndTruth) {

@@ -5,9 +5,9 @@
 //     cluster, and so is a grey one);
 //  2. along every bearing, the pixels classified to the nearest cluster and cut into runs (a gap as
 //     wide as a line is bridged, so the lines crossing the carpet do not cut it); the run that
-//     touches the centre is the robot; the bearing votes, by length, for the cluster of its longest
-//     other run: the carpet is what the robot stands on and what reaches from its body to where
-//     the floor ends, on most bearings;
+//     touches the centre is the robot; the bearing votes for the cluster of its first run beyond
+//     the body when the body is known (the search starts beyond it), else, by length, of its
+//     longest other run: the carpet is what the robot stands on, on most bearings;
 //  3. the winner must be seen on enough bearings (the carpet surrounds the robot; a person, a box
 //     or a rod hides it on a few only), else "no carpet" with the reason;
 //  4. its colour window from its own pixels (carpet_colour_from_samples on them), grey carpets
@@ -124,11 +124,11 @@ std::vector<Run> runs_along(const std::vector<int>& labels, int first_r, int bri
 struct Votes {
   std::vector<double> length;      // per cluster: sum of the winning runs' lengths
   std::vector<int> bearings_seen;  // per cluster: bearings with a run of at least `bridge` px
-  std::vector<Run> winners;        // per bearing: its longest run beyond the robot (label -1: none)
+  std::vector<Run> winners;        // per bearing: the run that voted (label -1: none)
 };
 
 Votes vote(const cv::Mat& lab8, const CarpetSearch& s, const Clusters& c) {
-  Votes v{std::vector<double>(c.centres.size(), 0.0), std::vector<int>(c.centres.size(), 0)};
+  Votes v{std::vector<double>(c.centres.size(), 0.0), std::vector<int>(c.centres.size(), 0), {}};
   // Gaps up to a fortieth of the view are bridged: a 12.5 cm line next to the robot is a few px
   // wide in any omni view; the carpet runs between lines are many times that.
   const int bridge = std::max(2, static_cast<int>(std::lround(s.outer_px / 40.0)));
@@ -147,13 +147,22 @@ Votes vote(const cv::Mat& lab8, const CarpetSearch& s, const Clusters& c) {
     const auto runs = runs_along(labels, r0, bridge);
     // Without a known body, the run from the centre is the robot's (lens, body): not the floor.
     const std::size_t skip = s.inner_px <= 0.0 && !runs.empty() && runs.front().begin <= bridge ? 1 : 0;
+    // With the body known (the search starts beyond it), the floor next to it is what the robot
+    // stands on: the first run as wide as a bridge (not a line) votes, so that near the carpet's
+    // edge the floor beyond it, longer in the image, does not outvote it. Without, the body may
+    // show as more than one run (lens, housing): the longest run votes.
     const Run* best = nullptr;
+    const Run* first = nullptr;
     std::vector<bool> seen(c.centres.size(), false);
     for (std::size_t i = skip; i < runs.size(); ++i) {
       const Run& r = runs[i];
-      if (r.end - r.begin >= bridge) seen[static_cast<std::size_t>(r.label)] = true;
+      if (r.end - r.begin >= bridge) {
+        seen[static_cast<std::size_t>(r.label)] = true;
+        if (first == nullptr) first = &r;
+      }
       if (best == nullptr || r.end - r.begin > best->end - best->begin) best = &r;
     }
+    if (s.inner_px > 0.0 && first != nullptr) best = first;
     v.winners.push_back(best != nullptr ? *best : Run{-1, 0, 0});
     if (best != nullptr) v.length[static_cast<std::size_t>(best->label)] += best->end - best->begin;
     for (std::size_t k = 0; k < seen.size(); ++k) v.bearings_seen[k] += seen[k];

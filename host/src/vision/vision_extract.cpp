@@ -591,6 +591,10 @@ bool LineExtractor::ensure_carpet(const cv::Mat& bgr, std::string* why) {
   search.outer_px = k1_;
   const auto c = estimate_carpet_colour(bgr, search, why);
   if (!c) return false;
+  if (!(c->median_val >= 1.0)) {  // the light follows the carpet's brightness: a black one has none
+    *why = "no carpet: the floor around the robot is black (median brightness " + std::to_string(c->median_val) + ")";
+    return false;
+  }
   carpet_ = CarpetHsv{c->hue, c->hue_half_width, c->sat_min, c->val_min, c->val_max};
   ref_val_ = c->median_val;
   sector_val_.clear();
