@@ -108,9 +108,11 @@ TEST(RealisticRoundTrip, CalibratedOnTheCentreSpotThenLocatedElsewhere) {
   EXPECT_LT(u_med, 8.0);
   EXPECT_LT(u_worst, 15.0);   // an accepted frame on the right side is never far off ...
   // ... and never the twin, but for one known failure (2026-12-06, issue [1/4]'s note): the frame
-  // at (270, 215, -175), since the realistic renderer's scene changed with the venue sampler, is
-  // accepted 225 cm off at the heading-unknown search (E 7.20 below E_TH 8; the goal colours'
-  // verdict 8 agree / 431 contrary). Lower it to 0 when mended, never raise it.
+  // at (270, 215, -175) is accepted 225 cm off by the heading-unknown search, at E 7.20 below
+  // E_TH 8, while the true pose scores E 6.7: the search misses the better minimum. The frame is
+  // the same as before; the calibrated carpet window moved a little (hue +-4.4 instead of +-4.0,
+  // from the cluster estimate), the crossings by 8 of 1195, and that moved the search's minimum.
+  // Lower it to 0 when mended, never raise it.
   constexpr int kKnownWrongTwins = 1;
   EXPECT_LE(u_twin, kKnownWrongTwins);
   // Heading known, a global search at that heading: what it accepts is right (within the same
