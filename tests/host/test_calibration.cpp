@@ -22,6 +22,7 @@
 
 #include "omniloc/calibration.hpp"
 #include "handedness.hpp"
+#include "self_check.hpp"
 #include "omniloc/camera.hpp"
 #include "test_data_path.hpp"
 #include "omniloc/conventions.hpp"
@@ -227,6 +228,21 @@ TEST(Calibration, RealTkuFrameOnTheCentreSpotHeadingUnknown) {
               r.goals.yellow->colour.hue_half_width, r.goals.yellow->pixels);
   EXPECT_NEAR(r.goals.blue->colour.hue, 112, 15);
   EXPECT_NEAR(r.goals.yellow->colour.hue, 28, 12);
+  // Self-check: the fitted camera puts the field's lines where the frame shows them; the same
+  // camera seen from 40 or 30 cm along the field's x puts them on bare carpet (turned, or moved
+  // along the halfway line, it would still put much of the centre circle and that line, which
+  // fill this view, on their lines: no test here).
+  const FrameFit& fit = r.fits.front();
+  std::printf("  self-check: %.0f %% of %d line points seen\n", 100 * fit.line_recall, fit.recall_points);
+  EXPECT_GT(fit.recall_points, 200);
+  EXPECT_GT(fit.line_recall, 0.9);
+  const Pose2 at{375.0, 275.0, fit.yaw_deg};
+  for (const Pose2& wrong : {Pose2{at.x_cm + 40.0, at.y_cm, at.yaw_deg}, Pose2{at.x_cm - 30.0, at.y_cm, at.yaw_deg}}) {
+    const detail::LineRecall lr = detail::model_line_recall(c, r.analyses.front(), wrong, field);
+    std::printf("  wrong pose (%.0f, %.0f, %.1f): %.0f %% of %d seen\n", wrong.x_cm, wrong.y_cm, wrong.yaw_deg,
+                100 * lr.fraction(), lr.expected);
+    EXPECT_LT(lr.fraction(), 0.5);
+  }
 }
 
 // The program: the real frame, one pose with the heading unknown, the camera file and overlay.

@@ -46,6 +46,7 @@ struct VenueOutcome {
   std::string calib_step;      // failed step ("rim", "carpet", "lines", "view", "fit", "model") or ""
   std::string calib_error;
   double rms_px = 0.0, centre_error_px = 0.0;
+  double line_recall = 0.0;    // calibrate's self-check on the calibration frame
   bool calib_good = false;     // calibrated, rms and centre within the goal
   LocateOutcome located;       // with the calibrated camera (when calibrated)
   LocateOutcome reference;     // with the venue's true (nominal) camera
@@ -128,6 +129,7 @@ inline VenueOutcome run_venue(std::uint64_t seed) {
   }
   out.calibrated = true;
   out.rms_px = cal.rms_px;
+  out.line_recall = cal.fits.front().line_recall;
   out.centre_error_px = (cal.camera.center_px - v.optics.centre_px).norm();
   out.calib_good = out.rms_px < kCalibRmsPx && out.centre_error_px < kCalibCentrePx;
   try {
@@ -151,8 +153,8 @@ inline void print_outcome(const VenueOutcome& o) {
   if (!o.calibrated) {
     std::printf("calibrate failed at %s: %s", o.calib_step.c_str(), o.calib_error.c_str());
   } else {
-    std::printf("calibrated rms %.2f px, centre %.2f px off%s; located ", o.rms_px, o.centre_error_px,
-                o.calib_good ? "" : " (outside the goal)");
+    std::printf("calibrated rms %.2f px, centre %.2f px off%s, self-check %.0f %%; located ", o.rms_px, o.centre_error_px,
+                o.calib_good ? "" : " (outside the goal)", 100 * o.line_recall);
     if (!o.located.usable) std::printf("no measurement (%s)", o.located.why.c_str());
     else std::printf("%.1f cm %.1f deg off, %s", o.located.error_cm, o.located.error_deg, verdict(o.located));
   }

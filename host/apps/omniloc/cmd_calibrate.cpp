@@ -162,6 +162,8 @@ int run_calibrate(const CalibrateArgs& a) {
     std::printf("%s: heading %.2f deg%s, %d line pixels, %d within %.0f px: rms %.2f px (%.2f cm), median %.2f px\n",
                 frames[i].name.c_str(), f.yaw_deg, f.yaw_given ? " (given)" : " (found, yaw offset taken for heading 0)",
                 f.line_pixels, f.inliers, r.inlier_threshold_px, f.rms_px, f.rms_cm, f.median_px);
+    std::printf("%s: self-check: %.0f %% of the %d line points the camera puts on the carpet are seen as lines\n",
+                frames[i].name.c_str(), 100 * f.line_recall, f.recall_points);
   }
   const auto& f0 = r.fits.front();
   std::printf("%s: coarse score %.2f px at heading %.1f deg; best distinct heading %.1f deg scores %.2f px%s\n",

@@ -106,6 +106,10 @@ struct FrameFit {
   double score = 0.0, twin_score = 0.0;     // coarse truncated mean residual (px)
   int line_pixels = 0, inliers = 0;
   double rms_px = 0.0, rms_cm = 0.0, median_px = 0.0;
+  // Self-check: of the field's line points the camera puts on the frame's carpet (`recall_points`),
+  // the fraction seen there as line (docs/CALIBRATION.md, step 8).
+  double line_recall = 0.0;
+  int recall_points = 0;
 };
 
 struct CalibrationResult {
