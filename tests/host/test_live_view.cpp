@@ -566,7 +566,9 @@ TEST(OmnilocdSimLiveView, PageShowsThePoseOnTheFieldAndTheCameraOverlay) {
   EXPECT_GT(grey, 200);
   EXPECT_GT(magenta, 50);
   EXPECT_GT(yellow, 200);
-  EXPECT_EQ(count_hue(img, field_panel, 300, 20, 60, 100), 0);
+  // The marker's antialiased edge over the cyan path can blend to a magenta hue (one such pixel
+  // seen at the marker's rim, BGR (143, 106, 152)): the marker's neighbourhood is not a crossing.
+  EXPECT_EQ(count_hue(img, field_panel, 300, 20, 60, 100) - count_hue(img, field_panel & around, 300, 20, 60, 100), 0);
 }
 
 // The robot's own daemon (no simulator) serves the page too: without a board, no pose, no frame,
