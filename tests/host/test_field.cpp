@@ -3,10 +3,13 @@
 
 #include <filesystem>
 #include <fstream>
+#include <cstdio>
 #include <string>
+#include <vector>
 
 #include "config_test_util.hpp"
 #include "omniloc/config_reader.hpp"
+#include "omniloc/conventions.hpp"
 #include "omniloc/field.hpp"
 
 namespace omniloc {
@@ -93,6 +96,28 @@ TEST(Field, RayIntervalsAgreeWithPointSamplingEverywhere) {
     }
   }
   EXPECT_GT(checked, 500000);
+}
+
+// The line walk that the overlays and calibrate's self-check share: every point lies on a white
+// line, consecutive points of one line are at most the step apart, and the count is the lines'
+// length over the step (centre circle, arcs and segments, hand-summed for the FIRA field).
+TEST(Field, LinePointsLieOnTheLinesAtTheStep) {
+  const FieldGeometry field = load_field("fira-robosot");
+  double length_cm = 0.0;
+  for (const auto& s : field.segments) length_cm += (s.b_cm - s.a_cm).norm();
+  for (const auto& a : field.arcs) length_cm += deg_to_rad(a.end_deg - a.start_deg) * a.radius_cm;
+  const std::size_t pieces = field.segments.size() + field.arcs.size();
+  for (const double step : {0.5, 2.0}) {
+    std::vector<Eigen::Vector2d> pts;
+    for_each_line_point(field, step, [&](const Eigen::Vector2d& q) { pts.push_back(q); });
+    int off = 0;
+    for (const auto& q : pts) off += !is_white(field, q);
+    EXPECT_EQ(off, 0) << step;
+    // n = ceil(len / step) + 1 per piece: between len / step + 1 and len / step + 2 per piece.
+    EXPECT_GE(static_cast<double>(pts.size()), length_cm / step + static_cast<double>(pieces)) << step;
+    EXPECT_LE(static_cast<double>(pts.size()), length_cm / step + 2.0 * static_cast<double>(pieces)) << step;
+    std::printf("step %.1f cm: %zu points over %.0f cm of lines in %zu pieces\n", step, pts.size(), length_cm, pieces);
+  }
 }
 
 TEST(Field, WhiteLineIndexAgreesWithIsWhite) {

@@ -86,7 +86,7 @@ inline LocateOutcome locate_with(const sim::Venue& v, const CameraModel& camera,
   // colours known) is located, when the truth is the pose or its twin (judged below).
   o.matched = r.match.error < config.e_th;
   if (r.match.cell < 0) return o;
-  // A twin counts: the field's point-symmetric pose shows the same lines.
+  // The field's point-symmetric pose shows the same lines.
   const Eigen::Vector2d c = v.field.centre_cm();
   const Pose2 twin{2 * c.x() - truth.x_cm, 2 * c.y() - truth.y_cm, wrap_deg(truth.yaw_deg + 180.0)};
   for (const Pose2& t : {truth, twin}) {

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -121,6 +122,10 @@ struct FieldGeometry {
 /// Loads a geometry file by name ("fira-robosot", "robocup-msl") or path. Throws ConfigError
 /// naming the file and the field for a missing, malformed or invalid entry.
 [[nodiscard]] FieldGeometry load_field(const std::string& name_or_path);
+
+/// Calls `f` with points along the centre line of every segment and arc of the field, `step_cm`
+/// apart along each (both ends included); the discs (marks) are the caller's.
+void for_each_line_point(const FieldGeometry& field, double step_cm, const std::function<void(const Eigen::Vector2d&)>& f);
 
 /// True when the floor point p (field frame, cm) is on a white line.
 [[nodiscard]] bool is_white(const FieldGeometry& field, const Eigen::Vector2d& p_cm);

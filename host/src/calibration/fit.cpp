@@ -749,13 +749,7 @@ cv::Mat calibration_overlay(const CalibrationFrame& frame, const FrameAnalysis& 
     const int v = static_cast<int>(std::lround(cam.center_px.y() - rr * std::sin(phi)));
     if (u >= 0 && v >= 0 && u < out.cols && v < out.rows) out.at<cv::Vec3b>(v, u) = {0, 255, 255};
   };
-  for (const auto& s : field.segments) {
-    const double len = (s.b_cm - s.a_cm).norm();
-    for (double t = 0; t <= len; t += 0.5) draw(s.a_cm + (s.b_cm - s.a_cm) * (t / len));
-  }
-  for (const auto& arc : field.arcs)
-    for (double t = arc.start_deg; t <= arc.end_deg; t += 0.2)
-      draw(arc.centre_cm + arc.radius_cm * Eigen::Vector2d(std::cos(deg_to_rad(t)), std::sin(deg_to_rad(t))));
+  for_each_line_point(field, 0.5, draw);
   for (const auto& d : field.discs) draw(d.centre_cm);
   const cv::Point c(static_cast<int>(std::lround(cam.center_px.x())), static_cast<int>(std::lround(cam.center_px.y())));
   cv::circle(out, c, static_cast<int>(std::lround(r.rim.radius_px)), {255, 128, 0}, 1, cv::LINE_AA);

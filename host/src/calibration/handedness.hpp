@@ -18,8 +18,8 @@ namespace omniloc::detail {
 [[nodiscard]] std::optional<std::string> handedness_evidence(const std::vector<CalibrationFrame>& frames,
                                                             const FieldGeometry& field, double separation_cm);
 
-/// The field's mirror axes through its centre that map its lines onto themselves: [0] the line
-/// y = centre (the long axis), [1] the line x = centre (the halfway line). Measured on the lines,
+/// The field's mirror axes through its centre that map its lines onto themselves: the line
+/// y = centre (the long axis) and the line x = centre (the halfway line). Measured on the lines,
 /// not assumed: a field file may place marks off the axes.
 struct MirrorAxes {
   bool long_axis = false, halfway_line = false;

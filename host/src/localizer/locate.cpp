@@ -161,10 +161,7 @@ void draw_field_model(cv::Mat& out, const CameraModel& camera, const FieldGeomet
     const double len = (b - a).norm();
     for (double t = 0; t <= len; t += 1.0) draw(a + (b - a) * (t / len));
   };
-  for (const auto& s : field.segments) segment(s.a_cm, s.b_cm);
-  for (const auto& arc : field.arcs)
-    for (double t = arc.start_deg; t <= arc.end_deg; t += 0.5)
-      draw(arc.centre_cm + arc.radius_cm * Eigen::Vector2d(std::cos(deg_to_rad(t)), std::sin(deg_to_rad(t))));
+  for_each_line_point(field, 1.0, draw);
   for (const auto& d : field.discs) draw(d.centre_cm);
   const double cy = field.centre_cm().y(), w = field.goal.width_cm / 2.0;
   for (const double x : {field.border_cm, field.border_cm + field.field_length_cm}) {

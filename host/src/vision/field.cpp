@@ -290,6 +290,21 @@ bool placeable(const FieldGeometry& field, const Eigen::Vector2d& p) {
   return p.x() >= -m && p.y() >= -m && p.x() <= field.total_x_cm() + m && p.y() <= field.total_y_cm() + m;
 }
 
+void for_each_line_point(const FieldGeometry& field, double step_cm, const std::function<void(const Eigen::Vector2d&)>& f) {
+  for (const auto& s : field.segments) {
+    const int n = std::max(1, static_cast<int>(std::ceil((s.b_cm - s.a_cm).norm() / step_cm)));
+    for (int i = 0; i <= n; ++i) f(s.a_cm + (s.b_cm - s.a_cm) * (static_cast<double>(i) / n));
+  }
+  for (const auto& a : field.arcs) {
+    const double span_deg = a.end_deg - a.start_deg;
+    const int n = std::max(1, static_cast<int>(std::ceil(deg_to_rad(span_deg) * a.radius_cm / step_cm)));
+    for (int i = 0; i <= n; ++i) {
+      const double t = deg_to_rad(a.start_deg + span_deg * i / n);
+      f(a.centre_cm + a.radius_cm * Eigen::Vector2d(std::cos(t), std::sin(t)));
+    }
+  }
+}
+
 bool is_white(const FieldGeometry& field, const Eigen::Vector2d& p) {
   const double h = field.line_width_cm / 2.0;
   // Bounding-box rejects first: most points are far from most lines (the renderer calls this per pixel).
