@@ -318,7 +318,7 @@ config::Json nominal_json(const TrueOptics& o) {
   try {
     cam.validate(config::Origin("nominal camera"));
   } catch (const std::exception& e) {
-    // Today's camera model cannot say everything (a view past 254 px): recorded, not hidden.
+    // A camera the model cannot say (none is known today): recorded, not hidden.
     j["valid"] = false;
     j["problem"] = e.what();
   }

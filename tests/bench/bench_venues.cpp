@@ -39,7 +39,7 @@ int main() {
     calib_good += o.calib_good;
     located += o.located_good();
     wild += o.wild();
-    ref_located += o.reference.matched && o.reference.error_cm <= test::kLocateCm && o.reference.error_deg <= test::kLocateDeg;
+    ref_located += o.reference_good();
     if (!o.calibrated) ++by_step[o.calib_step];
     else if (!o.calib_good) ++by_step["calibrated outside the goal"];
     else if (!o.located_good()) ++by_step[o.located.usable ? "located outside the goal" : "locate: no measurement"];

@@ -42,8 +42,8 @@ namespace {
 
 using omniloc::fuzz::fuzz_check;
 
-// docs/VISION.md "Database": 80-byte header, payload nx ny x 1440, FNV-1a 64 of everything before it.
-constexpr std::size_t kHeaderBytes = 80;
+// docs/VISION.md "Database": 88-byte header, payload nx ny x 1440, FNV-1a 64 of everything before it.
+constexpr std::size_t kHeaderBytes = 88;
 constexpr std::size_t kEntryBytes = 360 * 4;
 
 template <class T>
@@ -88,7 +88,7 @@ Reading read_independently(std::string_view f, const omniloc::FieldGeometry& fie
   Reading r;
   if (f.size() < kHeaderBytes) return r;
   if (std::memcmp(f.data(), "OMNIFDB\0", 8) != 0) return r;
-  if (read_at<std::uint32_t>(f, 8) != 1 || read_at<std::uint32_t>(f, 12) != kHeaderBytes) return r;
+  if (read_at<std::uint32_t>(f, 8) != 2 || read_at<std::uint32_t>(f, 12) != kHeaderBytes) return r;
   r.nx = read_at<std::int32_t>(f, 16);
   r.ny = read_at<std::int32_t>(f, 20);
   r.x0 = read_at<double>(f, 24);
@@ -102,6 +102,8 @@ Reading read_independently(std::string_view f, const omniloc::FieldGeometry& fie
   if (f.size() != kHeaderBytes + payload + 8) return r;
   if (read_at<std::uint64_t>(f, kHeaderBytes + payload) != fnv1a64(f.substr(0, kHeaderBytes + payload))) return r;
   if (read_at<std::uint64_t>(f, 56) != field_fp || read_at<std::uint64_t>(f, 64) != camera_fp) return r;
+  // The default camera's view (under 254 px) is sampled every pixel.
+  if (read_at<double>(f, 80) != 1.0) return r;
   if (!std::isfinite(r.step) || !std::isfinite(r.x0) || !std::isfinite(r.y0) || r.step < 1.0 || r.step > 100.0) return r;
   if (r.nx < 2 || r.ny < 2) return r;  // one point along a side cannot localise along it
   bool near_edge = false;

@@ -103,7 +103,8 @@ write(write_board, "garbage_and_unplug", ops(3, 0, 0, 0, 0) + step_raw(bytes(ran
 
 # feature_db: byte 0 is the mode (bit 0: the harness fixes the fingerprints and the checksum), the
 # rest the file. Header offsets (docs/VISION.md): nx 16, ny 20, x0 24, y0 32, step 40, field
-# fingerprint 56, camera fingerprint 64, payload bytes 72; the FNV-1a 64 checksum is the last 8 bytes.
+# fingerprint 56, camera fingerprint 64, payload bytes 72, radius step (px) 80, 88 bytes in all (format
+# version 2); the FNV-1a 64 checksum is the last 8 bytes.
 def fnv1a64(data):
     h = 0xcbf29ce484222325
     for b in data:
@@ -125,8 +126,10 @@ def feature_db_seeds(omniloc):
     with tempfile.TemporaryDirectory() as tmp:
         for step in (10, 15, 20, 30):
             out = os.path.join(tmp, f"s{step}.db")
+            # At 20 and 30 cm the field's grid has one point along a side: builddb writes the file,
+            # then its read-back refuses it (exit 1), which is what those seeds are for.
             subprocess.run([omniloc, "builddb", "--field", field, "--camera", "default", "--step", str(step),
-                            "--threads", "1", "--out", out], check=True, capture_output=True)
+                            "--threads", "1", "--out", out], check=step < 20, capture_output=True)
             dbs[step] = open(out, "rb").read()
     h = "feature_db"
     for step in (10, 15):
@@ -146,7 +149,7 @@ def feature_db_seeds(omniloc):
     write(h, "tiny_step", b"\x00" + patch(d, 40, "<d", 1e-300))
     write(h, "shifted_origin", b"\x00" + patch(d, 24, "<d", 6.0))
     write(h, "other_step", b"\x00" + patch(d, 40, "<d", 20.0))
-    one = d[:80 + 1440] + b"\0" * 8
+    one = d[:88 + 1440] + b"\0" * 8
     one = one[:16] + struct.pack("<ii", 1, 1) + one[24:72] + struct.pack("<Q", 1440) + one[80:]
     write(h, "one_by_one_at_10cm", b"\x00" + resum(one))
     write(h, "nx_swapped", b"\x00" + resum(d[:16] + struct.pack("<ii", 3, 4) + d[24:]))
@@ -154,11 +157,12 @@ def feature_db_seeds(omniloc):
     write(h, "payload_size_wrong", b"\x00" + patch(d, 72, "<Q", 1440 * 11))
     write(h, "truncated", b"\x00" + d[:-1])
     write(h, "one_byte_more", b"\x01" + d + b"\0")
-    write(h, "header_only", b"\x00" + d[:80])
+    write(h, "header_only", b"\x00" + d[:88])
     write(h, "checksum_wrong", b"\x00" + d[:-1] + bytes([d[-1] ^ 1]))
     write(h, "other_field", b"\x00" + patch(d, 56, "<Q", 0x1234))
     write(h, "other_camera", b"\x00" + patch(d, 64, "<Q", 0x1234))
-    write(h, "version_2", b"\x00" + patch(d, 8, "<I", 2))
+    write(h, "version_1", b"\x00" + patch(d, 8, "<I", 1))
+    write(h, "other_radius_step", b"\x01" + patch(d, 80, "<d", 2.0))
     write(h, "not_a_database", b"\x00" + b"OMNIFDX\0" + d[8:])
     write(h, "empty", b"\x00")
 

@@ -334,7 +334,8 @@ void patch_with_valid_checksum(std::vector<char>& bytes, std::size_t offset, T v
 TEST_F(FeatureDbTest, RefusesAValidChecksumOverANonsenseGridAndFilesThatAreNotFiles) {
   save_feature_db(*db_, path_);
   const std::vector<char> good = read_file();
-  // Header offsets: magic 0, version 8, header_bytes 12, nx 16, ny 20, x0 24, y0 32, step 40.
+  // Header offsets: magic 0, version 8, header_bytes 12, nx 16, ny 20, x0 24, y0 32, step 40,
+  // payload_bytes 72, radius_step_px 80 (88 bytes).
   struct Case {
     const char* what;
     std::size_t offset;
@@ -347,6 +348,7 @@ TEST_F(FeatureDbTest, RefusesAValidChecksumOverANonsenseGridAndFilesThatAreNotFi
       {"tiny step", 40, 1e-300, "corrupt grid"},
       {"shifted origin", 24, 25.0, "is not the grid of field"},
       {"other step", 40, 20.0, "is not the grid of field"},
+      {"other radius step", 80, 2.0, "radii sampled every 2.000000 px, the camera in use samples every 1.000000 px"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.what);
@@ -357,13 +359,13 @@ TEST_F(FeatureDbTest, RefusesAValidChecksumOverANonsenseGridAndFilesThatAreNotFi
   }
   // A 1 x 1 grid with a payload of one point and a valid checksum.
   {
-    std::vector<char> bytes(good.begin(), good.begin() + 80 + kFeatureBytes);
+    std::vector<char> bytes(good.begin(), good.begin() + 88 + kFeatureBytes);
     bytes.resize(bytes.size() + 8);
     std::int32_t one = 1;
     std::memcpy(bytes.data() + 16, &one, 4);
     std::memcpy(bytes.data() + 20, &one, 4);
     const std::uint64_t payload = kFeatureBytes;
-    patch_with_valid_checksum(bytes, 72, payload);  // payload_bytes is the last header field
+    patch_with_valid_checksum(bytes, 72, payload);  // payload_bytes, before radius_step_px (80)
     write_file(bytes);
     expect_refused("fewer than 2 points along a side", *field_, *camera_);
   }

@@ -467,18 +467,47 @@ TEST(VisionModelConfig, RecordingMetaCarriesTheVisionBlock) {
   EXPECT_EQ(back.camera.vision, meta.camera.vision);
 }
 
-TEST(VisionModelConfig, ViewBeyondTheFormatIsRefused) {
-  CameraModel cam = load_camera("default");
-  cam.width_px = 1280;
-  cam.height_px = 1024;
-  cam.center_px = {640, 512};
-  for (auto& m : cam.radius_lut) m.radius_px *= 2.0;
-  try {
-    cam.validate(config::Origin("big.json"));
-    ADD_FAILURE() << "accepted";
-  } catch (const std::exception& e) {
-    EXPECT_NE(std::string(e.what()).find("big.json:radius_lut: the view reaches beyond the 254 px"), std::string::npos) << e.what();
+// A 1280 x 1024 camera whose view ends at 477 px (the default table at twice the scale): the
+// feature's one-byte radii are sample indices every view / 254 px, so the whole view is scanned
+// (before, such a camera was refused). The extraction's crossings against the geometric scan of
+// the same camera, and crossings found beyond the old 254 px end.
+TEST(VisionLargeView, ViewBeyond254PxIsScannedToItsEnd) {
+  CameraModel big = load_camera("default");
+  big.width_px = 1280;
+  big.height_px = 1024;
+  big.center_px = {640, 512};
+  for (auto& m : big.radius_lut) m.radius_px *= 2.0;
+  big.body_radius_px *= 2.0;
+  big.validate(config::Origin("big.json"));
+  ASSERT_NEAR(big.view_radius_px(), 2.0 * load_camera("default").view_radius_px(), 1e-9);
+  EXPECT_NEAR(big.scan_step_px(), big.view_radius_px() / 254.0, 1e-12);
+  EXPECT_EQ(big.last_scan_sample(), 254);
+  EXPECT_EQ(big.first_scan_sample(), static_cast<int>(std::ceil(big.body_radius_px / big.scan_step_px())));
+
+  const sim::OmniRenderer r(load_field("fira-robosot"), big);
+  const std::uint64_t seed = 4771;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> ux(60, 690), uy(60, 490), uyaw(-180, 180);
+  LineExtractor ex(big);
+  Agreement all;
+  int beyond_old_end = 0;
+  for (int i = 0; i < 6; ++i) {
+    const Pose2 pose{ux(rng), uy(rng), uyaw(rng)};
+    sim::RenderOptions opt;
+    opt.seed = seed + static_cast<std::uint64_t>(i);
+    const cv::Mat img = r.render(pose, opt);
+    ExtractionReport rep;
+    const Scan got = rotate_to_field(ex.extract(img, 4, &rep), pose.yaw_deg);
+    ASSERT_TRUE(rep.usable) << rep.reason;
+    all.add(compare(got, expected_scan(r.field(), big, {pose.x_cm, pose.y_cm}), 1.0));
+    for (const std::uint8_t k : got.radii_px) beyond_old_end += k != kNoCrossing && k * big.scan_step_px() > 254.0;
   }
+  print("1280 x 1024, view 477 px", all);
+  std::printf("crossings beyond 254 px: %d\n", beyond_old_end);
+  EXPECT_GT(all.recall(), 0.9);
+  EXPECT_GT(all.precision(), 0.9);
+  EXPECT_GT(beyond_old_end, 100);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -54,6 +54,10 @@ struct VenueOutcome {
     return located.matched && located.error_cm <= kLocateCm && located.error_deg <= kLocateDeg;
   }
   [[nodiscard]] bool wild() const { return located.accepted && located.error_cm > kWildCm; }
+  /// The same judgement of the reference locate (with the true camera).
+  [[nodiscard]] bool reference_good() const {
+    return reference.matched && reference.error_cm <= kLocateCm && reference.error_deg <= kLocateDeg;
+  }
 };
 
 /// The step a calibration error names (the analysis and fit say "no mirror rim", "no carpet", ...).

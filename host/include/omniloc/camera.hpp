@@ -49,11 +49,18 @@ struct CameraModel {
   /// How the line extraction sees the floor (the "vision" block; not part of fingerprint()).
   VisionModel vision;
 
-  /// The largest view radius the uint8 feature format stores (255 is "no crossing").
-  static constexpr double kMaxViewRadiusPx = 254.0;
-  /// Largest radius whose full circle is inside the image and the table; validate() refuses a
-  /// camera where it exceeds kMaxViewRadiusPx.
+  /// The feature format stores a radius as a sample index in one byte (255 is "no crossing"), so a
+  /// ray has at most this many samples: sample k lies k * scan_step_px() px from the centre.
+  static constexpr int kMaxScanSample = 254;
+  /// Largest radius whose full circle is inside the image and the table.
   [[nodiscard]] double view_radius_px() const;
+  /// Pixels between a ray's samples: 1 while the view fits in kMaxScanSample px, else the view
+  /// divided into kMaxScanSample samples, so that a camera of any size scans its whole view (a
+  /// 1280 x 1024 one as if its image were halved: the feature's resolution, not its reach, is capped).
+  [[nodiscard]] double scan_step_px() const;
+  /// The first and last sample index of a ray (ceil(min_radius / step), floor(view / step)).
+  [[nodiscard]] int first_scan_sample() const;
+  [[nodiscard]] int last_scan_sample() const;
   /// Smallest radius at which the floor is visible (body radius or the table's first row).
   [[nodiscard]] double min_radius_px() const;
   /// Ground distance at pixel radius r (linear in the table); NaN outside the table.
@@ -72,7 +79,7 @@ struct CameraModel {
   [[nodiscard]] std::uint64_t fingerprint() const;
 
   /// Throws ConfigError "<at>.<field>: <why> (got <value>)": size not in 1..16384, centre outside
-  /// the image, fewer than two table rows, a view beyond kMaxViewRadiusPx, a bad "vision" block, a table not strictly increasing in both columns or with
+  /// the image, fewer than two table rows, a bad "vision" block, a table not strictly increasing in both columns or with
   /// negative values, a mast half width outside [0, 90), no visible floor ring.
   void validate(const config::Origin& at) const;
   bool operator==(const CameraModel&) const = default;

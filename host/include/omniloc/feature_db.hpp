@@ -1,5 +1,5 @@
 // Feature database: for every point of a grid over the field and its border, the expected scan
-// (360 rays x 4 crossings, uint8, field frame) by ray casting the field model through the camera's
+// (360 rays x 4 crossings, uint8 sample indices, field frame) by ray casting the field model through the camera's
 // radius table. Stored as a versioned binary file whose header carries the grid and the field and
 // camera fingerprints, and a checksum; loading refuses a file that is truncated, corrupt, or was
 // built for another field or camera. Databases are generated (`omniloc builddb`), never committed.
@@ -38,6 +38,7 @@ struct FeatureDb {
   GridSpec grid;
   std::uint64_t field_fingerprint = 0;
   std::uint64_t camera_fingerprint = 0;
+  double radius_step_px = 1.0;  // the features' radius unit (CameraModel::scan_step_px)
   std::vector<std::uint8_t> features;  // cells() * kFeatureBytes, cell-major
 
   [[nodiscard]] const std::uint8_t* cell_features(int cell) const {
@@ -53,7 +54,8 @@ using BuildProgress = std::function<void(int done, int total)>;
 [[nodiscard]] FeatureDb build_feature_db(const FieldGeometry& field, const CameraModel& camera, const GridSpec& grid,
                                          const BuildProgress& progress = {}, unsigned threads = 0);
 
-inline constexpr std::uint32_t kFeatureDbVersion = 1;
+/// 2: radii are sample indices, the header says the step (a view beyond 254 px; 1 had px only).
+inline constexpr std::uint32_t kFeatureDbVersion = 2;
 
 /// Writes the file (throws std::runtime_error naming the path on I/O failure).
 void save_feature_db(const FeatureDb& db, const std::string& path);

@@ -1,12 +1,14 @@
 // Line scan: the white-line feature of equations (1)-(4). For each of 360 field-frame directions,
-// the pixel radii (from the image centre) of the first four white-line crossings, where a crossing
-// is the entry edge of a white run. Radii are uint8 (0..254); kNoCrossing marks "no further
-// crossing within view". Each ray also records where its view ends (ray_end_px): the mast hides a
+// the radii (from the image centre) of the first four white-line crossings, where a crossing is
+// the entry edge of a white run. A radius is a sample index, uint8 (0..254): sample k lies
+// k * CameraModel::scan_step_px() px out (1 px up to a 254 px view, so radius = px there; a larger
+// view is divided into 254 samples). kNoCrossing marks "no further crossing within view". Each ray also records where its view ends (ray_end_px): the mast hides a
 // ray entirely (end 0), an obstacle ends it where it begins, keeping the crossings before it, and a
 // database crossing at or beyond the end is unknown rather than missing, so the matcher leaves it out.
 //
 // Sampling (shared by the image scan and the geometric scan so that they agree): along each ray,
-// integer radii k = ceil(min_radius_px) .. floor(view_radius_px), each read at the nearest pixel; a
+// samples k = CameraModel::first_scan_sample() .. last_scan_sample(), each read at the pixel
+// nearest k * scan_step_px(); a
 // crossing is a white sample preceded by at least min_gap_px non-white samples (counted from the
 // first sample, so a run already white there is not a crossing). The gap rule keeps a line that
 // runs nearly along a ray from producing a zig-zag of crossings out of pixel rounding.

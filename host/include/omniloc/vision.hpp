@@ -164,7 +164,7 @@ struct CarpetSearch {
 /// One end of a ray that is not the carpet's end: a blob on the carpet (robot, person, ball).
 struct ObstacleBlob {
   int first_ray = 0, last_ray = 0;  ///< bearing-scan ray indices (last may wrap below first)
-  int near_radius_px = 0;           ///< the smallest end radius among its rays
+  int near_radius_px = 0;           ///< the smallest end radius among its rays (a sample index, line_scan.hpp)
 };
 
 struct ExtractionReport {
@@ -175,7 +175,7 @@ struct ExtractionReport {
   int crossings = 0;
   int rays_ended_at_carpet_edge = 0, rays_ended_at_obstacle = 0;
   double carpet_fraction = 0.0;  ///< carpet bins / bins visited
-  /// Per ray: where the carpet ends (px; 0 hidden, 255 not reached: carpet to the end of the view
+  /// Per ray: where the carpet ends (sample index as the scan's radii, line_scan.hpp; 0 hidden, 255 not reached: carpet to the end of the view
   /// or the walk stopped after four crossings).
   std::vector<std::uint8_t> carpet_end_px;
   std::vector<ObstacleBlob> obstacles;
@@ -222,7 +222,7 @@ class LineExtractor {
     std::vector<std::int32_t> bin_begin, bin_pixel;
     std::vector<std::int16_t> bin_second;  // 0, +-1 or +-width: a 4-connected neighbour
     std::vector<std::uint8_t> first_bin;
-    // Where along the ray each pixel's centre lies (px), and per bin its outer pixel's (a bin b
+    // Where along the ray each pixel's centre lies (in samples: px / scan_step_px), and per bin its outer pixel's (a bin b
     // holds the centres in (b - 1, b] and reports its brighter pixel, the outer one on a rising
     // edge): where a line's edge is placed between two bins.
     std::vector<float> along, bin_centre;
@@ -254,6 +254,7 @@ class LineExtractor {
   int width_px_, height_px_;
   double cx_, cy_, yaw_offset_deg_;
   bool mirrored_;
+  double step_px_;  // px between a ray's samples (CameraModel::scan_step_px): a bin is one sample
   int k0_, k1_;
   std::vector<std::pair<double, double>> masts_;  // bearing, half width (deg)
   VisionModel vision_;

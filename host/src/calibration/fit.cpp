@@ -466,10 +466,9 @@ void build_camera(const FitState& st, const std::vector<FrameState>& fs, double 
   // The table reaches as far as the lines measured the mapping, not only to where the carpet ends
   // all round: the line extraction ends each ray at the carpet's edge or an obstacle frame by frame,
   // so a robot or a goal near the calibration spot no longer shrinks the view of every later frame.
-  // (At most the 254 px the feature format stores.)
-  const double lut_end = std::min(
-      std::max(res.view_radius_px, res.radial.monotonic_up_to(res.measured_max_px) ? res.measured_max_px : 0.0),
-      static_cast<double>(kNoCrossing - 1));
+  // (Any length: the scan samples a long view more coarsely, CameraModel::scan_step_px.)
+  const double lut_end =
+      std::max(res.view_radius_px, res.radial.monotonic_up_to(res.measured_max_px) ? res.measured_max_px : 0.0);
   for (double r = 0.0; r < lut_end; r += 4.0) cam.radius_lut.push_back({r, res.radial.ground_cm(r)});
   cam.radius_lut.push_back({lut_end, res.radial.ground_cm(lut_end)});
   cam.body_radius_px = a0.body_radius_px;

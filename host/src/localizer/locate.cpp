@@ -185,11 +185,12 @@ cv::Mat locate_overlay(const cv::Mat& bgr, const CameraModel& camera, const Fiel
       const double b = static_cast<double>(j) / s.rays_per_degree;
       const std::uint8_t end = s.ray_end_px[static_cast<std::size_t>(j)];
       if (end == kRayHidden) continue;
-      const double r_end = end == kRayToViewEnd ? view : end;
+      const double step = camera.scan_step_px();  // the scan's radii are sample indices (line_scan.hpp)
+      const double r_end = end == kRayToViewEnd ? view : end * step;
       if (j % s.rays_per_degree == 0) cv::line(out, pixel_at(camera, r0, b), pixel_at(camera, r_end, b), {110, 110, 110}, 1);
       for (int n = 0; n < kCrossingsPerRay; ++n) {
         const std::uint8_t r = s.radii_px[static_cast<std::size_t>(j * kCrossingsPerRay + n)];
-        if (r != kNoCrossing && r < r_end) put(out, pixel_at(camera, r, b), {255, 0, 255});
+        if (r != kNoCrossing && r * step < r_end) put(out, pixel_at(camera, r * step, b), {255, 0, 255});
       }
       if (end != kRayToViewEnd) put(out, pixel_at(camera, r_end, b), {0, 0, 255});  // carpet boundary / obstacle
     }

@@ -30,8 +30,17 @@ double interp(const std::vector<RadiusMark>& lut, double x, GetX gx, GetY gy) {
 double CameraModel::view_radius_px() const {
   const double image_r = std::min({center_px.x(), center_px.y(), width_px - 1.0 - center_px.x(),
                                    height_px - 1.0 - center_px.y()});
-  // No cap here: validate() refuses a view beyond what the uint8 feature format stores.
   return std::min(image_r, radius_lut.empty() ? 0.0 : radius_lut.back().radius_px);
+}
+
+double CameraModel::scan_step_px() const { return std::max(1.0, view_radius_px() / kMaxScanSample); }
+
+int CameraModel::first_scan_sample() const { return static_cast<int>(std::ceil(min_radius_px() / scan_step_px())); }
+
+int CameraModel::last_scan_sample() const {
+  // A step above 1 px is the view divided into kMaxScanSample samples: the last one is the view's end.
+  const double step = scan_step_px();
+  return step > 1.0 ? kMaxScanSample : static_cast<int>(std::floor(view_radius_px()));
 }
 
 double CameraModel::min_radius_px() const {
@@ -118,15 +127,8 @@ void CameraModel::validate(const config::Origin& at) const {
     require(masts[i].half_width_deg >= 0.0 && masts[i].half_width_deg < 90.0, m / "half_width_deg",
             "must be in [0, 90)", masts[i].half_width_deg);
   }
-  // Crossing radii are stored as uint8 with 255 reserved for "no crossing": a larger view would
-  // need a different feature format, so such a camera is refused rather than silently cropped.
-  require(view_radius_px() <= kMaxViewRadiusPx, at / "radius_lut",
-          "the view reaches beyond the " + config::show(kMaxViewRadiusPx) +
-              " px the uint8 feature format stores: end the table at <= " + config::show(kMaxViewRadiusPx) +
-              " px (or use a smaller image)",
-          config::show(view_radius_px()) + " px");
   vision.validate(at / "vision");
-  require(view_radius_px() > min_radius_px() + 2.0, at,
+  require(last_scan_sample() > first_scan_sample() + 2, at,
           "no visible floor ring: the image or 'radius_lut' ends inside the body radius " +
               config::show(min_radius_px()) + " px",
           config::show(view_radius_px()) + " px");

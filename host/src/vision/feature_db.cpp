@@ -36,6 +36,7 @@ struct Header {
   std::uint64_t field_fingerprint;
   std::uint64_t camera_fingerprint;
   std::uint64_t payload_bytes;
+  double radius_step_px;  // version 2: px between a ray's samples (CameraModel::scan_step_px)
 };
 static_assert(std::endian::native == std::endian::little, "the database format is little-endian");
 
@@ -68,6 +69,7 @@ FeatureDb build_feature_db(const FieldGeometry& field, const CameraModel& camera
   db.grid = grid;
   db.field_fingerprint = field.fingerprint();
   db.camera_fingerprint = camera.fingerprint();
+  db.radius_step_px = camera.scan_step_px();
   db.features.resize(static_cast<std::size_t>(grid.cells()) * kFeatureBytes);
   if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
   std::atomic<int> next_row{0};
@@ -108,6 +110,7 @@ void save_feature_db(const FeatureDb& db, const std::string& path) {
   h.field_fingerprint = db.field_fingerprint;
   h.camera_fingerprint = db.camera_fingerprint;
   h.payload_bytes = db.features.size();
+  h.radius_step_px = db.radius_step_px;
   if (db.features.size() != static_cast<std::size_t>(db.grid.cells()) * kFeatureBytes) {
     throw std::invalid_argument("save_feature_db: feature array does not match the grid");
   }
@@ -230,11 +233,18 @@ FeatureDb load_feature_db(const std::string& path, const FieldGeometry& field, c
                              hex(h.camera_fingerprint) + ", camera in use has " + hex(camera.fingerprint()) +
                              "): rebuild it with `omniloc builddb`");
   }
+  // The fingerprint covers the view the step derives from; the step is checked by itself to say so.
+  if (h.radius_step_px != camera.scan_step_px()) {
+    throw std::runtime_error(where + "radii sampled every " + std::to_string(h.radius_step_px) +
+                             " px, the camera in use samples every " + std::to_string(camera.scan_step_px()) +
+                             " px: rebuild it with `omniloc builddb`");
+  }
   check_grid(h, field, where);
   FeatureDb db;
   db.grid = {h.x0_cm, h.y0_cm, h.step_cm, h.nx, h.ny};
   db.field_fingerprint = h.field_fingerprint;
   db.camera_fingerprint = h.camera_fingerprint;
+  db.radius_step_px = h.radius_step_px;
   db.features.assign(bytes.begin() + sizeof(Header), bytes.begin() + static_cast<std::ptrdiff_t>(sizeof(Header) + h.payload_bytes));
   return db;
 }

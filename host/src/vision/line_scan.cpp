@@ -42,8 +42,10 @@ void check_image(const cv::Mat& bgr, const CameraModel& cam) {
 template <class ClassifyAt>
 std::uint8_t walk_ray(const CameraModel& cam, double phi, int k0, int k1, const ScanParams& p, std::uint8_t* out,
               ClassifyAt classify_at) {
-  const double cu = std::cos(phi) * (cam.mirrored ? -1.0 : 1.0);
-  const double sv = -std::sin(phi);
+  // Sample k lies k * step px out: the step folded into the direction.
+  const double step = cam.scan_step_px();
+  const double cu = std::cos(phi) * (cam.mirrored ? -step : step);
+  const double sv = -std::sin(phi) * step;
   const double cx = cam.center_px.x(), cy = cam.center_px.y();
   int found = 0;
   int dark = 0;
@@ -80,8 +82,8 @@ const std::array<Eigen::Vector2d, kScanRays>& ray_directions() {
   return dirs;
 }
 
-int first_sample(const CameraModel& cam) { return static_cast<int>(std::ceil(cam.min_radius_px())); }
-int last_sample(const CameraModel& cam) { return static_cast<int>(std::floor(cam.view_radius_px())); }
+int first_sample(const CameraModel& cam) { return cam.first_scan_sample(); }
+int last_sample(const CameraModel& cam) { return cam.last_scan_sample(); }
 
 template <class ClassifyAt>
 Scan scan_with(const CameraModel& cam, double yaw_deg, const ScanParams& p, ClassifyAt classify_at) {
@@ -166,8 +168,9 @@ Scan rotate_to_field(const BearingScan& b, double yaw_deg) {
 void expected_features(const FieldGeometry& field, const CameraModel& cam, const Eigen::Vector2d& pos,
                        std::uint8_t* out, std::vector<WhiteInterval>& iv, int min_gap_px, double bearing_offset_deg) {
   const int k0 = first_sample(cam), k1 = last_sample(cam);
-  const double t_lo = cam.ground_cm_at_radius(k0);
-  const double t_hi = cam.ground_cm_at_radius(k1);
+  const double step = cam.scan_step_px();
+  const double t_lo = cam.ground_cm_at_radius(k0 * step);
+  const double t_hi = cam.ground_cm_at_radius(k1 * step);
   const RayCaster caster(field);
   const auto& dirs = ray_directions();
   for (int k = 0; k < kScanRays; ++k) {
@@ -175,8 +178,8 @@ void expected_features(const FieldGeometry& field, const CameraModel& cam, const
                                                           : Eigen::Vector2d(std::cos(deg_to_rad(k + bearing_offset_deg)),
                                                                             std::sin(deg_to_rad(k + bearing_offset_deg)));
     caster.intervals(pos, dir, t_lo, t_hi, iv);
-    crossings_of_runs(k0, k1, min_gap_px, iv, [&cam](const WhiteInterval& w) {
-      return std::pair{cam.radius_px_at_ground(w.enter_cm), cam.radius_px_at_ground(w.exit_cm)};
+    crossings_of_runs(k0, k1, min_gap_px, iv, [&cam, step](const WhiteInterval& w) {
+      return std::pair{cam.radius_px_at_ground(w.enter_cm) / step, cam.radius_px_at_ground(w.exit_cm) / step};
     }, out + k * kCrossingsPerRay);
   }
 }

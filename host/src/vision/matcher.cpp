@@ -273,10 +273,11 @@ class LinearisedCaster {
   LinearisedCaster(const FieldGeometry& field, const CameraModel& camera, const Eigen::Vector2d& centre_cm,
                    double bearing_offset_deg)
       : caster_(field), camera_(camera), centre_(centre_cm) {
-    k0_ = static_cast<int>(std::ceil(camera.min_radius_px()));
-    k1_ = static_cast<int>(std::floor(camera.view_radius_px()));
-    t_lo_ = camera.ground_cm_at_radius(k0_);
-    t_hi_ = camera.ground_cm_at_radius(k1_);
+    k0_ = camera.first_scan_sample();
+    k1_ = camera.last_scan_sample();
+    step_px_ = camera.scan_step_px();
+    t_lo_ = camera.ground_cm_at_radius(k0_ * step_px_);
+    t_hi_ = camera.ground_cm_at_radius(k1_ * step_px_);
     std::vector<Run> at_x, at_y;
     for (int k = 0; k < kScanRays; ++k) {
       dirs_[static_cast<std::size_t>(k)] = {std::cos(deg_to_rad(k + bearing_offset_deg)), std::sin(deg_to_rad(k + bearing_offset_deg))};
@@ -402,8 +403,8 @@ class LinearisedCaster {
     caster_.intervals(origin, dirs_[static_cast<std::size_t>(k)], t_lo_, t_hi_, iv_);
     for (const auto& w : iv_) {
       Run r;
-      r.enter_px = camera_.radius_px_at_ground(w.enter_cm);
-      r.exit_px = camera_.radius_px_at_ground(w.exit_cm);
+      r.enter_px = camera_.radius_px_at_ground(w.enter_cm) / step_px_;  // in samples (line_scan.hpp)
+      r.exit_px = camera_.radius_px_at_ground(w.exit_cm) / step_px_;
       out.push_back(r);
     }
   }
@@ -412,6 +413,7 @@ class LinearisedCaster {
   const CameraModel& camera_;
   Eigen::Vector2d centre_;
   int k0_ = 0, k1_ = 0;
+  double step_px_ = 1.0;
   double t_lo_ = 0.0, t_hi_ = 0.0;
   std::array<Eigen::Vector2d, kScanRays> dirs_;
   std::vector<Run> runs_;

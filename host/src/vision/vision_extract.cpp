@@ -457,8 +457,9 @@ LineExtractor::LineExtractor(const CameraModel& cam)
       cy_(cam.center_px.y()),
       yaw_offset_deg_(cam.yaw_offset_deg),
       mirrored_(cam.mirrored),
-      k0_(static_cast<int>(std::ceil(cam.min_radius_px()))),
-      k1_(static_cast<int>(std::floor(std::min(cam.view_radius_px(), CameraModel::kMaxViewRadiusPx)))),
+      step_px_(cam.scan_step_px()),
+      k0_(cam.first_scan_sample()),
+      k1_(cam.last_scan_sample()),
       vision_(cam.vision),
       tables_(kMaxRaysPerDegree + 1),
       carpet_(cam.vision.carpet_hsv),
@@ -469,7 +470,9 @@ LineExtractor::LineExtractor(const CameraModel& cam)
 
 // The pixels each ray touches, in order: a 4-connected path (a diagonal step gets the neighbour
 // nearer the ray inserted), so that no 1 px line, whatever its direction, lies between two
-// consecutive pixels. Each pixel is binned at the integer nearest its centre's distance along the ray.
+// consecutive pixels. Each pixel is binned at the sample at or beyond its centre's distance along
+// the ray (a camera whose samples are more than 1 px apart puts several pixels in a bin: a line
+// between two samples is still seen).
 const LineExtractor::RayTable& LineExtractor::table(int rpd, std::size_t step_bytes) {
   RayTable& t = tables_[static_cast<std::size_t>(rpd)];
   if (!t.begin.empty() && t.step_bytes == static_cast<int>(step_bytes)) return t;
@@ -493,7 +496,7 @@ const LineExtractor::RayTable& LineExtractor::table(int rpd, std::size_t step_by
     int pu = -1, pv = -1;
     auto emit = [&](int u, int v) {
       if (u < 0 || v < 0 || u >= width_px_ || v >= height_px_) return;
-      const double along = (u - cx_) * du + (v - cy_) * dv;
+      const double along = ((u - cx_) * du + (v - cy_) * dv) / step_px_;
       // The sample convention of the database (expected_features): a crossing at the first integer
       // radius at or beyond the line's edge, so a pixel counts at the integer at or above its centre.
       const int bin = static_cast<int>(std::ceil(along - 1e-9));
@@ -505,7 +508,7 @@ const LineExtractor::RayTable& LineExtractor::table(int rpd, std::size_t step_by
       t.row_u0[static_cast<std::size_t>(v)] = std::min(t.row_u0[static_cast<std::size_t>(v)], u);
       t.row_u1[static_cast<std::size_t>(v)] = std::max(t.row_u1[static_cast<std::size_t>(v)], u);
     };
-    for (double r = k0_ - 0.5; r <= k1_ + 0.5; r += 0.05) {
+    for (double r = k0_ * step_px_ - 0.5; r <= k1_ * step_px_ + 0.5; r += 0.05) {
       const int u = static_cast<int>(std::floor(cx_ + r * du + 0.5)), v = static_cast<int>(std::floor(cy_ + r * dv + 0.5));
       if (u == pu && v == pv) continue;
       if (pu >= 0 && u != pu && v != pv) {
@@ -587,8 +590,8 @@ bool LineExtractor::ensure_carpet(const cv::Mat& bgr, std::string* why) {
   if (carpet_) return true;
   CarpetSearch search;
   search.centre_px = {cx_, cy_};
-  search.inner_px = k0_;
-  search.outer_px = k1_;
+  search.inner_px = k0_ * step_px_;
+  search.outer_px = k1_ * step_px_;
   const auto c = estimate_carpet_colour(bgr, search, why);
   if (!c) return false;
   if (!(c->median_val >= 1.0)) {  // the light follows the carpet's brightness: a black one has none
