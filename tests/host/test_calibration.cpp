@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -448,6 +449,41 @@ TEST(Calibration, CommandWritesEachStepsPicture) {
   EXPECT_EQ(good + inlier, printed_in) << fit_line;
   EXPECT_GT(good, inlier);  // the fit's rms is about 1 px
   std::filesystem::remove_all(dir);
+}
+
+// A refusal inside step 4 still draws its picture, with what was measured: a carpet ring round a
+// dark body but no lines (the disc given, so no rim is searched) refuses "no lines" after the
+// body and view radii are known.
+TEST(Calibration, PolarStepRefusalStillDrawsItsPicture) {
+  cv::Mat img(480, 640, CV_8UC3, cv::Scalar(0, 0, 0));
+  const cv::Point centre(320, 240);
+  cv::circle(img, centre, 160, cv::Scalar(60, 140, 50), cv::FILLED);  // carpet
+  cv::circle(img, centre, 30, cv::Scalar(20, 20, 20), cv::FILLED);    // the robot's body
+  AnalysisHints hints;
+  hints.centre_px = Eigen::Vector2d(320.0, 240.0);
+  hints.rim_radius_px = 200.0;
+  std::map<std::string, cv::Mat> pictures;
+  const StepPictureSink sink = [&](const std::string&, const std::string& step, const cv::Mat& picture) {
+    pictures[step] = picture.clone();
+  };
+  try {
+    (void)analyse_frame(img, "ring.png", hints, sink);
+    FAIL() << "a frame without lines was analysed";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("ring.png: no lines"), std::string::npos) << e.what();
+  }
+  ASSERT_EQ(pictures.size(), 4u);
+  const cv::Mat& polar = pictures.at("4-polar");
+  ASSERT_EQ(polar.rows, 360);
+  ASSERT_EQ(polar.cols, 200);
+  // The body (30 px) and the carpet's end (160 px) marked within a few px.
+  auto marked_col = [&](const cv::Vec3b& colour) {
+    for (int c = 0; c < polar.cols; ++c)
+      if (count_colour(polar.col(c).clone(), colour) == polar.rows) return c;
+    return -1;
+  };
+  EXPECT_NEAR(marked_col(detail::kBodyMark), 31, 3);
+  EXPECT_NEAR(marked_col(detail::kViewMark), 160, 3);
 }
 
 // A refused run keeps the pictures of the steps it reached: from the centre spot without

@@ -112,7 +112,7 @@ cv::Mat coarse_picture(const CoarseGrid& grid, double trunc_px) {
     caption(out, text, {4, top + 16});
     coarse_panel(s, trunc_px).copyTo(out(cv::Rect(0, top + kCoarseCaptionPx, panel_w, panel_h)));
   }
-  caption(out, "x: heading term 0..360 deg; y: d(view) 60 cm (bottom) .. 2.8 km (top); hot = low", {4, out.rows - 6});
+  caption(out, "x: heading term 0..360 deg; y: d(view) 60 cm..2.8 km; hot = good", {4, out.rows - 6});
   return out;
 }
 
