@@ -286,8 +286,9 @@ Subcommand add_calibrate(CLI::App& program) {
                   "PNG of the frame with the detected line pixels and the field model at the fitted pose\n"
                   "(frames after the first: OUT-2.png, OUT-3.png, ...)");
   app->add_option("--debug-dir", a->debug_dir,
-                  "directory (created) for each step's picture per frame: IMAGE-1-disc.png, -2-carpet,\n"
-                  "-3-lines, -4-polar, -5-coarse (first frame), -6-residuals; written up to a failed step too")
+                  "directory (created) for each step's picture per frame, STEM = the image's name without\n"
+                  "extension: STEM-1-disc.png, -2-carpet, -3-lines, -4-polar, -5-coarse (first frame),\n"
+                  "-6-residuals; written up to a failed step too")
       ->type_name("DIR");
   app->add_option("--carpet-at", a->carpet_at,
                   "a pixel that is carpet: its colour is the carpet's (when the carpet step fails)")
