@@ -7,11 +7,13 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -28,6 +30,8 @@
 #include "omniloc/conventions.hpp"
 #include "omniloc/field.hpp"
 #include "omniloc_sim/renderer.hpp"
+#include "run_command.hpp"
+#include "step_pictures.hpp"
 #include "test_data_path.hpp"
 
 namespace omniloc {
@@ -328,6 +332,202 @@ TEST(Calibration, CommandTakesTheDiscAndACarpetPixelAsHints) {
   std::filesystem::remove_all(dir);
 }
 
+namespace {
+
+// Pixels of `img` (8-bit BGR) that are exactly `colour`.
+int count_colour(const cv::Mat& img, const cv::Vec3b& colour) {
+  cv::Mat eq;
+  cv::inRange(img, cv::Scalar(colour[0], colour[1], colour[2]), cv::Scalar(colour[0], colour[1], colour[2]), eq);
+  return cv::countNonZero(eq);
+}
+
+// Of 360 points on the circle inside the image, how many have `colour` within 1 px.
+double share_on_circle(const cv::Mat& img, const RimCircle& rim, const cv::Vec3b& colour) {
+  int inside = 0, hit = 0;
+  for (int k = 0; k < 360; ++k) {
+    const double a = deg_to_rad(k);
+    const int u = static_cast<int>(std::lround(rim.centre_px.x() + rim.radius_px * std::cos(a)));
+    const int v = static_cast<int>(std::lround(rim.centre_px.y() + rim.radius_px * std::sin(a)));
+    if (u < 1 || v < 1 || u + 1 >= img.cols || v + 1 >= img.rows) continue;
+    ++inside;
+    bool found = false;
+    for (int dv = -1; dv <= 1 && !found; ++dv)
+      for (int du = -1; du <= 1 && !found; ++du) found = img.at<cv::Vec3b>(v + dv, u + du) == colour;
+    hit += found;
+  }
+  return inside > 0 ? static_cast<double>(hit) / inside : 0.0;
+}
+
+// The integer after `before` in `text` (-1 when absent).
+int number_after(const std::string& text, const std::string& before) {
+  const auto at = text.find(before);
+  return at == std::string::npos ? -1 : std::atoi(text.c_str() + at + before.size());
+}
+
+// The integer just before `after` in `text` (-1 when absent).
+int number_before(const std::string& text, const std::string& after) {
+  auto at = text.find(after);
+  if (at == std::string::npos) return -1;
+  while (at > 0 && std::isdigit(static_cast<unsigned char>(text[at - 1]))) --at;
+  return std::atoi(text.c_str() + at);
+}
+
+}  // namespace
+
+// `--debug-dir`: the six step pictures of the real frame, each checked against what the step
+// measured (the analysis run here, and the residual counts the command prints).
+TEST(Calibration, CommandWritesEachStepsPicture) {
+  const auto path = test_data("tku-robosot-centre-spot.png");
+  ASSERT_FALSE(path.empty());
+  const cv::Mat img = cv::imread(path.string(), cv::IMREAD_COLOR);
+  const FrameAnalysis an = analyse_frame(img, "tku");
+  const auto dir = std::filesystem::temp_directory_path() / ("omniloc_debug_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  const auto debug = dir / "pictures" / "run1";  // nested: the command creates it
+  std::string out;
+  const std::string cmd = std::string(OMNILOC_CLI_PATH) + " calibrate " + path.string() +
+                          " --pose 375,275 --mirrored no --out " + (dir / "cam.json").string() + " --debug-dir " + debug.string();
+  std::filesystem::create_directories(dir);
+  ASSERT_EQ(test::run_command(cmd, dir / "out.txt", out), 0) << cmd << "\n" << out;
+  EXPECT_NE(out.find("debug pictures: " + debug.string() + " (6 files)"), std::string::npos) << out;
+  auto picture = [&](const std::string& step, int flags = cv::IMREAD_COLOR) {
+    const auto p = debug / ("tku-robosot-centre-spot-" + step + ".png");
+    EXPECT_TRUE(std::filesystem::exists(p)) << p;
+    return cv::imread(p.string(), flags);
+  };
+  // 1: the rim drawn where the rim is (and the frame alone has no such circle).
+  const cv::Mat disc = picture("1-disc");
+  ASSERT_EQ(disc.size(), img.size());
+  EXPECT_GT(share_on_circle(disc, an.rim, detail::kRimColour), 0.9);
+  EXPECT_LT(share_on_circle(img, an.rim, detail::kRimColour), 0.05);
+  // 2: the carpet mask, as much carpet as the analysis found (a mask of nothing or everything fails).
+  const cv::Mat carpet = picture("2-carpet", cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(carpet.size(), img.size());
+  ASSERT_EQ(carpet.type(), CV_8UC1);
+  const double total = static_cast<double>(img.total());
+  const double carpet_share = cv::countNonZero(an.carpet_mask) / total;
+  std::printf("carpet share %.3f (picture %.3f)\n", carpet_share, cv::countNonZero(carpet) / total);
+  EXPECT_GT(carpet_share, 0.1);
+  EXPECT_NEAR(cv::countNonZero(carpet) / total, carpet_share, 0.005);
+  // 3: the line pixels, white over the dimmed frame (which holds no white).
+  const cv::Mat lines = picture("3-lines");
+  ASSERT_EQ(lines.size(), img.size());
+  EXPECT_GT(cv::countNonZero(an.line_mask), 500);
+  EXPECT_EQ(count_colour(lines, detail::kLineColour), cv::countNonZero(an.line_mask));
+  // 4: bearings x radii; the body and view radii marked; carpet between them on most bearings.
+  const cv::Mat polar = picture("4-polar");
+  ASSERT_EQ(polar.rows, 360);
+  ASSERT_EQ(polar.cols, static_cast<int>(an.rim.radius_px));
+  const int body_col = static_cast<int>(std::lround(an.body_radius_px)), view_col = static_cast<int>(std::lround(an.view_radius_px));
+  EXPECT_EQ(count_colour(polar.col(body_col).clone(), detail::kBodyMark), 360);
+  EXPECT_EQ(count_colour(polar.col(view_col).clone(), detail::kViewMark), 360);
+  const cv::Mat ring = polar.colRange(body_col + 2, view_col - 1).clone();
+  const double ring_carpet = count_colour(ring, detail::kPolarCarpet) / static_cast<double>(ring.total());
+  std::printf("polar: carpet on %.2f of the ring between body and view\n", ring_carpet);
+  EXPECT_GT(ring_carpet, 0.5);
+  // 5: two heat maps (120 headings x 51 scales, 4 px cells): not flat.
+  const cv::Mat coarse = picture("5-coarse");
+  EXPECT_EQ(coarse.cols, 120 * detail::kCoarseCellPx);
+  EXPECT_EQ(coarse.rows, 2 * (detail::kCoarseCaptionPx + 51 * detail::kCoarseCellPx) + detail::kCoarseFooterPx);
+  cv::Scalar mean, sdev;
+  cv::meanStdDev(coarse(cv::Rect(0, detail::kCoarseCaptionPx, coarse.cols, 51 * detail::kCoarseCellPx)), mean, sdev);
+  EXPECT_GT(sdev[0] + sdev[1] + sdev[2], 30.0);
+  // 6: every line pixel coloured by its residual: as many within 3 px as the command counts.
+  const cv::Mat resid = picture("6-residuals");
+  ASSERT_EQ(resid.size(), img.size());
+  const int good = count_colour(resid, detail::kResidualGood), inlier = count_colour(resid, detail::kResidualInlier);
+  const int coloured = good + inlier + count_colour(resid, detail::kResidualNear) + count_colour(resid, detail::kResidualFar);
+  const std::string name = path.string() + ": heading ";
+  const auto at = out.find(name);
+  ASSERT_NE(at, std::string::npos) << out;
+  const std::string fit_line = out.substr(at, out.find('\n', at) - at);
+  const int printed_px = number_before(fit_line, " line pixels, ");
+  const int printed_in = number_after(fit_line, " line pixels, ");
+  std::printf("residuals: %d coloured (%d line pixels printed), %d within 3 px (%d printed)\n", coloured, printed_px,
+              good + inlier, printed_in);
+  EXPECT_EQ(coloured, printed_px) << fit_line;
+  EXPECT_EQ(good + inlier, printed_in) << fit_line;
+  EXPECT_GT(good, inlier);  // the fit's rms is about 1 px
+  std::filesystem::remove_all(dir);
+}
+
+// A refusal inside step 4 still draws its picture, with what was measured: a carpet ring round a
+// dark body but no lines (the disc given, so no rim is searched) refuses "no lines" after the
+// body and view radii are known.
+TEST(Calibration, PolarStepRefusalStillDrawsItsPicture) {
+  cv::Mat img(480, 640, CV_8UC3, cv::Scalar(0, 0, 0));
+  const cv::Point centre(320, 240);
+  cv::circle(img, centre, 160, cv::Scalar(60, 140, 50), cv::FILLED);  // carpet
+  cv::circle(img, centre, 30, cv::Scalar(20, 20, 20), cv::FILLED);    // the robot's body
+  AnalysisHints hints;
+  hints.centre_px = Eigen::Vector2d(320.0, 240.0);
+  hints.rim_radius_px = 200.0;
+  std::map<std::string, cv::Mat> pictures;
+  const StepPictureSink sink = [&](const std::string&, const std::string& step, const cv::Mat& picture) {
+    pictures[step] = picture.clone();
+  };
+  try {
+    (void)analyse_frame(img, "ring.png", hints, sink);
+    FAIL() << "a frame without lines was analysed";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("ring.png: no lines"), std::string::npos) << e.what();
+  }
+  ASSERT_EQ(pictures.size(), 4u);
+  const cv::Mat& polar = pictures.at("4-polar");
+  ASSERT_EQ(polar.rows, 360);
+  ASSERT_EQ(polar.cols, 200);
+  // The body (30 px) and the carpet's end (160 px) marked within a few px.
+  auto marked_col = [&](const cv::Vec3b& colour) {
+    for (int c = 0; c < polar.cols; ++c)
+      if (count_colour(polar.col(c).clone(), colour) == polar.rows) return c;
+    return -1;
+  };
+  EXPECT_NEAR(marked_col(detail::kBodyMark), 31, 3);
+  EXPECT_NEAR(marked_col(detail::kViewMark), 160, 3);
+}
+
+// A refused run keeps the pictures of the steps it reached: from the centre spot without
+// --mirrored the handedness step refuses after the analysis (pictures 1-4, not 5-6); a black
+// frame has no rim (no picture); a directory that cannot be made is an error naming it.
+TEST(Calibration, CommandWritesThePicturesOfTheStepsBeforeARefusal) {
+  const auto path = test_data("tku-robosot-centre-spot.png");
+  ASSERT_FALSE(path.empty());
+  const auto dir = std::filesystem::temp_directory_path() / ("omniloc_debug_refused_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const auto debug = dir / "pictures";
+  auto run = [&](const std::string& image, const std::string& debug_dir, std::string& out) {
+    const std::string cmd = std::string(OMNILOC_CLI_PATH) + " calibrate " + image + " --pose 375,275 --out " +
+                            (dir / "cam.json").string() + " --debug-dir " + debug_dir;
+    return test::run_command(cmd, dir / "out.txt", out);
+  };
+  std::string out;
+  EXPECT_EQ(run(path.string(), debug.string(), out), 1) << out;
+  EXPECT_NE(out.find("handedness unknown"), std::string::npos) << out;
+  EXPECT_NE(out.find("debug pictures: " + debug.string() + " (4 files)"), std::string::npos) << out;
+  for (const char* step : {"1-disc", "2-carpet", "3-lines", "4-polar"}) {
+    const auto p = debug / (std::string("tku-robosot-centre-spot-") + step + ".png");
+    EXPECT_FALSE(cv::imread(p.string(), cv::IMREAD_UNCHANGED).empty()) << p;
+  }
+  for (const char* step : {"5-coarse", "6-residuals"})
+    EXPECT_FALSE(std::filesystem::exists(debug / (std::string("tku-robosot-centre-spot-") + step + ".png"))) << step;
+  EXPECT_FALSE(std::filesystem::exists(dir / "cam.json"));
+
+  const auto black = dir / "black.png";
+  cv::imwrite(black.string(), cv::Mat(480, 640, CV_8UC3, cv::Scalar::all(0)));
+  const auto debug2 = dir / "pictures-black";
+  EXPECT_EQ(run(black.string(), debug2.string(), out), 1) << out;
+  EXPECT_NE(out.find("black.png: no mirror rim"), std::string::npos) << out;
+  EXPECT_NE(out.find("debug pictures: " + debug2.string() + " (0 files)"), std::string::npos) << out;
+  EXPECT_TRUE(std::filesystem::is_directory(debug2));
+
+  const auto blocked = dir / "cam.json-is-a-file" / "pictures";
+  std::ofstream(dir / "cam.json-is-a-file") << "x";
+  EXPECT_EQ(run(path.string(), blocked.string(), out), 1) << out;
+  EXPECT_NE(out.find("cannot create the debug directory '" + blocked.string() + "'"), std::string::npos) << out;
+  std::filesystem::remove_all(dir);
+}
+
 // The handedness rule (docs/CALIBRATION.md, "Handedness"), against hand-worked cases: the
 // shipped fields are mirror-symmetric about both axes; a mark off the axes breaks the symmetry.
 TEST(Handedness, MirrorAxesAreMeasuredOnTheLines) {
@@ -385,11 +585,27 @@ TEST(Calibration, RealFrameAtAWrongPoseFitsNothing) {
   const auto path = test_data("tku-robosot-centre-spot.png");
   ASSERT_FALSE(path.empty());
   CalibrationFrame f{cv::imread(path.string(), cv::IMREAD_COLOR), "tku", {150.0, 100.0}, std::nullopt};
+  // The step pictures of a refused fit: the analysis and the coarse search were reached, so
+  // their pictures came, each once (the residuals' too when the refinement kept enough pixels).
+  std::vector<std::string> steps;
+  CalibrationOptions opt;
+  opt.step_pictures = [&](const std::string& frame, const std::string& step, const cv::Mat& picture) {
+    EXPECT_EQ(frame, "tku");
+    EXPECT_FALSE(picture.empty()) << step;
+    steps.push_back(step);
+  };
   try {
-    (void)calibrate_camera({f}, load_field("fira-robosot"));
+    (void)calibrate_camera({f}, load_field("fira-robosot"), opt);
     FAIL() << "calibrated at a wrong pose";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("tku: nothing fits"), std::string::npos) << e.what();
+  }
+  const std::vector<std::string> reached{"1-disc", "2-carpet", "3-lines", "4-polar", "5-coarse"};
+  ASSERT_GE(steps.size(), reached.size());
+  EXPECT_EQ(std::vector<std::string>(steps.begin(), steps.begin() + 5), reached);
+  EXPECT_LE(steps.size(), 6u);
+  if (steps.size() == 6u) {
+    EXPECT_EQ(steps.back(), "6-residuals");
   }
 }
 

@@ -4,9 +4,13 @@
 // at the fitted pose.
 #include <chrono>
 #include <cstdio>
+#include <exception>
+#include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
@@ -20,7 +24,7 @@ namespace omniloc::cli {
 
 namespace {
 struct CalibrateArgs {
-  std::string field_name = "fira-robosot", out, overlay;
+  std::string field_name = "fira-robosot", out, overlay, debug_dir;
   std::vector<std::string> images, poses;
   std::string carpet_at, centre, mirrored;
   double rim_radius_px = 0.0;
@@ -86,6 +90,68 @@ std::string numbered(const std::string& path, std::size_t i) {
   n += std::to_string(i + 1);  // (not "-" + ...: GCC 12 warns -Wrestrict on it)
   return dot == std::string::npos ? path + n : path.substr(0, dot) + n + path.substr(dot);
 }
+/// `--debug-dir`: writes the step pictures as DIR/<image stem>-<step>.png and counts them. Two
+/// images with one stem (a/f.png, b/f.png) get "-2", "-3" after the later ones' stems, so no
+/// picture overwrites another.
+class DebugPictures {
+ public:
+  explicit DebugPictures(std::filesystem::path dir) : dir_(std::move(dir)) {}
+
+  /// Creates the directory; false (and says why, naming it) when it cannot.
+  bool create() const {
+    std::error_code ec;
+    std::filesystem::create_directories(dir_, ec);
+    if (ec || !std::filesystem::is_directory(dir_)) {
+      std::fprintf(stderr, "omniloc calibrate: error: cannot create the debug directory '%s': %s\n", dir_.string().c_str(),
+                   ec ? ec.message().c_str() : "not a directory");
+      return false;
+    }
+    return true;
+  }
+
+  /// The sink: never throws (it runs while a refusal is on its way out; a picture it cannot
+  /// write is reported and counted as failed, the calibration's own reason stays the error).
+  void write(const std::string& frame_name, const std::string& step, const cv::Mat& picture) {
+    const std::filesystem::path path = dir_ / (stem_of(frame_name) + "-" + step + ".png");
+    bool ok = false;
+    try {
+      ok = cv::imwrite(path.string(), picture);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "omniloc calibrate: %s\n", e.what());
+    }
+    if (ok) ++written_;
+    else {
+      ++failed_;
+      std::fprintf(stderr, "omniloc calibrate: error: cannot write debug picture '%s'\n", path.string().c_str());
+    }
+  }
+
+  /// "debug pictures: DIR (N files)", on stdout, at the end or before a failure's error.
+  void report() const {
+    std::printf("debug pictures: %s (%d files%s)\n", dir_.string().c_str(), written_,
+                failed_ > 0 ? (", " + std::to_string(failed_) + " not written").c_str() : "");
+    std::fflush(stdout);
+  }
+  [[nodiscard]] bool all_written() const { return failed_ == 0; }
+
+ private:
+  std::string stem_of(const std::string& frame_name) {
+    if (const auto it = stems_.find(frame_name); it != stems_.end()) return it->second;
+    const std::string stem = std::filesystem::path(frame_name).stem().string();
+    std::string unique = stem;
+    for (int n = 2; taken(unique); ++n) unique = stem + "-" + std::to_string(n);
+    return stems_[frame_name] = unique;
+  }
+  [[nodiscard]] bool taken(const std::string& stem) const {
+    for (const auto& [name, s] : stems_)
+      if (s == stem) return true;
+    return false;
+  }
+  std::filesystem::path dir_;
+  std::map<std::string, std::string> stems_;  // frame name -> file stem
+  int written_ = 0, failed_ = 0;
+};
+
 int run_calibrate(const CalibrateArgs& a) {
   const std::vector<std::string>& images = a.images;
   const std::string& out = a.out;
@@ -124,7 +190,21 @@ int run_calibrate(const CalibrateArgs& a) {
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::fprintf(stderr, "[%6.2f s] %s\n", s, m.c_str());
   };
-  const CalibrationResult r = calibrate_camera(frames, field, opt);
+  std::shared_ptr<DebugPictures> debug;
+  if (!a.debug_dir.empty()) {
+    debug = std::make_shared<DebugPictures>(a.debug_dir);
+    if (!debug->create()) return 1;
+    opt.step_pictures = [debug](const std::string& frame, const std::string& step, const cv::Mat& picture) {
+      debug->write(frame, step, picture);
+    };
+  }
+  CalibrationResult r;
+  try {
+    r = calibrate_camera(frames, field, opt);
+  } catch (const std::exception&) {
+    if (debug) debug->report();  // the pictures of the steps reached: where to look for the cause
+    throw;
+  }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   {
     std::ofstream f(out);
@@ -181,7 +261,9 @@ int run_calibrate(const CalibrateArgs& a) {
       std::printf("overlay %s\n", p.c_str());
     }
   }
-  return 0;
+  if (!debug) return 0;
+  debug->report();
+  return debug->all_written() ? 0 : 1;
 }
 
 }  // namespace
@@ -203,6 +285,11 @@ Subcommand add_calibrate(CLI::App& program) {
   app->add_option("--overlay", a->overlay,
                   "PNG of the frame with the detected line pixels and the field model at the fitted pose\n"
                   "(frames after the first: OUT-2.png, OUT-3.png, ...)");
+  app->add_option("--debug-dir", a->debug_dir,
+                  "directory (created) for each step's picture per frame, STEM = the image's name without\n"
+                  "extension: STEM-1-disc.png, -2-carpet, -3-lines, -4-polar, -5-coarse (first frame),\n"
+                  "-6-residuals; written up to a failed step too")
+      ->type_name("DIR");
   app->add_option("--carpet-at", a->carpet_at,
                   "a pixel that is carpet: its colour is the carpet's (when the carpet step fails)")
       ->type_name("X,Y");

@@ -149,8 +149,17 @@ struct AnalysisHints {
   std::optional<bool> mirrored;  ///< the handedness (`--mirrored yes|no`) when the lines do not tell it
 };
 
+/// Receives one step's picture (`omniloc calibrate --debug-dir`; docs/CALIBRATION.md, "Step
+/// pictures"): the frame's name, the step ("1-disc", "2-carpet", "3-lines", "4-polar", "5-coarse",
+/// "6-residuals") and the picture (8-bit BGR, the carpet mask 8-bit grey). Called as each step
+/// ends and, for a step that refuses after measuring (polar statistics), just before the refusal
+/// is thrown: a failed run has the pictures of the steps it reached, which is when a team needs
+/// them. The library writes no file: the caller decides where pictures go.
+using StepPictureSink = std::function<void(const std::string& frame_name, const std::string& step, const cv::Mat& picture)>;
+
 struct CalibrationOptions {
   std::function<void(const std::string&)> progress;  // stage messages for a long run
+  StepPictureSink step_pictures;                     // empty: no picture is drawn
   GoalColourOptions goal_colours;
   AnalysisHints hints;  // the same for every frame
 };
@@ -174,7 +183,9 @@ struct CalibrationOptions {
 
 /// Rim, carpet colour, line pixels, body, masts, view radius of one frame. Throws when the frame
 /// shows no carpet or no lines.
-[[nodiscard]] FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& context, const AnalysisHints& hints = {});
+/// Pictures 1-4 (disc, carpet, lines, polar) go to `pictures` when given.
+[[nodiscard]] FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& context, const AnalysisHints& hints = {},
+                                          const StepPictureSink& pictures = {});
 
 /// The whole calibration (all frames share one camera). Throws std::runtime_error with the frame's
 /// name and the reason when nothing fits.

@@ -19,6 +19,7 @@
 #include "omniloc/conventions.hpp"
 #include "handedness.hpp"
 #include "self_check.hpp"
+#include "step_pictures.hpp"
 
 namespace omniloc {
 
@@ -244,6 +245,7 @@ constexpr int kCoarseHeadings = 120;
 struct CoarseResult {
   CoarseHit best[2];
   std::vector<double> heading_scores[2];
+  detail::CoarseGrid grid;  // the brute force's scores, for picture 5
 };
 
 // Brute force on one frame (centre = rim centre): 7 shapes x 51 scales x 120 headings per
@@ -253,8 +255,12 @@ CoarseResult coarse_search(const FrameAnalysis& a, const CalibrationFrame& f, co
   const double rv = a.view_radius_px;
   const std::vector<double> shapes{0.01, 0.3, 0.5, 0.65, 0.8, 0.9, 0.95};
   CoarseResult out;
+  out.grid.heading_step_deg = 360.0 / kCoarseHeadings;
   std::vector<double> scores(static_cast<std::size_t>(kCoarseHeadings));
   for (int mir = 0; mir < 2; ++mir) {
+    cv::Mat1f& grid = out.grid.score_px[mir];
+    grid.create(51, kCoarseHeadings);
+    grid.setTo(1e9f);
     say(std::string("coarse search (") + (mir ? "mirrored" : "not mirrored") + "): 7 shapes x 51 scales x 120 headings");
     CoarseHit& best = out.best[mir];
     const auto pp = to_polar(a.line_pixels, a.rim.centre_px, mir == 1, 1000);
@@ -263,6 +269,7 @@ CoarseResult coarse_search(const FrameAnalysis& a, const CalibrationFrame& f, co
         const CoarseMap m{60.0 * std::pow(1.08, si), x};
         score_yaws(pp, m, rv, f.position_cm, fd, 2 * kPi / kCoarseHeadings, kCoarseTruncPx, scores);
         for (int k = 0; k < kCoarseHeadings; ++k) {
+          grid(si, k) = std::min(grid(si, k), static_cast<float>(scores[static_cast<std::size_t>(k)]));  // best shape
           if (scores[static_cast<std::size_t>(k)] < best.score) {
             best = {scores[static_cast<std::size_t>(k)], m, k * 2 * kPi / kCoarseHeadings};
             out.heading_scores[mir] = scores;
@@ -368,6 +375,18 @@ void refine(FitState& st, std::vector<FrameState>& fs, double& shared_angle, con
   }
   for (auto& s : fs)
     if (s.frame->yaw_deg) s.angle_rad = shared_angle;
+}
+
+// Picture 6 per frame: every line pixel's residual at the refined camera.
+void show_residuals(const FitState& st, const std::vector<FrameState>& fs, const FieldDistance& fd,
+                    double inlier_threshold_px, const StepPictureSink& pictures) {
+  for (const auto& s : fs) {
+    const double alpha = s.angle_rad - s.yaw_rad;
+    std::vector<double> e_px;
+    for (const auto& p : s.analysis->line_pixels) e_px.push_back(residual_px(st, alpha, s.frame->position_cm, p, fd, nullptr));
+    pictures(s.frame->name, "6-residuals",
+             detail::residuals_picture(s.frame->image, s.analysis->line_pixels, e_px, inlier_threshold_px));
+  }
 }
 
 // Residuals per frame over every line pixel, and the totals.
@@ -541,7 +560,7 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, 
   CalibrationResult res;
   for (const auto& f : frames) {
     say(f.name + ": finding the mirror rim, carpet, lines, body and masts");
-    res.analyses.push_back(analyse_frame(f.image, f.name, options.hints));
+    res.analyses.push_back(analyse_frame(f.image, f.name, options.hints, options.step_pictures));
     const auto& a = res.analyses.back();
     say(f.name + ": rim (" + std::to_string(a.rim.centre_px.x()) + ", " + std::to_string(a.rim.centre_px.y()) +
         ") r " + std::to_string(a.rim.radius_px) + " px, " + std::to_string(a.line_pixels.size()) + " line pixels");
@@ -553,6 +572,8 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, 
   const double rv = a0.view_radius_px;
 
   const CoarseResult coarse = coarse_search(a0, frames.front(), fd, say);
+  if (options.step_pictures)
+    options.step_pictures(frames.front().name, "5-coarse", detail::coarse_picture(coarse.grid, kCoarseTruncPx));
   res.unmirrored_score = coarse.best[0].score;
   res.mirrored_score = coarse.best[1].score;
   // Within 3 %: the lines seen do not tell the handedness (a view symmetric about the robot); the
@@ -597,6 +618,8 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, 
   }
   res.inlier_threshold_px = 3.0;  // a 5 cm line far away is 1-2 px: 3 px is one line width off
   refine(st, fs, shared_angle, fd, say);
+  // Before the refusals below (non-monotonic model, too few inliers): their cause is in this picture.
+  if (options.step_pictures) show_residuals(st, fs, fd, res.inlier_threshold_px, options.step_pictures);
 
   res.radial = st.poly();
   // The view: where the carpet ends all round in every frame.

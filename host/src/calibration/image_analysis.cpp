@@ -12,6 +12,7 @@
 
 #include "omniloc/calibration.hpp"
 #include "omniloc/conventions.hpp"
+#include "step_pictures.hpp"
 
 namespace omniloc {
 
@@ -303,9 +304,15 @@ RimCircle rim_of(const cv::Mat& bgr, const AnalysisHints& hints, const std::stri
 
 }  // namespace
 
-FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx, const AnalysisHints& hints) {
+FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx, const AnalysisHints& hints,
+                            const StepPictureSink& pictures) {
+  // Drawn only when someone looks: a run without --debug-dir pays nothing.
+  const auto show = [&](const char* step, const auto& draw) {
+    if (pictures) pictures(ctx, step, draw());
+  };
   FrameAnalysis fa;
   fa.rim = rim_of(bgr, hints, ctx);
+  show("1-disc", [&] { return detail::disc_picture(bgr, fa.rim); });
   const RimCircle& rim = fa.rim;
   cv::Mat hsv;
   cv::cvtColor(bgr, hsv, cv::COLOR_BGR2HSV);
@@ -334,6 +341,7 @@ FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx, const An
       }
     }
   }
+  show("2-carpet", [&] { return fa.carpet_mask.clone(); });
   // Local carpet brightness and saturation over a window four rim windows wide (several line
   // widths: the line itself never dominates it), from carpet pixels only.
   const int kb = 4 * w + 1;
@@ -361,100 +369,113 @@ FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx, const An
         fa.line_mask.at<std::uint8_t>(v, u) = 255;
     }
   }
+  show("3-lines", [&] { return detail::lines_picture(bgr, fa.line_mask); });
 
   // Polar statistics about the rim centre: class per (angle, radius): 0 other, 1 carpet, 2 line.
   const int nr = static_cast<int>(rim.radius_px);
-  std::vector<std::uint8_t> cls(static_cast<std::size_t>(kPolarAngles) * static_cast<std::size_t>(nr), 0);
+  detail::PolarClasses polar{kPolarAngles, nr, {}};
+  std::vector<std::uint8_t>& cls = polar.cls;
+  cls.assign(static_cast<std::size_t>(kPolarAngles) * static_cast<std::size_t>(nr), 0);
   auto at = [&](int k, int r) -> std::uint8_t& { return cls[static_cast<std::size_t>(k) * static_cast<std::size_t>(nr) + static_cast<std::size_t>(r)]; };
-  for (int k = 0; k < kPolarAngles; ++k) {
-    const double a = deg_to_rad(k * 360.0 / kPolarAngles);
-    for (int r = 0; r < nr; ++r) {
-      const int u = static_cast<int>(std::lround(rim.centre_px.x() + r * std::cos(a)));
-      const int v = static_cast<int>(std::lround(rim.centre_px.y() - r * std::sin(a)));
-      if (u < 0 || v < 0 || u >= bgr.cols || v >= bgr.rows) continue;
-      at(k, r) = fa.line_mask.at<std::uint8_t>(v, u) ? 2 : (carpet(v, u) > 0 ? 1 : 0);
-    }
-  }
-  std::vector<double> floor_frac(static_cast<std::size_t>(nr), 0.0);
-  for (int r = 0; r < nr; ++r) {
-    int n = 0;
-    for (int k = 0; k < kPolarAngles; ++k) n += at(k, r) != 0;
-    floor_frac[static_cast<std::size_t>(r)] = static_cast<double>(n) / kPolarAngles;
-  }
-  const double fmax = *std::max_element(floor_frac.begin(), floor_frac.end());
-  if (fmax < 0.25) throw std::runtime_error(ctx + ": no carpet: at no radius is a quarter of the circle carpet or line");
-  // Body: inside the first radius where the floor is seen on 80 % as many angles as anywhere.
-  int body = 0;
-  while (body < nr && floor_frac[static_cast<std::size_t>(body)] < 0.8 * fmax) ++body;
-  fa.body_radius_px = body + 1.0;
-  // End of the carpet per angle: the first run of more than a rim window of "other" pixels.
-  std::vector<double> end(kPolarAngles, nr);
-  for (int k = 0; k < kPolarAngles; ++k) {
-    int run = 0;
-    for (int r = body; r < nr; ++r) {
-      run = at(k, r) == 0 ? run + 1 : 0;
-      if (run > w) {
-        end[static_cast<std::size_t>(k)] = r - run;
-        break;
+  std::vector<bool> mast(kPolarAngles, false);
+  // Picture 4 with what was measured: on a refusal below too (body, view or masts then 0 / none).
+  const auto show_polar = [&] {
+    show("4-polar", [&] { return detail::polar_picture(polar, fa.body_radius_px, fa.view_radius_px, mast); });
+  };
+  try {
+    for (int k = 0; k < kPolarAngles; ++k) {
+      const double a = deg_to_rad(k * 360.0 / kPolarAngles);
+      for (int r = 0; r < nr; ++r) {
+        const int u = static_cast<int>(std::lround(rim.centre_px.x() + r * std::cos(a)));
+        const int v = static_cast<int>(std::lround(rim.centre_px.y() - r * std::sin(a)));
+        if (u < 0 || v < 0 || u >= bgr.cols || v >= bgr.rows) continue;
+        at(k, r) = fa.line_mask.at<std::uint8_t>(v, u) ? 2 : (carpet(v, u) > 0 ? 1 : 0);
       }
     }
-  }
-  const double view0 = percentile(end, 0.1);
-  // Masts: angles where most of [body, view] is neither carpet nor line (rods, the mast).
-  std::vector<double> other(kPolarAngles, 0.0);
-  const int r0 = body + w / 2, r1 = std::max(r0 + 1, static_cast<int>(view0));
-  for (int k = 0; k < kPolarAngles; ++k) {
-    int n = 0;
-    for (int r = r0; r < r1; ++r) n += at(k, r) == 0;
-    other[static_cast<std::size_t>(k)] = static_cast<double>(n) / (r1 - r0);
-  }
-  std::vector<bool> mast(kPolarAngles, false);
-  for (int k = 0; k < kPolarAngles; ++k) {
-    const double s = (other[static_cast<std::size_t>((k + kPolarAngles - 1) % kPolarAngles)] + other[static_cast<std::size_t>(k)] +
-                      other[static_cast<std::size_t>((k + 1) % kPolarAngles)]) / 3.0;
-    mast[static_cast<std::size_t>(k)] = s >= 0.6;
-  }
-  if (std::all_of(mast.begin(), mast.end(), [](bool b) { return b; })) {
-    throw std::runtime_error(ctx + ": no carpet: every direction is hidden between the body and the end of the carpet");
-  }
-  int start = 0;
-  while (mast[static_cast<std::size_t>(start)]) ++start;  // begin the sweep outside a sector
-  for (int i = 0; i < kPolarAngles; ++i) {
-    const int k = (start + i) % kPolarAngles;
-    if (!mast[static_cast<std::size_t>(k)] || mast[static_cast<std::size_t>((k + kPolarAngles - 1) % kPolarAngles)]) continue;
-    int len = 0;
-    while (mast[static_cast<std::size_t>((k + len) % kPolarAngles)]) ++len;
-    const double step = 360.0 / kPolarAngles;
-    // Half a bin each side for the sampling, one more bin of margin for the rod's soft edge.
-    fa.masts_image.push_back({wrap_deg((k + 0.5 * (len - 1)) * step), 0.5 * len * step + step});
-  }
-  std::vector<double> open_end;
-  for (int k = 0; k < kPolarAngles; ++k)
-    if (!mast[static_cast<std::size_t>(k)]) open_end.push_back(end[static_cast<std::size_t>(k)]);
-  // The 10th percentile: the ball or a robot on a few rays does not pull the view in.
-  fa.view_radius_px = percentile(open_end, 0.1);
-  if (fa.view_radius_px <= fa.body_radius_px + 2 * w) {
-    throw std::runtime_error(ctx + ": no carpet ring: the carpet ends at " + std::to_string(fa.view_radius_px) +
-                             " px, at the robot's body (" + std::to_string(fa.body_radius_px) + " px)");
-  }
-  // Line pixels for the fit: outside the body, before the carpet ends on their ray, not on a mast.
-  for (int v = 0; v < bgr.rows; ++v) {
-    for (int u = 0; u < bgr.cols; ++u) {
-      if (!fa.line_mask.at<std::uint8_t>(v, u)) continue;
-      const double du = u - rim.centre_px.x(), dv = rim.centre_px.y() - v;
-      const double r = std::hypot(du, dv);
-      if (r < fa.body_radius_px + 1.0) continue;
-      double a = rad_to_deg(std::atan2(dv, du));
-      if (a < 0) a += 360.0;
-      const auto k = static_cast<std::size_t>(std::min(kPolarAngles - 1, static_cast<int>(a * kPolarAngles / 360.0)));
-      if (mast[k] || r > end[k]) continue;
-      fa.line_pixels.emplace_back(u, v);
+    std::vector<double> floor_frac(static_cast<std::size_t>(nr), 0.0);
+    for (int r = 0; r < nr; ++r) {
+      int n = 0;
+      for (int k = 0; k < kPolarAngles; ++k) n += at(k, r) != 0;
+      floor_frac[static_cast<std::size_t>(r)] = static_cast<double>(n) / kPolarAngles;
     }
+    const double fmax = *std::max_element(floor_frac.begin(), floor_frac.end());
+    if (fmax < 0.25) throw std::runtime_error(ctx + ": no carpet: at no radius is a quarter of the circle carpet or line");
+    // Body: inside the first radius where the floor is seen on 80 % as many angles as anywhere.
+    int body = 0;
+    while (body < nr && floor_frac[static_cast<std::size_t>(body)] < 0.8 * fmax) ++body;
+    fa.body_radius_px = body + 1.0;
+    // End of the carpet per angle: the first run of more than a rim window of "other" pixels.
+    std::vector<double> end(kPolarAngles, nr);
+    for (int k = 0; k < kPolarAngles; ++k) {
+      int run = 0;
+      for (int r = body; r < nr; ++r) {
+        run = at(k, r) == 0 ? run + 1 : 0;
+        if (run > w) {
+          end[static_cast<std::size_t>(k)] = r - run;
+          break;
+        }
+      }
+    }
+    const double view0 = percentile(end, 0.1);
+    // Masts: angles where most of [body, view] is neither carpet nor line (rods, the mast).
+    std::vector<double> other(kPolarAngles, 0.0);
+    const int r0 = body + w / 2, r1 = std::max(r0 + 1, static_cast<int>(view0));
+    for (int k = 0; k < kPolarAngles; ++k) {
+      int n = 0;
+      for (int r = r0; r < r1; ++r) n += at(k, r) == 0;
+      other[static_cast<std::size_t>(k)] = static_cast<double>(n) / (r1 - r0);
+    }
+    for (int k = 0; k < kPolarAngles; ++k) {
+      const double s = (other[static_cast<std::size_t>((k + kPolarAngles - 1) % kPolarAngles)] + other[static_cast<std::size_t>(k)] +
+                        other[static_cast<std::size_t>((k + 1) % kPolarAngles)]) / 3.0;
+      mast[static_cast<std::size_t>(k)] = s >= 0.6;
+    }
+    if (std::all_of(mast.begin(), mast.end(), [](bool b) { return b; })) {
+      throw std::runtime_error(ctx + ": no carpet: every direction is hidden between the body and the end of the carpet");
+    }
+    int start = 0;
+    while (mast[static_cast<std::size_t>(start)]) ++start;  // begin the sweep outside a sector
+    for (int i = 0; i < kPolarAngles; ++i) {
+      const int k = (start + i) % kPolarAngles;
+      if (!mast[static_cast<std::size_t>(k)] || mast[static_cast<std::size_t>((k + kPolarAngles - 1) % kPolarAngles)]) continue;
+      int len = 0;
+      while (mast[static_cast<std::size_t>((k + len) % kPolarAngles)]) ++len;
+      const double step = 360.0 / kPolarAngles;
+      // Half a bin each side for the sampling, one more bin of margin for the rod's soft edge.
+      fa.masts_image.push_back({wrap_deg((k + 0.5 * (len - 1)) * step), 0.5 * len * step + step});
+    }
+    std::vector<double> open_end;
+    for (int k = 0; k < kPolarAngles; ++k)
+      if (!mast[static_cast<std::size_t>(k)]) open_end.push_back(end[static_cast<std::size_t>(k)]);
+    // The 10th percentile: the ball or a robot on a few rays does not pull the view in.
+    fa.view_radius_px = percentile(open_end, 0.1);
+    if (fa.view_radius_px <= fa.body_radius_px + 2 * w) {
+      throw std::runtime_error(ctx + ": no carpet ring: the carpet ends at " + std::to_string(fa.view_radius_px) +
+                               " px, at the robot's body (" + std::to_string(fa.body_radius_px) + " px)");
+    }
+    // Line pixels for the fit: outside the body, before the carpet ends on their ray, not on a mast.
+    for (int v = 0; v < bgr.rows; ++v) {
+      for (int u = 0; u < bgr.cols; ++u) {
+        if (!fa.line_mask.at<std::uint8_t>(v, u)) continue;
+        const double du = u - rim.centre_px.x(), dv = rim.centre_px.y() - v;
+        const double r = std::hypot(du, dv);
+        if (r < fa.body_radius_px + 1.0) continue;
+        double a = rad_to_deg(std::atan2(dv, du));
+        if (a < 0) a += 360.0;
+        const auto k = static_cast<std::size_t>(std::min(kPolarAngles - 1, static_cast<int>(a * kPolarAngles / 360.0)));
+        if (mast[k] || r > end[k]) continue;
+        fa.line_pixels.emplace_back(u, v);
+      }
+    }
+    if (fa.line_pixels.size() < 50) {
+      throw std::runtime_error(ctx + ": no lines: only " + std::to_string(fa.line_pixels.size()) +
+                               " line pixels on the carpet");
+    }
+  } catch (const std::runtime_error&) {
+    show_polar();
+    throw;
   }
-  if (fa.line_pixels.size() < 50) {
-    throw std::runtime_error(ctx + ": no lines: only " + std::to_string(fa.line_pixels.size()) +
-                             " line pixels on the carpet");
-  }
+  show_polar();
   return fa;
 }
 
