@@ -255,7 +255,8 @@ TEST_F(FeatureDbTest, FileRoundTrip) {
   EXPECT_EQ(back.grid.x0_cm, db_->grid.x0_cm);
   EXPECT_EQ(back.grid.step_cm, db_->grid.step_cm);
   EXPECT_EQ(back.features, db_->features);
-  EXPECT_EQ(fs::file_size(path_), 80u + 75u * 55u * 1440u + 8u);
+  EXPECT_EQ(back.radius_step_px, 1.0);  // the default camera's view is under 254 px
+  EXPECT_EQ(fs::file_size(path_), 88u + 75u * 55u * 1440u + 8u);
 }
 
 TEST_F(FeatureDbTest, RefusesTruncatedCorruptAndForeignFiles) {
