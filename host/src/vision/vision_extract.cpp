@@ -1136,13 +1136,14 @@ BearingScan LineExtractor::extract_with(Walk how, const cv::Mat& bgr, int rpd, E
 // the estimated line steps measured on this frame alone (the first frame's two passes). The
 // followed state can be stale: a light switched on near the robot, or the exposure jumping, makes
 // the carpet brighter than the running reference by more than a line's step, and carpet taken for
-// line never updates that reference. A carpet estimated from a frame that gives nothing usable is
-// not kept: the next frame estimates again.
+// line never updates that reference. When even that finds too little carpet (the light jumped
+// beyond what the window follows), an estimated carpet is estimated again from this frame. A carpet
+// estimated from a frame that gives nothing usable is not kept: the next frame estimates again.
 BearingScan LineExtractor::extract_impl(const cv::Mat& bgr, int rpd, ExtractionReport* report, Walk how) {
   ExtractionReport local;
   ExtractionReport& rep = report != nullptr ? *report : local;
   const bool followed = !sector_val_.empty();
-  const bool estimated_here = !carpet_.has_value();
+  bool estimated_here = !carpet_.has_value();
   const std::optional<CarpetHsv> carpet = carpet_;
   const double ref_val = ref_val_;
   BearingScan scan = extract_once(bgr, rpd, &rep, how);
@@ -1152,6 +1153,12 @@ BearingScan LineExtractor::extract_impl(const cv::Mat& bgr, int rpd, ExtractionR
     ref_val_ = ref_val;
     sector_val_.clear();
     contrast_ = vision_.line_contrast;
+    scan = extract_once(bgr, rpd, &rep, how);
+  }
+  if (!rep.usable && carpet && !carpet_ && !vision_.carpet_hsv) {
+    // Too little carpet even in this frame's own light: the light jumped beyond what the window
+    // follows (light_range); the carpet is estimated again from this frame.
+    estimated_here = true;
     scan = extract_once(bgr, rpd, &rep, how);
   }
   if (!rep.usable && estimated_here && !vision_.carpet_hsv && carpet_) {
