@@ -5,7 +5,21 @@
 
 namespace omniloc::sim {
 
+namespace {
+
+FrameRender omni_render(const OmniRenderer& renderer) {
+  return [&renderer](double, const Pose2& truth, const RenderOptions& options) { return renderer.render(truth, options); };
+}
+
+}  // namespace
+
 void run_simulation(World& world, const OmniRenderer& renderer, const SimRunOptions& options,
+                    const std::function<void(const SimWindow&)>& on_window,
+                    const std::function<void(const SimFrame&)>& on_frame) {
+  run_simulation(world, omni_render(renderer), options, on_window, on_frame);
+}
+
+void run_simulation(World& world, const FrameRender& renderer, const SimRunOptions& options,
                     const std::function<void(const SimWindow&)>& on_window,
                     const std::function<void(const SimFrame&)>& on_frame) {
   const double clock_hz = world.config().robot.clock_hz;
@@ -26,7 +40,7 @@ void run_simulation(World& world, const OmniRenderer& renderer, const SimRunOpti
         f.truth = world.truth();
         f.truth.yaw_deg = wrap_deg(f.truth.yaw_deg);
         render.seed = seed0 + 7919 * ++frame_index;  // fresh sensor noise per frame
-        if (options.render_frames) f.bgr = renderer.render(f.truth, render);
+        if (options.render_frames) f.bgr = renderer(f.t_ms, f.truth, render);
         on_frame(f);
       }
       next_frame_ms += options.frame_period_ms;
@@ -41,10 +55,16 @@ void run_simulation(World& world, const OmniRenderer& renderer, const SimRunOpti
 void record_simulation(const std::filesystem::path& dir, World& world, const OmniRenderer& renderer,
                        const SimRunOptions& options, const std::string& field_name,
                        const std::optional<Pose2>& initial_pose, const RecordingOptions& recording) {
+  record_simulation(dir, world, renderer.camera(), omni_render(renderer), options, field_name, initial_pose, recording);
+}
+
+void record_simulation(const std::filesystem::path& dir, World& world, const CameraModel& camera,
+                       const FrameRender& renderer, const SimRunOptions& options, const std::string& field_name,
+                       const std::optional<Pose2>& initial_pose, const RecordingOptions& recording) {
   RecordingMeta meta;
   meta.field = field_name;
   meta.field_geometry = load_field(field_name).spec;
-  meta.camera = renderer.camera();
+  meta.camera = camera;
   meta.robot = world.config().robot;
   meta.initial_pose = initial_pose;
   RecordingWriter writer(dir, meta, true, recording);

@@ -422,6 +422,49 @@ TEST(VisionNoMeasurement, BlackFrameAndWallsOnlyAreNotUsable) {
   EXPECT_FALSE(rep.usable);
 }
 
+// Frames from which nothing usable comes leave nothing behind, and a jump of the light is read
+// again: on realistic frames through a camera with only today's keys (no "vision" block), a white
+// frame and a blown-out one first (their "carpet" would be a grey window at the sensor's top that
+// held every later frame), then a normal frame, which estimates the green carpet afresh; then the
+// exposure jumping from 0.6x to 1.6x between two frames (the followed light is 2.7x too dark).
+TEST(VisionNoMeasurement, WhiteAndBlownOutFramesLeaveNoCarpetBehindAndALightJumpIsReadAgain) {
+  const FieldGeometry field = load_field("fira-robosot");
+  const sim::TrueOptics optics;
+  const sim::RealisticRenderer rr(field, optics);
+  const CameraModel cam = sim::nominal_camera(optics);
+  ASSERT_FALSE(cam.vision.carpet_hsv.has_value());
+  const Pose2 pose{310.0, 240.0, 35.0};
+  auto frame = [&](std::uint64_t seed, double exposure) {
+    sim::RenderOptions o = sim::realistic(seed);
+    o.realism.look.colour_cast = cv::Vec3f(1.0f, 1.0f, 1.0f) * static_cast<float>(exposure);
+    return rr.render(pose, o);
+  };
+  LineExtractor ex(cam);
+  ExtractionReport rep;
+  (void)ex.extract(cv::Mat(cam.height_px, cam.width_px, CV_8UC3, cv::Scalar::all(255)), 2, &rep);
+  std::printf("white frame: %s\n", rep.reason.c_str());
+  EXPECT_FALSE(rep.usable);
+  (void)ex.extract(frame(11, 12.0), 2, &rep);
+  std::printf("blown out (exposure x12): %s\n", rep.reason.c_str());
+  EXPECT_FALSE(rep.usable);
+  EXPECT_NE(rep.reason.find("no carpet"), std::string::npos) << rep.reason;
+  (void)ex.extract(frame(12, 1.0), 2, &rep);
+  std::printf("then a normal frame: %s, carpet hue %.0f +- %.1f, V %.0f..%.0f, %d crossings\n", rep.usable ? "usable" : rep.reason.c_str(),
+              rep.carpet.hue, rep.carpet.hue_half_width, rep.carpet.val_min, rep.carpet.val_max, rep.crossings);
+  EXPECT_TRUE(rep.usable) << rep.reason;
+  EXPECT_NEAR(rep.carpet.hue, 70.0, 8.0);  // the renderer's carpet paint, not a grey window
+  EXPECT_FALSE(is_grey_carpet(rep.carpet.hue_half_width));
+  LineExtractor ex2(cam);  // the light jump on its own
+  for (std::uint64_t seed = 13; seed < 16; ++seed) {
+    (void)ex2.extract(frame(seed, 0.6), 2, &rep);
+    EXPECT_TRUE(rep.usable) << rep.reason;
+  }
+  (void)ex2.extract(frame(16, 1.6), 2, &rep);
+  std::printf("exposure 0.6x -> 1.6x: %s, %d rays seen, %d crossings\n", rep.usable ? "usable" : rep.reason.c_str(), rep.rays_seen,
+              rep.crossings);
+  EXPECT_TRUE(rep.usable) << rep.reason;
+}
+
 TEST(VisionModelConfig, BlockRoundTripsAndBadValuesNameTheField) {
   CameraModel cam = load_camera("default");
   cam.vision.carpet_hsv = CarpetHsv{93.0, 5.0, 110.0, 30.0, 100.0};

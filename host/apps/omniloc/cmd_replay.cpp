@@ -71,6 +71,18 @@ int run_replay(const ReplayArgs& a) {
               "relocalizations %d, lost events %d, origin resets %d; poses without a fix %zu\n",
               s.frames, s.accepted, s.rejected, s.ambiguous, s.dropped, s.global_searches, s.relocalizations,
               s.lost_events, s.origin_resets, r.poses_without_fix);
+  // Frames that showed nothing usable (no carpet, too few rays or crossings): no measurement.
+  std::size_t no_measurement = 0;
+  const FrameReport* first_empty = nullptr;
+  for (const FrameReport& f : r.frames) {
+    if (f.no_measurement.empty()) continue;
+    ++no_measurement;
+    if (!first_empty) first_empty = &f;
+  }
+  if (first_empty) {
+    std::printf("frames with no measurement %zu (the first at %.1f ms: %s)\n", no_measurement, first_empty->t_ms,
+                first_empty->no_measurement.c_str());
+  }
   if (r.time_to_first_fix_ms) {
     std::printf("first fix %.2f s after the first window; decided by the side %d time(s)\n", *r.time_to_first_fix_ms / 1000.0,
                 s.decided_by_side);

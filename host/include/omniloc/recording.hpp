@@ -250,6 +250,9 @@ struct ReplayResult {
   /// Board time from the first window to the first pose with a fix (nullopt: never fixed; 0 with a
   /// known start pose).
   std::optional<double> time_to_first_fix_ms;
+  /// Every frame's outcome in processing order (FrameReport::no_measurement set: the frame showed
+  /// nothing usable and gave no measurement, odometry stood).
+  std::vector<FrameReport> frames;
 };
 
 /// What a replay may change of the run it replays.

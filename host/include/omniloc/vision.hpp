@@ -238,6 +238,7 @@ class LineExtractor {
   const RayTable& table(int rays_per_degree, std::size_t step_bytes);
   bool ensure_carpet(const cv::Mat& bgr, std::string* why);
   BearingScan extract_impl(const cv::Mat& bgr, int rays_per_degree, ExtractionReport* report, Walk how);
+  BearingScan extract_once(const cv::Mat& bgr, int rays_per_degree, ExtractionReport* report, Walk how);
   template <class Pixel>
   void walk_rays(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr, Pixel px) const;
   void walk(const cv::Mat& bgr, const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const;

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
+#include <utility>
 
 #include "omniloc/recording.hpp"
 
@@ -70,18 +71,20 @@ ReplayResult replay_recording(const Recording& rec, const LocalizerConfig& confi
     // A frame goes in before the window whose end is at or after its time.
     if (fi < rec.frames.size() && rec.frames[fi].t_ms <= rec.windows[wi].t_end_ms) {
       (void)loc.on_image(rec.frames[fi].t_ms, load_frame(rec, fi));
+      for (FrameReport& r : loc.take_frame_reports()) out.frames.push_back(std::move(r));
       ++fi;
     } else {
       EncoderWindow w = rec.windows[wi];
       if (settings.heading) w.heading_trust = *settings.heading;
       out.poses.push_back(loc.on_window(w));
+      for (FrameReport& r : loc.take_frame_reports()) out.frames.push_back(std::move(r));
       if (!out.time_to_first_fix_ms && out.poses.back().source != PoseSource::kNone)
         out.time_to_first_fix_ms = w.t_end_ms - rec.windows.front().t_end_ms;
       ++wi;
     }
     if (progress && (++done % 200 == 0 || done == total)) progress(done, total);
   }
-  (void)loc.take_frame_reports();
+  for (FrameReport& r : loc.take_frame_reports()) out.frames.push_back(std::move(r));
   out.stats = loc.stats();
   std::vector<double> pos, yaw;
   for (const LocalizedPose& p : out.poses) {

@@ -598,6 +598,13 @@ bool LineExtractor::ensure_carpet(const cv::Mat& bgr, std::string* why) {
     *why = "no carpet: the floor around the robot is black (median brightness " + std::to_string(c->median_val) + ")";
     return false;
   }
+  // A line is brighter than the carpet by at least min_val_step: a carpet at the sensor's top (the
+  // frame blown out) leaves no room for one.
+  if (c->median_val > 255.0 - vision_.extraction.min_val_step) {
+    *why = "no carpet: the floor around the robot is overexposed (median brightness " +
+           std::to_string(static_cast<int>(std::lround(c->median_val))) + ")";
+    return false;
+  }
   carpet_ = CarpetHsv{c->hue, c->hue_half_width, c->sat_min, c->val_min, c->val_max};
   ref_val_ = c->median_val;
   sector_val_.clear();
@@ -1124,7 +1131,45 @@ BearingScan LineExtractor::extract_with(Walk how, const cv::Mat& bgr, int rpd, E
   return extract_impl(bgr, rpd, report, how);
 }
 
+// A frame the followed state cannot read (too little carpet, too few rays or crossings) is read
+// again, with the same carpet window, before it is given up, with the light per sector and
+// the estimated line steps measured on this frame alone (the first frame's two passes). The
+// followed state can be stale: a light switched on near the robot, or the exposure jumping, makes
+// the carpet brighter than the running reference by more than a line's step, and carpet taken for
+// line never updates that reference. When even that finds too little carpet (the light jumped
+// beyond what the window follows), an estimated carpet is estimated again from this frame. A carpet
+// estimated from a frame that gives nothing usable is not kept: the next frame estimates again.
 BearingScan LineExtractor::extract_impl(const cv::Mat& bgr, int rpd, ExtractionReport* report, Walk how) {
+  ExtractionReport local;
+  ExtractionReport& rep = report != nullptr ? *report : local;
+  const bool followed = !sector_val_.empty();
+  bool estimated_here = !carpet_.has_value();
+  const std::optional<CarpetHsv> carpet = carpet_;
+  const double ref_val = ref_val_;
+  BearingScan scan = extract_once(bgr, rpd, &rep, how);
+  if (rep.usable) return scan;
+  if (followed && carpet) {
+    carpet_ = carpet;  // too little carpet dropped an estimated one: it is tried once more first
+    ref_val_ = ref_val;
+    sector_val_.clear();
+    contrast_ = vision_.line_contrast;
+    scan = extract_once(bgr, rpd, &rep, how);
+  }
+  if (!rep.usable && carpet && !carpet_ && !vision_.carpet_hsv) {
+    // Too little carpet even in this frame's own light: the light jumped beyond what the window
+    // follows (light_range); the carpet is estimated again from this frame.
+    estimated_here = true;
+    scan = extract_once(bgr, rpd, &rep, how);
+  }
+  if (!rep.usable && estimated_here && !vision_.carpet_hsv && carpet_) {
+    carpet_.reset();
+    sector_val_.clear();
+    contrast_ = vision_.line_contrast;
+  }
+  return scan;
+}
+
+BearingScan LineExtractor::extract_once(const cv::Mat& bgr, int rpd, ExtractionReport* report, Walk how) {
   const bool fast = how != Walk::kReference;
   if (bgr.empty()) throw std::invalid_argument("extract: empty image");
   if (bgr.type() != CV_8UC3) throw std::invalid_argument("extract: image must be 8-bit BGR (CV_8UC3), got type " + std::to_string(bgr.type()));

@@ -33,14 +33,26 @@ struct SimFrame {
   cv::Mat bgr;
 };
 
+/// What draws a frame: the image taken at t_ms at the true pose, with the run's render options
+/// (their seed advanced per frame). OmniRenderer::render is one; a RealisticRenderer, or a renderer
+/// whose light changes with t_ms, is another.
+using FrameRender = std::function<cv::Mat(double t_ms, const Pose2& truth, const RenderOptions& options)>;
+
 /// Runs `world` to the end, calling on_frame and on_window in time order (a frame at t comes
 /// before the window whose end is >= t). Either callback may be empty (frames are then not rendered).
+void run_simulation(World& world, const FrameRender& render, const SimRunOptions& options,
+                    const std::function<void(const SimWindow&)>& on_window,
+                    const std::function<void(const SimFrame&)>& on_frame);
 void run_simulation(World& world, const OmniRenderer& renderer, const SimRunOptions& options,
                     const std::function<void(const SimWindow&)>& on_window,
                     const std::function<void(const SimFrame&)>& on_frame);
 
 /// Writes the run as a recording directory with truth.csv (one truth row per window). meta.json
-/// names `field_name`, the renderer's camera, the world's robot and, if given, initial_pose.
+/// names `field_name`, `camera` (the renderer's, for an OmniRenderer), the world's robot and, if
+/// given, initial_pose.
+void record_simulation(const std::filesystem::path& dir, World& world, const CameraModel& camera,
+                       const FrameRender& render, const SimRunOptions& options, const std::string& field_name,
+                       const std::optional<Pose2>& initial_pose, const RecordingOptions& recording = {});
 void record_simulation(const std::filesystem::path& dir, World& world, const OmniRenderer& renderer,
                        const SimRunOptions& options, const std::string& field_name,
                        const std::optional<Pose2>& initial_pose, const RecordingOptions& recording = {});
