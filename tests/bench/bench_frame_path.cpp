@@ -4,7 +4,7 @@
 // prediction, and the sub-grid refinement (interpolation, then ray casting). Measured on five frames:
 //   0  rendered 640 x 480      (OmniRenderer, common/cameras/default.json, two robots in view)
 //   1  rendered 1280 x 1024    (the same camera scaled by 2: a larger sensor behind the same mirror;
-//                               the feature format stops the rays at 254 px)
+//                               its 477 px view sampled every 1.88 px, CameraModel::scan_step_px)
 //   2  realistic 640 x 480     (RealisticRenderer: hyperbolic tilted mirror, walls, people, robots,
 //                               noise, JPEG; matched with the optics' nominal camera)
 //   3  realistic 1280 x 1024   (the same optics scaled by 2)

@@ -15,6 +15,7 @@
 
 #include "omniloc/recording.hpp"
 #include "omniloc_sim/record_sim.hpp"
+#include "same_poses.hpp"
 
 namespace omniloc {
 namespace {
@@ -165,13 +166,8 @@ TEST(ReplayCommand, WritesTheLibrarysPosesAndNamesABadLine) {
             0)
       << read_text(dir / "stderr.txt");
   const auto poses = read_poses_csv(dir / "poses.csv");
-  ASSERT_EQ(poses.size(), lib.poses.size());
-  for (std::size_t k = 0; k < poses.size(); ++k) {
-    ASSERT_EQ(poses[k].source, lib.poses[k].source) << k;
-    ASSERT_NEAR(poses[k].pose.x_cm, lib.poses[k].pose.x_cm, 1e-3) << k;
-    ASSERT_NEAR(poses[k].pose.y_cm, lib.poses[k].pose.y_cm, 1e-3) << k;
-    ASSERT_NEAR(poses[k].t_ms, lib.poses[k].t_ms, 1e-3) << k;
-  }
+  test::expect_same_poses(poses, lib.poses);
+  if (HasFatalFailure()) return;
   const std::string out = read_text(dir / "stdout.txt");
   char expected[64];
   std::snprintf(expected, sizeof expected, "mean %7.2f  median %7.2f", lib.position_error_cm->mean,

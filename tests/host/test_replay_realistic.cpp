@@ -29,6 +29,7 @@
 #include "omniloc_sim/record_sim.hpp"
 #include "omniloc_sim/renderer.hpp"
 #include "run_command.hpp"
+#include "same_poses.hpp"
 
 namespace omniloc {
 namespace {
@@ -236,13 +237,8 @@ TEST(ReplayRealistic, TodaysCameraKeysReplayWithTheLightChanging) {
                                    dir / "cli.log", output);
   ASSERT_EQ(rc, 0) << output;
   std::printf("omniloc replay:\n%s", output.c_str());
-  const auto poses = read_poses_csv(dir / "poses.csv");
-  ASSERT_EQ(poses.size(), r.poses.size());
-  for (std::size_t k = 0; k < poses.size(); ++k) {
-    ASSERT_EQ(poses[k].source, r.poses[k].source) << k;
-    ASSERT_NEAR(poses[k].pose.x_cm, r.poses[k].pose.x_cm, 1e-3) << k;
-    ASSERT_NEAR(poses[k].pose.y_cm, r.poses[k].pose.y_cm, 1e-3) << k;
-  }
+  test::expect_same_poses(read_poses_csv(dir / "poses.csv"), r.poses);
+  if (HasFatalFailure()) return;
   EXPECT_NE(output.find("accepted " + std::to_string(r.stats.accepted) + ","), std::string::npos) << output;
   const auto without = std::count_if(r.frames.begin(), r.frames.end(), [](const FrameReport& f) { return !f.no_measurement.empty(); });
   EXPECT_NE(output.find("frames with no measurement " + std::to_string(without) + " "), std::string::npos) << output;
