@@ -259,14 +259,14 @@ CoarseResult coarse_search(const FrameAnalysis& a, const CalibrationFrame& f, co
   std::vector<double> scores(static_cast<std::size_t>(kCoarseHeadings));
   for (int mir = 0; mir < 2; ++mir) {
     cv::Mat1f& grid = out.grid.score_px[mir];
-    grid.create(51, kCoarseHeadings);
+    grid.create(detail::CoarseGrid::kScales, kCoarseHeadings);
     grid.setTo(1e9f);
     say(std::string("coarse search (") + (mir ? "mirrored" : "not mirrored") + "): 7 shapes x 51 scales x 120 headings");
     CoarseHit& best = out.best[mir];
     const auto pp = to_polar(a.line_pixels, a.rim.centre_px, mir == 1, 1000);
     for (double x : shapes) {
-      for (int si = 0; si <= 50; ++si) {
-        const CoarseMap m{60.0 * std::pow(1.08, si), x};
+      for (int si = 0; si < detail::CoarseGrid::kScales; ++si) {
+        const CoarseMap m{detail::CoarseGrid::view_cm(si), x};
         score_yaws(pp, m, rv, f.position_cm, fd, 2 * kPi / kCoarseHeadings, kCoarseTruncPx, scores);
         for (int k = 0; k < kCoarseHeadings; ++k) {
           grid(si, k) = std::min(grid(si, k), static_cast<float>(scores[static_cast<std::size_t>(k)]));  // best shape

@@ -108,11 +108,14 @@ cv::Mat coarse_picture(const CoarseGrid& grid, double trunc_px) {
     const int top = mir * (kCoarseCaptionPx + panel_h);
     char text[128];
     std::snprintf(text, sizeof text, "%s: best %.2f px at heading term %.0f deg, d(view) %.0f cm",
-                  mir ? "mirrored" : "not mirrored", lo, best.x * grid.heading_step_deg, 60.0 * std::pow(1.08, best.y));
+                  mir ? "mirrored" : "not mirrored", lo, best.x * grid.heading_step_deg, CoarseGrid::view_cm(best.y));
     caption(out, text, {4, top + 16});
     coarse_panel(s, trunc_px).copyTo(out(cv::Rect(0, top + kCoarseCaptionPx, panel_w, panel_h)));
   }
-  caption(out, "x: heading term 0..360 deg; y: d(view) 60 cm..2.8 km; hot = good", {4, out.rows - 6});
+  char legend[128];
+  std::snprintf(legend, sizeof legend, "x: heading term 0..360 deg; y: d(view) %.0f cm..%.0f m; hot = good",
+                CoarseGrid::view_cm(0), CoarseGrid::view_cm(CoarseGrid::kScales - 1) / 100.0);
+  caption(out, legend, {4, out.rows - 6});
   return out;
 }
 

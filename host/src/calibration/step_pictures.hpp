@@ -3,6 +3,7 @@
 // wrong. Pure drawing: the steps hand their results to a StepPictureSink (calibration.hpp).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -25,8 +26,11 @@ struct PolarClasses {
 };
 
 /// Step 5's grid: per handedness (0 not mirrored, 1 mirrored) the best coarse score (px) over the
-/// shapes, rows = scale index (d(view) = 60 cm x 1.08^row), cols = heading term bin.
+/// shapes, rows = scale index, cols = heading term bin. The coarse search walks these scales.
 struct CoarseGrid {
+  static constexpr int kScales = 51;
+  /// Row i's scale: the ground distance at the view radius, 60 cm x 1.08^i (60 cm .. 28 m).
+  [[nodiscard]] static double view_cm(int row) { return 60.0 * std::pow(1.08, row); }
   cv::Mat1f score_px[2];
   double heading_step_deg = 0.0;
 };

@@ -396,8 +396,8 @@ class LinearisedCaster {
   static constexpr int kMinCrossings = 8;
   static constexpr int kSectorRays = 10;  // the sandwich's clusters: 10 degrees of rays
   struct Run {
-    double enter_px = 0.0, exit_px = 0.0;
-    Eigen::Vector2d enter_g{0.0, 0.0}, exit_g{0.0, 0.0};  // px per cm of the origin's shift
+    double enter_px = 0.0, exit_px = 0.0;  // in samples (line_scan.hpp): px up to a 254 px view
+    Eigen::Vector2d enter_g{0.0, 0.0}, exit_g{0.0, 0.0};  // samples per cm of the origin's shift
   };
   void cast(const Eigen::Vector2d& origin, int k, std::vector<Run>& out) {
     caster_.intervals(origin, dirs_[static_cast<std::size_t>(k)], t_lo_, t_hi_, iv_);
