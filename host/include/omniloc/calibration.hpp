@@ -78,6 +78,7 @@ struct GoalRegion {
   HsvClass colour;             // measured from the region's own pixels
   Eigen::Vector2d centroid_px{0.0, 0.0};
   int pixels = 0;
+  cv::Mat mask;  // CV_8U, 255 = the region's pixels (for checks against hand-drawn goals)
 };
 
 /// The goal colours a frame shows (a goal not seen is empty).

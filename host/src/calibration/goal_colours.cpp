@@ -35,6 +35,7 @@ std::optional<GoalRegion> largest_region(const cv::Mat& hsv, const cv::Mat& band
   GoalRegion g;
   g.pixels = stats.at<int>(best, cv::CC_STAT_AREA);
   g.centroid_px = {centroids.at<double>(best, 0), centroids.at<double>(best, 1)};
+  g.mask = labels == best;
   g.colour.hue = percentile(hs, 0.5);
   // Three robust sigmas, at least 4 hue units (JPEG and noise spread paint that much).
   g.colour.hue_half_width = std::max(4.0, 3.0 * robust_sigma(hs));
