@@ -4,12 +4,13 @@
 // camera. Printed: the rates against the goal, the failures by step, the seeds that failed, and
 // the same locate with each venue's true camera in the same run (the reference: what the front
 // end would reach with a perfect calibration). VENUES_COUNT (default 300) and VENUES_SEED
-// (default 2026) choose the venues; every venue's seed is printed, so one can be re-run alone
-// with `omniloc-sim venues --count 1 --seed ...`.
+// (default 2026) choose the venues; every venue's seed is printed, and VENUES_SEEDS (a comma list
+// of printed venue seeds) re-runs those venues alone.
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <map>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -25,14 +26,31 @@ int main() {
     std::fprintf(stderr, "bench_venues: VENUES_COUNT must be 1..100000 (got %d)\n", count);
     return 2;
   }
-  std::printf("bench_venues: %d venues of seed %llu\n", count, static_cast<unsigned long long>(seed));
+  std::vector<std::uint64_t> venues;
+  if (const char* list = std::getenv("VENUES_SEEDS"); list != nullptr) {
+    std::istringstream in(list);
+    for (std::string item; std::getline(in, item, ',');) {
+      char* end = nullptr;
+      const std::uint64_t v = std::strtoull(item.c_str(), &end, 10);
+      if (item.empty() || end == nullptr || *end != '\0') {
+        std::fprintf(stderr, "bench_venues: VENUES_SEEDS must be a comma list of venue seeds (got '%s')\n", item.c_str());
+        return 2;
+      }
+      venues.push_back(v);
+    }
+    std::printf("bench_venues: the %zu venues of VENUES_SEEDS\n", venues.size());
+  } else {
+    for (int i = 0; i < count; ++i) venues.push_back(sim::venue_seed(seed, static_cast<std::uint64_t>(i)));
+    std::printf("bench_venues: %d venues of seed %llu\n", count, static_cast<unsigned long long>(seed));
+  }
   const auto t0 = std::chrono::steady_clock::now();
   int calibrated = 0, calib_good = 0, located = 0, wild = 0, ref_located = 0;
   std::map<std::string, int> by_step;
   std::vector<std::uint64_t> failed;
-  for (int i = 0; i < count; ++i) {
-    const test::VenueOutcome o = test::run_venue(sim::venue_seed(seed, static_cast<std::uint64_t>(i)));
-    std::printf("[%3d/%d] ", i + 1, count);
+  const int n_venues = static_cast<int>(venues.size());
+  for (int i = 0; i < n_venues; ++i) {
+    const test::VenueOutcome o = test::run_venue(venues[static_cast<std::size_t>(i)]);
+    std::printf("[%3d/%d] ", i + 1, n_venues);
     test::print_outcome(o);
     std::fflush(stdout);
     calibrated += o.calibrated;
@@ -46,8 +64,8 @@ int main() {
     if (!o.calib_good || !o.located_good()) failed.push_back(o.seed);
   }
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  auto pct = [count](int n) { return 100.0 * n / count; };
-  std::printf("\ncalibrated (a camera written): %d of %d (%.1f %%)\n", calibrated, count, pct(calibrated));
+  auto pct = [n_venues](int n) { return 100.0 * n / n_venues; };
+  std::printf("\ncalibrated (a camera written): %d of %d (%.1f %%)\n", calibrated, n_venues, pct(calibrated));
   std::printf("calibrated within the goal (rms < 2 px, centre within 2 px): %d (%.1f %%; goal 97 %%)\n", calib_good, pct(calib_good));
   std::printf("second frame located within 5 cm and 2 deg (pose or twin, below E_TH): %d (%.1f %%; goal 95 %%)\n", located, pct(located));
   std::printf("accepted more than 20 cm off: %d (goal 0)\n", wild);

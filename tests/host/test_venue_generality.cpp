@@ -18,7 +18,10 @@ constexpr std::uint64_t kSeed = 2026;
 constexpr int kVenues = 30;
 // What the front end reached on these venues when the floors were set (docs/CALIBRATION.md,
 // "Generality"): raise them as it improves, never lower them.
-constexpr int kMinCalibrated = 13;
+// 11: two of the 13 counted before the self-check refused (step 8) were wrong cameras within the
+// rms and centre goal (venues 18273785850258396930 and 2539317775091407530, mapping 157 % and 181 %
+// off the truth): refusing them is what the issue asks; they are the test below.
+constexpr int kMinCalibrated = 11;
 constexpr int kMinLocated = 1;
 // Accepted more than 20 cm off (the goal is 0): venue 11331608226358829653 (18 x 12 m, centre
 // spot; its calibrated camera locates the second frame 575 cm off and the localizer accepts it).
@@ -43,6 +46,20 @@ TEST(VenueGenerality, ThirtySampledVenuesCalibrateAndLocate) {
   EXPECT_GE(calib_good, kMinCalibrated);
   EXPECT_GE(located, kMinLocated);
   EXPECT_LE(wild, kMaxWild);
+}
+
+// Cameras that fit their frame's line pixels (rms 0.9 and 1.2 px) but are wrong (the mapping 157 %
+// off the venue's true one, the centre 186 px off): calibrate's self-check refuses them, naming
+// itself. Judged against the sampler's true cameras (measured with the check off: docs/
+// CALIBRATION.md, step 8). Venue 2539317775091407530, refused by the self-check too in the Release
+// build, lies at the inlier check's edge (36-40 %): another compiler's rounding refuses it there.
+TEST(VenueGenerality, SelfCheckRefusesWrongCamerasThatFitTheirPixels) {
+  for (const std::uint64_t seed : {18273785850258396930ull, 17316000990051603176ull}) {
+    const test::VenueOutcome o = test::run_venue(seed);
+    test::print_outcome(o);
+    EXPECT_FALSE(o.calibrated) << seed;
+    EXPECT_EQ(o.calib_step, "self-check") << seed << ": " << o.calib_error;
+  }
 }
 
 }  // namespace

@@ -43,10 +43,13 @@ struct VenueOutcome {
   std::uint64_t seed = 0;
   std::string field, spot;
   bool calibrated = false;     // calibrate wrote a camera
-  std::string calib_step;      // failed step ("rim", "carpet", "lines", "view", "fit", "model") or ""
+  std::string calib_step;      // failed step ("rim", "carpet", "lines", "view", "fit", "model", "self-check") or ""
   std::string calib_error;
   double rms_px = 0.0, centre_error_px = 0.0;
   double line_recall = 0.0;    // calibrate's self-check on the calibration frame
+  // The calibrated mapping against the true one: the largest relative ground-distance error over
+  // the radii the lines measured (what the frame can tell), printed beside the goal's figures.
+  double mapping_error = 0.0;
   bool calib_good = false;     // calibrated, rms and centre within the goal
   LocateOutcome located;       // with the calibrated camera (when calibrated)
   LocateOutcome reference;     // with the venue's true (nominal) camera
@@ -65,7 +68,7 @@ inline std::string failed_step(const std::string& what) {
   for (const auto& [key, step] : {std::pair{"no mirror rim", "rim"}, std::pair{"rim radius given", "rim"},
                                   std::pair{"no carpet ring", "view"}, std::pair{"no carpet", "carpet"},
                                   std::pair{"no lines", "lines"}, std::pair{"monotonic", "model"},
-                                  std::pair{"nothing fits", "fit"}}) {
+                                  std::pair{"nothing fits", "fit"}, std::pair{"self-check failed", "self-check"}}) {
     if (what.find(key) != std::string::npos) return step;
   }
   return "other";
@@ -135,6 +138,14 @@ inline VenueOutcome run_venue(std::uint64_t seed) {
   out.rms_px = cal.rms_px;
   out.line_recall = cal.fits.front().line_recall;
   out.centre_error_px = (cal.camera.center_px - v.optics.centre_px).norm();
+  try {
+    const CameraModel truth_camera = sim::nominal_camera(v.optics, std::hypot(v.field.total_x_cm(), v.field.total_y_cm()));
+    for (double rr = cal.measured_min_px; rr <= cal.measured_max_px; rr += 1.0)
+      out.mapping_error =
+          std::max(out.mapping_error, std::abs(cal.radial.ground_cm(rr) / truth_camera.ground_cm_at_radius(rr) - 1.0));
+  } catch (const std::exception&) {
+    out.mapping_error = 1.0;  // the true camera does not reach those radii
+  }
   out.calib_good = out.rms_px < kCalibRmsPx && out.centre_error_px < kCalibCentrePx;
   try {
     // With the calibration frame's heading unknown, the camera's yaw offset takes that heading as
@@ -157,8 +168,9 @@ inline void print_outcome(const VenueOutcome& o) {
   if (!o.calibrated) {
     std::printf("calibrate failed at %s: %s", o.calib_step.c_str(), o.calib_error.c_str());
   } else {
-    std::printf("calibrated rms %.2f px, centre %.2f px off%s, self-check %.0f %%; located ", o.rms_px, o.centre_error_px,
-                o.calib_good ? "" : " (outside the goal)", 100 * o.line_recall);
+    std::printf("calibrated rms %.2f px, centre %.2f px off%s, mapping %.1f %% off at worst, self-check %.0f %%; located ",
+                o.rms_px, o.centre_error_px, o.calib_good ? "" : " (outside the goal)", 100 * o.mapping_error,
+                100 * o.line_recall);
     if (!o.located.usable) std::printf("no measurement (%s)", o.located.why.c_str());
     else std::printf("%.1f cm %.1f deg off, %s", o.located.error_cm, o.located.error_deg, verdict(o.located));
   }

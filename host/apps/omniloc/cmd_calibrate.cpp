@@ -218,9 +218,14 @@ int run_calibrate(const CalibrateArgs& a) {
   const CameraModel& c = r.camera;
   std::printf("centre (%.2f, %.2f) px (rim (%.2f, %.2f) r %.1f px on %d/360 rays)\n", c.center_px.x(), c.center_px.y(),
               r.rim.centre_px.x(), r.rim.centre_px.y(), r.rim.radius_px, r.rim.rays_on_circle);
-  std::printf("radial model d(r) = %.6g r + %.6g r^2 + %.6g r^3 + %.6g r^4 cm; d(50) %.1f, d(100) %.1f, d(view) %.1f cm\n",
-              r.radial.a[0], r.radial.a[1], r.radial.a[2], r.radial.a[3], r.radial.ground_cm(50), r.radial.ground_cm(100),
-              r.radial.ground_cm(r.view_radius_px));
+  const RadialModel& m = r.radial;
+  if (m.rational()) {
+    std::printf("radial model (rational) d(r) = %.6g x / (1 %+.6g x^2 %+.6g x^3 %+.6g x^4) cm", m.a[0], m.e[0], m.e[1], m.e[2]);
+  } else {
+    std::printf("radial model (quartic) d(r) = %.6g x %+.6g x^2 %+.6g x^3 %+.6g x^4 cm", m.a[0], m.a[1], m.a[2], m.a[3]);
+  }
+  std::printf(", x = r / %.1f px; d(50) %.1f, d(100) %.1f, d(view) %.1f cm\n", m.scale_px, m.ground_cm(50), m.ground_cm(100),
+              m.ground_cm(r.view_radius_px));
   std::printf("yaw offset %.2f deg%s, mirrored %s (%s)%s\n", c.yaw_offset_deg,
               r.yaw_offset_ambiguous ? " (or 180 deg more: the view is symmetric; add a frame off the centre to tell)" : "",
               c.mirrored ? "yes" : "no", r.handedness_from.c_str(),

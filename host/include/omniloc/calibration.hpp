@@ -6,11 +6,12 @@
 // carpet colour (dominant hue in the rim's disc) -> line pixels (locally brighter and less
 // saturated than the carpet around them) -> body radius, masts and view radius (polar statistics
 // of carpet / line / other) -> coarse brute-force search of yaw and mapping over a field-frame
-// distance transform -> robust (Huber, truncated) Ceres fit of centre, radial polynomial and yaw
+// distance transform -> robust (Huber, truncated) Ceres fit of centre, radial model and yaw
 // with nearest-line-point re-association (ICP-style).
 //
-// Radial model: ground distance d(r) = a1 r + a2 r^2 + a3 r^3 + a4 r^4 (cm, r in px from the image
-// centre), checked monotonic over [0, view radius]; written out as `radius_lut` rows.
+// Radial model: ground distance d(r) a quartic in x = r / view radius, or where the quartic turns
+// over, a rational form with the mirror's horizon (RadialModel), checked monotonic over [0, view
+// radius]; written out as `radius_lut` rows.
 #pragma once
 
 #include <array>
@@ -36,12 +37,21 @@ struct CalibrationFrame {
   std::optional<double> yaw_deg;
 };
 
-/// d(r) = sum_k a[k] r^(k+1): ground distance (cm) at image radius r (px).
-struct RadialPolynomial {
-  std::array<double, 4> a{0.0, 0.0, 0.0, 0.0};
+/// The ground distance (cm) at image radius r (px), a ratio of polynomials in x = r / scale_px:
+///   d(r) = (a1 x + a2 x^2 + a3 x^3 + a4 x^4) / (1 + e2 x^2 + e3 x^3 + e4 x^4).
+/// Two forms are fitted (docs/CALIBRATION.md, step 6): the quartic (e = 0), and where the quartic
+/// turns over, the rational form of a central omni camera (a2 = a3 = a4 = 0: Scaramuzza's model,
+/// the ray through r leaves the mirror along (r, -z(r)) with z = z0 + z2 r^2 + z3 r^3 + z4 r^4 and
+/// meets the floor at H r / z(r)), whose pole is the horizon that a hyperbolic or spherical mirror
+/// approaches as its floor distance climbs steeply towards the rim.
+struct RadialModel {
+  double scale_px = 1.0;                       ///< r is normalised by it (the view radius)
+  std::array<double, 4> a{0.0, 0.0, 0.0, 0.0};  ///< numerator a1..a4 (cm)
+  std::array<double, 3> e{0.0, 0.0, 0.0};       ///< denominator e2..e4 (dimensionless)
+  [[nodiscard]] bool rational() const { return e != std::array<double, 3>{0.0, 0.0, 0.0}; }
   [[nodiscard]] double ground_cm(double r_px) const;
   [[nodiscard]] double slope_cm_per_px(double r_px) const;
-  /// True when d increases strictly on (0, r_max_px].
+  /// True when d is finite and increases strictly on (0, r_max_px] (the horizon beyond it).
   [[nodiscard]] bool monotonic_up_to(double r_max_px) const;
 };
 
@@ -115,7 +125,7 @@ struct FrameFit {
 
 struct CalibrationResult {
   CameraModel camera;  // what the project reads (radius_lut ends at the view radius)
-  RadialPolynomial radial;
+  RadialModel radial;
   RimCircle rim;
   CarpetColour carpet;
   double view_radius_px = 0.0;
