@@ -7,7 +7,7 @@
 #   make lint       verilator --lint-only -Wall on every RTL file
 #   make formal     yosys + yosys-smtbmc (z3) proofs
 #   make mutate     every mutation of tests/mutate/mutations.txt against the proofs and cycle tests
-#                   ("N of N mutations killed"; MUTATE_ARGS, e.g. --formal-only or --only NAME,...)
+#                   ("N of N mutations killed"; MUTATE_ARGS, e.g. --formal-only, --rtl-only or --only NAME,...)
 #   make bitstream  iCEBreaker bitstream with the open iCE40 flow
 #   make bench      benchmarks (each against a naive reference, ratio printed)
 #   make soak       long simulated runs: the localizer (SOAK_MINUTES, default 10), the daemon with faults

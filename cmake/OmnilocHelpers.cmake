@@ -38,6 +38,11 @@ endfunction()
 # include dir, rtl/ as the module library (-y) and VCD tracing (TRACE: every testbench can re-run a
 # failing seed with a trace). SOURCES defaults to rtl/<top>.v and PREFIX to V<top>; VERILATOR_ARGS
 # adds per-model flags, e.g. parameters (-GTIMEOUT_CYCLES=200).
+# OMNILOC_VERILATOR_LINT_FATAL=OFF adds -Wno-fatal: the -Wall warnings are still printed but no
+# longer stop the build. Only the mutation tree of `make mutate` (tests/mutate/run_mutate.py) turns
+# it off: a mutant that leaves a signal unused is a wrong design to be killed by the tests, not a
+# lint failure of rtl/ (which `make lint` and every normal build keep fatal).
+option(OMNILOC_VERILATOR_LINT_FATAL "Verilator -Wall warnings stop the build (OFF only for mutants)" ON)
 function(omniloc_verilate target)
   cmake_parse_arguments(ARG "" "TOP_MODULE;PREFIX" "SOURCES;VERILATOR_ARGS" ${ARGN})
   if(NOT ARG_TOP_MODULE)
@@ -49,11 +54,16 @@ function(omniloc_verilate target)
   if(NOT ARG_PREFIX)
     set(ARG_PREFIX V${ARG_TOP_MODULE})
   endif()
+  set(lint_args)
+  if(NOT OMNILOC_VERILATOR_LINT_FATAL)
+    set(lint_args -Wno-fatal)
+  endif()
   verilate(${target} TRACE
     SOURCES ${ARG_SOURCES}
     TOP_MODULE ${ARG_TOP_MODULE}
     PREFIX ${ARG_PREFIX}
     INCLUDE_DIRS ${OMNILOC_RTL_INCLUDE_DIR} ${OMNILOC_RTL_DIR}
     OPT_FAST -O2
-    VERILATOR_ARGS -Wall -O3 --x-assign fast --x-initial fast -y ${OMNILOC_RTL_DIR} ${ARG_VERILATOR_ARGS})
+    VERILATOR_ARGS -Wall ${lint_args} -O3 --x-assign fast --x-initial fast -y ${OMNILOC_RTL_DIR}
+      ${ARG_VERILATOR_ARGS})
 endfunction()

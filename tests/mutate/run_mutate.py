@@ -5,9 +5,16 @@ Each mutation of tests/mutate/mutations.txt is a named one-line change of one RT
 substring that must occur exactly once in the file, and its replacement). It is applied to a
 temporary copy of rtl/ (the repository is never edited), then its checks run against that copy in
 order until one fails: the mutation is KILLED by that check. A mutation that passes all of its
-checks SURVIVED (the tests cannot tell it from the real design). Exit status: 0 when every mutation
-was killed, 1 when one survived (or a check could not decide, e.g. a timeout), 2 on a usage error
-or a mutation that does not apply (its pattern missing or not unique) or does not build.
+checks SURVIVED (the tests cannot tell it from the real design). A mutation whose copy a check
+cannot build (yosys cannot read it, the testbench does not verilate or compile) DOES NOT BUILD: it
+tests nothing, and the run goes on with the next one. Exit status: 0 when every mutation was
+killed, 1 when one survived (or a check could not decide, e.g. a timeout), 2 on a usage error, a
+mutation that does not apply (its pattern missing or not unique) or one that does not build.
+
+Lint is not a build failure here: the testbenches of the mutated copy are verilated with -Wall
+-Wno-fatal (CMake OMNILOC_VERILATOR_LINT_FATAL=OFF, that tree only), so a mutant that, say, leaves
+a signal unused (UNUSEDSIGNAL) is built and tested like any other; its warnings are named on its line of
+the report ("lint: UNUSEDSIGNAL"). The normal build and `make lint` keep -Wall fatal for rtl/.
 
 Checks:
   formal:NAME          the CTest test formal_NAME of the build tree (tests/formal, tests/link,
@@ -20,14 +27,17 @@ Checks:
 Before the mutations, every check used runs once on the unmutated copy (the baseline): a check
 that fails there would kill every mutation and prove nothing, so the run stops.
 
-usage: run_mutate.py --build BUILD [--work DIR] [--fast] [--only NAME[,NAME...]] [--no-baseline]
-                     [--formal-only] [--list] [--jobs N]
+usage: run_mutate.py --build BUILD [--work DIR] [--list-file FILE] [--fast] [--only NAME[,NAME...]]
+                     [--no-baseline] [--formal-only | --rtl-only] [--list] [--jobs N]
   --fast   only the mutations marked `fast: yes` and only their formal checks (the subset that
            `make test` runs as the CTest test mutate_fast, label mutate)
   --formal-only  the mutations that have formal checks, with only those checks
+  --rtl-only     the mutations that have cycle-test checks, with only those checks (every such
+                 mutant is then built, which a formal check killing it first would skip)
 """
 
 import argparse
+import filecmp
 import json
 import os
 import re
@@ -124,13 +134,24 @@ class Runner:
         self.base_secs = {}
 
     def fresh_copy(self):
-        """The copy equal to rtl/, every file written now (shutil.copyfile, not copy2): a file left
-        mutated by an earlier, interrupted run and copied back with rtl/'s older mtime would leave
-        the mutation tree's testbenches, built from the mutated file, looking up to date. The
-        rebuild this costs per run is mostly ccache hits."""
-        if os.path.exists(self.copy):
-            shutil.rmtree(self.copy)
-        shutil.copytree(RTL, self.copy, copy_function=shutil.copyfile)
+        """The copy made equal to rtl/. A file whose content differs (e.g. left mutated by an
+        earlier, interrupted run) is written now (shutil.copyfile, not copy2: copied back with
+        rtl/'s older mtime it would leave the testbenches built from the mutated file looking up to
+        date); a file already equal keeps its mtime, so that a second run does not rebuild every
+        testbench from scratch (there may be no ccache). Files gone from rtl/ are removed."""
+        want = set()
+        for root, _, files in os.walk(RTL):
+            for f in files:
+                rel = os.path.relpath(os.path.join(root, f), RTL)
+                want.add(rel)
+                src, dst = os.path.join(RTL, rel), os.path.join(self.copy, rel)
+                if not (os.path.isfile(dst) and filecmp.cmp(src, dst, shallow=False)):
+                    os.makedirs(os.path.dirname(dst), exist_ok=True)
+                    shutil.copyfile(src, dst)
+        for root, _, files in os.walk(self.copy):
+            for f in files:
+                if os.path.relpath(os.path.join(root, f), self.copy) not in want:
+                    os.remove(os.path.join(root, f))
 
     def write(self, rel, text):
         # rel is rtl/..., the copy is rtl/ itself
@@ -142,7 +163,9 @@ class Runner:
         if self.configured:
             return
         cache = open(os.path.join(self.build, "CMakeCache.txt"), encoding="utf-8").read()
-        args = ["cmake", "-S", SRC, "-B", self.mbuild, "-DOMNILOC_RTL_DIR=" + self.copy]
+        # Lint warnings of a mutant are not fatal in this tree (see the top of this file).
+        args = ["cmake", "-S", SRC, "-B", self.mbuild, "-DOMNILOC_RTL_DIR=" + self.copy,
+                "-DOMNILOC_VERILATOR_LINT_FATAL=OFF"]
         for var in ("CMAKE_BUILD_TYPE", "CMAKE_GENERATOR", "CMAKE_C_COMPILER_LAUNCHER",
                     "CMAKE_CXX_COMPILER_LAUNCHER"):
             m = re.search(rf"^{var}:\w+=(.*)$", cache, re.M)
@@ -155,7 +178,10 @@ class Runner:
         self.configured = True
 
     def run_check(self, check, tag, timeout=None):
-        """(passed, seconds, detail); passed None = undecided (timeout)."""
+        """(passed, seconds, detail, kind, lint): passed None = undecided (timeout); kind "build"
+        = the copy could not be built for this check (not lint), "fail" = the check failed,
+        "timeout", or "" = passed; lint = the Verilator warning codes of the testbench build."""
+        lint = []
         start = time.monotonic()
         kind = check.split(":")[0]
         log = os.path.join(self.work, "logs", f"{tag}.{check.replace(':', '_').replace('*', 'x')}.log")
@@ -177,10 +203,15 @@ class Runner:
             self.configure()
             b = subprocess.run(["cmake", "--build", self.mbuild, "--target", target, "-j", str(self.jobs)],
                                capture_output=True, text=True)
+            blog = log[:-len(".log")] + ".build.log"
+            with open(blog, "w") as f:
+                f.write(b.stdout + b.stderr)
+            lint = sorted(set(re.findall(r"%Warning-([A-Z0-9_]+):", b.stdout + b.stderr)))
             if b.returncode != 0:
-                with open(log, "w") as f:
-                    f.write(b.stdout + b.stderr)
-                return False, time.monotonic() - start, f"BUILD FAILED (log {log})", "build"
+                # Warnings are not fatal in this tree: the first error says why it did not build.
+                err = re.search(r"^.*(%Error.*|error:.*)$", b.stdout + b.stderr, re.M)
+                why = err.group(1).strip()[:160] if err else f"exit {b.returncode}"
+                return False, time.monotonic() - start, f"{why} (log {blog})", "build", lint
             exe = self.find_exe(target)
             cmd = [exe, f"--gtest_filter={filt}"]
             full_env = dict(os.environ)
@@ -189,17 +220,18 @@ class Runner:
             r = subprocess.run(cmd, capture_output=True, text=True, env=full_env, timeout=to,
                                cwd=self.mbuild if kind == "rtl" else self.work)
         except subprocess.TimeoutExpired:
-            return None, time.monotonic() - start, f"timeout after {to} s", "timeout"
+            return None, time.monotonic() - start, f"timeout after {to} s", "timeout", lint
         with open(log, "w") as f:
             f.write(r.stdout + r.stderr)
         secs = time.monotonic() - start
         if r.returncode == 0:
-            return True, secs, "", ""
+            return True, secs, "", "", lint
         text = r.stdout + r.stderr
         if kind == "formal" and "yosys failed" in text:
-            return False, secs, f"yosys failed (log {log})", "build"
+            return False, secs, f"yosys failed (log {log})", "build", lint
         if kind == "rtl" and "[  FAILED  ]" not in text:
-            return False, secs, f"exit {r.returncode} without a failed test (log {log})", "build"
+            # A crash or abort of the testbench: not a build failure, not a clean kill either.
+            return None, secs, f"exit {r.returncode} without a failed test (log {log})", "timeout", lint
         detail = ""
         if kind == "formal":
             m = re.findall(r"FORMAL \S+: (\w+ depth \d+) FAILED", text)
@@ -210,7 +242,7 @@ class Runner:
         else:
             m = re.findall(r"\[  FAILED  \] (\S+) \(", text)
             detail = ", ".join(m[:3]) if m else "failed"
-        return False, secs, detail, "fail"
+        return False, secs, detail, "fail", lint
 
     def find_exe(self, target):
         if target not in self.built:
@@ -232,6 +264,7 @@ def main():
     ap.add_argument("--only")
     ap.add_argument("--no-baseline", action="store_true")
     ap.add_argument("--formal-only", action="store_true")
+    ap.add_argument("--rtl-only", action="store_true")
     ap.add_argument("--list", action="store_true")
     ap.add_argument("--jobs", type=int, default=2)
     args = ap.parse_args()
@@ -262,6 +295,12 @@ def main():
         muts = [m for m in muts if any(c.startswith("formal:") for c in m["checks"])]
         for m in muts:
             m["checks"] = [c for c in m["checks"] if c.startswith("formal:")]
+    if args.rtl_only:
+        if args.formal_only or args.fast:
+            die("--rtl-only goes with neither --formal-only nor --fast")
+        muts = [m for m in muts if any(c.startswith("rtl:") for c in m["checks"])]
+        for m in muts:
+            m["checks"] = [c for c in m["checks"] if c.startswith("rtl:")]
     if args.list:
         for m in muts:
             print(f"  {m['name']:<34} {m['file']:<28} {' '.join(m['checks'])}")
@@ -278,24 +317,27 @@ def main():
             used += [c for c in m["checks"] if c not in used]
         print(f"baseline: {len(used)} checks on the unmutated copy")
         for c in used:
-            ok, secs, detail, _ = runner.run_check(c, "baseline")
+            ok, secs, detail, _, lint = runner.run_check(c, "baseline")
             runner.base_secs[c] = secs
-            print(f"  {c:<50} {'passed' if ok else 'FAILED ' + detail} ({secs:.1f} s)", flush=True)
+            note = f" [lint: {' '.join(lint)}: rtl/ itself is not lint-clean]" if lint else ""
+            print(f"  {c:<50} {'passed' if ok else 'FAILED ' + detail} ({secs:.1f} s){note}", flush=True)
             if not ok:
                 die(f"check {c} fails on the unmutated design: fix it before mutating", 1)
 
-    killed, survived, undecided = [], [], []
+    killed, survived, undecided, unbuilt = [], [], [], []
     for i, mu in enumerate(muts, 1):
         runner.write(mu["file"], apply(mu, originals[mu["file"]]))
-        result, by = None, []
+        result, by, lints = None, [], []
         start = time.monotonic()
         for c in mu["checks"]:
             base = runner.base_secs.get(c)
-            ok, secs, detail, kind = runner.run_check(
+            ok, secs, detail, kind, lint = runner.run_check(
                 c, mu["name"], timeout=None if base is None else int(max(60, 5 * base)))
+            lints += [w for w in lint if w not in lints]
             if kind == "build":
-                runner.write(mu["file"], originals[mu["file"]])
-                die(f"mutation {mu['name']} does not build ({c}: {detail}): not a useful mutation", 2)
+                result = "unbuilt"
+                by = [f"{c}: {detail}"]
+                break
             if ok is None:
                 by.append(f"{c}: {detail}")
                 result = result or "undecided"
@@ -306,16 +348,20 @@ def main():
                 break
         runner.write(mu["file"], originals[mu["file"]])
         secs = time.monotonic() - start
-        if result == "killed":
+        note = f" (lint: {' '.join(lints)})" if lints else ""
+        if result == "unbuilt":
+            unbuilt.append(mu["name"])
+            print(f"[{i:2}/{len(muts)}] {mu['name']:<34} DOES NOT BUILD {by[0]} [{secs:.0f} s]", flush=True)
+        elif result == "killed":
             killed.append(mu["name"])
-            print(f"[{i:2}/{len(muts)}] {mu['name']:<34} killed   by {by[0]} [{secs:.0f} s]", flush=True)
+            print(f"[{i:2}/{len(muts)}] {mu['name']:<34} killed   by {by[0]}{note} [{secs:.0f} s]", flush=True)
         elif result == "undecided":
             undecided.append(mu["name"])
-            print(f"[{i:2}/{len(muts)}] {mu['name']:<34} UNDECIDED {'; '.join(by)} [{secs:.0f} s]", flush=True)
+            print(f"[{i:2}/{len(muts)}] {mu['name']:<34} UNDECIDED {'; '.join(by)}{note} [{secs:.0f} s]", flush=True)
         else:
             survived.append(mu["name"])
-            print(f"[{i:2}/{len(muts)}] {mu['name']:<34} SURVIVED {' '.join(mu['checks'])} all passed "
-                  f"[{secs:.0f} s]", flush=True)
+            print(f"[{i:2}/{len(muts)}] {mu['name']:<34} SURVIVED {' '.join(mu['checks'])} all passed"
+                  f"{note} [{secs:.0f} s]", flush=True)
 
     n = len(muts)
     print(f"{len(killed)} of {n} mutations killed ({time.monotonic() - t0:.0f} s)")
@@ -323,6 +369,9 @@ def main():
         print("survived: " + ", ".join(survived))
     if undecided:
         print("undecided: " + ", ".join(undecided))
+    if unbuilt:
+        print("does not build (not lint: fix or drop the mutation): " + ", ".join(unbuilt))
+        return 2
     return 0 if len(killed) == n else 1
 
 
