@@ -1,5 +1,5 @@
 // Fitting side of the calibration: a field-frame distance transform of the white lines, a coarse
-// brute-force search of yaw and mapping, and a robust Ceres fit of centre, rational radial model and
+// brute-force search of yaw and mapping, and a robust Ceres fit of centre, radial model and
 // yaw with nearest-line-point re-association; the camera it writes and the overlay it draws.
 #include <algorithm>
 #include <chrono>
@@ -837,9 +837,10 @@ cv::Mat calibration_overlay(const CalibrationFrame& frame, const FrameAnalysis& 
   // Field model: ground distance -> radius by bisection in the fitted model (beyond the LUT's
   // view radius too, up to the rim, so the whole seen field is drawn).
   const double r_max = r.rim.radius_px;
+  const bool monotonic_to_rim = r.radial.monotonic_up_to(r_max);  // once, not per line point
   auto radius_of = [&](double d) {
     double lo = 0.0, hi = r_max;
-    if (!(r.radial.ground_cm(hi) >= d) || !r.radial.monotonic_up_to(hi)) hi = r.view_radius_px;
+    if (!monotonic_to_rim || !(r.radial.ground_cm(hi) >= d)) hi = r.view_radius_px;
     if (r.radial.ground_cm(hi) < d) return -1.0;
     for (int i = 0; i < 40; ++i) ((r.radial.ground_cm(0.5 * (lo + hi)) < d) ? lo : hi) = 0.5 * (lo + hi);
     return 0.5 * (lo + hi);
