@@ -62,8 +62,8 @@ function(omniloc_verilate target)
     SOURCES ${ARG_SOURCES}
     TOP_MODULE ${ARG_TOP_MODULE}
     PREFIX ${ARG_PREFIX}
-    INCLUDE_DIRS ${OMNILOC_RTL_INCLUDE_DIR} ${OMNILOC_RTL_DIR}
+    INCLUDE_DIRS ${OMNILOC_RTL_INCLUDE_DIR} ${OMNILOC_RTL_DIR} ${OMNILOC_RTL_DIR}/gyro
     OPT_FAST -O2
-    VERILATOR_ARGS -Wall ${lint_args} -O3 --x-assign fast --x-initial fast -y ${OMNILOC_RTL_DIR}
+    VERILATOR_ARGS -Wall ${lint_args} -O3 --x-assign fast --x-initial fast -y ${OMNILOC_RTL_DIR} -y ${OMNILOC_RTL_DIR}/gyro
       ${ARG_VERILATOR_ARGS})
 endfunction()

@@ -8,6 +8,8 @@
 // win_timestamp_o, win_count_o (4 x signed 32, channel 0 in the low bits), win_position_o,
 // win_dir_o and status_o (STATUS as it stood at the capture) then hold until the next capture.
 // win_consumed_i (one-cycle strobe) marks the window as taken, for STATUS.OVERRUN.
+// The gyro's window (gyro_*_i) comes from outside (omniloc_top's gyro_ctrl, ticked by tick_o) and
+// goes into the window bank with the counts; tied to 0 where there is no gyro.
 //
 // Assumptions: enc_a_i/enc_b_i asynchronous; a single clock; rst_i synchronous, active high,
 // and held for at least one cycle. CLK_HZ / TICK_HZ >= PERIOD_MIN_CYCLES. Defaults: the paper's
@@ -27,6 +29,10 @@ module encoder_core #(
     input  wire                                         rst_i,
     input  wire [`OMNILOC_CHANNELS-1:0]                 enc_a_i,
     input  wire [`OMNILOC_CHANNELS-1:0]                 enc_b_i,
+    // the gyro's window (gyro_accum ticked by tick_o), held from the cycle after the tick
+    input  wire signed [`OMNILOC_GYRO_SUM_BITS-1:0]     gyro_sum_i,
+    input  wire [`OMNILOC_GYRO_COUNT_BITS-1:0]          gyro_count_i,
+    input  wire [`OMNILOC_BODY_WINDOW_GYRO_FLAGS_W-1:0] gyro_flags_i,
     // register bus
     input  wire [`OMNILOC_ADDR_W-1:0]                   reg_addr_i,
     input  wire                                         reg_rd_i,
@@ -99,6 +105,7 @@ encoder_regs #(.CLK_HZ(CLK_HZ), .TICK_HZ(TICK_HZ)) u_regs (
     .capture_i(capture), .illegal_i(illegal), .win_consumed_i(win_consumed_i),
     .timestamp_i(timestamp), .win_count_i(win_count_o), .win_position_i(win_position_o),
     .win_dir_i(win_dir_o), .err_count_i(err_count),
+    .gyro_sum_i(gyro_sum_i), .gyro_count_i(gyro_count_i), .gyro_flags_i(gyro_flags_i),
     .win_valid_o(win_valid_o), .win_seq_o(win_seq_o), .win_timestamp_o(win_timestamp_o),
     .win_status_o(status_o), .bank_idx_i(bank_idx_i), .bank_byte_o(bank_byte_o),
     /* verilator lint_off PINCONNECTEMPTY */

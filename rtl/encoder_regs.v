@@ -13,7 +13,10 @@
 // win_consumed_i (the link streaming the window), copies the whole bank (seq, timestamp, status,
 // dir, counts, positions) into the one frozen bank that SNAP_* read and that the link sends byte
 // by byte (bank_idx_i -> bank_byte_o, the WINDOW body layout), so the reads that follow belong to
-// the same window even if captures happen meanwhile.
+// the same window even if captures happen meanwhile. The gyro's window (gyro_*_i, from gyro_accum
+// ticked by the window tick, so latched at the same edge as a capture) is part of the bank: copied with the counts, read as SNAP_GYRO_SUM
+// and SNAP_GYRO. STATUS.GYRO_FAULT is set in the cycle after a capture whose gyro flags are not 0
+// (so it shows in the next window's status byte; the window's own flags are in its body).
 // STATUS.OVERRUN: a capture while the previous window was neither latched through SNAP_SEQ nor
 // acknowledged by win_consumed_i. A flag set and cleared (W1C) in the same cycle stays set.
 //
@@ -54,6 +57,10 @@ module encoder_regs #(
     input  wire [`OMNILOC_CHANNELS*`OMNILOC_DATA_W-1:0] win_position_i,
     input  wire [`OMNILOC_SNAP_DIR_DIR_W-1:0]           win_dir_i,
     input  wire [`OMNILOC_CHANNELS*`OMNILOC_DATA_W-1:0] err_count_i,
+    // the gyro's window (gyro_accum), latched at the same capture edge as the counts
+    input  wire signed [`OMNILOC_GYRO_SUM_BITS-1:0]     gyro_sum_i,
+    input  wire [`OMNILOC_GYRO_COUNT_BITS-1:0]          gyro_count_i,
+    input  wire [`OMNILOC_BODY_WINDOW_GYRO_FLAGS_W-1:0] gyro_flags_i,
     // window bank, valid from the cycle after the capture until the next one
     output wire                                         win_valid_o,
     output wire [`OMNILOC_DATA_W-1:0]                   win_seq_o,
@@ -76,6 +83,10 @@ localparam ILL_LSB = `OMNILOC_STATUS_ILLEGAL_LSB;
 localparam ILL_W = `OMNILOC_STATUS_ILLEGAL_W;
 localparam OVR_BIT = `OMNILOC_STATUS_OVERRUN_LSB;
 localparam BAD_BIT = `OMNILOC_STATUS_BAD_WRITE_LSB;
+localparam GYR_BIT = `OMNILOC_STATUS_GYRO_FAULT_LSB;
+localparam integer GSUM_W = `OMNILOC_GYRO_SUM_BITS;
+localparam integer GCNT_W = `OMNILOC_GYRO_COUNT_BITS;
+localparam integer GFLG_W = `OMNILOC_BODY_WINDOW_GYRO_FLAGS_W;
 localparam DEC_LSB = `OMNILOC_CONTROL_DECODE_LSB;
 localparam DEC_W = `OMNILOC_CONTROL_DECODE_W;
 localparam FLT_W = `OMNILOC_FILTER_LENGTH_W;
@@ -112,12 +123,21 @@ localparam integer W_COUNT = `OMNILOC_BODY_WINDOW_COUNT_LSB;
 localparam integer W_DIR = `OMNILOC_BODY_WINDOW_DIR_LSB;
 localparam integer W_STAT = `OMNILOC_BODY_WINDOW_STATUS_LSB;
 localparam integer BDIR_W = `OMNILOC_BODY_WINDOW_DIR_W;
+localparam integer W_GSUM = `OMNILOC_BODY_WINDOW_GYRO_SUM_LSB;
+localparam integer W_GCNT = `OMNILOC_BODY_WINDOW_GYRO_COUNT_LSB;
+localparam integer W_GFLG = `OMNILOC_BODY_WINDOW_GYRO_FLAGS_LSB;
+localparam integer BGSUM_W = `OMNILOC_BODY_WINDOW_GYRO_SUM_W;
 reg [8*BODY_BYTES-1:0] fz_body_q = {8*BODY_BYTES{1'b0}};
 reg [CH*DATA_W-1:0]    fz_pos_q = {CH*DATA_W{1'b0}};
 wire [DATA_W-1:0] snap_ts_q = fz_body_q[W_TS +: DATA_W];
 wire [CH*DATA_W-1:0] snap_count_q = fz_body_q[W_COUNT +: CH*DATA_W];
 wire [DIR_W-1:0] snap_dir_q = fz_body_q[W_DIR +: DIR_W];
 wire [BYTE_W-1:0] snap_status_q = fz_body_q[W_STAT +: BYTE_W];
+wire [DATA_W-1:0] snap_gsum_q = fz_body_q[W_GSUM +: DATA_W];
+wire [GCNT_W-1:0] snap_gcnt_q = fz_body_q[W_GCNT +: GCNT_W];
+wire [GFLG_W-1:0] snap_gflg_q = fz_body_q[W_GFLG +: GFLG_W];
+// The gyro sum as the body and SNAP_GYRO_SUM carry it: sign-extended to the body field.
+wire [BGSUM_W-1:0] gyro_sum_ext = {{(BGSUM_W - GSUM_W){gyro_sum_i[GSUM_W-1]}}, gyro_sum_i};
 wire [CH*DATA_W-1:0] snap_pos_q = fz_pos_q;
 localparam [BANK_IDX_W-1:0] LAST_IDX = BODY_BYTES[BANK_IDX_W-1:0];
 wire [8*BODY_BYTES+7:0] fz_ext = {8'd0, fz_body_q};
@@ -157,7 +177,8 @@ wire period_ok = (reg_wdata_i[DATA_W-1:PMIN_W] != {(DATA_W - PMIN_W){1'b0}})
 reg known_i;
 reg writable_i;
 always @(*) begin
-    known_i = `OMNILOC_ADDR_KNOWN(reg_addr_i) && (reg_addr_i != `OMNILOC_REG_LINK_ERRORS);
+    known_i = `OMNILOC_ADDR_KNOWN(reg_addr_i) && (reg_addr_i != `OMNILOC_REG_LINK_ERRORS)
+              && (reg_addr_i != `OMNILOC_REG_GYRO_STATE);
     writable_i = `OMNILOC_ADDR_WRITABLE(reg_addr_i);
 end
 
@@ -236,6 +257,11 @@ function [DATA_W-1:0] word;
             `OMNILOC_REG_ERROR_COUNT1: word = err_count_i[1*DATA_W +: DATA_W];
             `OMNILOC_REG_ERROR_COUNT2: word = err_count_i[2*DATA_W +: DATA_W];
             `OMNILOC_REG_ERROR_COUNT3: word = err_count_i[3*DATA_W +: DATA_W];
+            `OMNILOC_REG_SNAP_GYRO_SUM: word = snap_gsum_q;
+            `OMNILOC_REG_SNAP_GYRO: begin
+                word[`OMNILOC_SNAP_GYRO_COUNT_LSB +: GCNT_W] = snap_gcnt_q;
+                word[`OMNILOC_SNAP_GYRO_FLAGS_LSB +: GFLG_W] = snap_gflg_q;
+            end
             default: word = {DATA_W{1'b0}};
         endcase
     end
@@ -275,6 +301,8 @@ always @(*) begin
     status_set[ILL_LSB +: ILL_W] = illegal_i;
     status_set[OVR_BIT] = overrun;
     status_set[BAD_BIT] = refused;
+    // In the cycle after a capture the gyro inputs hold the captured window.
+    status_set[GYR_BIT] = win_valid_q && (gyro_flags_i != {GFLG_W{1'b0}});
 end
 wire [ST_W-1:0] status_clr = wr_status ? rq_wdata[ST_W-1:0] : {ST_W{1'b0}};
 wire [ST_W-1:0] status_next = (status_q & ~status_clr) | status_set;
@@ -344,6 +372,9 @@ always @(posedge clk_i) begin
         fz_body_q[W_COUNT +: CH*DATA_W] <= win_count_i;
         fz_body_q[W_DIR +: BDIR_W] <= {{(BDIR_W - DIR_W){1'b0}}, win_dir_i};
         fz_body_q[W_STAT +: BYTE_W] <= win_status_q;
+        fz_body_q[W_GSUM +: BGSUM_W] <= gyro_sum_ext;
+        fz_body_q[W_GCNT +: GCNT_W] <= gyro_count_i;
+        fz_body_q[W_GFLG +: GFLG_W] <= gyro_flags_i;
         fz_pos_q <= win_position_i;
     end
 end
@@ -378,7 +409,7 @@ always @(posedge clk_i) begin
         if ($past(overrun)) assert (status_q[OVR_BIT]);
         if ($past(illegal_i) != 4'd0) assert ((status_q[ILL_LSB +: 4] & $past(illegal_i)) == $past(illegal_i));
         // A flag only clears on a write of one to it.
-        if (($past(status_q) & ~status_q) != 6'd0) assert ($past(wr_status));
+        if (($past(status_q) & ~status_q) != {ST_W{1'b0}}) assert ($past(wr_status));
         // The sequence number moves only at a capture, by one.
         if ($past(capture_i)) assert (seq_q == $past(seq_q) + 32'd1);
         else assert (seq_q == $past(seq_q));
@@ -408,6 +439,10 @@ reg [DATA_W-1:0]    f_s_seq = {DATA_W{1'b0}}, f_s_ts = {DATA_W{1'b0}};
 reg [CH*DATA_W-1:0] f_s_count = {CH*DATA_W{1'b0}}, f_s_pos = {CH*DATA_W{1'b0}};
 reg [DIR_W-1:0]     f_s_dir = {DIR_W{1'b0}};
 reg [BYTE_W-1:0]    f_s_status = {BYTE_W{1'b0}};
+reg [GSUM_W-1:0]    f_s_gsum = {GSUM_W{1'b0}};
+reg [GCNT_W-1:0]    f_s_gcnt = {GCNT_W{1'b0}};
+reg [GFLG_W-1:0]    f_s_gflg = {GFLG_W{1'b0}};
+reg                 f_after_capture = 1'b0;
 // A window captured and not yet latched; the timestamp of the last capture.
 reg                 f_pending = 1'b0;
 reg [DATA_W-1:0]    f_win_ts = {DATA_W{1'b0}};
@@ -419,7 +454,11 @@ always @(posedge clk_i) begin
         f_s_pos <= win_position_i;
         f_s_dir <= win_dir_i;
         f_s_status <= win_status_q;
+        f_s_gsum <= gyro_sum_i;
+        f_s_gcnt <= gyro_count_i;
+        f_s_gflg <= gyro_flags_i;
     end
+    f_after_capture <= !rst_i && capture_i;
     if (rst_i) begin
         f_pending <= 1'b0;
         f_win_ts <= {DATA_W{1'b0}};
@@ -437,6 +476,7 @@ always @(*) begin
     f_set[ILL_LSB +: ILL_W] = illegal_i;
     f_set[OVR_BIT] = f_overrun;
     f_set[BAD_BIT] = refused;
+    f_set[GYR_BIT] = f_after_capture && (gyro_flags_i != {GFLG_W{1'b0}});
 end
 wire [ST_W-1:0] f_clr = (f_rq_wr && f_rq_addr == `OMNILOC_REG_STATUS) ? f_rq_wdata[ST_W-1:0] : {ST_W{1'b0}};
 
@@ -472,10 +512,13 @@ always @(*) begin
         `OMNILOC_REG_ERROR_COUNT1: f_word = err_count_i[63:32];
         `OMNILOC_REG_ERROR_COUNT2: f_word = err_count_i[95:64];
         `OMNILOC_REG_ERROR_COUNT3: f_word = err_count_i[127:96];
+        `OMNILOC_REG_SNAP_GYRO_SUM: f_word = {{(DATA_W - GSUM_W){f_s_gsum[GSUM_W-1]}}, f_s_gsum};
+        `OMNILOC_REG_SNAP_GYRO: f_word = {{(DATA_W - 16){1'b0}}, f_s_gflg, f_s_gcnt};
         default: f_word = {DATA_W{1'b0}};
     endcase
 end
-wire f_known = `OMNILOC_ADDR_KNOWN(f_rq_addr) && (f_rq_addr != `OMNILOC_REG_LINK_ERRORS);
+wire f_known = `OMNILOC_ADDR_KNOWN(f_rq_addr) && (f_rq_addr != `OMNILOC_REG_LINK_ERRORS)
+            && (f_rq_addr != `OMNILOC_REG_GYRO_STATE);
 // ... carried to the answer two edges later.
 reg              f_rd1 = 1'b0, f_rd2 = 1'b0;
 reg [DATA_W-1:0] f_exp1 = {DATA_W{1'b0}}, f_exp2 = {DATA_W{1'b0}};
@@ -498,6 +541,9 @@ always @(*) begin
     f_body[W_COUNT +: CH*DATA_W] = f_s_count;
     f_body[W_DIR +: DIR_W] = f_s_dir;
     f_body[W_STAT +: BYTE_W] = f_s_status;
+    f_body[W_GSUM +: BGSUM_W] = {{(BGSUM_W - GSUM_W){f_s_gsum[GSUM_W-1]}}, f_s_gsum};
+    f_body[W_GCNT +: GCNT_W] = f_s_gcnt;
+    f_body[W_GFLG +: GFLG_W] = f_s_gflg;
 end
 
 always @(*) begin
@@ -518,6 +564,7 @@ always @(*) begin
         assert (bank_byte_o == ((bank_idx_i < LAST_IDX) ? f_body[8*bank_idx_i +: 8] : 8'd0));
         // OVERRUN bookkeeping and the window timestamp: the time of the capture.
         assert (pending_q == f_pending);
+        assert (win_valid_q == f_after_capture);
         assert (win_ts_q == f_win_ts);
         assert (win_timestamp_o == f_win_ts);
         // The read answer: the register of the address read, 0 for anything else.
@@ -543,6 +590,9 @@ always @(posedge clk_i) begin
         cover ($past(capture_i && f_pending && f_latch) && !status_q[OVR_BIT]);
         cover (bank_idx_i == 8'd12 && bank_byte_o != 8'd0);
         cover (win_ts_q != 0 && f_s_ts == win_ts_q);
+        // A negative gyro window read back sign-extended, and a gyro fault reaching STATUS.
+        cover (reg_ack_q && f_rd2 && f_addr2 == `OMNILOC_REG_SNAP_GYRO_SUM && reg_rdata_q[DATA_W-1]);
+        cover (status_q[GYR_BIT] && !$past(status_q[GYR_BIT]));
     end
 end
 `endif

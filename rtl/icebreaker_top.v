@@ -9,7 +9,9 @@
 // myRIO clock), so the same RTL is shown to close at that frequency.
 // Pins (constraints/icebreaker.pcf): encoders on PMOD1A (A0..A3 on the top row, B0..B3 on the
 // bottom row), FT2232H channel B UART (FPGA receives on 6, transmits on 9), the user button as
-// reset, the green LED for link activity and the red LED for errors (both active low).
+// reset, the green LED for link activity and the red LED for errors (both active low; a gyro
+// fault or a missing gyro is an error), the ICM-42688-P gyro's SPI on PMOD1B (docs/GYRO.md
+// "Wiring": pin 1 CS, 2 MOSI, 3 MISO, 4 SCLK, the Digilent SPI PMOD order).
 // Reset: held for 16 cycles after configuration and while the button is pressed (synchronised).
 `resetall
 `timescale 1ns / 1ps
@@ -23,6 +25,10 @@ module icebreaker_top (
     input  wire [`OMNILOC_CHANNELS-1:0] ENC_B,
     input  wire       RX,
     output wire       TX,
+    output wire       GYRO_CS_N,
+    output wire       GYRO_MOSI,
+    input  wire       GYRO_MISO,
+    output wire       GYRO_SCLK,
     output wire       LEDG_N,
     output wire       LEDR_N
 );
@@ -40,7 +46,9 @@ module icebreaker_top (
     wire activity, error;
     omniloc_top #(.CLK_HZ(`OMNILOC_BOARD_CLOCK_HZ), .TICK_HZ(`OMNILOC_TICK_HZ), .BAUD(`OMNILOC_UART_BAUD)) u_omniloc (
         .clk_i(CLK), .rst_i(rst), .enc_a_i(ENC_A), .enc_b_i(ENC_B),
-        .uart_rx_i(RX), .uart_tx_o(TX), .activity_o(activity), .error_o(error));
+        .uart_rx_i(RX), .uart_tx_o(TX),
+        .spi_sclk_o(GYRO_SCLK), .spi_mosi_o(GYRO_MOSI), .spi_miso_i(GYRO_MISO), .spi_cs_n_o(GYRO_CS_N),
+        .activity_o(activity), .error_o(error));
 
     assign LEDG_N = !activity;
     assign LEDR_N = !error;

@@ -1,8 +1,12 @@
-// omniloc_top: the board-independent design: encoder core + UART link.
+// omniloc_top: the board-independent design: encoder core + gyro reader + UART link.
 //
 // uart_rx -> frame_rx -> link_engine -> frame_tx -> uart_tx; link_engine masters the register
-// bus of encoder_core and streams its windows. LINK_ERRORS (UART receive error counters) is
-// answered here; every other address goes to the core.
+// bus of encoder_core and streams its windows. gyro_ctrl (rtl/gyro/) reads an ICM-42688-P over
+// SPI and sums its yaw-rate samples per window, ticked by the core's window tick so that a
+// captured window's gyro sum and encoder counts cover the same interval; the core puts them in one
+// window bank.
+// LINK_ERRORS (UART receive error counters) and GYRO_STATE (the reader's live state) are answered
+// here; every other address goes to the core.
 // Assumptions: one clock of CLK_HZ; rst_i synchronous, active high; uart_rx_i and the encoder
 // pins asynchronous (synchronised inside). CLK_HZ / BAUD >= 4 and should divide exactly
 // (docs/RTL.md lists the rates). The defaults are the board's (common/regmap.json "link": 12 MHz,
@@ -23,6 +27,10 @@ module omniloc_top #(
     input  wire [`OMNILOC_CHANNELS-1:0] enc_b_i,
     input  wire       uart_rx_i,
     output wire       uart_tx_o,
+    output wire       spi_sclk_o,   // to the ICM-42688-P (SPI mode 0)
+    output wire       spi_mosi_o,
+    input  wire       spi_miso_i,
+    output wire       spi_cs_n_o,
     output wire       activity_o,   // a byte went either way in the last ~50 ms
     output wire       error_o       // a sticky error: illegal transition, refused write or UART error
 );
@@ -30,6 +38,18 @@ module omniloc_top #(
     localparam integer ADDR_W = `OMNILOC_ADDR_W;
     localparam integer DATA_W = `OMNILOC_DATA_W;
     localparam integer CH     = `OMNILOC_CHANNELS;
+    localparam integer GSUM_W = `OMNILOC_GYRO_SUM_BITS;
+    localparam integer GCNT_W = `OMNILOC_GYRO_COUNT_BITS;
+    localparam integer GFLG_W = `OMNILOC_BODY_WINDOW_GYRO_FLAGS_W;
+    localparam integer GFCNT_W = `OMNILOC_GYRO_STATE_FAULTS_W;
+    generate
+        if (GSUM_W != 16 + GCNT_W) begin : bad_gyro_widths
+            bad_regmap_GYRO_SUM_BITS_must_be_16_plus_GYRO_COUNT_BITS gyro_width_error();
+        end
+        if (`OMNILOC_GYRO_FLAG_WRONG_ID != 0 || `OMNILOC_GYRO_FLAG_DROPPED != 4) begin : bad_gyro_flags
+            bad_regmap_GYRO_FLAG_bits_0_to_4_are_gyro_ctrl_flags gyro_flags_error();
+        end
+    endgenerate
 
     // ---- UART ----
     wire [7:0]  rx_byte;
@@ -70,22 +90,71 @@ module omniloc_top #(
         .body_idx_o(ftx_idx), .body_byte_i(ftx_byte),
         .byte_o(tx_byte), .byte_valid_o(tx_valid), .byte_ready_i(tx_ready));
 
-    // ---- register bus: LINK_ERRORS here, the rest in the core ----
+    // ---- gyro: ICM-42688-P reader, its windows ticked by the core's window tick ----
+    // Every tick, enabled or not: a capture (a tick while CONTROL.ENABLE) then latches the gyro's
+    // window at the same edge as the encoders', and the first window after ENABLE holds the last
+    // 10 ms rather than everything since reset (which would overflow the sample count).
+    wire signed [GSUM_W-1:0] gyro_sum;
+    wire [GCNT_W-1:0]        gyro_count;
+    wire [4:0]               gyro_accum_flags;
+    wire [GFCNT_W-1:0]       gyro_faults;
+    wire                     gyro_running, gyro_id_fault;
+    wire                     tick;      // the core's window tick: the gyro's window
+    gyro_ctrl #(.CLK_HZ(CLK_HZ), .SCLK_HZ(`OMNILOC_GYRO_SCLK_HZ), .ODR_HZ(`OMNILOC_GYRO_ODR_HZ),
+                .FS_DPS(`OMNILOC_GYRO_FS_DPS), .COUNT_W(GCNT_W), .FCNT_W(GFCNT_W)) u_gyro (
+        .clk_i(clk_i), .rst_i(rst_i), .tick_i(tick),
+        .spi_sclk_o(spi_sclk_o), .spi_mosi_o(spi_mosi_o), .spi_miso_i(spi_miso_i), .spi_cs_n_o(spi_cs_n_o),
+        .gyro_sum_o(gyro_sum), .gyro_count_o(gyro_count), .gyro_flags_o(gyro_accum_flags),
+        /* verilator lint_off PINCONNECTEMPTY */
+        .gyro_valid_o(),
+        /* verilator lint_on PINCONNECTEMPTY */
+        .gyro_fault_count_o(gyro_faults), .gyro_running_o(gyro_running), .gyro_id_fault_o(gyro_id_fault));
+    // ABSENT: a wrong WHO_AM_I and no successful start-up since. It and NOT_RUNNING are latched at
+    // the tick, as gyro_accum latches its flags, so the window's flags byte is of one instant.
+    reg gyro_absent_q, gyro_not_running_q, gyro_absent_win_q;
+    always @(posedge clk_i) begin
+        if (rst_i) begin
+            gyro_absent_q <= 1'b0;
+            gyro_not_running_q <= 1'b0;
+            gyro_absent_win_q <= 1'b0;
+        end else begin
+            if (gyro_id_fault) gyro_absent_q <= 1'b1;
+            else if (gyro_running) gyro_absent_q <= 1'b0;
+            if (tick) begin
+                gyro_not_running_q <= !gyro_running;
+                gyro_absent_win_q <= gyro_absent_q;
+            end
+        end
+    end
+    reg [GFLG_W-1:0] gyro_flags;
+    always @(*) begin
+        gyro_flags = {GFLG_W{1'b0}};
+        gyro_flags[4:0] = gyro_accum_flags;   // gyro_ctrl's bits are GYRO_FLAG_WRONG_ID .. _DROPPED
+        gyro_flags[`OMNILOC_GYRO_FLAG_NOT_RUNNING] = gyro_not_running_q;
+        gyro_flags[`OMNILOC_GYRO_FLAG_ABSENT] = gyro_absent_win_q;
+    end
+
+    // ---- register bus: LINK_ERRORS and GYRO_STATE here, the rest in the core ----
     wire [ADDR_W-1:0] bus_addr;
     wire              bus_rd, bus_wr;
     wire [DATA_W-1:0] bus_wdata;
-    wire              to_link = (bus_addr == `OMNILOC_REG_LINK_ERRORS);
+    wire              to_link = (bus_addr == `OMNILOC_REG_LINK_ERRORS) || (bus_addr == `OMNILOC_REG_GYRO_STATE);
 
     wire [DATA_W-1:0] core_rdata;
     wire              core_ack, core_err;
     reg               link_ack_q, link_err_q;
     reg  [DATA_W-1:0] link_rdata_q;
     // LINK_ERRORS: the receiver's counters at their fields.
-    reg  [DATA_W-1:0] link_errors;
+    // GYRO_STATE: the reader's live state.
+    reg  [DATA_W-1:0] link_errors, gyro_state;
     always @(*) begin
         link_errors = {DATA_W{1'b0}};
         link_errors[`OMNILOC_LINK_ERRORS_FRAMING_LSB +: `OMNILOC_LINK_ERRORS_FRAMING_W] = rx_framing;
         link_errors[`OMNILOC_LINK_ERRORS_OVERRUN_LSB +: `OMNILOC_LINK_ERRORS_OVERRUN_W] = rx_overruns;
+        gyro_state = {DATA_W{1'b0}};
+        gyro_state[`OMNILOC_GYRO_STATE_RUNNING_LSB] = gyro_running;
+        gyro_state[`OMNILOC_GYRO_STATE_ABSENT_LSB] = gyro_absent_q;
+        gyro_state[`OMNILOC_GYRO_STATE_FAULTS_LSB +: GFCNT_W] = gyro_faults;
     end
     always @(posedge clk_i) begin
         if (rst_i) begin
@@ -95,14 +164,14 @@ module omniloc_top #(
         end else begin
             link_ack_q   <= to_link && (bus_rd || bus_wr);
             link_err_q   <= bus_wr;                    // read-only
-            link_rdata_q <= link_errors;
+            link_rdata_q <= (bus_addr == `OMNILOC_REG_GYRO_STATE) ? gyro_state : link_errors;
         end
     end
     wire [DATA_W-1:0] bus_rdata = link_ack_q ? link_rdata_q : core_rdata;
     wire        bus_ack   = link_ack_q | core_ack;
     wire        bus_err   = link_ack_q ? link_err_q : core_err;
 
-    wire                 win_valid, win_consumed, stream_en, tick;
+    wire                 win_valid, win_consumed, stream_en;
     wire [7:0]           bank_byte;
     wire [DATA_W-1:0]    win_seq, win_ts;
     wire [CH*DATA_W-1:0] win_count, win_position;
@@ -110,6 +179,7 @@ module omniloc_top #(
     wire [`OMNILOC_BODY_WINDOW_STATUS_W-1:0] status;   // STATUS at capture, as the window's status byte
     encoder_core #(.CLK_HZ(CLK_HZ), .TICK_HZ(TICK_HZ)) u_core (
         .clk_i(clk_i), .rst_i(rst_i), .enc_a_i(enc_a_i), .enc_b_i(enc_b_i),
+        .gyro_sum_i(gyro_sum), .gyro_count_i(gyro_count), .gyro_flags_i(gyro_flags),
         .reg_addr_i(bus_addr), .reg_rd_i(bus_rd && !to_link), .reg_wr_i(bus_wr && !to_link),
         .reg_wdata_i(bus_wdata), .reg_rdata_o(core_rdata), .reg_ack_o(core_ack), .reg_err_o(core_err),
         .win_valid_o(win_valid), .win_seq_o(win_seq), .win_timestamp_o(win_ts), .win_count_o(win_count),
@@ -138,7 +208,7 @@ module omniloc_top #(
     end
     assign activity_o = (activity_q != 3'd0);
     assign error_o = (|status[`OMNILOC_STATUS_ILLEGAL_LSB +: `OMNILOC_STATUS_ILLEGAL_W])
-                   || status[`OMNILOC_STATUS_BAD_WRITE_LSB]
+                   || status[`OMNILOC_STATUS_BAD_WRITE_LSB] || status[`OMNILOC_STATUS_GYRO_FAULT_LSB]
                    || (|rx_framing) || (|rx_overruns);
 
     // The live window and positions are for other tops (e.g. a position display); the link sends

@@ -28,7 +28,7 @@ if [ -z "$required_hz" ]; then
 fi
 required_mhz=$(python3 -c "print(f'{$required_hz / 1e6:g}')")
 
-mapfile -t sources < <(ls rtl/*.v)
+mapfile -t sources < <(ls rtl/*.v rtl/gyro/*.v)
 echo "bitstream: synthesising icebreaker_top from ${#sources[@]} RTL files (log: $out/yosys.log)"
 yosys -q -l "$out/yosys.log" -p "read_verilog -Irtl/include ${sources[*]}; synth_ice40 -top icebreaker_top -json $out/omniloc.json"
 yosys -q -l "$out/yosys_modules.log" -p "read_verilog -Irtl/include ${sources[*]}; synth_ice40 -noflatten -top icebreaker_top; tee -o $out/modules.stat stat"

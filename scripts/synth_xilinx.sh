@@ -11,7 +11,7 @@ mkdir -p "$out"
 cd "$root"
 target_hz=$(sed -n 's/^`define OMNILOC_PAPER_CLOCK_HZ \([0-9]*\)$/\1/p' rtl/include/omniloc_regs.vh)
 [ -n "$target_hz" ] || { echo "synth_xilinx: error: no OMNILOC_PAPER_CLOCK_HZ in rtl/include/omniloc_regs.vh" >&2; exit 1; }
-mapfile -t sources < <(ls rtl/*.v | grep -v '_top\.v$' ; echo rtl/omniloc_top.v)
+mapfile -t sources < <(ls rtl/*.v rtl/gyro/*.v | grep -v '_top\.v$' ; echo rtl/omniloc_top.v)
 yosys -q -l "$out/yosys.log" -p "read_verilog -Irtl/include ${sources[*]}; chparam -set CLK_HZ $target_hz omniloc_top; synth_xilinx -family xc7 -top omniloc_top; tee -o $out/stat.txt stat"
 python3 - "$out/stat.txt" <<'PY'
 import re, sys

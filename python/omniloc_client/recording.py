@@ -1,6 +1,8 @@
 """Recording directories as omnilocd writes them and ``omniloc replay`` reads them (docs/DAEMON.md,
 "Recording"): meta.json, encoders.csv, camera.csv with frames/NNNNNN.png, and truth.csv when a
-simulator made it. Frames are kept as files (the standard library has no PNG decoder)."""
+simulator made it. Frames are kept as files (the standard library has no PNG decoder); the other
+CSV files of a recording (heading.csv: the heading's trust and the board's raw gyro windows, and
+the clock and frame-time logs) are kept verbatim, so a copy replays as the original does."""
 
 from __future__ import annotations
 
@@ -50,6 +52,7 @@ class Recording:
     frames: List[FrameRow] = field(default_factory=list)
     truth: Optional[List[TruthRow]] = None
     directory: Optional[Path] = None  # where it was read from (frame files are there)
+    other_files: dict = field(default_factory=dict)  # name -> text of the CSV files not parsed here
 
 
 def _rows(path: Path, header: tuple):
@@ -108,6 +111,9 @@ def read_recording(directory: str | Path) -> Recording:
     if path.exists():
         rec.truth = [TruthRow(*(_float(r[i], path, line, TRUTH_HEADER[i]) for i in range(4)))
                      for line, r in _rows(path, TRUTH_HEADER)]
+    for path in sorted(d.glob("*.csv")):
+        if path.name not in ("encoders.csv", "camera.csv", "truth.csv"):
+            rec.other_files[path.name] = path.read_text()
     return rec
 
 
@@ -136,4 +142,6 @@ def write_recording(rec: Recording, directory: str | Path) -> Path:
             w.writerow(TRUTH_HEADER)
             for t in rec.truth:
                 w.writerow([f"{t.t_ms:.6f}", f"{t.x_cm:.6f}", f"{t.y_cm:.6f}", f"{t.yaw_deg:.6f}"])
+    for name, text in rec.other_files.items():
+        (d / name).write_text(text)
     return d

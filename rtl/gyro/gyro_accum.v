@@ -53,7 +53,10 @@ reg [FAULT_W:0]        flags_q, flags_out_q;
 reg                    valid_q;
 reg [FCNT_W-1:0]       fcnt_q;
 
-wire full = count_q == COUNT_MAX;
+// full_q: count_q == COUNT_MAX, kept as a flip-flop beside the count (no 8-bit compare in front of
+// the flags and the fault counter; the equality is proven below).
+reg  full_q;
+wire full = full_q;
 wire take = sample_valid_i && !tick_i;
 wire accept = take && !full;
 wire drop = take && full;
@@ -72,9 +75,11 @@ always @(posedge clk_i) begin
     if (rst_i || tick_i) begin
         sum_q <= {SUM_W{1'b0}};
         count_q <= {COUNT_W{1'b0}};
+        full_q <= 1'b0;
     end else if (accept) begin
         sum_q <= sum_q + sample_ext;
         count_q <= count_q + 1'b1;
+        full_q <= count_q == COUNT_MAX - 1'b1;
     end
 end
 
@@ -150,6 +155,7 @@ always @(*) begin
         assert ($signed(f_sum_ext) >= f_lo && $signed(f_sum_ext) <= f_hi);
         // The flags are exactly the faults seen in the window.
         assert (flags_q == f_seen);
+        assert (full_q == (count_q == COUNT_MAX));
     end
 end
 

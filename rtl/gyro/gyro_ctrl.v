@@ -133,7 +133,8 @@ reg             wait_q;          // a byte is in flight in spi_master
 reg [7:0]       z1_q;            // GYRO_DATA_Z1 of the current burst
 reg [15:0]      prev_q;          // the previous sample
 reg [RUN_W-1:0] run_q;           // how many times in a row prev_q repeated its predecessor
-reg [3:0]       fault;           // (combinational) fault pulses to gyro_accum
+reg [3:0]       fault;           // (combinational) fault pulses
+reg [3:0]       fault_q;         // ... registered on their way to gyro_accum (off the state decode's path)
 
 wire spi_busy, spi_done;
 wire [7:0] spi_rx;
@@ -145,17 +146,22 @@ wire spi_start = is_xfer && !wait_q && !spi_busy;
 wire txn_end = spi_done && byte_q == last_byte;   // the last byte of a transaction arrived
 wire tim_zero = tim_q == {TIM_W{1'b0}};
 
-// The sample of a completed data burst and its checks.
+// The sample of a completed data burst, registered with its two comparisons (stage S: the 16-bit
+// compares end in flip-flops, off the path into gyro_accum), then judged in the next cycle
+// (stage C): stuck from the run length, invalid, or handed to gyro_accum.
 wire [15:0] sample = {z1_q, spi_rx};
 wire sample_end = txn_end && state_q == S_DATA;
-wire invalid = sample == 16'h8000;
-wire same = sample == prev_q;
-wire stuck = same && run_q >= STUCK_LAST[RUN_W-1:0];
-// A good sample goes to gyro_accum at once, or one cycle later if that cycle is a tick (pend_q):
-// z1_q and spi_rx hold for at least the CS hold and deselect time after the burst.
+reg  [15:0] smp_q;               // stage S: the sample
+reg         smp_v_q;             // stage S holds a new sample this cycle
+reg         invalid_q, same_q;   // stage S: it is 0x8000; it equals its predecessor
+reg         run_long_q;          // run_q >= STUCK_LAST, kept beside run_q (no compare on the path)
+wire stuck = same_q && run_long_q;
+// A good sample goes to gyro_accum in stage C, or one cycle later if that cycle is a tick (pend_q):
+// smp_q holds until the next burst ends, microseconds later.
+wire [RUN_W-1:0] run_next = !same_q ? {RUN_W{1'b0}} : run_q == RUN_MAX[RUN_W-1:0] ? run_q : run_q + 1'b1;
 reg  pend_q;
 wire accum_taken;
-wire sample_ok = (sample_end && !invalid && !stuck) || pend_q;
+wire sample_ok = (smp_v_q && !invalid_q && !stuck) || pend_q;
 
 always @(*) begin
     case (state_q)
@@ -216,13 +222,11 @@ always @(*) begin
                 fault[1] = 1'b1;
             end
         end
-        S_DATA: if (txn_end) begin
-            state_d = S_POLL;
-            fault[2] = !invalid && stuck;
-            fault[3] = invalid;
-        end
+        S_DATA: if (txn_end) state_d = S_POLL;
         default: state_d = S_RST;
     endcase
+    fault[2] = smp_v_q && !invalid_q && stuck;
+    fault[3] = smp_v_q && invalid_q;
 end
 
 always @(posedge clk_i) begin
@@ -233,9 +237,13 @@ always @(posedge clk_i) begin
         byte_q <= 2'd0;
         wait_q <= 1'b0;
         run_q <= {RUN_W{1'b0}};
+        run_long_q <= 1'b0;
         pend_q <= 1'b0;
         prev_q <= 16'd0;
+        smp_v_q <= 1'b0;
+        fault_q <= 4'd0;
     end else begin
+        fault_q <= fault;
         pend_q <= sample_ok && !accum_taken;
         state_q <= state_d;
         if (load) begin
@@ -252,14 +260,23 @@ always @(posedge clk_i) begin
             wait_q <= 1'b0;
             byte_q <= txn_end ? 2'd0 : byte_q + 2'd1;
         end
-        if (sample_end) begin
-            run_q <= !same ? {RUN_W{1'b0}} : run_q == RUN_MAX[RUN_W-1:0] ? run_q : run_q + 1'b1;
-            prev_q <= sample;
+        smp_v_q <= sample_end;
+        if (sample_end) prev_q <= sample;
+        if (smp_v_q) begin
+            run_q <= run_next;
+            run_long_q <= run_next >= STUCK_LAST[RUN_W-1:0];
         end
     end
 end
 
 // Pure data registers (no reset needed).
+always @(posedge clk_i) begin
+    if (sample_end) begin
+        smp_q <= sample;
+        invalid_q <= sample == 16'h8000;
+        same_q <= sample == prev_q;
+    end
+end
 always @(posedge clk_i) begin
     if (spi_done && state_q == S_DATA && byte_q == 2'd1) z1_q <= spi_rx;
 end
@@ -295,8 +312,8 @@ gyro_accum #(
     .rst_i(rst_i),
     .tick_i(tick_i),
     .sample_valid_i(sample_ok),
-    .sample_i(sample),
-    .fault_i(fault),
+    .sample_i(smp_q),
+    .fault_i(fault_q),
     .sum_o(gyro_sum_o),
     .count_o(gyro_count_o),
     .flags_o(gyro_flags_o),

@@ -40,6 +40,7 @@ struct BoardSim::Impl {
   std::unique_ptr<Vomniloc_top> top;
   std::unique_ptr<VerilatedVcdC> trace;
   EncoderSource* source = nullptr;
+  Icm42688* gyro = nullptr;
   std::int64_t cycle = 0;   // since the end of reset
   std::uint64_t trace_time = 0;
 
@@ -120,12 +121,14 @@ struct BoardSim::Impl {
   }
 };
 
-BoardSim::BoardSim(EncoderSource* source) : impl_(std::make_unique<Impl>()) {
+BoardSim::BoardSim(EncoderSource* source, Icm42688* gyro) : impl_(std::make_unique<Impl>()) {
   impl_->context->traceEverOn(true);
   impl_->top = std::make_unique<Vomniloc_top>(impl_->context.get());
   impl_->source = source;
+  impl_->gyro = gyro;
   auto& top = *impl_->top;
   top.uart_rx_i = 1;
+  top.spi_miso_i = 1;
   top.enc_a_i = 0;
   top.enc_b_i = 0;
   top.rst_i = 1;
@@ -168,6 +171,8 @@ void BoardSim::run_cycles(std::int64_t cycles) {
     top.uart_rx_i = s.rx_line_level() ? 1 : 0;
     s.step_clock();
     s.decode_tx_line(top.uart_tx_o != 0);
+    // The gyro sees the pins this edge left and answers MISO for the next one.
+    if (s.gyro) top.spi_miso_i = s.gyro->step(top.spi_cs_n_o != 0, top.spi_sclk_o != 0, top.spi_mosi_o != 0) ? 1 : 0;
     ++s.cycle;
   }
 }

@@ -17,6 +17,7 @@ WorldConfig world_config(const daemon::DaemonModels& models, const SimRobotOptio
 SimulatedRobot::SimulatedRobot(const daemon::DaemonModels& models, Trajectory trajectory,
                                const SimRobotOptions& options)
     : robot_(world_config(models, options), std::move(trajectory), options.clocks, options.seed ^ 0xC10C5ULL),
+      heading_(models.robot, GyroScale::of_board()),
       renderer_(models.field, models.camera) {
   if (options.camera) {
     RenderOptions ro;
@@ -31,7 +32,7 @@ daemon::DaemonIo SimulatedRobot::io() {
   daemon::DaemonIo io;
   io.clock = &robot_.clock;
   io.open_board = robot_.transport_factory();
-  io.heading = &robot_.log;
+  io.heading = &heading_;   // the board's gyro windows, as omnilocd does
   io.camera = camera_.get();
   return io;
 }
@@ -46,7 +47,7 @@ std::string SimulatedRobot::describe() const {
                   "%.0f %% dropped",
                   c.board_drift_ppm, c.usb_jitter_mean_ms, c.usb_jitter_max_ms, c.burst_extra_ms, c.camera_latency_ms,
                   c.camera_jitter_ms, c.camera_drop_fraction * 100.0);
-  return "simulated robot: Verilated board at " + std::to_string(BoardSim::kClockHz / 1'000'000) + " MHz" +
+  return "simulated robot: Verilated board at " + std::to_string(BoardSim::kClockHz / 1'000'000) + " MHz with an ICM-42688-P" +
          (camera_ ? ", rendered omni camera" : ", no camera") + clocks +
          "; the daemon runs at the simulator's pace (slower than real time), not on the wall clock";
 }

@@ -118,6 +118,7 @@ void Icm42688::produce_sample() {
     value = static_cast<std::int16_t>(std::clamp(lsb, -32767.0, 32767.0));
     last_value_ = value;
   }
+  if (!params_.keep_logs) produced_.clear();   // the last one is still needed (a sample pending)
   produced_.push_back({value, cycle_});
   if (prev_cs_n_) {
     const auto u = static_cast<std::uint16_t>(value);
@@ -182,6 +183,7 @@ bool Icm42688::step(bool cs_n, bool sclk, bool mosi) {
           if (n >= 2 && read_addrs_[n - 2] == kGyroDataZ1 && read_addrs_[n - 1] == kGyroDataZ0) {
             const auto v = static_cast<std::int16_t>(
                 static_cast<std::uint16_t>((read_values_[n - 2] << 8) | read_values_[n - 1]));
+            if (!params_.keep_logs) reads_.clear();
             reads_.push_back({v, cycle_});
           }
         }

@@ -130,6 +130,23 @@ TEST(BoardSession, RefusesAForeignBoardAnotherMajorVersionAndABadDecoding) {
   EXPECT_THROW(BoardSession(std::make_unique<ScriptedTransport>(newer), BoardSessionOptions{}), BoardIdentityError);
   EXPECT_EQ(newer.regs[r::kRegControl], 0u) << "a board of another major version must not be configured";
 
+  // Below 1.0 a minor version changes the layout: the board of before the gyro (0.1.0, a 26-byte
+  // window) is refused by this host (0.2.0, the gyro's 32-byte window), naming both versions.
+  Script before_gyro = good_board();
+  before_gyro.regs[r::kRegVersion] = r::kVersionMinor.put(r::kVersionValue, 1);
+  try {
+    BoardSession session(std::make_unique<ScriptedTransport>(before_gyro), BoardSessionOptions{});
+    FAIL() << "a 0.1.0 board was accepted";
+  } catch (const BoardIdentityError& e) {
+    EXPECT_NE(std::string(e.what()).find("register map is version 0.1.0, this host speaks 0.2.0"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(before_gyro.regs[r::kRegControl], 0u) << "a board of another layout must not be configured";
+  EXPECT_TRUE(version_compatible(0x000201u, 0x000200u));
+  EXPECT_FALSE(version_compatible(0x000100u, 0x000200u));
+  EXPECT_TRUE(version_compatible(0x010300u, 0x010200u)) << "from 1.0 on a minor version is compatible";
+  EXPECT_FALSE(version_compatible(0x020000u, 0x010000u));
+
   // A patch-level difference is accepted and reported.
   Script patched = good_board();
   patched.regs[r::kRegVersion] = r::kVersionPatch.put(r::kVersionValue, r::kVersionPatch.get(r::kVersionValue) + 1);

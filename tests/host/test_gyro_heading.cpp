@@ -8,6 +8,7 @@
 
 #include "omniloc/gyro_heading.hpp"
 #include "omniloc/recording.hpp"
+#include "omniloc/regmap.hpp"
 #include "temp_dir.hpp"
 
 namespace omniloc {
@@ -86,6 +87,44 @@ TEST_F(GyroHeadingTest, ABoardWithoutAGyroGivesTheWheelsRotation) {
   EXPECT_EQ(heading_.state(), GyroState::kNoGyro);
   EXPECT_EQ(heading_.trust(), HeadingTrust::kNone);
   EXPECT_EQ(heading_.status_token(), "wheels-no-gyro");
+}
+
+TEST_F(GyroHeadingTest, AGyroThatDoesNotAnswerIsMissingNotAFault) {
+  // A v0.2 board with nothing on its gyro PMOD: flags ABSENT | NOT_RUNNING, no sample.
+  const std::uint8_t absent = (1u << regmap::kGyroFlagAbsent) | (1u << regmap::kGyroFlagNotRunning);
+  EXPECT_NEAR(feed(window(0, 2000, absent, 0)), wheel_rotation_deg(2000), 1e-6);
+  EXPECT_EQ(heading_.state(), GyroState::kMissing);
+  EXPECT_EQ(heading_.trust(), HeadingTrust::kNone);
+  EXPECT_EQ(heading_.status_token(), "wheels-no-gyro");
+  EXPECT_NE(heading_.describe().find("gyro missing"), std::string::npos) << heading_.describe();
+  // The part answers after all (plugged in): trusted after ten clean windows.
+  for (int i = 0; i < 10; ++i) (void)feed(window(0, 100));
+  EXPECT_EQ(heading_.state(), GyroState::kLearningBias);
+  EXPECT_EQ(gyro_flag_names(0x28), "invalid value, not running");
+  EXPECT_EQ(gyro_flag_names(0), "none");
+}
+
+TEST_F(GyroHeadingTest, TheStartUpIsBridgedByTheWheelsWithoutAFault) {
+  // The part's 31 ms start-up after the board's reset: NOT_RUNNING and no sample. The wheels give
+  // the rotation, the trust stays relative (an aligned heading is not forgotten), no fault counted.
+  const std::uint8_t not_running = 1u << regmap::kGyroFlagNotRunning;
+  EXPECT_NEAR(feed(window(0, 500, not_running, 0)), wheel_rotation_deg(500), 1e-6);
+  EXPECT_EQ(heading_.state(), GyroState::kStarting);
+  EXPECT_EQ(heading_.trust(), HeadingTrust::kRelative);
+  EXPECT_EQ(heading_.status_token(), "gyro");
+  EXPECT_EQ(heading_.fault_windows(), 0u);
+  // Its first samples: the gyro from the next window on, at once (nothing to recover from).
+  EXPECT_NEAR(feed(window(16400, 500)), wheel_rotation_deg(500) + 1.0, 1e-6);
+  EXPECT_EQ(heading_.state(), GyroState::kLearningBias);
+  // NOT_RUNNING after it once ran is a restart (a timeout): a fault.
+  (void)feed(window(0, 500, not_running, 0));
+  EXPECT_EQ(heading_.state(), GyroState::kFault);
+  EXPECT_EQ(heading_.trust(), HeadingTrust::kNone);
+}
+
+TEST_F(GyroHeadingTest, TheBoardsScaleIsTheRegisterMapsPart) {
+  EXPECT_DOUBLE_EQ(GyroScale::of_board().lsb_per_dps, kLsbPerDps);
+  EXPECT_DOUBLE_EQ(GyroScale::of_board().odr_hz, kOdrHz);
 }
 
 TEST_F(GyroHeadingTest, ABadScaleIsRefused) {

@@ -46,15 +46,16 @@ TEST(Encode, MatchesHandBuiltFrames) {
   EXPECT_EQ(encode(WriteReq{0x02, 0x0000000B}), hex("a50602020b0000008137"));
   EXPECT_EQ(encode(SnapshotReq{}), hex("a501031e5d"));
   EXPECT_EQ(encode(ErrorResp{2, 7}), hex("a503e00207a9a8"));
-  Window w{7, 0x12345678, {100, -100, 0, INT32_MIN}, 0x0A, 0x10};
+  // v0.2: the gyro's sum (-1234567 = 0xFFED2979), sample count and flags (ABSENT | WRONG_ID) follow.
+  Window w{7, 0x12345678, {100, -100, 0, INT32_MIN}, 0x0A, 0x10, -1234567, 10, 0x41};
   EXPECT_EQ(encode(Telemetry{w}),
-            hex("a51b900700000078563412640000009cffffff00000000000000800a10714c"));
+            hex("a521900700000078563412640000009cffffff00000000000000800a107929edff0a418ea4"));
 }
 
 TEST(Encode, EveryTypeHasItsRegmapBodySize) {
   const std::vector<Frame> frames{ReadReq{}, WriteReq{}, SnapshotReq{}, ReadResp{},
                                   WriteAck{}, SnapshotResp{}, Telemetry{}, ErrorResp{}};
-  const std::vector<std::size_t> body{1, 5, 0, 5, 1, 26, 26, 2};
+  const std::vector<std::size_t> body{1, 5, 0, 5, 1, 32, 32, 2};
   for (std::size_t i = 0; i < frames.size(); ++i) {
     const auto bytes = encode(frames[i]);
     ASSERT_EQ(bytes.size(), frame_bytes(body[i])) << i;
@@ -70,8 +71,8 @@ TEST(Encode, EveryTypeHasItsRegmapBodySize) {
 
 TEST(Decoder, RoundTripsEveryTypeFedOneByteAtATime) {
   const std::vector<Frame> frames{ReadReq{0x14}, WriteReq{0x04, 400000}, SnapshotReq{}, ReadResp{0x00, 0x4F4D4E4C},
-                                  WriteAck{0x02}, SnapshotResp{Window{1, 2, {3, -4, 5, -6}, 0x0A, 0x21}},
-                                  Telemetry{Window{9, 0xFFFFFFFF, {INT32_MAX, INT32_MIN, -1, 1}, 0x05, 0x10}},
+                                  WriteAck{0x02}, SnapshotResp{Window{1, 2, {3, -4, 5, -6}, 0x0A, 0x21, -8388608, 10, 0x60}},
+                                  Telemetry{Window{9, 0xFFFFFFFF, {INT32_MAX, INT32_MIN, -1, 1}, 0x05, 0x10, 8388607, 255, 0x01}},
                                   ErrorResp{3, 0x90}};
   FrameDecoder d;
   std::vector<Frame> got;

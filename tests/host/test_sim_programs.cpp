@@ -289,8 +289,9 @@ TEST(OmnilocdSim, ControlChannelServesCommandsWhileThePosesFlow) {
   const auto pump = [&] {
     for (const auto& g : rx.drain()) grams.push_back(nlohmann::json::parse(g));
   };
+  // A patience, not a speed requirement: the simulated daemon runs at 0.1-0.4x real time here.
   const auto wait_for = [&](const std::function<bool()>& done) {
-    for (int i = 0; i < 6000 && !done(); ++i) {
+    for (int i = 0; i < 18000 && !done(); ++i) {
       ::usleep(10'000);
       pump();
     }

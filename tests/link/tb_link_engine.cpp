@@ -82,6 +82,8 @@ struct Window {
   std::uint32_t seq, ts;
   std::uint32_t count[4];
   std::uint8_t dir, status;
+  std::uint32_t gyro_sum;
+  std::uint8_t gyro_count, gyro_flags;
   [[nodiscard]] std::vector<std::uint8_t> body() const {
     std::vector<std::uint8_t> b;
     omniloc::tb::put_u32(b, seq);
@@ -89,6 +91,9 @@ struct Window {
     for (auto c : count) omniloc::tb::put_u32(b, c);
     b.push_back(dir);
     b.push_back(status);
+    omniloc::tb::put_u32(b, gyro_sum);
+    b.push_back(gyro_count);
+    b.push_back(gyro_flags);
     return b;
   }
 };
@@ -108,7 +113,7 @@ TEST(LinkEngine, RequestsSnapshotsAndStreamingMatchGoldenModel) {
   int tx_busy = 0;
   Frame sending{};
   int sending_len = -1;
-  std::vector<std::uint8_t> bank(26, 0);      // the frozen bank (latched by SNAP_SEQ reads and win_consumed_o)
+  std::vector<std::uint8_t> bank(rm::kFrameTelemetryBodyBytes, 0);  // the frozen bank (latched by SNAP_SEQ reads and win_consumed_o)
   std::vector<std::size_t> snapshot_answers;  // expected_responses slots waiting for their SNAP_SEQ read
   int requests_left = 3000;
   bool event_up = false;
@@ -148,7 +153,8 @@ TEST(LinkEngine, RequestsSnapshotsAndStreamingMatchGoldenModel) {
     dut.win_valid_i = 0;
     if (--next_window_in == 0) {
       next_window_in = 700 + static_cast<int>(rng() % 800);
-      win = {++seq, static_cast<std::uint32_t>(rng()), {}, static_cast<std::uint8_t>(rng() % 16), static_cast<std::uint8_t>(rng())};
+      win = {++seq, static_cast<std::uint32_t>(rng()), {}, static_cast<std::uint8_t>(rng() % 16), static_cast<std::uint8_t>(rng()),
+             static_cast<std::uint32_t>(rng()), static_cast<std::uint8_t>(rng()), static_cast<std::uint8_t>(rng())};
       for (auto& c : win.count) c = static_cast<std::uint32_t>(rng());
       if (rng() % 10 == 0) stream = !stream;
       dut.win_valid_i = 1;

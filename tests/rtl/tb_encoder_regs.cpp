@@ -35,6 +35,9 @@ struct Inputs {
   std::array<std::uint32_t, 4> pos{};
   std::uint8_t dir = 0;
   std::array<std::uint32_t, 4> errs{};
+  std::uint32_t gyro_sum = 0;   // 24-bit two's complement, as gyro_accum gives it
+  std::uint8_t gyro_count = 0;
+  std::uint8_t gyro_flags = 0;
 };
 
 // Golden register file: state after each clock edge.
@@ -56,6 +59,9 @@ struct Model {
   std::uint8_t snap_dir = 0;
   std::array<std::uint32_t, 4> snap_count{};
   std::array<std::uint32_t, 4> snap_pos{};
+  std::uint32_t snap_gyro_sum = 0;  // sign-extended to 32 bits
+  std::uint8_t snap_gyro_count = 0;
+  std::uint8_t snap_gyro_flags = 0;
   std::uint32_t rdata = 0;
   bool ack = false;
   bool err = false;
@@ -79,6 +85,8 @@ struct Model {
       case rm::kRegSnapTimestamp: value = snap_ts; break;
       case rm::kRegSnapDir: value = snap_dir; break;
       case rm::kRegSnapStatus: value = snap_status; break;
+      case rm::kRegSnapGyroSum: value = snap_gyro_sum; break;
+      case rm::kRegSnapGyro: value = snap_gyro_count | static_cast<std::uint32_t>(snap_gyro_flags) << 8; break;
       default:
         if (in.addr >= rm::kRegSnapCount0 && in.addr <= rm::kRegSnapCount3) {
           value = snap_count[in.addr - rm::kRegSnapCount0];
@@ -110,8 +118,11 @@ struct Model {
     const bool consumed = latch || in.consumed;
     const bool overrun = in.capture && pending && !consumed;
     std::uint8_t next_status = status;
-    if (wr && in.addr == rm::kRegStatus) next_status &= static_cast<std::uint8_t>(~in.wdata & 0x3F);
-    next_status |= static_cast<std::uint8_t>((in.illegal & 0xF) | (overrun ? 0x10 : 0) | (refused ? 0x20 : 0));
+    if (wr && in.addr == rm::kRegStatus) next_status &= static_cast<std::uint8_t>(~in.wdata & 0x7F);
+    // GYRO_FAULT: in the cycle after a capture the gyro inputs hold that window's flags.
+    const bool gyro_fault = win_valid && in.gyro_flags != 0;
+    next_status |= static_cast<std::uint8_t>((in.illegal & 0xF) | (overrun ? 0x10 : 0) | (refused ? 0x20 : 0) |
+                                             (gyro_fault ? 0x40 : 0));
     n.status = next_status;
     n.win_valid = in.capture;
     if (in.capture) {
@@ -129,6 +140,9 @@ struct Model {
       n.snap_dir = in.dir;
       n.snap_count = in.count;
       n.snap_pos = in.pos;
+      n.snap_gyro_sum = (in.gyro_sum & 0x800000u) ? (in.gyro_sum | 0xFF000000u) : in.gyro_sum;
+      n.snap_gyro_count = in.gyro_count;
+      n.snap_gyro_flags = in.gyro_flags;
     }
     n.ack = in.rd || in.wr;
     n.err = (in.rd && in.wr) || (rd && !known) || (wr && (!known || !writable)) || refused;
@@ -137,7 +151,8 @@ struct Model {
   }
 };
 
-// The frozen bank as a WINDOW body (seq, timestamp, counts, dir, status), as the link sends it.
+// The frozen bank as a WINDOW body (seq, timestamp, counts, dir, status, gyro sum, count, flags),
+// as the link sends it.
 std::vector<std::uint8_t> bank_body(const Model& m) {
   std::vector<std::uint8_t> b;
   auto put = [&](std::uint32_t v) { for (int k = 0; k < 4; ++k) b.push_back(static_cast<std::uint8_t>(v >> (8 * k))); };
@@ -146,10 +161,13 @@ std::vector<std::uint8_t> bank_body(const Model& m) {
   for (auto c : m.snap_count) put(c);
   b.push_back(m.snap_dir);
   b.push_back(m.snap_status);
+  put(m.snap_gyro_sum);
+  b.push_back(m.snap_gyro_count);
+  b.push_back(m.snap_gyro_flags);
   return b;
 }
 
-// idx: the bank byte to check this cycle (26 = past the body, reads 0).
+// idx: the bank byte to check this cycle (kFrameTelemetryBodyBytes = past the body, reads 0).
 std::string compare(Vencoder_regs& d, const Model& m, unsigned idx = 0) {
   auto field = [](const char* name, std::uint64_t got, std::uint64_t want) {
     return got == want ? std::string() : std::string(name) + " " + std::to_string(got) + " != golden " + std::to_string(want);
@@ -196,8 +214,9 @@ Result run(std::uint64_t seed, std::uint64_t cycles, const TraceRequest* trace) 
     bool err = false;
     std::uint32_t rdata = 0;
   } answer;
-  const std::array<std::uint8_t, 8> hot = {rm::kRegControl, rm::kRegFilter, rm::kRegPeriod, rm::kRegStatus,
-                                           rm::kRegSnapSeq, rm::kRegSnapCount2, rm::kRegSnapStatus, rm::kRegId};
+  const std::array<std::uint8_t, 10> hot = {rm::kRegControl, rm::kRegFilter, rm::kRegPeriod, rm::kRegStatus,
+                                            rm::kRegSnapSeq, rm::kRegSnapCount2, rm::kRegSnapStatus, rm::kRegId,
+                                            rm::kRegSnapGyroSum, rm::kRegSnapGyro};
   for (std::uint64_t i = 0; i < cycles; ++i) {
     const unsigned r = static_cast<unsigned>(rng() % 100);
     in.rd = r < 35 || r >= 98;
@@ -208,8 +227,8 @@ Result run(std::uint64_t seed, std::uint64_t cycles, const TraceRequest* trace) 
       case 1: in.wdata = static_cast<std::uint32_t>(rng() % 16); break;        // CONTROL-like
       case 2: in.wdata = static_cast<std::uint32_t>(rng() % 300); break;       // FILTER-like
       case 3: in.wdata = static_cast<std::uint32_t>(60 + rng() % 8); break;    // around PERIOD_MIN
-      case 4: in.wdata = 0x3F; break;                                          // clear all flags
-      default: in.wdata = static_cast<std::uint32_t>(1u << (rng() % 6)); break;
+      case 4: in.wdata = 0x7F; break;                                          // clear all flags
+      default: in.wdata = static_cast<std::uint32_t>(1u << (rng() % 7)); break;
     }
     in.capture = rng() % 23 == 0;
     in.illegal = (rng() % 40 == 0) ? static_cast<std::uint8_t>(rng() % 16) : 0;
@@ -222,6 +241,9 @@ Result run(std::uint64_t seed, std::uint64_t cycles, const TraceRequest* trace) 
         in.errs[ch] = static_cast<std::uint32_t>(rng());
       }
       in.dir = static_cast<std::uint8_t>(rng() % 16);
+      in.gyro_sum = static_cast<std::uint32_t>(rng()) & 0xFFFFFFu;
+      in.gyro_count = static_cast<std::uint8_t>(rng());
+      in.gyro_flags = rng() % 2 == 0 ? 0 : static_cast<std::uint8_t>(rng() % 128);
     }
     dut->reg_addr_i = in.addr;
     dut->reg_rd_i = in.rd;
@@ -237,6 +259,9 @@ Result run(std::uint64_t seed, std::uint64_t cycles, const TraceRequest* trace) 
       dut->err_count_i[ch] = in.errs[ch];
     }
     dut->win_dir_i = in.dir;
+    dut->gyro_sum_i = in.gyro_sum;
+    dut->gyro_count_i = in.gyro_count;
+    dut->gyro_flags_i = in.gyro_flags;
     const std::uint64_t e = dut.cycle();
     const bool had_overrun = (model.status & 0x10) != 0;
     dut.step();
@@ -252,7 +277,7 @@ Result run(std::uint64_t seed, std::uint64_t cycles, const TraceRequest* trace) 
     shown.err = answer.err;
     shown.rdata = answer.rdata;
     answer = {model.ack, model.err, model.rdata};
-    if (auto s = compare(dut.io(), shown, static_cast<unsigned>(e % 27)); !s.empty()) {
+    if (auto s = compare(dut.io(), shown, static_cast<unsigned>(e % (rm::kFrameTelemetryBodyBytes + 1))); !s.empty()) {
       res.failure = "edge " + std::to_string(e) + ": " + s;
       res.fail_cycle = e;
       return res;

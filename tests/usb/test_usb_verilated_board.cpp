@@ -1,13 +1,17 @@
 // UsbTransport -- the exact code that runs on the robot -- against an emulated FT2232H (umockdev)
 // whose UART side is the Verilated board (rtl/omniloc_top.v) with the world simulator's encoder
-// waveforms on its pins: open, configure, read the ID register, stream a second of windows that
-// must equal the golden decoder's counts, then unplug in the middle and see the error reported.
+// waveforms on its pins and the ICM-42688-P model on its SPI pins: open, configure, read the ID
+// register, stream a second of windows whose counts must equal the golden decoder's and whose gyro
+// sums must partition the model's samples exactly, then unplug in the middle and see the error
+// reported.
 // Run under `umockdev-wrapper` (CTest does).
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
 #include <mutex>
 #include <thread>
+#include <vector>
 
 #include "../link/golden_quadrature.hpp"
 #include "tb_support.hpp"
@@ -16,6 +20,7 @@
 #include "omniloc/usb_transport.hpp"
 #include "omniloc_sim/board_sim.hpp"
 #include "omniloc_sim/ft2232h_model.hpp"
+#include "omniloc_sim/icm42688.hpp"
 #include "omniloc_sim/trajectory.hpp"
 
 namespace omniloc {
@@ -31,7 +36,7 @@ constexpr std::int64_t kCaptureLag = 4;  // docs/RTL.md: pin -> window counter w
 /// model allows (about half of real time here), one millisecond of board time per lock.
 class ClockedBoard final : public sim::UartSide {
  public:
-  explicit ClockedBoard(sim::EncoderSource& source) : board_(&source), thread_([this] { run(); }) {}
+  ClockedBoard(sim::EncoderSource& source, sim::Icm42688& gyro) : board_(&source, &gyro), thread_([this] { run(); }) {}
   ~ClockedBoard() override {
     stop_ = true;
     thread_.join();
@@ -43,6 +48,12 @@ class ClockedBoard final : public sim::UartSide {
   std::size_t from_board(std::span<std::uint8_t> out) override {
     Turn turn(*this);
     return board_.from_board(out);
+  }
+  /// Runs `f` while the board's clock thread waits (to read a model it steps).
+  template <class F>
+  void with_board(F f) {
+    Turn turn(*this);
+    f();
   }
 
  private:
@@ -83,7 +94,12 @@ TEST(UsbVerilatedBoard, StreamsGoldenWindowsThenReportsUnplug) {
   sim::QuadratureStream stream(omniloc::tb::board_world(seed), sim::make_trajectory("circle", seed));
   tb::GoldenQuadrature golden(stream, kWindowCycles);
   sim::EmulatedUsb usb;
-  ClockedBoard board(golden);
+  sim::Icm42688Params gp;
+  gp.clk_hz = static_cast<double>(BoardSim::kClockHz);
+  gp.noise_dps_rms = 0.16;
+  gp.seed = seed;
+  sim::Icm42688 gyro(gp, [](double t) { return 120.0 * std::sin(2.0 * 3.14159265358979 * 0.7 * t) - 40.0; });
+  ClockedBoard board(golden, gyro);
   sim::Ft2232hModel device(usb, board, sim::Ft2232hConfig::programmed_with(sim::read_eeprom_identity(OMNILOC_EEPROM_CONF)));
 
   UsbTransport transport;
@@ -100,6 +116,7 @@ TEST(UsbVerilatedBoard, StreamsGoldenWindowsThenReportsUnplug) {
   // A second of board time: 100 windows, each equal to the golden decoder's count.
   std::optional<protocol::Window> prev;
   int checked = 0, moving = 0;
+  std::vector<protocol::Window> windows;
   while (checked < 100) {
     const auto w = client.poll_telemetry(2000ms);
     ASSERT_TRUE(w.has_value()) << "no telemetry after " << checked << " windows";
@@ -115,11 +132,30 @@ TEST(UsbVerilatedBoard, StreamsGoldenWindowsThenReportsUnplug) {
       ++checked;
     }
     prev = w;
+    windows.push_back(*w);
   }
+  // The gyro's windows against the part's own log: every sample once, in order, summed exactly.
+  // (The board thread keeps the model running; its log is only read under the board's turn below.)
+  std::vector<sim::Icm42688::Sample> reads;
+  board.with_board([&] { reads = gyro.reads(); });
+  std::size_t next = 0;
+  int with_samples = 0;
+  for (const auto& w : windows) {
+    if (w.gyro_count == 0) continue;
+    ++with_samples;
+    ASSERT_EQ(w.gyro_flags, 0u) << "window " << w.seq;
+    ASSERT_LE(next + w.gyro_count, reads.size());
+    std::int64_t sum = 0;
+    for (std::size_t i = 0; i < w.gyro_count; ++i) sum += reads[next + i].value;
+    ASSERT_EQ(w.gyro_sum, sum) << "window " << w.seq;
+    next += w.gyro_count;
+  }
+  EXPECT_GE(with_samples, 95);
   EXPECT_GT(moving, 300);
   EXPECT_EQ(golden.illegal(), 0);
   EXPECT_EQ(transport.status().counters.line_framing, 0u);
-  std::printf("%d windows over emulated USB equal the golden decoder (%d motor-windows moving)\n", checked, moving);
+  std::printf("%d windows over emulated USB equal the golden decoder (%d motor-windows moving); %zu gyro samples "
+              "summed exactly into %d windows\n", checked, moving, next, with_samples);
 
   // Unplug while streaming: the next read reports the device gone.
   device.unplug();

@@ -1,4 +1,4 @@
-// `omniloc probe`: finds omniloc boards on USB, prints ID, version and status, then a live table of
+// `omniloc probe`: finds omniloc boards on USB, prints ID, version, status and the gyro's state, then a live table of
 // window counts and link errors (or one snapshot with --once).
 #include <atomic>
 #include <csignal>
@@ -91,6 +91,12 @@ int run_probe(const ProbeArgs& a) {
     std::printf(" %u", client.read_register(static_cast<std::uint8_t>(r::kRegErrorCount0 + ch)));
   }
   std::printf("\n");
+  const std::uint32_t gyro = client.read_register(r::kRegGyroState);
+  std::printf("GYRO_STATE running %u absent %u faults %u (%s)\n", r::kGyroStateRunning.get(gyro),
+              r::kGyroStateAbsent.get(gyro), r::kGyroStateFaults.get(gyro),
+              r::kGyroStateRunning.get(gyro) ? "the ICM-42688-P is read"
+              : r::kGyroStateAbsent.get(gyro) ? "no gyro answers on PMOD1B: the heading comes from the wheels"
+                                              : "the gyro is starting");
   if (version_differs(ident)) {
     std::fprintf(stderr, "warning: the board's register map differs from the host's\n");
   }

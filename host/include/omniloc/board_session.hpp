@@ -39,10 +39,14 @@ struct BoardIdentity {
   [[nodiscard]] std::string version_text() const;  ///< "1.0.0"
 };
 
-/// Reads ID, VERSION, CONTROL and PERIOD; throws BoardIdentityError naming the transport when the
-/// ID is wrong or the register map's major version differs from the host's (a minor or patch
-/// difference is accepted: the host checks `version_differs()` to warn).
+/// Reads ID, VERSION, CONTROL and PERIOD; throws BoardIdentityError naming the transport and both
+/// versions when the ID is wrong or the register map is not version_compatible with the host's (a
+/// patch difference, or a minor one from 1.0 on, is accepted: the host checks `version_differs()` to warn).
 [[nodiscard]] BoardIdentity identify_board(BoardClient& client, double window_period_ms, const std::string& where);
+
+/// True if a board of register-map version `board` can serve a host of version `host`: the same
+/// major version and, before 1.0 (where every minor version may change the layout), the same minor.
+[[nodiscard]] bool version_compatible(std::uint32_t board, std::uint32_t host);
 
 /// True if the board's register-map version is not exactly the host's (any field).
 [[nodiscard]] bool version_differs(const BoardIdentity& identity);
@@ -64,8 +68,8 @@ struct SessionWindow {
   protocol::Window raw;
   double board_ms = 0.0;
 
-  /// The window as the odometry takes it: counts in the robot's decoding, t_end_ms = board_ms +
-  /// offset_ms, gyro_yaw_deg left 0 (the caller adds the heading).
+  /// The window as the odometry takes it: counts in the robot's decoding, the gyro's raw window,
+  /// t_end_ms = board_ms + offset_ms, gyro_yaw_deg left 0 (the caller adds the heading).
   [[nodiscard]] EncoderWindow to_encoder_window(double offset_ms) const;
 };
 

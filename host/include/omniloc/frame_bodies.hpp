@@ -80,20 +80,29 @@ struct WindowBody {
   std::array<std::int32_t, 4> count{};  ///< signed edge count of channel n (SNAP_COUNTn)
   std::uint8_t dir = 0;  ///< bit n: channel n counting down at the end of the window (SNAP_DIR)
   std::uint8_t status = 0;  ///< low byte of STATUS at capture (SNAP_STATUS)
+  std::int32_t gyro_sum = 0;  ///< sum of the gyro's Z-rate samples in the window, LSB (SNAP_GYRO_SUM)
+  std::uint8_t gyro_count = 0;  ///< samples in gyro_sum (SNAP_GYRO.COUNT)
+  std::uint8_t gyro_flags = 0;  ///< the gyro's flags of the window, bit n = GYRO_FLAG_* n (SNAP_GYRO.FLAGS)
   friend bool operator==(const WindowBody&, const WindowBody&) = default;
 };
-inline constexpr std::size_t kBodyWindowBytes = 26;
+inline constexpr std::size_t kBodyWindowBytes = 32;
 inline constexpr std::size_t kBodyWindowSeqOffset = 0;
 inline constexpr std::size_t kBodyWindowTimestampCyclesOffset = 4;
 inline constexpr std::size_t kBodyWindowCountOffset = 8;
 inline constexpr std::size_t kBodyWindowDirOffset = 24;
 inline constexpr std::size_t kBodyWindowStatusOffset = 25;
+inline constexpr std::size_t kBodyWindowGyroSumOffset = 26;
+inline constexpr std::size_t kBodyWindowGyroCountOffset = 30;
+inline constexpr std::size_t kBodyWindowGyroFlagsOffset = 31;
 constexpr void pack(const WindowBody& v, std::span<std::uint8_t, kBodyWindowBytes> out) {
   body_detail::put_le<std::uint32_t>(out, kBodyWindowSeqOffset, v.seq);
   body_detail::put_le<std::uint32_t>(out, kBodyWindowTimestampCyclesOffset, v.timestamp_cycles);
   for (std::size_t i = 0; i < 4; ++i) body_detail::put_le<std::int32_t>(out, kBodyWindowCountOffset + 4 * i, v.count[i]);
   body_detail::put_le<std::uint8_t>(out, kBodyWindowDirOffset, v.dir);
   body_detail::put_le<std::uint8_t>(out, kBodyWindowStatusOffset, v.status);
+  body_detail::put_le<std::int32_t>(out, kBodyWindowGyroSumOffset, v.gyro_sum);
+  body_detail::put_le<std::uint8_t>(out, kBodyWindowGyroCountOffset, v.gyro_count);
+  body_detail::put_le<std::uint8_t>(out, kBodyWindowGyroFlagsOffset, v.gyro_flags);
 }
 [[nodiscard]] constexpr WindowBody unpack_window(std::span<const std::uint8_t, kBodyWindowBytes> in) {
   WindowBody v;
@@ -102,6 +111,9 @@ constexpr void pack(const WindowBody& v, std::span<std::uint8_t, kBodyWindowByte
   for (std::size_t i = 0; i < 4; ++i) v.count[i] = body_detail::get_le<std::int32_t>(in, kBodyWindowCountOffset + 4 * i);
   v.dir = body_detail::get_le<std::uint8_t>(in, kBodyWindowDirOffset);
   v.status = body_detail::get_le<std::uint8_t>(in, kBodyWindowStatusOffset);
+  v.gyro_sum = body_detail::get_le<std::int32_t>(in, kBodyWindowGyroSumOffset);
+  v.gyro_count = body_detail::get_le<std::uint8_t>(in, kBodyWindowGyroCountOffset);
+  v.gyro_flags = body_detail::get_le<std::uint8_t>(in, kBodyWindowGyroFlagsOffset);
   return v;
 }
 

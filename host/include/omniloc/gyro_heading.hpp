@@ -67,7 +67,7 @@ class WheelYawHeading final : public HeadingSource {
 struct GyroScale {
   double lsb_per_dps = 0.0;  ///< sensitivity at the configured full scale, LSB per deg/s
   double odr_hz = 0.0;       ///< output data rate: each sample stands for 1 / odr_hz seconds
-  /// The board's part and settings (common/regmap.json "gyro": ICM-42688-P, +-2000 dps, 1 kHz).
+  /// The board's part and settings (common/regmap.json "constants" GYRO_*: ICM-42688-P, +-2000 dps, 1 kHz).
   [[nodiscard]] static GyroScale of_board();
   /// Degrees turned by `samples` samples summing to sum_lsb at a bias of bias_lsb per sample.
   [[nodiscard]] double degrees(double sum_lsb, double samples, double bias_lsb) const {
@@ -84,10 +84,16 @@ struct GyroHeadingConfig {
 
 enum class GyroState {
   kNoGyro,        ///< no gyro field in the windows (a board without one): the wheels
+  kStarting,      ///< the part has not given its first sample since the board's reset (NOT_RUNNING
+                  ///< only, 31 ms of start-up): the wheels bridge it, and it is not a fault
   kLearningBias,  ///< running, no standstill yet: the bias is taken as 0
   kRunning,       ///< running with a learnt bias
   kFault,         ///< a fault was flagged recently: the wheels
+  kMissing,       ///< the board has its gyro reader but no part answers (flag ABSENT): the wheels
 };
+
+/// The names of a window's gyro flags (regmap GYRO_FLAG_*), "none" for 0: "stuck value, not running".
+[[nodiscard]] std::string gyro_flag_names(std::uint8_t flags);
 
 class GyroHeading final : public HeadingSource {
  public:
@@ -120,6 +126,7 @@ class GyroHeading final : public HeadingSource {
   int clean_run_ = 0;             ///< clean windows in a row since the last fault
   std::uint8_t last_flags_ = 0;   ///< the last fault's flags (0: no sample at all)
   std::uint64_t fault_windows_ = 0;
+  bool ever_ran_ = false;         ///< a clean window with samples has been seen
 };
 
 }  // namespace omniloc

@@ -161,6 +161,7 @@ class Odometry {
   double mean_distance_cm_;                  // mean centre-to-wheel distance, for the uncertainty
   OdometryEstimate est_;
   bool have_window_ = false;
+  bool start_pose_pending_ = false;        // reset() before the first window: its yaw waits for the trust
   double last_t_ms_ = 0.0;
   double last_gyro_deg_ = 0.0;
   double yaw_offset_deg_ = 0.0;             // pose yaw = gyro yaw + offset

@@ -9,9 +9,22 @@
 namespace omniloc::regmap {
 
 inline constexpr std::uint32_t kIdValue = 0x4F4D4E4Cu;
-inline constexpr std::uint32_t kVersionValue = 0x00000100u;
+inline constexpr std::uint32_t kVersionValue = 0x00000200u;
 inline constexpr int kChannels = 4;
 inline constexpr std::uint32_t kPeriodMinCycles = 64u;
+inline constexpr std::uint32_t kGyroSumBits = 24u;
+inline constexpr std::uint32_t kGyroCountBits = 8u;
+inline constexpr std::uint32_t kGyroFsDps = 2000u;
+inline constexpr std::uint32_t kGyroOdrHz = 1000u;
+inline constexpr std::uint32_t kGyroSclkHz = 3000000u;
+inline constexpr std::uint32_t kGyroLsbPerKdps = 16400u;
+inline constexpr std::uint32_t kGyroFlagWrongId = 0u;
+inline constexpr std::uint32_t kGyroFlagTimeout = 1u;
+inline constexpr std::uint32_t kGyroFlagStuck = 2u;
+inline constexpr std::uint32_t kGyroFlagInvalid = 3u;
+inline constexpr std::uint32_t kGyroFlagDropped = 4u;
+inline constexpr std::uint32_t kGyroFlagNotRunning = 5u;
+inline constexpr std::uint32_t kGyroFlagAbsent = 6u;
 
 // Link: clocks and rates (common/regmap.json "link")
 /// The iCEBreaker's 12 MHz oscillator, which drives the design directly (no PLL: 40 MHz cannot be made exactly from 12 MHz, and at 12 MHz both the 100 Hz window and 1 Mbaud divide exactly).
@@ -71,6 +84,9 @@ inline constexpr std::uint8_t kRegErrorCount0 = 0x14;
 inline constexpr std::uint8_t kRegErrorCount1 = 0x15;
 inline constexpr std::uint8_t kRegErrorCount2 = 0x16;
 inline constexpr std::uint8_t kRegErrorCount3 = 0x17;
+inline constexpr std::uint8_t kRegGyroState = 0x18;
+inline constexpr std::uint8_t kRegSnapGyroSum = 0x19;
+inline constexpr std::uint8_t kRegSnapGyro = 0x1A;
 
 // Register fields; k<Reg>Bits: the bits a register with fields uses
 inline constexpr int kVersionBits = 24;
@@ -89,17 +105,25 @@ inline constexpr int kFilterBits = 8;
 inline constexpr Field kFilterLength{0, 8};
 inline constexpr int kPeriodBits = 32;
 inline constexpr Field kPeriodCycles{0, 32};
-inline constexpr int kStatusBits = 6;
+inline constexpr int kStatusBits = 7;
 inline constexpr Field kStatusIllegal{0, 4};
 inline constexpr Field kStatusOverrun{4, 1};
 inline constexpr Field kStatusBadWrite{5, 1};
+inline constexpr Field kStatusGyroFault{6, 1};
 inline constexpr int kLinkErrorsBits = 32;
 inline constexpr Field kLinkErrorsFraming{0, 16};
 inline constexpr Field kLinkErrorsOverrun{16, 16};
 inline constexpr int kSnapDirBits = 4;
 inline constexpr Field kSnapDirDir{0, 4};
+inline constexpr int kGyroStateBits = 16;
+inline constexpr Field kGyroStateRunning{0, 1};
+inline constexpr Field kGyroStateAbsent{1, 1};
+inline constexpr Field kGyroStateFaults{8, 8};
+inline constexpr int kSnapGyroBits = 16;
+inline constexpr Field kSnapGyroCount{0, 8};
+inline constexpr Field kSnapGyroFlags{8, 8};
 
-inline constexpr std::array<Register, 24> kRegisters{{
+inline constexpr std::array<Register, 27> kRegisters{{
     {"ID", 0x00, Access::kReadOnly},
     {"VERSION", 0x01, Access::kReadOnly},
     {"CONTROL", 0x02, Access::kReadWrite},
@@ -124,6 +148,9 @@ inline constexpr std::array<Register, 24> kRegisters{{
     {"ERROR_COUNT1", 0x15, Access::kReadOnly},
     {"ERROR_COUNT2", 0x16, Access::kReadOnly},
     {"ERROR_COUNT3", 0x17, Access::kReadOnly},
+    {"GYRO_STATE", 0x18, Access::kReadOnly},
+    {"SNAP_GYRO_SUM", 0x19, Access::kReadOnly},
+    {"SNAP_GYRO", 0x1A, Access::kReadOnly},
 }};
 
 // UART frames
@@ -141,9 +168,9 @@ inline constexpr std::size_t kFrameReadRespBodyBytes = 5;
 inline constexpr std::uint8_t kFrameWriteAck = 0x82;
 inline constexpr std::size_t kFrameWriteAckBodyBytes = 1;
 inline constexpr std::uint8_t kFrameSnapshotResp = 0x83;
-inline constexpr std::size_t kFrameSnapshotRespBodyBytes = 26;
+inline constexpr std::size_t kFrameSnapshotRespBodyBytes = 32;
 inline constexpr std::uint8_t kFrameTelemetry = 0x90;
-inline constexpr std::size_t kFrameTelemetryBodyBytes = 26;
+inline constexpr std::size_t kFrameTelemetryBodyBytes = 32;
 inline constexpr std::uint8_t kFrameError = 0xE0;
 inline constexpr std::size_t kFrameErrorBodyBytes = 2;
 inline constexpr std::uint8_t kErrBadCrc = 1;

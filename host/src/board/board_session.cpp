@@ -15,6 +15,13 @@ std::string BoardIdentity::version_text() const {
 
 bool version_differs(const BoardIdentity& identity) { return identity.version != regmap::kVersionValue; }
 
+bool version_compatible(std::uint32_t board, std::uint32_t host) {
+  // Semantic versioning: the major version, and below 1.0 the minor one too, changes the layout.
+  const auto major = [](std::uint32_t v) { return regmap::kVersionMajor.get(v); };
+  const auto minor = [](std::uint32_t v) { return regmap::kVersionMinor.get(v); };
+  return major(board) == major(host) && (major(host) != 0 || minor(board) == minor(host));
+}
+
 std::uint32_t control_decode_for(int decoding) {
   switch (decoding) {
     case 1: return regmap::kControlDecodeX1;
@@ -34,12 +41,12 @@ BoardIdentity identify_board(BoardClient& client, double window_period_ms, const
     throw BoardIdentityError(buf);
   }
   b.version = client.read_register(regmap::kRegVersion);
-  if (regmap::kVersionMajor.get(b.version) != regmap::kVersionMajor.get(regmap::kVersionValue)) {
+  if (!version_compatible(b.version, regmap::kVersionValue)) {
     BoardIdentity host;
     host.version = regmap::kVersionValue;
     throw BoardIdentityError(where + ": the board's register map is version " + b.version_text() +
                              ", this host speaks " + host.version_text() +
-                             " (major versions differ): update the bitstream or the host");
+                             " (the window layout differs): load the bitstream of this host's version, or the host of the board's");
   }
   b.control = client.read_register(regmap::kRegControl);
   // PERIOD counts board cycles per window: with the robot's window period it gives the board's
@@ -54,6 +61,11 @@ EncoderWindow SessionWindow::to_encoder_window(double offset_ms) const {
   w.seq = raw.seq;
   w.t_end_ms = offset_ms + board_ms;
   for (std::size_t i = 0; i < w.counts.size() && i < raw.count.size(); ++i) w.counts[i] = raw.count[i];
+  // The gyro's window, latched at the same capture as the counts (a v0.2 board always has the fields).
+  w.gyro.present = true;
+  w.gyro.sum_lsb = raw.gyro_sum;
+  w.gyro.samples = raw.gyro_count;
+  w.gyro.flags = raw.gyro_flags;
   return w;
 }
 

@@ -5,6 +5,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
+#include <utility>
+
+#include "omniloc/regmap.hpp"
 
 namespace omniloc {
 
@@ -62,8 +65,17 @@ double GyroHeading::gyro_yaw_deg(const EncoderWindow& window) {
     yaw_deg_ = wrap_deg(yaw_deg_ + wheels_.rotation_deg(window));
     return yaw_deg_;
   }
+  const std::uint8_t not_running = static_cast<std::uint8_t>(1u << regmap::kGyroFlagNotRunning);
+  if (!ever_ran_ && g.flags == not_running && g.samples == 0) {
+    // The part's start-up after the board's reset: the wheels bridge the first windows; not a fault
+    // (the heading stays aligned: a few milliseconds of the wheels' rotation).
+    state_ = GyroState::kStarting;
+    still_since_ms_ = -1.0;
+    yaw_deg_ = wrap_deg(yaw_deg_ + wheels_.rotation_deg(window));
+    return yaw_deg_;
+  }
   if (g.flags != 0 || g.samples == 0) {  // never summed: the wheels stand in for this window
-    state_ = GyroState::kFault;
+    state_ = (g.flags >> regmap::kGyroFlagAbsent) & 1u ? GyroState::kMissing : GyroState::kFault;
     last_flags_ = g.flags;
     clean_run_ = 0;
     ++fault_windows_;
@@ -72,6 +84,7 @@ double GyroHeading::gyro_yaw_deg(const EncoderWindow& window) {
     return yaw_deg_;
   }
   ++clean_run_;
+  ever_ran_ = true;
   const bool still = wheels_still(window);
   if (!still) {
     still_since_ms_ = -1.0;
@@ -85,14 +98,15 @@ double GyroHeading::gyro_yaw_deg(const EncoderWindow& window) {
     const double bias_lsb = bias_samples_ > 0.0 ? bias_sum_lsb_ / bias_samples_ : 0.0;
     yaw_deg_ = wrap_deg(yaw_deg_ + scale_.degrees(static_cast<double>(g.sum_lsb), g.samples, bias_lsb));
   }
-  if (state_ != GyroState::kFault || clean_run_ >= config_.recover_windows)
+  if ((state_ != GyroState::kFault && state_ != GyroState::kMissing) || clean_run_ >= config_.recover_windows)
     state_ = bias_samples_ > 0.0 ? GyroState::kRunning : GyroState::kLearningBias;
   return yaw_deg_;
 }
 
 HeadingTrust GyroHeading::trust() const {
-  return state_ == GyroState::kRunning || state_ == GyroState::kLearningBias ? HeadingTrust::kRelative
-                                                                             : HeadingTrust::kNone;
+  return state_ == GyroState::kRunning || state_ == GyroState::kLearningBias || state_ == GyroState::kStarting
+             ? HeadingTrust::kRelative
+             : HeadingTrust::kNone;
 }
 
 double GyroHeading::bias_deg_per_s() const {
@@ -107,9 +121,12 @@ std::string GyroHeading::describe() const {
     case GyroState::kRunning:
       std::snprintf(buf, sizeof buf, "gyro (bias %+.3f deg/s)", bias_deg_per_s());
       return buf;
+    case GyroState::kMissing: return "wheels (gyro missing: no ICM-42688-P answers WHO_AM_I)";
+    case GyroState::kStarting: return "gyro starting (the wheels until its first sample)";
     case GyroState::kFault:
       if (last_flags_ == 0) return "wheels (gyro gave no sample)";
-      std::snprintf(buf, sizeof buf, "wheels (gyro fault flags 0x%02x)", static_cast<unsigned>(last_flags_));
+      std::snprintf(buf, sizeof buf, "wheels (gyro fault flags 0x%02x: %s)", static_cast<unsigned>(last_flags_),
+                    gyro_flag_names(last_flags_).c_str());
       return buf;
   }
   return "wheels";
@@ -117,7 +134,9 @@ std::string GyroHeading::describe() const {
 
 std::string GyroHeading::status_token() const {
   switch (state_) {
-    case GyroState::kNoGyro: return "wheels-no-gyro";
+    case GyroState::kNoGyro:
+    case GyroState::kMissing: return "wheels-no-gyro";
+    case GyroState::kStarting:
     case GyroState::kLearningBias:
     case GyroState::kRunning: return "gyro";
     case GyroState::kFault: return "wheels-gyro-fault";
@@ -126,8 +145,21 @@ std::string GyroHeading::status_token() const {
 }
 
 GyroScale GyroScale::of_board() {
-  // ICM-42688-P at GYRO_FS_SEL = +-2000 dps: 16.4 LSB/(deg/s) (datasheet DS-000347, table 1), ODR 1 kHz.
-  return {16.4, 1000.0};
+  // The part as gyro_ctrl configures it (common/regmap.json "constants": ICM-42688-P at +-2000 dps,
+  // 16.4 LSB/(deg/s) by datasheet DS-000347's table, 1 kHz).
+  return {regmap::kGyroLsbPerKdps / 1000.0, static_cast<double>(regmap::kGyroOdrHz)};
+}
+
+std::string gyro_flag_names(std::uint8_t flags) {
+  static constexpr std::pair<std::uint32_t, const char*> kNames[] = {
+      {regmap::kGyroFlagWrongId, "wrong WHO_AM_I"},   {regmap::kGyroFlagTimeout, "data-ready timeout"},
+      {regmap::kGyroFlagStuck, "stuck value"},        {regmap::kGyroFlagInvalid, "invalid value"},
+      {regmap::kGyroFlagDropped, "sample dropped"},   {regmap::kGyroFlagNotRunning, "not running"},
+      {regmap::kGyroFlagAbsent, "absent"}};
+  std::string out;
+  for (const auto& [bit, name] : kNames)
+    if ((flags >> bit) & 1u) out += (out.empty() ? "" : ", ") + std::string(name);
+  return out.empty() ? "none" : out;
 }
 
 }  // namespace omniloc

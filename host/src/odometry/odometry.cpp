@@ -158,6 +158,7 @@ Odometry::Odometry(const RobotConfig& config)
 void Odometry::reset(const Pose2& pose, double sigma_xy_cm, double sigma_yaw_deg) {
   if (!have_window_) last_gyro_deg_ = pose.yaw_deg;  // gyro aligned with the field at start-up
   yaw_offset_deg_ = angle_diff_deg(pose.yaw_deg, last_gyro_deg_);
+  start_pose_pending_ = !have_window_;
   // The motion prior's velocity turns with the heading correction.
   last_velocity_field_ = robot_to_field(last_velocity_field_, yaw_difference_deg(pose, est_.pose));
   est_.pose = {pose.x_cm, pose.y_cm, wrap_deg(pose.yaw_deg)};
@@ -179,6 +180,14 @@ const OdometryEstimate& Odometry::update(const EncoderWindow& window) {
       throw std::invalid_argument(os.str());
     }
   }
+  if (!have_window_ && start_pose_pending_ && window.heading_trust != HeadingTrust::kAbsolute) {
+    // A start pose given before the first window, and a heading that is not the field's: the
+    // board's gyro (or the wheels) starts at 0 (gyro_heading.hpp), so the start yaw is the offset,
+    // not the gyro's first reading.
+    last_gyro_deg_ = 0.0;
+    yaw_offset_deg_ = angle_diff_deg(est_.pose.yaw_deg, 0.0);
+  }
+  start_pose_pending_ = false;
   const Eigen::Vector4d travel = wheel_travel_cm(config_, window.counts);
   const double dyaw_deg = angle_diff_deg(window.gyro_yaw_deg, last_gyro_deg_);
   const double dyaw_rad = deg_to_rad(dyaw_deg);

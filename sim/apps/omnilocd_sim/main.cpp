@@ -3,7 +3,7 @@
 // the simulation's host clock (realistic clocks by default, docs/SIMULATOR.md "Clocks";
 // --perfect-clocks: the board's simulated time). Takes every omnilocd option (the camera is
 // rendered unless `--camera none`) plus the simulation's own: --trajectory NAME, --seed N,
-// --perfect-clocks, --board-drift-ppm PPM. With --record-dir it
+// --perfect-clocks, --board-drift-ppm PPM, --start known|search. With --record-dir it
 // also writes the run's truth.csv beside the recording, so `omniloc replay` reports errors.
 #include <cstdio>
 #include <memory>
@@ -29,19 +29,25 @@ struct SimArgs {
   std::uint64_t seed = 1;
   bool perfect_clocks = false;
   double board_drift_ppm = 50.0;
+  std::string start = "known";  ///< known: the daemon is told the start pose; search: it is not
 };
 
 int run(const omniloc::daemon::DaemonConfig& config, const SimArgs& sim_args, const omniloc::Logger& log) {
   using namespace omniloc;
   auto say = [&log](const std::string& s) { log.info(s); };
-  const daemon::DaemonModels models = daemon::load_models(config, say);
+  daemon::DaemonModels models = daemon::load_models(config, say);
   sim::SimRobotOptions o;
   o.seed = sim_args.seed;
   o.camera = config.camera != "none";
   o.camera_fps = config.camera_fps;
   if (sim_args.perfect_clocks) o.clocks = sim::SimClockConfig::perfect();
   else o.clocks.board_drift_ppm = sim_args.board_drift_ppm;
-  sim::SimulatedRobot robot(models, sim::make_trajectory(sim_args.trajectory, sim_args.seed, sim::playing_area(models.field)), o);
+  const sim::Trajectory trajectory = sim::make_trajectory(sim_args.trajectory, sim_args.seed, sim::playing_area(models.field));
+  // --start known: the team places the robot and tells the daemon its start pose (a kick-off); the
+  // board's gyro is relative, so without it (or a side and goal colours) a global search on the
+  // point-symmetric field stays ambiguous.
+  if (sim_args.start == "known") models.initial_pose = trajectory.start();
+  sim::SimulatedRobot robot(models, trajectory, o);
   say(robot.describe() + "; trajectory " + sim_args.trajectory + ", seed " + std::to_string(sim_args.seed));
   daemon::DaemonIo io = robot.io();
   io.logger = log;
@@ -83,6 +89,10 @@ int main(int argc, char** argv) {
                "every clock equal, no USB or camera delay (default: realistic clocks, docs/SIMULATOR.md)");
   app.add_option("--board-drift-ppm", sim_args.board_drift_ppm, "the simulated board crystal against the host clock")
       ->default_str("50")->check(CLI::Range(-1000.0, 1000.0));
+  app.add_option("--start", sim_args.start,
+                 "known: the daemon is told the robot's start pose, as a team does at kick-off; search: it is not "
+                 "(a global search, ambiguous on a point-symmetric field until set_side or set_pose)")
+      ->default_str("known")->check(CLI::IsMember({"known", "search"}));
   omniloc::cli::DaemonCommandLine cl;
   omniloc::cli::add_daemon_options(app, cl);
   return omniloc::cli::parse_and_run(app, argc, argv, "omnilocd-sim", [&] {

@@ -1,8 +1,9 @@
 // The simulated encoder board: the Verilated rtl/omniloc_top.v (encoder core + UART link, as on the
 // iCEBreaker at its board clock and UART rate, regmap::kBoardClockHz and regmap::kUartBaud: 12 MHz and
 // 1 Mbaud) with models of what its pins are wired to: the FT2232H's UART side (a bit-exact serializer
-// into the FPGA's RX pin and a decoder of its TX pin) and the
-// four encoders (an EncoderSource that gives the A/B levels of every clock cycle).
+// into the FPGA's RX pin and a decoder of its TX pin), the four encoders (an EncoderSource that
+// gives the A/B levels of every clock cycle) and the ICM-42688-P gyro on the SPI pins (sim::Icm42688,
+// stepped every cycle; without one MISO reads 1, the pull-up of an empty PMOD).
 //
 // BoardSim is a UartSide, so it plugs into the FT2232H model under umockdev; SimTransport puts it
 // behind the host's Transport interface in-process, advancing simulated time while the host waits.
@@ -17,6 +18,7 @@
 #include "omniloc/regmap.hpp"
 #include "omniloc/transport.hpp"
 #include "omniloc_sim/encoder_waveform.hpp"
+#include "omniloc_sim/icm42688.hpp"
 #include "omniloc_sim/uart_side.hpp"
 
 namespace omniloc::sim {
@@ -54,8 +56,10 @@ class BoardSim final : public UartSide {
   static constexpr std::int64_t kClockHz = regmap::kBoardClockHz;
   static constexpr std::int64_t kBaud = regmap::kUartBaud;
 
-  /// Builds the model and holds reset for 4 cycles; `source` may be null (all pins low).
-  explicit BoardSim(EncoderSource* source = nullptr);
+  /// Builds the model and holds reset for 4 cycles; `source` may be null (all pins low), `gyro`
+  /// null (no gyro fitted: MISO high). Both must outlive the board; the gyro is stepped at the
+  /// board's clock (its Icm42688Params::clk_hz must be kClockHz).
+  explicit BoardSim(EncoderSource* source = nullptr, Icm42688* gyro = nullptr);
   ~BoardSim() override;
   BoardSim(const BoardSim&) = delete;
   BoardSim& operator=(const BoardSim&) = delete;

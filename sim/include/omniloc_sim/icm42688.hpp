@@ -31,6 +31,7 @@ struct Icm42688Params {
   double noise_dps_rms = 0.0;        ///< white noise added to each sample
   double startup_s = 0.030;          ///< gyro start-up: PWR_MGMT0 on to the first data-ready
   std::uint64_t seed = 1;            ///< of the noise
+  bool keep_logs = true;             ///< false: produced() and reads() hold only the latest (long runs)
 };
 
 /// Fault injection; may be changed between steps.
@@ -70,7 +71,7 @@ class Icm42688 {
   [[nodiscard]] std::uint64_t cycle() const { return cycle_; }
   [[nodiscard]] double time_s() const { return static_cast<double>(cycle_) / params_.clk_hz; }
 
-  /// Every sample put into GYRO_DATA_Z (in order).
+  /// Every sample put into GYRO_DATA_Z (in order; only the latest without keep_logs).
   [[nodiscard]] const std::vector<Sample>& produced() const { return produced_; }
   /// Every burst that read GYRO_DATA_Z1 then GYRO_DATA_Z0: the 16-bit value the master got.
   [[nodiscard]] const std::vector<Sample>& reads() const { return reads_; }

@@ -44,6 +44,16 @@ struct ReferenceBoardConfig {
 /// Counts of one window for a window sequence number.
 using CountScript = std::function<std::array<std::int32_t, regmap::kChannels>(std::uint32_t seq)>;
 
+/// The gyro's window as the board latches it (regmap WINDOW gyro_sum, gyro_count, gyro_flags).
+struct GyroWindowScript {
+  std::int32_t sum = 0;
+  std::uint8_t count = 0;
+  std::uint8_t flags = 0;
+};
+/// The gyro's window for a window sequence number; without one, a working gyro at rest (ten 1 kHz
+/// samples of 0 per 10 ms window, no flag).
+using GyroScript = std::function<GyroWindowScript(std::uint32_t seq)>;
+
 class ReferenceBoard final : public UartSide {
  public:
   /// Where one emitted frame lies in the board's output byte stream (for fault-injection bookkeeping).
@@ -57,8 +67,8 @@ class ReferenceBoard final : public UartSide {
     std::uint32_t value;
   };
 
-  explicit ReferenceBoard(ReferenceBoardConfig cfg = {}, CountScript script = nullptr)
-      : cfg_(cfg), script_(std::move(script)) {
+  explicit ReferenceBoard(ReferenceBoardConfig cfg = {}, CountScript script = nullptr, GyroScript gyro = nullptr)
+      : cfg_(cfg), script_(std::move(script)), gyro_(std::move(gyro)) {
     period_cycles_ = cfg_.clk_hz / cfg_.tick_hz;
     timestamp_ = cfg_.initial_timestamp_cycles;
     position_ = cfg_.initial_position;
@@ -194,6 +204,13 @@ class ReferenceBoard final : public UartSide {
     w.seq = ++seq_;
     w.timestamp_cycles = timestamp_;
     if (script_) w.count = script_(w.seq);
+    const GyroWindowScript g = gyro_ ? gyro_(w.seq) : GyroWindowScript{0, static_cast<std::uint8_t>(regmap::kGyroOdrHz / cfg_.tick_hz), 0};
+    w.gyro_sum = g.sum;
+    w.gyro_count = g.count;
+    w.gyro_flags = g.flags;
+    gyro_faults_ += g.flags != 0 && gyro_faults_ < 255 ? 1u : 0u;
+    gyro_running_ = (g.flags >> regmap::kGyroFlagNotRunning & 1u) == 0;
+    gyro_absent_ = (g.flags >> regmap::kGyroFlagAbsent & 1u) != 0;
     for (int ch = 0; ch < regmap::kChannels; ++ch) {
       const auto c = static_cast<std::size_t>(ch);
       position_[c] += static_cast<std::uint32_t>(w.count[c]);
@@ -203,6 +220,8 @@ class ReferenceBoard final : public UartSide {
     w.dir = dir_;
     if (!consumed_ && !windows_.empty()) status_ = regmap::kStatusOverrun.put(status_, 1);
     w.status = static_cast<std::uint8_t>(status_ & 0xFF);
+    // The RTL sets GYRO_FAULT in the cycle after the capture: it shows from the next window on.
+    if (g.flags != 0) status_ = regmap::kStatusGyroFault.put(status_, 1);
     if (!cfg_.keep_history) windows_.clear();
     windows_.push_back(w);
     last_positions_ = position_;
@@ -242,6 +261,13 @@ class ReferenceBoard final : public UartSide {
       case r::kRegSnapTimestamp: return latched_.timestamp_cycles;
       case r::kRegSnapDir: return latched_.dir;
       case r::kRegSnapStatus: return latched_.status;
+      case r::kRegSnapGyroSum: return static_cast<std::uint32_t>(latched_.gyro_sum);
+      case r::kRegSnapGyro:
+        return r::kSnapGyroFlags.put(r::kSnapGyroCount.put(0, latched_.gyro_count), latched_.gyro_flags);
+      case r::kRegGyroState:  // the live reader: faults counted per flagged window (the RTL counts each fault)
+        return r::kGyroStateFaults.put(
+            r::kGyroStateAbsent.put(r::kGyroStateRunning.put(0, gyro_running_ ? 1 : 0), gyro_absent_ ? 1 : 0),
+            gyro_faults_);
       default: return std::nullopt;
     }
   }
@@ -337,6 +363,10 @@ class ReferenceBoard final : public UartSide {
   std::array<std::uint32_t, regmap::kChannels> last_positions_{};
   std::array<std::uint32_t, regmap::kChannels> latched_positions_{};
   protocol::Window latched_;
+  GyroScript gyro_;
+  std::uint32_t gyro_faults_ = 0;
+  bool gyro_running_ = true;
+  bool gyro_absent_ = false;
 };
 
 }  // namespace omniloc::sim

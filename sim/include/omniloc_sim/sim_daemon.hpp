@@ -1,5 +1,6 @@
-// The simulated robot behind the robot's own Daemon: world -> quadrature waveforms -> Verilated
-// board (rtl/omniloc_top.v) -> SimTransport, the simulated gyro as heading, a camera rendering the
+// The simulated robot behind the robot's own Daemon: world -> quadrature waveforms and the
+// ICM-42688-P model -> Verilated board (rtl/omniloc_top.v) -> SimTransport, the heading from the
+// board's gyro windows as on the real robot (GyroHeading, no side channel), a camera rendering the
 // field at the true pose, and the simulation's host clock as the daemon's (realistic clocks by
 // default, sim_clocks.hpp). `omnilocd-sim`, `omniloc-sim demo` and the tests build their runs from it; truth reaches them through the truth
 // log and the daemon's observer, never through the daemon.
@@ -37,15 +38,20 @@ class SimulatedRobot {
   /// `models` must outlive the robot (the renderer keeps the field and camera).
   SimulatedRobot(const daemon::DaemonModels& models, Trajectory trajectory, const SimRobotOptions& options);
 
-  /// Clock, board factory, heading and camera for the Daemon (observer and log are the caller's).
+  /// Clock, board factory, heading (the board's gyro windows) and camera for the Daemon (observer
+  /// and log are the caller's).
   [[nodiscard]] daemon::DaemonIo io();
   [[nodiscard]] const SimTruthLog& truth() const { return robot_.log; }
   [[nodiscard]] BoardSim& board() { return robot_.board; }
+  /// The gyro part on the board: its faults() make it fail or vanish (who_am_i) mid-run.
+  [[nodiscard]] Icm42688& gyro() { return robot_.gyro; }
+  [[nodiscard]] const GyroHeading& heading() const { return heading_; }
   [[nodiscard]] std::int64_t board_cycles() const { return robot_.board.cycle(); }
   [[nodiscard]] std::string describe() const;
 
  private:
   VerilatedRobot robot_;
+  GyroHeading heading_;
   OmniRenderer renderer_;
   std::unique_ptr<SimCamera> camera_;
 };
