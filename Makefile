@@ -8,7 +8,7 @@
 #   make formal     yosys + yosys-smtbmc (z3) proofs
 #   make mutate     every mutation of tests/mutate/mutations.txt against the proofs and cycle tests
 #                   ("N of N mutations killed"; MUTATE_ARGS, e.g. --formal-only, --rtl-only or --only NAME,...)
-#   make bitstream  iCEBreaker bitstream with the open iCE40 flow
+#   make bitstream  iCEBreaker bitstream with the open iCE40 flow (CHANNELS=3: a three-wheel robot's board)
 #   make bench      benchmarks (each against a naive reference, ratio printed)
 #   make soak       long simulated runs: the localizer (SOAK_MINUTES, default 10), the daemon with faults
 #                   (SOAK_DAEMON_MINUTES, default 60 simulated; SOAK_BOARD reference or verilated)

@@ -1,8 +1,11 @@
-// encoder_core: four quadrature encoder channels counted in windows (paper section 2.2).
+// encoder_core: three or four quadrature encoder channels counted in windows (paper section 2.2).
 //
-// tick_generator (window clock, PERIOD register) -> capture = tick while CONTROL.ENABLE; four
+// tick_generator (window clock, PERIOD register) -> capture = tick while CONTROL.ENABLE; CHANNELS
 // encoder_channel (synchronizer, glitch filter, decoder, window counter, position, error count);
 // encoder_regs (register bus, status, window bank and its snapshot). See docs/RTL.md.
+// CHANNELS (3 or 4, default the register map's 4) is how many wheels the robot has: the ports and
+// the register map stay 4 wide, a channel at or above CHANNELS is not built (its pins ignored, its
+// counts, positions, direction and errors 0), and CONFIG.CHANNELS tells the host.
 //
 // Window outputs for the streamer: win_valid_o pulses for one cycle after each capture; win_seq_o,
 // win_timestamp_o, win_count_o (4 x signed 32, channel 0 in the low bits), win_position_o,
@@ -23,6 +26,7 @@
 module encoder_core #(
     parameter CLK_HZ = `OMNILOC_PAPER_CLOCK_HZ,
     parameter TICK_HZ = `OMNILOC_TICK_HZ,
+    parameter integer CHANNELS = `OMNILOC_CHANNELS,
     parameter integer BANK_IDX_W = $clog2(`OMNILOC_BODY_WINDOW_BYTES + 1)
 ) (
     input  wire                                         clk_i,
@@ -82,21 +86,37 @@ tick_generator #(.CLK_HZ(CLK_HZ), .TICK_HZ(TICK_HZ)) u_tick (
 
 genvar ch;
 generate
+    // Elaboration stops here, naming the rule, when CHANNELS is not 3 or 4 (no such module).
+    if (CHANNELS < 3 || CHANNELS > CH) begin : g_bad_channels
+        encoder_core_CHANNELS_must_be_3_or_4 u_stop ();
+    end
     for (ch = 0; ch < CH; ch = ch + 1) begin : g_ch
-        encoder_channel u_ch (
-            .clk_i(clk_i), .rst_i(rst_i), .a_i(enc_a_i[ch]), .b_i(enc_b_i[ch]),
-            .filter_len_i(filter_len), .en_i(enable), .mode_i(decode), .capture_i(capture),
-            .win_count_o(win_count_o[DATA_W*ch +: DATA_W]), .win_position_o(win_position_o[DATA_W*ch +: DATA_W]),
-            .win_dir_o(win_dir_o[ch]),
-            /* verilator lint_off PINCONNECTEMPTY */
-            .position_o(), .dir_o(),
-            /* verilator lint_on PINCONNECTEMPTY */
-            .err_o(illegal[ch]), .err_count_o(err_count[DATA_W*ch +: DATA_W])
-        );
+        if (ch >= CHANNELS) begin : g_off
+            // A wheel the robot does not have: nothing built, nothing counted.
+            /* verilator lint_off UNUSEDSIGNAL */
+            wire unused_pins = enc_a_i[ch] ^ enc_b_i[ch];
+            /* verilator lint_on UNUSEDSIGNAL */
+            assign win_count_o[DATA_W*ch +: DATA_W] = {DATA_W{1'b0}};
+            assign win_position_o[DATA_W*ch +: DATA_W] = {DATA_W{1'b0}};
+            assign win_dir_o[ch] = 1'b0;
+            assign illegal[ch] = 1'b0;
+            assign err_count[DATA_W*ch +: DATA_W] = {DATA_W{1'b0}};
+        end else begin : g_on
+            encoder_channel u_ch (
+                .clk_i(clk_i), .rst_i(rst_i), .a_i(enc_a_i[ch]), .b_i(enc_b_i[ch]),
+                .filter_len_i(filter_len), .en_i(enable), .mode_i(decode), .capture_i(capture),
+                .win_count_o(win_count_o[DATA_W*ch +: DATA_W]), .win_position_o(win_position_o[DATA_W*ch +: DATA_W]),
+                .win_dir_o(win_dir_o[ch]),
+                /* verilator lint_off PINCONNECTEMPTY */
+                .position_o(), .dir_o(),
+                /* verilator lint_on PINCONNECTEMPTY */
+                .err_o(illegal[ch]), .err_count_o(err_count[DATA_W*ch +: DATA_W])
+            );
+        end
     end
 endgenerate
 
-encoder_regs #(.CLK_HZ(CLK_HZ), .TICK_HZ(TICK_HZ)) u_regs (
+encoder_regs #(.CLK_HZ(CLK_HZ), .TICK_HZ(TICK_HZ), .CHANNELS(CHANNELS)) u_regs (
     .clk_i(clk_i), .rst_i(rst_i),
     .reg_addr_i(reg_addr_i), .reg_rd_i(reg_rd_i), .reg_wr_i(reg_wr_i), .reg_wdata_i(reg_wdata_i),
     .reg_rdata_o(reg_rdata_o), .reg_ack_o(reg_ack_o), .reg_err_o(reg_err_o),

@@ -30,6 +30,7 @@
 module encoder_regs #(
     parameter CLK_HZ = `OMNILOC_PAPER_CLOCK_HZ,
     parameter TICK_HZ = `OMNILOC_TICK_HZ,
+    parameter integer CHANNELS = `OMNILOC_CHANNELS,   // CONFIG.CHANNELS: the channels encoder_core built
     parameter integer BANK_IDX_W = $clog2(`OMNILOC_BODY_WINDOW_BYTES + 1)
 ) (
     input  wire                                         clk_i,
@@ -91,6 +92,8 @@ localparam DEC_LSB = `OMNILOC_CONTROL_DECODE_LSB;
 localparam DEC_W = `OMNILOC_CONTROL_DECODE_W;
 localparam FLT_W = `OMNILOC_FILTER_LENGTH_W;
 localparam DIR_W = `OMNILOC_SNAP_DIR_DIR_W;
+localparam integer CFG_CH_W = `OMNILOC_CONFIG_CHANNELS_W;
+localparam [CFG_CH_W-1:0] CHANNELS_FIELD = CHANNELS[CFG_CH_W-1:0];
 
 // ---- control registers ----
 reg              enable_q;
@@ -262,6 +265,7 @@ function [DATA_W-1:0] word;
                 word[`OMNILOC_SNAP_GYRO_COUNT_LSB +: GCNT_W] = snap_gcnt_q;
                 word[`OMNILOC_SNAP_GYRO_FLAGS_LSB +: GFLG_W] = snap_gflg_q;
             end
+            `OMNILOC_REG_CONFIG: word[`OMNILOC_CONFIG_CHANNELS_LSB +: CFG_CH_W] = CHANNELS_FIELD;
             default: word = {DATA_W{1'b0}};
         endcase
     end
@@ -514,6 +518,7 @@ always @(*) begin
         `OMNILOC_REG_ERROR_COUNT3: f_word = err_count_i[127:96];
         `OMNILOC_REG_SNAP_GYRO_SUM: f_word = {{(DATA_W - GSUM_W){f_s_gsum[GSUM_W-1]}}, f_s_gsum};
         `OMNILOC_REG_SNAP_GYRO: f_word = {{(DATA_W - 16){1'b0}}, f_s_gflg, f_s_gcnt};
+        `OMNILOC_REG_CONFIG: f_word = CHANNELS;
         default: f_word = {DATA_W{1'b0}};
     endcase
 end

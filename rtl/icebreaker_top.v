@@ -12,13 +12,16 @@
 // reset, the green LED for link activity and the red LED for errors (both active low; a gyro
 // fault or a missing gyro is an error), the ICM-42688-P gyro's SPI on PMOD1B (docs/GYRO.md
 // "Wiring": pin 1 CS, 2 MOSI, 3 MISO, 4 SCLK, the Digilent SPI PMOD order).
+// CHANNELS 3: a three-wheel robot's board, channel 3's pins (A3, B3) unused.
 // Reset: held for 16 cycles after configuration and while the button is pressed (synchronised).
 `resetall
 `timescale 1ns / 1ps
 `default_nettype none
 `include "omniloc_regs.vh"
 
-module icebreaker_top (
+module icebreaker_top #(
+    parameter integer CHANNELS = `OMNILOC_CHANNELS   // wheels: 4, or 3 (`make bitstream CHANNELS=3`)
+) (
     input  wire       CLK,
     input  wire       BTN_N,
     input  wire [`OMNILOC_CHANNELS-1:0] ENC_A,
@@ -44,7 +47,8 @@ module icebreaker_top (
     wire rst = !por_q[4];
 
     wire activity, error;
-    omniloc_top #(.CLK_HZ(`OMNILOC_BOARD_CLOCK_HZ), .TICK_HZ(`OMNILOC_TICK_HZ), .BAUD(`OMNILOC_UART_BAUD)) u_omniloc (
+    omniloc_top #(.CLK_HZ(`OMNILOC_BOARD_CLOCK_HZ), .TICK_HZ(`OMNILOC_TICK_HZ), .BAUD(`OMNILOC_UART_BAUD),
+                  .CHANNELS(CHANNELS)) u_omniloc (
         .clk_i(CLK), .rst_i(rst), .enc_a_i(ENC_A), .enc_b_i(ENC_B),
         .uart_rx_i(RX), .uart_tx_o(TX),
         .spi_sclk_o(GYRO_SCLK), .spi_mosi_o(GYRO_MOSI), .spi_miso_i(GYRO_MISO), .spi_cs_n_o(GYRO_CS_N),

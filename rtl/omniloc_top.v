@@ -10,7 +10,8 @@
 // Assumptions: one clock of CLK_HZ; rst_i synchronous, active high; uart_rx_i and the encoder
 // pins asynchronous (synchronised inside). CLK_HZ / BAUD >= 4 and should divide exactly
 // (docs/RTL.md lists the rates). The defaults are the board's (common/regmap.json "link": 12 MHz,
-// 100 Hz windows, 1 Mbaud); every width comes from the generated map.
+// 100 Hz windows, 1 Mbaud, 4 channels); every width comes from the generated map. CHANNELS 3 builds a
+// three-wheel board (encoder_core): the ports and the window layout stay 4 channels wide.
 `resetall
 `timescale 1ns / 1ps
 `default_nettype none
@@ -19,7 +20,8 @@
 module omniloc_top #(
     parameter integer CLK_HZ  = `OMNILOC_BOARD_CLOCK_HZ,
     parameter integer TICK_HZ = `OMNILOC_TICK_HZ,
-    parameter integer BAUD    = `OMNILOC_UART_BAUD
+    parameter integer BAUD    = `OMNILOC_UART_BAUD,
+    parameter integer CHANNELS = `OMNILOC_CHANNELS   // 3 or 4 wheels (encoder_core); CONFIG.CHANNELS
 ) (
     input  wire       clk_i,
     input  wire       rst_i,
@@ -177,7 +179,7 @@ module omniloc_top #(
     wire [CH*DATA_W-1:0] win_count, win_position;
     wire [CH-1:0]        win_dir;
     wire [`OMNILOC_BODY_WINDOW_STATUS_W-1:0] status;   // STATUS at capture, as the window's status byte
-    encoder_core #(.CLK_HZ(CLK_HZ), .TICK_HZ(TICK_HZ)) u_core (
+    encoder_core #(.CLK_HZ(CLK_HZ), .TICK_HZ(TICK_HZ), .CHANNELS(CHANNELS)) u_core (
         .clk_i(clk_i), .rst_i(rst_i), .enc_a_i(enc_a_i), .enc_b_i(enc_b_i),
         .gyro_sum_i(gyro_sum), .gyro_count_i(gyro_count), .gyro_flags_i(gyro_flags),
         .reg_addr_i(bus_addr), .reg_rd_i(bus_rd && !to_link), .reg_wr_i(bus_wr && !to_link),

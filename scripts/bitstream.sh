@@ -7,12 +7,22 @@
 # per module (yosys synth_ice40 -noflatten: LUT4, flip-flops, carries of each module, own cells only).
 # Usage: scripts/bitstream.sh [BUILD_DIR]
 #   BITSTREAM_SEEDS (environment) overrides the information seeds (default "2 3 4 5"; "" = none).
+#   CHANNELS (environment): the wheels the board counts, 4 (the register map's, default) or 3; a
+#   3-channel bitstream goes to BUILD_DIR/icebreaker_3ch/. The script checks that the synthesised
+#   design has exactly that many encoder channels.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=$(realpath -m "${1:-build}")
-out="$build/icebreaker"
-mkdir -p "$out"
 cd "$root"
+max_channels=$(sed -n 's/^`define OMNILOC_CHANNELS \([0-9]*\)$/\1/p' rtl/include/omniloc_regs.vh)
+channels=${CHANNELS:-$max_channels}
+if [ "$channels" != 3 ] && [ "$channels" != "$max_channels" ]; then
+  echo "bitstream: error: CHANNELS=$channels: the board counts 3 or $max_channels encoder channels" >&2
+  exit 2
+fi
+out="$build/icebreaker"
+[ "$channels" = "$max_channels" ] || out="$build/icebreaker_${channels}ch"
+mkdir -p "$out"
 
 # The timing target, from the generated header (one source: common/regmap.json "link").
 target_hz=$(sed -n 's/^`define OMNILOC_TIMING_TARGET_HZ \([0-9]*\)$/\1/p' rtl/include/omniloc_regs.vh)
@@ -29,9 +39,16 @@ fi
 required_mhz=$(python3 -c "print(f'{$required_hz / 1e6:g}')")
 
 mapfile -t sources < <(ls rtl/*.v rtl/gyro/*.v)
-echo "bitstream: synthesising icebreaker_top from ${#sources[@]} RTL files (log: $out/yosys.log)"
-yosys -q -l "$out/yosys.log" -p "read_verilog -Irtl/include ${sources[*]}; synth_ice40 -top icebreaker_top -json $out/omniloc.json"
-yosys -q -l "$out/yosys_modules.log" -p "read_verilog -Irtl/include ${sources[*]}; synth_ice40 -noflatten -top icebreaker_top; tee -o $out/modules.stat stat"
+echo "bitstream: synthesising icebreaker_top ($channels encoder channels) from ${#sources[@]} RTL files (log: $out/yosys.log)"
+read="read_verilog -Irtl/include ${sources[*]}; chparam -set CHANNELS $channels icebreaker_top"
+yosys -q -l "$out/yosys.log" -p "$read; synth_ice40 -top icebreaker_top -json $out/omniloc.json"
+yosys -q -l "$out/yosys_modules.log" -p "$read; synth_ice40 -noflatten -top icebreaker_top; tee -o $out/modules.stat stat"
+# The hierarchy must hold one encoder_channel per wheel (a CHANNELS that did not reach the core would not).
+built=$(awk '/=== design hierarchy ===/{h=1} h && $1 ~ /encoder_channel$/ {print $2; exit}' "$out/modules.stat")
+if [ "${built:-0}" != "$channels" ]; then
+  echo "bitstream: error: the synthesised design has ${built:-no} encoder_channel instances, CHANNELS is $channels" >&2
+  exit 1
+fi
 
 # nextpnr is told to finish even when timing fails, so that every seed reports its Fmax; the
 # verdict on seed 1 is nextpnr_report.py's.

@@ -3,7 +3,7 @@
 `define OMNILOC_REGS_VH
 
 `define OMNILOC_ID 32'h4F4D4E4C
-`define OMNILOC_VERSION 32'h00000200
+`define OMNILOC_VERSION 32'h00000300
 `define OMNILOC_ADDR_W 8
 `define OMNILOC_DATA_W 32
 `define OMNILOC_CHANNELS 4
@@ -59,7 +59,8 @@
 `define OMNILOC_REG_GYRO_STATE 8'h18
 `define OMNILOC_REG_SNAP_GYRO_SUM 8'h19
 `define OMNILOC_REG_SNAP_GYRO 8'h1A
-`define OMNILOC_ADDR_KNOWN(a) (((a) == 8'h00) || ((a) == 8'h01) || ((a) == 8'h02) || ((a) == 8'h03) || ((a) == 8'h04) || ((a) == 8'h05) || ((a) == 8'h06) || ((a) == 8'h07) || ((a) == 8'h08) || ((a) == 8'h09) || ((a) == 8'h0A) || ((a) == 8'h0B) || ((a) == 8'h0C) || ((a) == 8'h0D) || ((a) == 8'h0E) || ((a) == 8'h0F) || ((a) == 8'h10) || ((a) == 8'h11) || ((a) == 8'h12) || ((a) == 8'h13) || ((a) == 8'h14) || ((a) == 8'h15) || ((a) == 8'h16) || ((a) == 8'h17) || ((a) == 8'h18) || ((a) == 8'h19) || ((a) == 8'h1A))
+`define OMNILOC_REG_CONFIG 8'h1B
+`define OMNILOC_ADDR_KNOWN(a) (((a) == 8'h00) || ((a) == 8'h01) || ((a) == 8'h02) || ((a) == 8'h03) || ((a) == 8'h04) || ((a) == 8'h05) || ((a) == 8'h06) || ((a) == 8'h07) || ((a) == 8'h08) || ((a) == 8'h09) || ((a) == 8'h0A) || ((a) == 8'h0B) || ((a) == 8'h0C) || ((a) == 8'h0D) || ((a) == 8'h0E) || ((a) == 8'h0F) || ((a) == 8'h10) || ((a) == 8'h11) || ((a) == 8'h12) || ((a) == 8'h13) || ((a) == 8'h14) || ((a) == 8'h15) || ((a) == 8'h16) || ((a) == 8'h17) || ((a) == 8'h18) || ((a) == 8'h19) || ((a) == 8'h1A) || ((a) == 8'h1B))
 `define OMNILOC_ADDR_WRITABLE(a) (((a) == 8'h02) || ((a) == 8'h03) || ((a) == 8'h04) || ((a) == 8'h05))
 
 // Register fields: _LSB and _W; _BITS: the bits a register with fields uses
@@ -116,6 +117,9 @@
 `define OMNILOC_SNAP_GYRO_COUNT_W 8
 `define OMNILOC_SNAP_GYRO_FLAGS_LSB 8
 `define OMNILOC_SNAP_GYRO_FLAGS_W 8
+`define OMNILOC_CONFIG_BITS 3
+`define OMNILOC_CONFIG_CHANNELS_LSB 0
+`define OMNILOC_CONFIG_CHANNELS_W 3
 
 // UART frames
 `define OMNILOC_FRAME_SYNC 8'hA5

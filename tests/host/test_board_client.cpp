@@ -32,7 +32,7 @@ struct Rig {
 TEST(BoardClient, ReadsIdVersionAndResetValues) {
   Rig rig;
   EXPECT_EQ(rig.client.read_register(r::kRegId), 0x4F4D4E4Cu);
-  EXPECT_EQ(rig.client.read_register(r::kRegVersion), 0x00000200u);  // 0.2.0: the gyro window
+  EXPECT_EQ(rig.client.read_register(r::kRegVersion), 0x00000300u);  // 0.3.0: CONFIG.CHANNELS
   EXPECT_EQ(rig.client.read_register(r::kRegPeriod), 120'000u);  // 12 MHz / 100 Hz (the board clock of common/regmap.json)
   EXPECT_EQ(rig.client.read_register(r::kRegControl), 0u);
   EXPECT_EQ(rig.client.counters().retries, 0u);

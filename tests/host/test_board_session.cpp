@@ -1,7 +1,8 @@
 // BoardSession against a scripted board written here from the protocol document (a register file
 // that answers READ/WRITE requests and sends the telemetry frames the test queues), independent of
-// the reference board and the RTL: the session's conversation (ID, VERSION, CONTROL, PERIOD reads,
-// then one CONTROL write), its refusals (wrong ID, other major version, bad decoding) and its window
+// the reference board and the RTL: the session's conversation (ID, VERSION, CONFIG, CONTROL, PERIOD
+// reads, then one CONTROL write), its refusals (wrong ID, other major version, bad decoding, a robot
+// with another number of wheels than the board's channels, a CONFIG out of range) and its window
 // times across a 32-bit timestamp wrap, all against hand-computed values.
 #include <gtest/gtest.h>
 
@@ -63,6 +64,7 @@ Script good_board() {
   Script s;
   s.regs[r::kRegId] = 0x4F4D4E4Cu;  // "OMNL", written out here rather than taken from regmap.hpp
   s.regs[r::kRegVersion] = r::kVersionValue;
+  s.regs[r::kRegConfig] = 4;  // CONFIG.CHANNELS (bits 2:0): a four-wheel board
   s.regs[r::kRegControl] = 0;
   s.regs[r::kRegPeriod] = 120'000;  // 12 MHz board, 10 ms windows
   return s;
@@ -86,11 +88,12 @@ TEST(BoardSession, IdentifiesConfiguresForTheRobotsDecodingAndUnwrapsTime) {
     BoardSession session(std::make_unique<ScriptedTransport>(s), o);
     EXPECT_EQ(session.identity().clock_hz, 12e6);
     EXPECT_EQ(session.identity().period_cycles, 120'000u);
-    // Four reads in this order, then one write of CONTROL = ENABLE | DECODE << 1 | STREAM << 3.
-    ASSERT_EQ(s.requests.size(), 5u);
-    const std::uint8_t order[] = {r::kRegId, r::kRegVersion, r::kRegControl, r::kRegPeriod};
-    for (int i = 0; i < 4; ++i) EXPECT_EQ(std::get<protocol::ReadReq>(s.requests[i]).addr, order[i]);
-    const auto& w = std::get<protocol::WriteReq>(s.requests[4]);
+    // Five reads in this order, then one write of CONTROL = ENABLE | DECODE << 1 | STREAM << 3.
+    ASSERT_EQ(s.requests.size(), 6u);
+    const std::uint8_t order[] = {r::kRegId, r::kRegVersion, r::kRegConfig, r::kRegControl, r::kRegPeriod};
+    for (int i = 0; i < 5; ++i) EXPECT_EQ(std::get<protocol::ReadReq>(s.requests[i]).addr, order[i]);
+    EXPECT_EQ(session.identity().channels, 4);
+    const auto& w = std::get<protocol::WriteReq>(s.requests[5]);
     EXPECT_EQ(w.addr, r::kRegControl);
     EXPECT_EQ(w.data, 0x1u | (field << 1) | (0x1u << 3)) << "decoding x" << decoding;
   }
@@ -130,15 +133,15 @@ TEST(BoardSession, RefusesAForeignBoardAnotherMajorVersionAndABadDecoding) {
   EXPECT_THROW(BoardSession(std::make_unique<ScriptedTransport>(newer), BoardSessionOptions{}), BoardIdentityError);
   EXPECT_EQ(newer.regs[r::kRegControl], 0u) << "a board of another major version must not be configured";
 
-  // Below 1.0 a minor version changes the layout: the board of before the gyro (0.1.0, a 26-byte
-  // window) is refused by this host (0.2.0, the gyro's 32-byte window), naming both versions.
+  // Below 1.0 a minor version changes the layout: the board of before CONFIG (0.2.0, which has no
+  // channel count) is refused by this host (0.3.0), naming both versions.
   Script before_gyro = good_board();
-  before_gyro.regs[r::kRegVersion] = r::kVersionMinor.put(r::kVersionValue, 1);
+  before_gyro.regs[r::kRegVersion] = r::kVersionMinor.put(r::kVersionValue, 2);
   try {
     BoardSession session(std::make_unique<ScriptedTransport>(before_gyro), BoardSessionOptions{});
-    FAIL() << "a 0.1.0 board was accepted";
+    FAIL() << "a 0.2.0 board was accepted";
   } catch (const BoardIdentityError& e) {
-    EXPECT_NE(std::string(e.what()).find("register map is version 0.1.0, this host speaks 0.2.0"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("register map is version 0.2.0, this host speaks 0.3.0"), std::string::npos)
         << e.what();
   }
   EXPECT_EQ(before_gyro.regs[r::kRegControl], 0u) << "a board of another layout must not be configured";
@@ -165,9 +168,55 @@ TEST(BoardSession, ConfigureFalseOnlyIdentifies) {
   BoardSessionOptions o;
   o.configure = false;
   BoardSession session(std::make_unique<ScriptedTransport>(s), o);
-  EXPECT_EQ(s.requests.size(), 4u);
+  EXPECT_EQ(s.requests.size(), 5u) << "ID, VERSION, CONFIG, CONTROL, PERIOD: reads only";
   EXPECT_EQ(session.identity().control, 0x5u);
   EXPECT_EQ(s.regs[r::kRegControl], 0x5u);
+}
+
+TEST(BoardSession, TheBoardsChannelCountMustMatchTheRobotsWheels) {
+  // A three-wheel board (CONFIG.CHANNELS = 3) with a four-wheel robot: refused, naming both, before
+  // anything is configured; with a three-wheel robot accepted.
+  Script three = good_board();
+  three.regs[r::kRegConfig] = 3;
+  BoardSessionOptions four_wheels;
+  four_wheels.wheels = 4;
+  try {
+    BoardSession session(std::make_unique<ScriptedTransport>(three), four_wheels);
+    FAIL() << "a 3-channel board was accepted for a 4-wheel robot";
+  } catch (const BoardIdentityError& e) {
+    EXPECT_NE(std::string(e.what()).find("the board counts 3 encoder channels but the robot config has 4"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(three.regs[r::kRegControl], 0u) << "a board that does not fit the robot must not be configured";
+  BoardSessionOptions three_wheels;
+  three_wheels.wheels = 3;
+  BoardSession ok(std::make_unique<ScriptedTransport>(three), three_wheels);
+  EXPECT_EQ(ok.identity().channels, 3);
+
+  // The other way round: a four-channel board, a three-wheel robot.
+  Script four = good_board();
+  try {
+    BoardSession session(std::make_unique<ScriptedTransport>(four), three_wheels);
+    FAIL() << "a 4-channel board was accepted for a 3-wheel robot";
+  } catch (const BoardIdentityError& e) {
+    EXPECT_NE(std::string(e.what()).find("the board counts 4 encoder channels but the robot config has 3"),
+              std::string::npos)
+        << e.what();
+  }
+
+  // A CONFIG that no omniloc bitstream reads (0, 2, 5, 7 channels): refused naming the register.
+  for (std::uint32_t bad : {0u, 2u, 5u, 7u, 0xFFFFFFF8u}) {
+    Script s = good_board();
+    s.regs[r::kRegConfig] = bad;
+    try {
+      BoardSession session(std::make_unique<ScriptedTransport>(s), BoardSessionOptions{});
+      FAIL() << "CONFIG " << bad << " was accepted";
+    } catch (const BoardIdentityError& e) {
+      EXPECT_NE(std::string(e.what()).find("register CONFIG reads 0x"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("is not 3 or 4"), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace

@@ -346,8 +346,8 @@ TEST(WheelLayout, BoardChannelsMustMatchTheWheels) {
   EXPECT_EQ(board_channel_mismatch(3, 3), std::nullopt);
   EXPECT_EQ(board_channel_mismatch(4, 4), std::nullopt);
   EXPECT_EQ(board_channel_mismatch(4, 3).value_or(""),
-            "the board counts 4 encoder channels but the robot config has 3 wheels: use the board built for 3 "
-            "channels, or the robot file of this robot");
+            "the board counts 4 encoder channels but the robot config has 3 wheels: load the bitstream built for 3 "
+            "channels (make bitstream CHANNELS=3), or the robot file of this robot");
   EXPECT_NE(board_channel_mismatch(3, 4).value_or("").find("the board counts 3 encoder channels but the robot config has 4"),
             std::string::npos);
   // A BoardSession on the reference board (this register map: 4 channels) refuses a three-wheel

@@ -41,6 +41,7 @@ TEST(OmnilocTop, RegistersErrorsAndStreamedWindowsThroughTheUartPins) {
   // Identity, over the wire.
   EXPECT_EQ(client.read_register(rm::kRegId), rm::kIdValue);
   EXPECT_EQ(client.read_register(rm::kRegVersion), rm::kVersionValue);
+  EXPECT_EQ(client.read_register(rm::kRegConfig), 4u) << "CONFIG.CHANNELS of the default board: four wheels";
 
   // Error answers: a read-only register, an unknown address, a refused value.
   try {

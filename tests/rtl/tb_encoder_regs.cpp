@@ -76,6 +76,7 @@ struct Model {
     switch (in.addr) {
       case rm::kRegId: value = rm::kIdValue; break;
       case rm::kRegVersion: value = rm::kVersionValue; break;
+      case rm::kRegConfig: value = 4; break;  // CONFIG.CHANNELS of the default build: four wheels
       case rm::kRegControl: value = (enable ? 1u : 0u) | (decode << 1) | (stream ? 8u : 0u); writable = true; break;
       case rm::kRegFilter: value = filter; writable = true; break;
       case rm::kRegPeriod: value = period; writable = true; break;

@@ -260,7 +260,8 @@ TEST_F(UsbLink, ProbeOncePrintsIdStatusAndASnapshot) {
   EXPECT_EQ(rc, 0) << out;
   EXPECT_NE(out.find("<- omniloc board"), std::string::npos) << out;
   EXPECT_NE(out.find("Dual RS232-HS"), std::string::npos) << out;
-  EXPECT_NE(out.find("ID 0x4F4D4E4C  register map 0.2.0"), std::string::npos) << out;
+  EXPECT_NE(out.find("ID 0x4F4D4E4C  register map 0.3.0"), std::string::npos) << out;
+  EXPECT_NE(out.find("CONFIG channels 4 (the bitstream counts 4 wheels)"), std::string::npos) << out;
   EXPECT_NE(out.find("GYRO_STATE running 1 absent 0 faults 0 (the ICM-42688-P is read)"), std::string::npos) << out;
   EXPECT_NE(out.find("CONTROL 0x00000001 (ENABLE 1"), std::string::npos) << out;
   EXPECT_NE(out.find(row(board.windows().back())), std::string::npos) << out;

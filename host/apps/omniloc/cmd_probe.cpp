@@ -80,6 +80,7 @@ int run_probe(const ProbeArgs& a) {
   std::printf("ID 0x%08X  register map %u.%u.%u (host speaks %u.%u.%u)\n", id, r::kVersionMajor.get(version),
               r::kVersionMinor.get(version), r::kVersionPatch.get(version), r::kVersionMajor.get(r::kVersionValue),
               r::kVersionMinor.get(r::kVersionValue), r::kVersionPatch.get(r::kVersionValue));
+  std::printf("CONFIG channels %d (the bitstream counts %d wheels)\n", ident.channels, ident.channels);
   std::printf("CONTROL 0x%08X (ENABLE %u, DECODE %u, STREAM %u)  PERIOD %u cycles  STATUS 0x%08X "
               "(ILLEGAL 0x%X, OVERRUN %u, BAD_WRITE %u)\n",
               control, r::kControlEnable.get(control), r::kControlDecode.get(control), r::kControlStream.get(control),

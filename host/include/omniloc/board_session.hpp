@@ -34,14 +34,15 @@ struct BoardIdentity {
   std::uint32_t control = 0;  ///< CONTROL as found (before the session configured it)
   std::uint32_t period_cycles = 0;  ///< PERIOD: board cycles per window
   double clock_hz = 0.0;      ///< board clock derived from PERIOD and the robot's window period
-  int channels = regmap::kChannels;  ///< encoder channels the board counts (3 or 4)
+  int channels = regmap::kChannels;  ///< CONFIG.CHANNELS: encoder channels the board counts (3 or 4)
 
   [[nodiscard]] std::string version_text() const;  ///< "1.0.0"
 };
 
-/// Reads ID, VERSION, CONTROL and PERIOD; throws BoardIdentityError naming the transport and both
+/// Reads ID, VERSION, CONFIG, CONTROL and PERIOD; throws BoardIdentityError naming the transport and both
 /// versions when the ID is wrong or the register map is not version_compatible with the host's (a
-/// patch difference, or a minor one from 1.0 on, is accepted: the host checks `version_differs()` to warn).
+/// patch difference, or a minor one from 1.0 on, is accepted: the host checks `version_differs()` to warn),
+/// or when CONFIG.CHANNELS is not 3 or 4.
 [[nodiscard]] BoardIdentity identify_board(BoardClient& client, double window_period_ms, const std::string& where);
 
 /// True if a board of register-map version `board` can serve a host of version `host`: the same

@@ -9,7 +9,7 @@
 namespace omniloc::regmap {
 
 inline constexpr std::uint32_t kIdValue = 0x4F4D4E4Cu;
-inline constexpr std::uint32_t kVersionValue = 0x00000200u;
+inline constexpr std::uint32_t kVersionValue = 0x00000300u;
 inline constexpr int kChannels = 4;
 inline constexpr std::uint32_t kPeriodMinCycles = 64u;
 inline constexpr std::uint32_t kGyroSumBits = 24u;
@@ -87,6 +87,7 @@ inline constexpr std::uint8_t kRegErrorCount3 = 0x17;
 inline constexpr std::uint8_t kRegGyroState = 0x18;
 inline constexpr std::uint8_t kRegSnapGyroSum = 0x19;
 inline constexpr std::uint8_t kRegSnapGyro = 0x1A;
+inline constexpr std::uint8_t kRegConfig = 0x1B;
 
 // Register fields; k<Reg>Bits: the bits a register with fields uses
 inline constexpr int kVersionBits = 24;
@@ -122,8 +123,10 @@ inline constexpr Field kGyroStateFaults{8, 8};
 inline constexpr int kSnapGyroBits = 16;
 inline constexpr Field kSnapGyroCount{0, 8};
 inline constexpr Field kSnapGyroFlags{8, 8};
+inline constexpr int kConfigBits = 3;
+inline constexpr Field kConfigChannels{0, 3};
 
-inline constexpr std::array<Register, 27> kRegisters{{
+inline constexpr std::array<Register, 28> kRegisters{{
     {"ID", 0x00, Access::kReadOnly},
     {"VERSION", 0x01, Access::kReadOnly},
     {"CONTROL", 0x02, Access::kReadWrite},
@@ -151,6 +154,7 @@ inline constexpr std::array<Register, 27> kRegisters{{
     {"GYRO_STATE", 0x18, Access::kReadOnly},
     {"SNAP_GYRO_SUM", 0x19, Access::kReadOnly},
     {"SNAP_GYRO", 0x1A, Access::kReadOnly},
+    {"CONFIG", 0x1B, Access::kReadOnly},
 }};
 
 // UART frames

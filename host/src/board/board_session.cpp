@@ -13,6 +13,14 @@ std::string BoardIdentity::version_text() const {
          "." + std::to_string(regmap::kVersionPatch.get(version));
 }
 
+namespace {
+std::string hex32(std::uint32_t v) {
+  char buf[16];
+  std::snprintf(buf, sizeof buf, "%08X", v);
+  return buf;
+}
+}  // namespace
+
 bool version_differs(const BoardIdentity& identity) { return identity.version != regmap::kVersionValue; }
 
 bool version_compatible(std::uint32_t board, std::uint32_t host) {
@@ -47,6 +55,14 @@ BoardIdentity identify_board(BoardClient& client, double window_period_ms, const
     throw BoardIdentityError(where + ": the board's register map is version " + b.version_text() +
                              ", this host speaks " + host.version_text() +
                              " (the window layout differs): load the bitstream of this host's version, or the host of the board's");
+  }
+  // CONFIG.CHANNELS: the wheels the bitstream was built for (rtl/encoder_core.v CHANNELS).
+  const std::uint32_t config = client.read_register(regmap::kRegConfig);
+  b.channels = static_cast<int>(regmap::kConfigChannels.get(config));
+  if (b.channels < 3 || b.channels > regmap::kChannels) {
+    throw BoardIdentityError(where + ": register CONFIG reads 0x" + hex32(config) + ": CHANNELS " +
+                             std::to_string(b.channels) + " is not 3 or " + std::to_string(regmap::kChannels) +
+                             " (a damaged or foreign bitstream)");
   }
   b.control = client.read_register(regmap::kRegControl);
   // PERIOD counts board cycles per window: with the robot's window period it gives the board's

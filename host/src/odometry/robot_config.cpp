@@ -222,8 +222,8 @@ double cm_per_count(const RobotConfig& c) {
 std::optional<std::string> board_channel_mismatch(int board_channels, int n) {
   if (board_channels == n) return std::nullopt;
   return "the board counts " + std::to_string(board_channels) + " encoder channels but the robot config has " +
-         std::to_string(n) + " wheels: use the board built for " + std::to_string(n) +
-         " channels, or the robot file of this robot";
+         std::to_string(n) + " wheels: load the bitstream built for " + std::to_string(n) +
+         " channels (make bitstream CHANNELS=" + std::to_string(n) + "), or the robot file of this robot";
 }
 
 void RobotConfig::validate(const config::Origin& at) const {

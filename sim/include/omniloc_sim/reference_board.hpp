@@ -36,6 +36,8 @@ struct ReferenceBoardConfig {
   std::uint32_t tick_hz = regmap::kTickHz;
   std::uint32_t initial_timestamp_cycles = 0;
   std::array<std::uint32_t, regmap::kChannels> initial_position{};  ///< to exercise wrap-around
+  /// CONFIG.CHANNELS: a board built for 3 wheels counts nothing on channel 3 (rtl/encoder_core.v).
+  int channels = regmap::kChannels;
   /// Keep every emitted frame, window and applied write for windows() / emitted() /
   /// applied_writes(); false keeps only the last window (a soak of hours, tests/soak/soak_daemon).
   bool keep_history = true;
@@ -204,6 +206,7 @@ class ReferenceBoard final : public UartSide {
     w.seq = ++seq_;
     w.timestamp_cycles = timestamp_;
     if (script_) w.count = script_(w.seq);
+    for (int ch = cfg_.channels; ch < regmap::kChannels; ++ch) w.count[static_cast<std::size_t>(ch)] = 0;
     const GyroWindowScript g = gyro_ ? gyro_(w.seq) : GyroWindowScript{0, static_cast<std::uint8_t>(regmap::kGyroOdrHz / cfg_.tick_hz), 0};
     w.gyro_sum = g.sum;
     w.gyro_count = g.count;
@@ -251,6 +254,7 @@ class ReferenceBoard final : public UartSide {
     switch (addr) {
       case r::kRegId: return r::kIdValue;
       case r::kRegVersion: return r::kVersionValue;
+      case r::kRegConfig: return r::kConfigChannels.put(0, static_cast<std::uint32_t>(cfg_.channels));
       case r::kRegControl: return control_;
       case r::kRegFilter: return filter_;
       case r::kRegPeriod: return period_cycles_;
