@@ -2,8 +2,9 @@
 # iCEBreaker bitstream with the open iCE40 flow: yosys synth_ice40 -> nextpnr-ice40 -> icepack.
 # Timing: nextpnr places for TIMING_TARGET_HZ of common/regmap.json "link" (60 MHz, the goal of
 # issue 14) at seed 1 only (no seed sweep), and the script fails when seed 1 misses
-# TIMING_REQUIRED_HZ (40 MHz, what the design meets today; raised as it gets faster). Seeds 2-5
-# are placed as information (their Fmax printed, never used). Prints the utilisation from nextpnr's report and
+# TIMING_REQUIRED_HZ (40 MHz, what the design meets today; raised as it gets faster) or uses more
+# logic cells than LC_LIMIT (what it reaches today; lowered as it shrinks). Seeds 2-5 are placed
+# as information (their Fmax printed, never used). Prints the utilisation from nextpnr's report and
 # per module (yosys synth_ice40 -noflatten: LUT4, flip-flops, carries of each module, own cells only).
 # Usage: scripts/bitstream.sh [BUILD_DIR]
 #   BITSTREAM_SEEDS (environment) overrides the information seeds (default "2 3 4 5"; "" = none).
@@ -37,6 +38,12 @@ if [ -z "$required_hz" ]; then
   exit 1
 fi
 required_mhz=$(python3 -c "print(f'{$required_hz / 1e6:g}')")
+# The logic-cell ceiling ("link".lc_limit: what the design reaches, lowered as it shrinks).
+lc_limit=$(sed -n 's/^`define OMNILOC_LC_LIMIT \([0-9]*\)$/\1/p' rtl/include/omniloc_regs.vh)
+if [ -z "$lc_limit" ]; then
+  echo "bitstream: error: no OMNILOC_LC_LIMIT in rtl/include/omniloc_regs.vh" >&2
+  exit 1
+fi
 
 mapfile -t sources < <(ls rtl/*.v rtl/gyro/*.v)
 echo "bitstream: synthesising icebreaker_top ($channels encoder channels) from ${#sources[@]} RTL files (log: $out/yosys.log)"
@@ -75,9 +82,10 @@ for seed in 1 ${BITSTREAM_SEEDS-2 3 4 5}; do
     echo "bitstream: seed $seed: no report (nextpnr failed, see $out/seed$seed.log)"
   fi
 done
-python3 scripts/nextpnr_report.py "$out/seed1.json" --min-mhz "$required_mhz" --modules "$out/modules.stat" || seed1_ok=0
+python3 scripts/nextpnr_report.py "$out/seed1.json" --min-mhz "$required_mhz" --max-lcs "$lc_limit" \
+  --modules "$out/modules.stat" || seed1_ok=0
 if [ $seed1_ok -ne 1 ]; then
-  echo "bitstream: error: seed 1 does not meet the required $required_mhz MHz; see $out/nextpnr.log" >&2
+  echo "bitstream: error: seed 1 does not meet the required $required_mhz MHz or uses more than $lc_limit logic cells; see $out/nextpnr.log" >&2
   exit 1
 fi
 icepack "$out/seed1.asc" "$out/omniloc.bin"

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Print Fmax and utilisation from a nextpnr --report JSON; exit 1 when a clock misses --min-mhz
-(the requirement; without it, the constraint nextpnr placed for)."""
+(the requirement; without it, the constraint nextpnr placed for) or the design uses more than
+--max-lcs logic cells."""
 import argparse
 import json
 import re
@@ -11,6 +12,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("report")
     parser.add_argument("--min-mhz", type=float, default=0.0)
+    parser.add_argument("--max-lcs", type=int, default=0, help="fail above this many ICESTORM_LC (0: no limit)")
     parser.add_argument("--modules", help="yosys `stat` output of a synth_ice40 -noflatten run")
     args = parser.parse_args()
     try:
@@ -36,6 +38,10 @@ def main():
         if cell in util:
             used, avail = util[cell]["used"], util[cell]["available"]
             print(f"utilisation: {cell:15s} {used:5d} / {avail:5d} ({100.0 * used / avail:.1f} %)")
+            if cell == "ICESTORM_LC" and args.max_lcs > 0:
+                verdict = "ok" if used <= args.max_lcs else "FAILS"
+                ok &= verdict == "ok"
+                print(f"utilisation: {used} logic cells, allowed {args.max_lcs}: {verdict}")
     if args.modules:
         ok &= print_modules(args.modules)
     return 0 if ok else 1
