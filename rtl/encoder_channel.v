@@ -19,7 +19,7 @@
 `include "omniloc_regs.vh"
 
 module encoder_channel #(
-    parameter W = `OMNILOC_DATA_W   // counts and positions wrap at 2^W (the error count is ERROR_COUNT_BITS, saturating)
+    parameter integer W = `OMNILOC_DATA_W   // counts and positions wrap at 2^W (the error count is ERROR_COUNT_BITS, saturating)
 ) (
     input  wire                                 clk_i,
     input  wire                                 rst_i,
