@@ -1,7 +1,8 @@
 // encoder_channel: one encoder (A and B pins) from the pins to the captured window.
 //
 // input_conditioner x2 -> quadrature_decoder -> window_counter, plus the per-channel illegal
-// transition counter (saturating, never cleared except by reset).
+// transition counter (OMNILOC_ERROR_COUNT_BITS wide, saturating, never cleared except by reset:
+// the host needs to know that a channel has a fault, not how many thousands).
 // Latency from a pin change to the count: conditioner (3 cycles, or FILTER + 2 when FILTER > 1)
 // + decoder (1 cycle); a pulse of the decoder is in the window whose capture_i is at or after it.
 //
@@ -18,7 +19,7 @@
 `include "omniloc_regs.vh"
 
 module encoder_channel #(
-    parameter integer W = `OMNILOC_DATA_W   // counts, positions and the error count wrap at 2^W
+    parameter integer W = `OMNILOC_DATA_W   // counts and positions wrap at 2^W (the error count is ERROR_COUNT_BITS, saturating)
 ) (
     input  wire                                 clk_i,
     input  wire                                 rst_i,
@@ -35,10 +36,11 @@ module encoder_channel #(
     output wire                                 dir_o,
     // One-cycle pulse per illegal transition, and their saturating count.
     output wire                                 err_o,
-    output wire [W-1:0]                         err_count_o
+    output wire [`OMNILOC_ERROR_COUNT_BITS-1:0] err_count_o
 );
 
 localparam integer DATA_W = W;
+localparam integer ERR_W = `OMNILOC_ERROR_COUNT_BITS;
 
 wire a_clean;
 wire b_clean;
@@ -69,13 +71,13 @@ window_counter #(.W(DATA_W)) u_win (
     .win_dir_o(win_dir_o), .position_o(position_o)
 );
 
-reg [DATA_W-1:0] err_count_q;
+reg [ERR_W-1:0] err_count_q;
 assign err_count_o = err_count_q;
 
 always @(posedge clk_i) begin
     if (rst_i) begin
-        err_count_q <= {DATA_W{1'b0}};
-    end else if (err_o && err_count_q != {DATA_W{1'b1}}) begin
+        err_count_q <= {ERR_W{1'b0}};
+    end else if (err_o && err_count_q != {ERR_W{1'b1}}) begin
         err_count_q <= err_count_q + 1'b1;
     end
 end

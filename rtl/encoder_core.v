@@ -63,6 +63,7 @@ module encoder_core #(
 
 localparam integer DATA_W = `OMNILOC_DATA_W;
 localparam integer CH = `OMNILOC_CHANNELS;
+localparam integer ERR_W = `OMNILOC_ERROR_COUNT_BITS;
 
 wire                                    enable;
 wire [`OMNILOC_CONTROL_DECODE_W-1:0]    decode;
@@ -71,7 +72,7 @@ wire [`OMNILOC_PERIOD_CYCLES_W-1:0]     period;
 wire [DATA_W-1:0]                       timestamp;
 wire                                    tick;
 wire [CH-1:0]                           illegal;
-wire [CH*DATA_W-1:0]                    err_count;
+wire [CH*ERR_W-1:0]                     err_count;
 wire        capture = tick & enable;
 
 assign tick_o = tick;
@@ -100,7 +101,7 @@ generate
             assign win_position_o[DATA_W*ch +: DATA_W] = {DATA_W{1'b0}};
             assign win_dir_o[ch] = 1'b0;
             assign illegal[ch] = 1'b0;
-            assign err_count[DATA_W*ch +: DATA_W] = {DATA_W{1'b0}};
+            assign err_count[ERR_W*ch +: ERR_W] = {ERR_W{1'b0}};
         end else begin : g_on
             encoder_channel u_ch (
                 .clk_i(clk_i), .rst_i(rst_i), .a_i(enc_a_i[ch]), .b_i(enc_b_i[ch]),
@@ -110,7 +111,7 @@ generate
                 /* verilator lint_off PINCONNECTEMPTY */
                 .position_o(), .dir_o(),
                 /* verilator lint_on PINCONNECTEMPTY */
-                .err_o(illegal[ch]), .err_count_o(err_count[DATA_W*ch +: DATA_W])
+                .err_o(illegal[ch]), .err_count_o(err_count[ERR_W*ch +: ERR_W])
             );
         end
     end

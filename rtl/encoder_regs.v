@@ -57,7 +57,7 @@ module encoder_regs #(
     input  wire [`OMNILOC_CHANNELS*`OMNILOC_DATA_W-1:0] win_count_i,
     input  wire [`OMNILOC_CHANNELS*`OMNILOC_DATA_W-1:0] win_position_i,
     input  wire [`OMNILOC_SNAP_DIR_DIR_W-1:0]           win_dir_i,
-    input  wire [`OMNILOC_CHANNELS*`OMNILOC_DATA_W-1:0] err_count_i,
+    input  wire [`OMNILOC_CHANNELS*`OMNILOC_ERROR_COUNT_BITS-1:0] err_count_i,  // saturating
     // the gyro's window (gyro_accum), latched at the same capture edge as the counts
     input  wire signed [`OMNILOC_GYRO_SUM_BITS-1:0]     gyro_sum_i,
     input  wire [`OMNILOC_GYRO_COUNT_BITS-1:0]          gyro_count_i,
@@ -93,6 +93,7 @@ localparam DEC_W = `OMNILOC_CONTROL_DECODE_W;
 localparam FLT_W = `OMNILOC_FILTER_LENGTH_W;
 localparam DIR_W = `OMNILOC_SNAP_DIR_DIR_W;
 localparam integer CFG_CH_W = `OMNILOC_CONFIG_CHANNELS_W;
+localparam integer ERR_W = `OMNILOC_ERROR_COUNT_BITS;
 localparam [CFG_CH_W-1:0] CHANNELS_FIELD = CHANNELS[CFG_CH_W-1:0];
 
 // ---- control registers ----
@@ -256,10 +257,10 @@ function [DATA_W-1:0] word;
             `OMNILOC_REG_SNAP_POSITION1: word = snap_pos_q[1*DATA_W +: DATA_W];
             `OMNILOC_REG_SNAP_POSITION2: word = snap_pos_q[2*DATA_W +: DATA_W];
             `OMNILOC_REG_SNAP_POSITION3: word = snap_pos_q[3*DATA_W +: DATA_W];
-            `OMNILOC_REG_ERROR_COUNT0: word = err_count_i[0*DATA_W +: DATA_W];
-            `OMNILOC_REG_ERROR_COUNT1: word = err_count_i[1*DATA_W +: DATA_W];
-            `OMNILOC_REG_ERROR_COUNT2: word = err_count_i[2*DATA_W +: DATA_W];
-            `OMNILOC_REG_ERROR_COUNT3: word = err_count_i[3*DATA_W +: DATA_W];
+            `OMNILOC_REG_ERROR_COUNT0: word[ERR_W-1:0] = err_count_i[0*ERR_W +: ERR_W];
+            `OMNILOC_REG_ERROR_COUNT1: word[ERR_W-1:0] = err_count_i[1*ERR_W +: ERR_W];
+            `OMNILOC_REG_ERROR_COUNT2: word[ERR_W-1:0] = err_count_i[2*ERR_W +: ERR_W];
+            `OMNILOC_REG_ERROR_COUNT3: word[ERR_W-1:0] = err_count_i[3*ERR_W +: ERR_W];
             `OMNILOC_REG_SNAP_GYRO_SUM: word = snap_gsum_q;
             `OMNILOC_REG_SNAP_GYRO: begin
                 word[`OMNILOC_SNAP_GYRO_COUNT_LSB +: GCNT_W] = snap_gcnt_q;
@@ -512,10 +513,10 @@ always @(*) begin
         `OMNILOC_REG_SNAP_POSITION1: f_word = f_s_pos[63:32];
         `OMNILOC_REG_SNAP_POSITION2: f_word = f_s_pos[95:64];
         `OMNILOC_REG_SNAP_POSITION3: f_word = f_s_pos[127:96];
-        `OMNILOC_REG_ERROR_COUNT0: f_word = err_count_i[31:0];
-        `OMNILOC_REG_ERROR_COUNT1: f_word = err_count_i[63:32];
-        `OMNILOC_REG_ERROR_COUNT2: f_word = err_count_i[95:64];
-        `OMNILOC_REG_ERROR_COUNT3: f_word = err_count_i[127:96];
+        `OMNILOC_REG_ERROR_COUNT0: f_word = {24'd0, err_count_i[7:0]};
+        `OMNILOC_REG_ERROR_COUNT1: f_word = {24'd0, err_count_i[15:8]};
+        `OMNILOC_REG_ERROR_COUNT2: f_word = {24'd0, err_count_i[23:16]};
+        `OMNILOC_REG_ERROR_COUNT3: f_word = {24'd0, err_count_i[31:24]};
         `OMNILOC_REG_SNAP_GYRO_SUM: f_word = {{(DATA_W - GSUM_W){f_s_gsum[GSUM_W-1]}}, f_s_gsum};
         `OMNILOC_REG_SNAP_GYRO: f_word = {{(DATA_W - 16){1'b0}}, f_s_gflg, f_s_gcnt};
         `OMNILOC_REG_CONFIG: f_word = CHANNELS;

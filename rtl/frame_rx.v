@@ -30,6 +30,10 @@ module frame_rx #(
     input  wire                       ev_ready_i,
     output reg                        ev_error_o,
     output reg  [7:0]                 ev_code_o,
+    // the request's kind, decoded with TYPE (0 with an error; a SNAPSHOT_REQ is neither), so that
+    // link_engine's bus strobes are one LUT level from flip-flops (the board's limiting path)
+    output reg                        ev_read_o,
+    output reg                        ev_write_o,
     output reg  [`OMNILOC_ADDR_W-1:0] ev_addr_o,
     output reg  [`OMNILOC_DATA_W-1:0] ev_data_o
 );
@@ -75,7 +79,7 @@ module frame_rx #(
 
     // Is (TYPE, LEN) a request this board serves? Decided when TYPE is parsed (len_q is known then).
     wire [7:0] body_len = len_q - 8'd1;
-    reg known_q, known_write_q;
+    reg known_q, known_write_q, known_read_q;
     wire known_read_d  = (in_byte_q == `OMNILOC_FRAME_READ_REQ)     && (body_len == `OMNILOC_FRAME_READ_REQ_BODY_BYTES);
     wire known_write_d = (in_byte_q == `OMNILOC_FRAME_WRITE_REQ)    && (body_len == `OMNILOC_FRAME_WRITE_REQ_BODY_BYTES);
     wire known_snap_d  = (in_byte_q == `OMNILOC_FRAME_SNAPSHOT_REQ) && (body_len == `OMNILOC_FRAME_SNAPSHOT_REQ_BODY_BYTES);
@@ -92,6 +96,7 @@ module frame_rx #(
         if (take && state_q == S_TYPE) begin
             known_q       <= known_read_d || known_write_d || known_snap_d;
             known_write_q <= known_write_d;
+            known_read_q  <= known_read_d;
         end
     end
 
@@ -99,6 +104,8 @@ module frame_rx #(
         begin
             ev_error_o <= 1'b1;
             ev_code_o  <= code;
+            ev_read_o  <= 1'b0;
+            ev_write_o <= 1'b0;
             ev_addr_o  <= detail;
             ev_data_o  <= {DATA_W{1'b0}};
             ev_valid_o <= 1'b1;
@@ -120,6 +127,8 @@ module frame_rx #(
             ev_valid_o <= 1'b0;
             ev_error_o <= 1'b0;
             ev_code_o  <= 8'd0;
+            ev_read_o  <= 1'b0;
+            ev_write_o <= 1'b0;
             ev_addr_o  <= {ADDR_W{1'b0}};
             ev_data_o  <= {DATA_W{1'b0}};
         end else begin
@@ -177,6 +186,8 @@ module frame_rx #(
                             // READ_REQ sits in its top bytes).
                             ev_error_o <= 1'b0;
                             ev_code_o  <= type_q;
+                            ev_read_o  <= known_read_q;
+                            ev_write_o <= known_write_q;
                             ev_addr_o  <= known_write_q ? body_q[`OMNILOC_BODY_REG_VALUE_ADDR_LSB +: `OMNILOC_BODY_REG_VALUE_ADDR_W]
                                                       : body_q[READ_BASE + `OMNILOC_BODY_REG_ADDR_ADDR_LSB +: `OMNILOC_BODY_REG_ADDR_ADDR_W];
                             ev_data_o  <= known_write_q ? body_q[`OMNILOC_BODY_REG_VALUE_DATA_LSB +: `OMNILOC_BODY_REG_VALUE_DATA_W]
@@ -208,6 +219,11 @@ module frame_rx #(
             if (ev_valid_o && !ev_error_o)
                 assert(ev_code_o == `OMNILOC_FRAME_READ_REQ || ev_code_o == `OMNILOC_FRAME_WRITE_REQ
                        || ev_code_o == `OMNILOC_FRAME_SNAPSHOT_REQ);
+            // The decoded kind is the TYPE's, and none with an error.
+            if (ev_valid_o) begin
+                assert(ev_read_o == (!ev_error_o && ev_code_o == `OMNILOC_FRAME_READ_REQ));
+                assert(ev_write_o == (!ev_error_o && ev_code_o == `OMNILOC_FRAME_WRITE_REQ));
+            end
             // A new request event follows the last CRC byte of a frame (the CRC itself is
             // checked against a golden model in tests/link/tb_frame_rx.cpp).
             if (ev_valid_o && !$past(ev_valid_o) && !ev_error_o) assert($past(state_q) == S_CRC_LO);
@@ -218,6 +234,10 @@ module frame_rx #(
             if ((state_q == S_BODY || state_q == S_CRC_HI || state_q == S_CRC_LO) && known_q)
                 assert(type_q == `OMNILOC_FRAME_READ_REQ || type_q == `OMNILOC_FRAME_WRITE_REQ
                        || type_q == `OMNILOC_FRAME_SNAPSHOT_REQ);
+            if (state_q == S_BODY || state_q == S_CRC_HI || state_q == S_CRC_LO) begin
+                assert(known_read_q == (known_q && type_q == `OMNILOC_FRAME_READ_REQ));
+                assert(known_write_q == (known_q && type_q == `OMNILOC_FRAME_WRITE_REQ));
+            end
             if (in_full_q) begin
                 assert(in_len_bad_q == ((in_byte_q == 8'd0) || (in_byte_q > MAX_LEN[7:0])));
                 assert(in_sync_q == (in_byte_q == `OMNILOC_FRAME_SYNC));

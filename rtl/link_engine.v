@@ -32,6 +32,8 @@ module link_engine #(
     output wire                    ev_ready_o,
     input  wire                    ev_error_i,
     input  wire [7:0]              ev_code_i,
+    input  wire                    ev_read_i,    // frame_rx's decoded kind: READ_REQ / WRITE_REQ,
+    input  wire                    ev_write_i,   // neither = SNAPSHOT_REQ (both 0 with ev_error_i)
     input  wire [`OMNILOC_ADDR_W-1:0] ev_addr_i,
     input  wire [`OMNILOC_DATA_W-1:0] ev_data_i,
     // frames to frame_tx
@@ -143,7 +145,7 @@ module link_engine #(
                             tx_type_o     <= `OMNILOC_FRAME_ERROR;
                             tx_body_len_o <= `OMNILOC_FRAME_ERROR_BODY_BYTES;
                             state_q       <= S_SEND;
-                        end else if (ev_code_i == `OMNILOC_FRAME_SNAPSHOT_REQ) begin
+                        end else if (!ev_read_i && !ev_write_i) begin   // SNAPSHOT_REQ
                             // Reading SNAP_SEQ latches the frozen bank: the answer is the bank.
                             reg_addr_o <= `OMNILOC_REG_SNAP_SEQ;
                             reg_rd_o   <= 1'b1;
@@ -151,8 +153,8 @@ module link_engine #(
                         end else begin
                             reg_addr_o  <= ev_addr_i;
                             reg_wdata_o <= ev_data_i;
-                            reg_rd_o    <= (ev_code_i == `OMNILOC_FRAME_READ_REQ);
-                            reg_wr_o    <= (ev_code_i == `OMNILOC_FRAME_WRITE_REQ);
+                            reg_rd_o    <= ev_read_i;
+                            reg_wr_o    <= ev_write_i;
                             state_q     <= S_BUS;
                         end
                     end

@@ -72,13 +72,14 @@ module omniloc_top #(
     // ---- frames ----
     wire              ev_valid, ev_ready, ev_error;
     wire [7:0]        ev_code;
+    wire              ev_read, ev_write;
     wire [ADDR_W-1:0] ev_addr;
     wire [DATA_W-1:0] ev_data;
     frame_rx #(.TIMEOUT_CYCLES(CLK_HZ / 1000 * `OMNILOC_FRAME_GAP_TIMEOUT_US / 1000)) u_frame_rx (
         .clk_i(clk_i), .rst_i(rst_i),
         .byte_i(rx_byte), .byte_valid_i(rx_valid), .byte_ready_o(rx_ready),
         .ev_valid_o(ev_valid), .ev_ready_i(ev_ready), .ev_error_o(ev_error),
-        .ev_code_o(ev_code), .ev_addr_o(ev_addr), .ev_data_o(ev_data));
+        .ev_code_o(ev_code), .ev_read_o(ev_read), .ev_write_o(ev_write), .ev_addr_o(ev_addr), .ev_data_o(ev_data));
 
     localparam integer BODY_BYTES = `OMNILOC_FRAME_TELEMETRY_BODY_BYTES;
     wire                    ftx_start, ftx_ready;
@@ -191,7 +192,7 @@ module omniloc_top #(
 
     link_engine u_link (
         .clk_i(clk_i), .rst_i(rst_i),
-        .ev_valid_i(ev_valid), .ev_ready_o(ev_ready), .ev_error_i(ev_error), .ev_code_i(ev_code),
+        .ev_valid_i(ev_valid), .ev_ready_o(ev_ready), .ev_error_i(ev_error), .ev_code_i(ev_code), .ev_read_i(ev_read), .ev_write_i(ev_write),
         .ev_addr_i(ev_addr), .ev_data_i(ev_data),
         .tx_start_o(ftx_start), .tx_ready_i(ftx_ready), .tx_type_o(ftx_type), .tx_body_len_o(ftx_len),
         .tx_idx_i(ftx_idx), .tx_byte_o(ftx_byte),

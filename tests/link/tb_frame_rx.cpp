@@ -137,7 +137,13 @@ std::vector<Event> run(const std::vector<Byte>& stream, std::uint64_t seed, cons
     }
     dut.ev_ready_i = (rng() % 3) != 0;
     const bool took = dut.byte_valid_i && dut.byte_ready_o;
-    if (dut.ev_valid_o && dut.ev_ready_i) events.push_back({dut.ev_error_o != 0, dut.ev_code_o, dut.ev_addr_o, dut.ev_data_o});
+    if (dut.ev_valid_o && dut.ev_ready_i) {
+      events.push_back({dut.ev_error_o != 0, dut.ev_code_o, dut.ev_addr_o, dut.ev_data_o});
+      // The decoded kind link_engine acts on: READ_REQ / WRITE_REQ, neither for a snapshot or an error.
+      const bool request = dut.ev_error_o == 0;
+      EXPECT_EQ(dut.ev_read_o != 0, request && dut.ev_code_o == omniloc::regmap::kFrameReadReq) << "ev_read_o";
+      EXPECT_EQ(dut.ev_write_o != 0, request && dut.ev_code_o == omniloc::regmap::kFrameWriteReq) << "ev_write_o";
+    }
     bench.step();
     if (took) {
       ++next;

@@ -132,13 +132,17 @@ TEST(LinkEngine, RequestsSnapshotsAndStreamingMatchGoldenModel) {
       --requests_left;
       const int kind = static_cast<int>(rng() % 10);
       dut.ev_error_i = 0;
+      dut.ev_read_i = 0;
+      dut.ev_write_i = 0;
       dut.ev_data_i = static_cast<std::uint32_t>(rng());
       // Mostly known addresses, sometimes any byte.
       dut.ev_addr_i = rng() % 4 ? rm::kRegisters[rng() % rm::kRegisters.size()].address : static_cast<std::uint8_t>(rng());
       if (kind < 4) {
         dut.ev_code_i = rm::kFrameReadReq;
+        dut.ev_read_i = 1;  // frame_rx's decoded kind, as its proof states it
       } else if (kind < 7) {
         dut.ev_code_i = rm::kFrameWriteReq;
+        dut.ev_write_i = 1;
         if (rng() % 3 == 0) dut.ev_addr_i = rm::kRegPeriod, dut.ev_data_i = static_cast<std::uint32_t>(rng() % 128);
       } else if (kind < 9) {
         dut.ev_code_i = rm::kFrameSnapshotReq;

@@ -239,7 +239,7 @@ Result run(std::uint64_t seed, std::uint64_t cycles, const TraceRequest* trace) 
       for (int ch = 0; ch < 4; ++ch) {
         in.count[ch] = static_cast<std::uint32_t>(rng());
         in.pos[ch] = static_cast<std::uint32_t>(rng());
-        in.errs[ch] = static_cast<std::uint32_t>(rng());
+        in.errs[ch] = static_cast<std::uint32_t>(rng()) & 0xFFu;  // ERROR_COUNT_BITS = 8
       }
       in.dir = static_cast<std::uint8_t>(rng() % 16);
       in.gyro_sum = static_cast<std::uint32_t>(rng()) & 0xFFFFFFu;
@@ -254,10 +254,11 @@ Result run(std::uint64_t seed, std::uint64_t cycles, const TraceRequest* trace) 
     dut->illegal_i = in.illegal;
     dut->win_consumed_i = in.consumed;
     dut->timestamp_i = in.timestamp;
+    dut->err_count_i = 0;
     for (int ch = 0; ch < 4; ++ch) {
       dut->win_count_i[ch] = in.count[ch];
       dut->win_position_i[ch] = in.pos[ch];
-      dut->err_count_i[ch] = in.errs[ch];
+      dut->err_count_i |= in.errs[ch] << (8 * ch);  // four 8-bit saturating counters, channel 0 low
     }
     dut->win_dir_i = in.dir;
     dut->gyro_sum_i = in.gyro_sum;
