@@ -19,7 +19,8 @@
 `include "omniloc_regs.vh"
 
 module encoder_channel #(
-    parameter integer W = `OMNILOC_DATA_W   // counts and positions wrap at 2^W (the error count is ERROR_COUNT_BITS, saturating)
+    // counts and positions wrap at 2^W (the error count is ERROR_COUNT_BITS wide, saturating)
+    parameter integer W = `OMNILOC_DATA_W
 ) (
     input  wire                                 clk_i,
     input  wire                                 rst_i,

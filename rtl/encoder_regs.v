@@ -14,8 +14,8 @@
 // dir, counts, positions) into the one frozen bank that SNAP_* read and that the link sends byte
 // by byte (bank_idx_i -> bank_byte_o, the WINDOW body layout), so the reads that follow belong to
 // the same window even if captures happen meanwhile. The gyro's window (gyro_*_i, from gyro_accum
-// ticked by the window tick, so latched at the same edge as a capture) is part of the bank: copied with the counts, read as SNAP_GYRO_SUM
-// and SNAP_GYRO. STATUS.GYRO_FAULT is set in the cycle after a capture whose gyro flags are not 0
+// ticked by the window tick, so latched at the same edge as a capture) is part of the bank: copied
+// with the counts, read as SNAP_GYRO_SUM and SNAP_GYRO. STATUS.GYRO_FAULT is set in the cycle after a capture whose gyro flags are not 0
 // (so it shows in the next window's status byte; the window's own flags are in its body).
 // STATUS.OVERRUN: a capture while the previous window was neither latched through SNAP_SEQ nor
 // acknowledged by win_consumed_i. A flag set and cleared (W1C) in the same cycle stays set.

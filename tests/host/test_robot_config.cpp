@@ -360,6 +360,15 @@ TEST(WheelLayout, BoardChannelsMustMatchTheWheels) {
   EXPECT_NE(err.find("the board counts 4 encoder channels but the robot config has 3 wheels"), std::string::npos) << err;
   o.wheels = wheel_count(load_named_robot_config("four-wheel-asymmetric"));
   EXPECT_NO_THROW(BoardSession(std::make_unique<sim::UartSideTransport>(board), o));
+  // A board built for three wheels (CONFIG.CHANNELS = 3) the other way round.
+  sim::ReferenceBoardConfig three_cfg;
+  three_cfg.channels = 3;
+  sim::ReferenceBoard three(three_cfg);
+  const std::string err3 = error_of([&] { BoardSession s(std::make_unique<sim::UartSideTransport>(three), o); });
+  EXPECT_NE(err3.find("the board counts 3 encoder channels but the robot config has 4 wheels"), std::string::npos) << err3;
+  o.wheels = wheel_count(load_named_robot_config("three-wheel"));
+  BoardSession session(std::make_unique<sim::UartSideTransport>(three), o);
+  EXPECT_EQ(session.identity().channels, 3);
 }
 
 // docs/HOWTO.md shows the three-wheel file: the snippet must be that file (one source of truth).
