@@ -12,7 +12,7 @@ packages=(
   ftdi-eeprom
   cyclonedds-dev cyclonedds-tools
   libcpp-httplib-dev chromium
-  clang libclang-rt-14-dev
+  clang libclang-rt-14-dev clang-format universal-ctags
 )
 
 missing=()

@@ -57,28 +57,34 @@ Ros2Bridge::Ros2Bridge(const Ros2Config& config) : impl_(std::make_unique<Impl>(
   m.frame_id = config.frame_id;
   m.child_frame_id = config.child_frame_id;
   if (config.domain_id < 0 || config.domain_id > 232)
-    throw std::runtime_error("ROS 2: domain id must be in [0, 232] (got " + std::to_string(config.domain_id) + ")");
-  m.participant = dds_create_participant(static_cast<dds_domainid_t>(config.domain_id), nullptr, nullptr);
+    throw std::runtime_error("ROS 2: domain id must be in [0, 232] (got " +
+                             std::to_string(config.domain_id) + ")");
+  m.participant =
+      dds_create_participant(static_cast<dds_domainid_t>(config.domain_id), nullptr, nullptr);
   if (m.participant < 0)
     throw std::runtime_error(
-        dds_error(("ROS 2: DDS participant in domain " + std::to_string(config.domain_id)).c_str(), m.participant));
+        dds_error(("ROS 2: DDS participant in domain " + std::to_string(config.domain_id)).c_str(),
+                  m.participant));
   dds_qos_t* qos = dds_create_qos();
   dds_qset_reliability(qos, DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
   dds_qset_durability(qos, DDS_DURABILITY_VOLATILE);
   dds_qset_history(qos, DDS_HISTORY_KEEP_LAST, 10);
   try {
-    const dds_entity_t pose_topic =
-        m.topic(&geometry_msgs_msg_dds__PoseWithCovarianceStamped__desc, config.topic_prefix + "/pose");
-    const dds_entity_t odom_topic = m.topic(&nav_msgs_msg_dds__Odometry__desc, config.topic_prefix + "/odom");
+    const dds_entity_t pose_topic = m.topic(&geometry_msgs_msg_dds__PoseWithCovarianceStamped__desc,
+                                            config.topic_prefix + "/pose");
+    const dds_entity_t odom_topic =
+        m.topic(&nav_msgs_msg_dds__Odometry__desc, config.topic_prefix + "/odom");
     m.pose_writer = dds_create_writer(m.participant, pose_topic, qos, nullptr);
     m.odom_writer = dds_create_writer(m.participant, odom_topic, qos, nullptr);
     if (m.pose_writer < 0 || m.odom_writer < 0)
-      throw std::runtime_error(dds_error("ROS 2: writer", m.pose_writer < 0 ? m.pose_writer : m.odom_writer));
+      throw std::runtime_error(
+          dds_error("ROS 2: writer", m.pose_writer < 0 ? m.pose_writer : m.odom_writer));
     if (!config.initial_pose_topic.empty()) {
-      const dds_entity_t init_topic =
-          m.topic(&geometry_msgs_msg_dds__PoseWithCovarianceStamped__desc, config.initial_pose_topic);
+      const dds_entity_t init_topic = m.topic(
+          &geometry_msgs_msg_dds__PoseWithCovarianceStamped__desc, config.initial_pose_topic);
       m.initial_reader = dds_create_reader(m.participant, init_topic, qos, nullptr);
-      if (m.initial_reader < 0) throw std::runtime_error(dds_error("ROS 2: reader", m.initial_reader));
+      if (m.initial_reader < 0)
+        throw std::runtime_error(dds_error("ROS 2: reader", m.initial_reader));
     }
   } catch (...) {
     dds_delete_qos(qos);
@@ -123,7 +129,8 @@ std::optional<InitialPose> Ros2Bridge::take_initial_pose() {
     const dds_return_t n = dds_take(m.initial_reader, samples, &info, 1, 1);
     if (n <= 0) break;
     if (info.valid_data) {
-      const auto* s = static_cast<const geometry_msgs_msg_dds__PoseWithCovarianceStamped_*>(samples[0]);
+      const auto* s =
+          static_cast<const geometry_msgs_msg_dds__PoseWithCovarianceStamped_*>(samples[0]);
       const auto& q = s->pose.pose.orientation;
       const auto yaw = quaternion_yaw_deg(q.x, q.y, q.z, q.w);
       const auto& pos = s->pose.pose.position;
@@ -136,9 +143,15 @@ std::optional<InitialPose> Ros2Bridge::take_initial_pose() {
   return latest;
 }
 
-std::uint64_t Ros2Bridge::published() const { return impl_->published; }
-std::uint64_t Ros2Bridge::failed() const { return impl_->failed; }
+std::uint64_t Ros2Bridge::published() const {
+  return impl_->published;
+}
+std::uint64_t Ros2Bridge::failed() const {
+  return impl_->failed;
+}
 
-bool ros2_available() { return true; }
+bool ros2_available() {
+  return true;
+}
 
 }  // namespace omniloc::ros2

@@ -9,7 +9,8 @@
 #include <vector>
 
 #include "Vomniloc_top.h"
-// The model's root (generated, with anonymous structs): for the clock's previous value, step_clock().
+// The model's root (generated, with anonymous structs): for the clock's previous value,
+// step_clock().
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wpedantic"
 #include "Vomniloc_top___024root.h"
@@ -20,7 +21,8 @@ namespace omniloc::sim {
 namespace {
 
 constexpr std::int64_t kCyclesPerBit = BoardSim::kClockHz / BoardSim::kBaud;
-static_assert(BoardSim::kClockHz % BoardSim::kBaud == 0, "the simulated line rate must divide the clock");
+static_assert(BoardSim::kClockHz % BoardSim::kBaud == 0,
+              "the simulated line rate must divide the clock");
 constexpr std::size_t kLevelBlock = 4096;
 
 // Split an EncoderSource levels byte into the A and B pin masks of the core.
@@ -58,7 +60,7 @@ struct BoardSim::Impl {
   std::unique_ptr<VerilatedVcdC> trace;
   EncoderSource* source = nullptr;
   Icm42688* gyro = nullptr;
-  std::int64_t cycle = 0;   // since the end of reset
+  std::int64_t cycle = 0;  // since the end of reset
   std::uint64_t trace_time = 0;
 
   std::vector<std::uint8_t> levels = std::vector<std::uint8_t>(kLevelBlock, 0);
@@ -83,7 +85,8 @@ struct BoardSim::Impl {
   bool rx_line_level() {
     if (tx_bit_cycles_left == 0) {
       if (tx_bits_left == 0 && !to_board.empty()) {
-        tx_frame = static_cast<std::uint16_t>((to_board.front() << 1) | 0x200u);  // start 0, data, stop 1
+        tx_frame =
+            static_cast<std::uint16_t>((to_board.front() << 1) | 0x200u);  // start 0, data, stop 1
         to_board.pop_front();
         tx_bits_left = 10;
       }
@@ -195,16 +198,28 @@ void BoardSim::run_cycles(std::int64_t cycles) {
     s.step_clock();
     s.decode_tx_line(top.uart_tx_o != 0);
     // The gyro sees the pins this edge left and answers MISO for the next one.
-    if (s.gyro) top.spi_miso_i = s.gyro->step(top.spi_cs_n_o != 0, top.spi_sclk_o != 0, top.spi_mosi_o != 0) ? 1 : 0;
+    if (s.gyro)
+      top.spi_miso_i =
+          s.gyro->step(top.spi_cs_n_o != 0, top.spi_sclk_o != 0, top.spi_mosi_o != 0) ? 1 : 0;
     ++s.cycle;
   }
 }
 
-std::int64_t BoardSim::cycle() const { return impl_->cycle; }
-std::size_t BoardSim::pending_from_board() const { return impl_->from_board.size(); }
-BoardSimCounters BoardSim::counters() const { return impl_->counters; }
-bool BoardSim::activity_led() const { return impl_->top->activity_o != 0; }
-bool BoardSim::error_led() const { return impl_->top->error_o != 0; }
+std::int64_t BoardSim::cycle() const {
+  return impl_->cycle;
+}
+std::size_t BoardSim::pending_from_board() const {
+  return impl_->from_board.size();
+}
+BoardSimCounters BoardSim::counters() const {
+  return impl_->counters;
+}
+bool BoardSim::activity_led() const {
+  return impl_->top->activity_o != 0;
+}
+bool BoardSim::error_led() const {
+  return impl_->top->error_o != 0;
+}
 
 void BoardSim::open_trace(const std::string& vcd_path) {
   impl_->trace = std::make_unique<VerilatedVcdC>();
@@ -231,8 +246,9 @@ std::size_t SimTransport::read(std::span<std::uint8_t> out, std::chrono::millise
 }
 
 TransportStatus SimTransport::status() const {
-  static const std::string description = "Verilated omniloc_top (" + std::to_string(BoardSim::kClockHz / 1'000'000) +
-                                          " MHz, " + std::to_string(BoardSim::kBaud) + " baud) in-process";
+  static const std::string description = "Verilated omniloc_top (" +
+                                         std::to_string(BoardSim::kClockHz / 1'000'000) + " MHz, " +
+                                         std::to_string(BoardSim::kBaud) + " baud) in-process";
   return TransportStatus{true, false, description, counters_};
 }
 

@@ -10,14 +10,16 @@
 namespace omniloc::sim {
 namespace {
 
-constexpr double kResetBusyS = 1e-3;        // no SPI access for 1 ms after a soft reset
-constexpr double kModeChangeBusyS = 200e-6; // no register write for 200 us after a gyro mode change
+constexpr double kResetBusyS = 1e-3;  // no SPI access for 1 ms after a soft reset
+constexpr double kModeChangeBusyS =
+    200e-6;  // no register write for 200 us after a gyro mode change
 
 // GYRO_FS_SEL 0..7: +-2000, 1000, 500, 250, 125, 62.5, 31.25, 15.625 dps (LSB per dps).
-constexpr std::array<double, 8> kSensitivity = {16.4, 32.8, 65.5, 131.0, 262.0, 524.3, 1048.6, 2097.2};
+constexpr std::array<double, 8> kSensitivity = {16.4,  32.8,  65.5,   131.0,
+                                                262.0, 524.3, 1048.6, 2097.2};
 // GYRO_ODR 0..15 in Hz, 0 = reserved.
-constexpr std::array<double, 16> kOdrHz = {0,    32000, 16000, 8000, 4000, 2000, 1000, 200,
-                                           100,  50,    25,    12.5, 0,    0,    0,    500};
+constexpr std::array<double, 16> kOdrHz = {0,   32000, 16000, 8000, 4000, 2000, 1000, 200,
+                                           100, 50,    25,    12.5, 0,    0,    0,    500};
 
 std::string hex2(unsigned v) {
   char buf[8];
@@ -34,10 +36,10 @@ Icm42688::Icm42688(const Icm42688Params& params, RateFn true_rate_dps)
 
 void Icm42688::reset_registers() {
   std::fill(regs_.begin(), regs_.end(), std::uint8_t{0});
-  regs_[kGyroConfig0] = 0x06;               // +-2000 dps, 1 kHz
-  regs_[0x50] = 0x06;                       // ACCEL_CONFIG0
+  regs_[kGyroConfig0] = 0x06;  // +-2000 dps, 1 kHz
+  regs_[0x50] = 0x06;          // ACCEL_CONFIG0
   regs_[kIntStatus] = kResetDoneInt;
-  regs_[kGyroDataZ1] = 0x80;                // 0x8000: no valid data yet
+  regs_[kGyroDataZ1] = 0x80;  // 0x8000: no valid data yet
   regs_[kGyroDataZ0] = 0x00;
   next_sample_s_ = -1.0;
   sample_pending_ = false;
@@ -49,11 +51,17 @@ void Icm42688::violation(const std::string& what) {
   violations_.push_back(buf + what);
 }
 
-bool Icm42688::gyro_on() const { return (regs_[kPwrMgmt0] & 0x0C) >= 0x08; }   // LP or LN
+bool Icm42688::gyro_on() const {
+  return (regs_[kPwrMgmt0] & 0x0C) >= 0x08;
+}  // LP or LN
 
-double Icm42688::sensitivity_lsb_per_dps() const { return kSensitivity[regs_[kGyroConfig0] >> 5]; }
+double Icm42688::sensitivity_lsb_per_dps() const {
+  return kSensitivity[regs_[kGyroConfig0] >> 5];
+}
 
-double Icm42688::odr_hz() const { return kOdrHz[regs_[kGyroConfig0] & 0x0F]; }
+double Icm42688::odr_hz() const {
+  return kOdrHz[regs_[kGyroConfig0] & 0x0F];
+}
 
 std::uint8_t Icm42688::read_reg(std::uint8_t addr) {
   if (addr == kWhoAmI) {
@@ -61,7 +69,7 @@ std::uint8_t Icm42688::read_reg(std::uint8_t addr) {
     return faults_.who_am_i;
   }
   const std::uint8_t v = regs_[addr];
-  if (addr == kIntStatus) regs_[addr] = 0;   // clear on read
+  if (addr == kIntStatus) regs_[addr] = 0;  // clear on read
   return v;
 }
 
@@ -73,7 +81,7 @@ void Icm42688::write_reg(std::uint8_t addr, std::uint8_t value) {
   switch (addr) {
     case kDeviceConfig:
       regs_[addr] = value & 0x31;
-      if (value & 0x01) reset_pending_ = true;   // applied when CS rises
+      if (value & 0x01) reset_pending_ = true;  // applied when CS rises
       break;
     case kPwrMgmt0: {
       const bool was_on = gyro_on();
@@ -97,7 +105,7 @@ void Icm42688::write_reg(std::uint8_t addr, std::uint8_t value) {
     case kIntStatus:
     case kGyroDataZ1:
     case kGyroDataZ0:
-      break;   // read-only
+      break;  // read-only
     default:
       regs_[addr] = value;
       break;
@@ -118,7 +126,7 @@ void Icm42688::produce_sample() {
     value = static_cast<std::int16_t>(std::clamp(lsb, -32767.0, 32767.0));
     last_value_ = value;
   }
-  if (!params_.keep_logs) produced_.clear();   // the last one is still needed (a sample pending)
+  if (!params_.keep_logs) produced_.clear();  // the last one is still needed (a sample pending)
   produced_.push_back({value, cycle_});
   if (prev_cs_n_) {
     const auto u = static_cast<std::uint16_t>(value);
@@ -138,7 +146,7 @@ bool Icm42688::step(bool cs_n, bool sclk, bool mosi) {
     next_sample_s_ += 1.0 / odr_hz();
   }
 
-  if (prev_cs_n_ && !cs_n) {   // CS falls: a transaction starts
+  if (prev_cs_n_ && !cs_n) {  // CS falls: a transaction starts
     if (reset_time_s_ >= 0.0 && t - reset_time_s_ < kResetBusyS) {
       violation("SPI access within 1 ms of the soft reset");
     }
@@ -149,7 +157,7 @@ bool Icm42688::step(bool cs_n, bool sclk, bool mosi) {
     read_values_.clear();
     miso_ = false;
   }
-  if (!prev_cs_n_ && cs_n) {   // CS rises: the transaction ends
+  if (!prev_cs_n_ && cs_n) {  // CS rises: the transaction ends
     if (reset_pending_) {
       reset_pending_ = false;
       reset_registers();
@@ -166,7 +174,7 @@ bool Icm42688::step(bool cs_n, bool sclk, bool mosi) {
     }
   }
   if (!cs_n && !prev_cs_n_) {
-    if (sclk && !prev_sclk_) {   // rising edge: MOSI sampled
+    if (sclk && !prev_sclk_) {  // rising edge: MOSI sampled
       if (mosi != prev_mosi_) violation("MOSI changed with the rising SCLK edge (no setup time)");
       in_ = static_cast<std::uint8_t>((in_ << 1) | (mosi ? 1 : 0));
       ++bits_;
@@ -194,7 +202,7 @@ bool Icm42688::step(bool cs_n, bool sclk, bool mosi) {
           addr_ = (addr_ + 1) & 0x7F;
         }
       }
-    } else if (!sclk && prev_sclk_ && read_ && bits_ >= 8) {   // falling edge: next MISO bit
+    } else if (!sclk && prev_sclk_ && read_ && bits_ >= 8) {  // falling edge: next MISO bit
       miso_ = (out_ & 0x80) != 0;
       out_ = static_cast<std::uint8_t>(out_ << 1);
     }

@@ -41,7 +41,8 @@ float block_factor(double s_cm, double z_cm, double cell_s, double cell_z, std::
 
 Eigen::Matrix3d tilt_rotation(const TrueOptics& o) {
   const double t = deg_to_rad(o.tilt_towards_deg);
-  return Eigen::AngleAxisd(deg_to_rad(o.tilt_deg), Eigen::Vector3d(-std::sin(t), std::cos(t), 0.0)).toRotationMatrix();
+  return Eigen::AngleAxisd(deg_to_rad(o.tilt_deg), Eigen::Vector3d(-std::sin(t), std::cos(t), 0.0))
+      .toRotationMatrix();
 }
 
 // The profiles other than the hyperbola (whose unit-sphere form is kept as it was): the pixel's
@@ -52,16 +53,24 @@ Eigen::Vector3d profile_ray_of_pixel(const TrueOptics& o, const Eigen::Vector2d&
   const double r = std::hypot(ua, vb);
   const double theta = o.theta_rad_at_radius(r);
   const Eigen::Vector3d local =
-      r > 1e-12 ? Eigen::Vector3d(std::sin(theta) * ua / r, std::sin(theta) * vb / r, std::cos(theta)) : Eigen::Vector3d(0.0, 0.0, 1.0);
+      r > 1e-12
+          ? Eigen::Vector3d(std::sin(theta) * ua / r, std::sin(theta) * vb / r, std::cos(theta))
+          : Eigen::Vector3d(0.0, 0.0, 1.0);
   const Eigen::Vector3d img = tilt_rotation(o) * local;
-  const double c = std::cos(deg_to_rad(-o.yaw_offset_deg)), s = std::sin(deg_to_rad(-o.yaw_offset_deg));
-  return Eigen::Vector3d(c * img.x() - s * img.y(), s * img.x() + c * img.y(), img.z()).normalized();
+  const double c = std::cos(deg_to_rad(-o.yaw_offset_deg)),
+               s = std::sin(deg_to_rad(-o.yaw_offset_deg));
+  return Eigen::Vector3d(c * img.x() - s * img.y(), s * img.x() + c * img.y(), img.z())
+      .normalized();
 }
 
-std::optional<Eigen::Vector2d> profile_pixel_of_robot_point(const TrueOptics& o, const Eigen::Vector3d& p) {
-  const Eigen::Vector3d d = Eigen::Vector3d(p.x(), p.y(), o.viewpoint_height_cm - p.z()).normalized();
-  const double c = std::cos(deg_to_rad(o.yaw_offset_deg)), s = std::sin(deg_to_rad(o.yaw_offset_deg));
-  const Eigen::Vector3d x = tilt_rotation(o).transpose() * Eigen::Vector3d(c * d.x() - s * d.y(), s * d.x() + c * d.y(), d.z());
+std::optional<Eigen::Vector2d> profile_pixel_of_robot_point(const TrueOptics& o,
+                                                            const Eigen::Vector3d& p) {
+  const Eigen::Vector3d d =
+      Eigen::Vector3d(p.x(), p.y(), o.viewpoint_height_cm - p.z()).normalized();
+  const double c = std::cos(deg_to_rad(o.yaw_offset_deg)),
+               s = std::sin(deg_to_rad(o.yaw_offset_deg));
+  const Eigen::Vector3d x = tilt_rotation(o).transpose() *
+                            Eigen::Vector3d(c * d.x() - s * d.y(), s * d.x() + c * d.y(), d.z());
   const double theta = std::acos(std::clamp(x.z(), -1.0, 1.0));
   if (theta >= o.max_theta_rad() - 1e-9) return std::nullopt;
   const double r = o.radius_px_at_theta(theta), n = std::hypot(x.x(), x.y());
@@ -71,19 +80,30 @@ std::optional<Eigen::Vector2d> profile_pixel_of_robot_point(const TrueOptics& o,
 
 // The profile's own parameters must describe a mapping that increases from the centre outwards.
 void check_optics(const TrueOptics& o) {
-  if (o.width_px < 1 || o.height_px < 1 || !(o.viewpoint_height_cm > 0.0) || !(o.mirror_radius_px > 0.0))
-    throw std::invalid_argument("TrueOptics: size, viewpoint_height_cm > 0 and mirror_radius_px > 0 are required");
+  if (o.width_px < 1 || o.height_px < 1 || !(o.viewpoint_height_cm > 0.0) ||
+      !(o.mirror_radius_px > 0.0))
+    throw std::invalid_argument(
+        "TrueOptics: size, viewpoint_height_cm > 0 and mirror_radius_px > 0 are required");
   bool ok = true;
   switch (o.profile) {
-    case MirrorProfile::kHyperbolic: ok = o.focal_px > 0.0 && o.xi > 0.0 && o.xi < 1.0; break;
-    case MirrorProfile::kTangent: ok = o.tan_a_cm > 0.0 && o.tan_b_per_px > 0.0 && o.tan_b_per_px * o.mirror_radius_px < kPi; break;
-    case MirrorProfile::kSpherical: ok = o.sphere_radius_px > o.mirror_radius_px; break;
-    case MirrorProfile::kConical: ok = o.cone_tip_deg >= 0.0 && o.cone_tip_px > 0.0 && o.cone_deg_per_px > 0.0; break;
+    case MirrorProfile::kHyperbolic:
+      ok = o.focal_px > 0.0 && o.xi > 0.0 && o.xi < 1.0;
+      break;
+    case MirrorProfile::kTangent:
+      ok = o.tan_a_cm > 0.0 && o.tan_b_per_px > 0.0 && o.tan_b_per_px * o.mirror_radius_px < kPi;
+      break;
+    case MirrorProfile::kSpherical:
+      ok = o.sphere_radius_px > o.mirror_radius_px;
+      break;
+    case MirrorProfile::kConical:
+      ok = o.cone_tip_deg >= 0.0 && o.cone_tip_px > 0.0 && o.cone_deg_per_px > 0.0;
+      break;
   }
   if (!ok)
-    throw std::invalid_argument(std::string("TrueOptics: bad parameters for the ") + mirror_profile_name(o.profile) +
-                                " profile (hyperbolic: focal_px > 0, 0 < xi < 1; tangent: a, b > 0, b x rim < pi; "
-                                "spherical: sphere radius > rim; conical: tip >= 0, tip_px > 0, deg_per_px > 0)");
+    throw std::invalid_argument(
+        std::string("TrueOptics: bad parameters for the ") + mirror_profile_name(o.profile) +
+        " profile (hyperbolic: focal_px > 0, 0 < xi < 1; tangent: a, b > 0, b x rim < pi; "
+        "spherical: sphere radius > rim; conical: tip >= 0, tip_px > 0, deg_per_px > 0)");
 }
 
 struct Hit {
@@ -94,7 +114,8 @@ struct Hit {
 };
 
 // Signed distance (cm, < 0 inside) from q to the nearest white line, each with its own width.
-double line_distance_cm(const FieldGeometry& f, const std::vector<double>& width, const Eigen::Vector2d& q) {
+double line_distance_cm(const FieldGeometry& f, const std::vector<double>& width,
+                        const Eigen::Vector2d& q) {
   double best = kInf;
   std::size_t i = 0;
   for (const auto& s : f.segments) {
@@ -120,7 +141,8 @@ double line_distance_cm(const FieldGeometry& f, const std::vector<double>& width
     if (inside) best = radial;
   }
   // A mark's radius varies with its "line" width like a painted disc would.
-  for (const auto& d : f.discs) best = std::min(best, (q - d.centre_cm).norm() - d.radius_cm * width[i++] / f.line_width_cm);
+  for (const auto& d : f.discs)
+    best = std::min(best, (q - d.centre_cm).norm() - d.radius_cm * width[i++] / f.line_width_cm);
   return best;
 }
 
@@ -139,30 +161,38 @@ bool in_goal_box(const FieldGeometry& f, const Eigen::Vector2d& q, bool& at_x_ma
   return false;
 }
 
-cv::Vec3f goal_paint(const SceneLook& look, GoalColour c) { return c == GoalColour::kYellow ? look.goal_yellow : look.goal_blue; }
-
-GoalColour colour_at_x_max(const FieldGeometry& f, const RealismOptions& r) {
-  return f.goal.colour_at_x_max != GoalColour::kUnknown ? f.goal.colour_at_x_max : r.goal_colour_at_x_max;
+cv::Vec3f goal_paint(const SceneLook& look, GoalColour c) {
+  return c == GoalColour::kYellow ? look.goal_yellow : look.goal_blue;
 }
 
-GoalColour other(GoalColour c) { return c == GoalColour::kYellow ? GoalColour::kBlue : GoalColour::kYellow; }
+GoalColour colour_at_x_max(const FieldGeometry& f, const RealismOptions& r) {
+  return f.goal.colour_at_x_max != GoalColour::kUnknown ? f.goal.colour_at_x_max
+                                                        : r.goal_colour_at_x_max;
+}
+
+GoalColour other(GoalColour c) {
+  return c == GoalColour::kYellow ? GoalColour::kBlue : GoalColour::kYellow;
+}
 
 // The carpet at q with its lines: grain (3 cm), patches (40 cm) on a textured carpet, and lines
 // worn in 25 cm stretches (dimmer, or gone where the wear is worst) as on an old venue's carpet.
-cv::Vec3f carpet_colour(const FieldGeometry& f, const Scene& sc, const SceneLook& lk, const Eigen::Vector2d& q,
-                        double footprint_cm, std::uint64_t tex_seed) {
+cv::Vec3f carpet_colour(const FieldGeometry& f, const Scene& sc, const SceneLook& lk,
+                        const Eigen::Vector2d& q, double footprint_cm, std::uint64_t tex_seed) {
   const double sd = line_distance_cm(f, sc.line_width_cm, q);
   float cover = static_cast<float>(std::clamp(0.5 - sd / footprint_cm, 0.0, 1.0));
   if (lk.line_wear > 0.0 && cover > 0.0f) {
     const double w = cell_hash(std::lround(q.x() / 25.0), std::lround(q.y() / 25.0), tex_seed + 9);
-    if (w < lk.line_wear) cover *= w < lk.line_wear / 3.0 ? 0.0f : static_cast<float>(0.35 + 0.4 * w / lk.line_wear);
+    if (w < lk.line_wear)
+      cover *= w < lk.line_wear / 3.0 ? 0.0f : static_cast<float>(0.35 + 0.4 * w / lk.line_wear);
   }
   const float g = static_cast<float>(lk.carpet_grain);
   const float grain = static_cast<float>(1.0 - lk.carpet_grain / 2.0) +
-                      g * static_cast<float>(cell_hash(std::lround(q.x() / 3.0), std::lround(q.y() / 3.0), tex_seed));
+                      g * static_cast<float>(cell_hash(std::lround(q.x() / 3.0),
+                                                       std::lround(q.y() / 3.0), tex_seed));
   cv::Vec3f carpet = lk.carpet * grain;
   if (lk.carpet_patch_contrast > 0.0) {
-    const double p = cell_hash(static_cast<std::int64_t>(std::floor(q.x() / 40.0)), static_cast<std::int64_t>(std::floor(q.y() / 40.0)), tex_seed + 13);
+    const double p = cell_hash(static_cast<std::int64_t>(std::floor(q.x() / 40.0)),
+                               static_cast<std::int64_t>(std::floor(q.y() / 40.0)), tex_seed + 13);
     carpet *= static_cast<float>(1.0 + lk.carpet_patch_contrast * (2.0 * p - 1.0));
   }
   return carpet * (1.0f - cover) + lk.line * cover;
@@ -173,17 +203,23 @@ cv::Vec3f carpet_colour(const FieldGeometry& f, const Scene& sc, const SceneLook
 bool on_look_carpet(const FieldGeometry& f, const SceneLook& look, const Eigen::Vector2d& q) {
   if (!on_carpet(f, q)) return false;
   const double* in = look.carpet_inset_cm;
-  return q.x() >= in[0] && q.x() <= f.total_x_cm() - in[1] && q.y() >= in[2] && q.y() <= f.total_y_cm() - in[3];
+  return q.x() >= in[0] && q.x() <= f.total_x_cm() - in[1] && q.y() >= in[2] &&
+         q.y() <= f.total_y_cm() - in[3];
 }
 
-// --- optics ---------------------------------------------------------------------------------------
+// --- optics
+// ---------------------------------------------------------------------------------------
 
 const char* mirror_profile_name(MirrorProfile p) {
   switch (p) {
-    case MirrorProfile::kHyperbolic: return "hyperbolic";
-    case MirrorProfile::kTangent: return "tangent";
-    case MirrorProfile::kSpherical: return "spherical";
-    case MirrorProfile::kConical: return "conical";
+    case MirrorProfile::kHyperbolic:
+      return "hyperbolic";
+    case MirrorProfile::kTangent:
+      return "tangent";
+    case MirrorProfile::kSpherical:
+      return "spherical";
+    case MirrorProfile::kConical:
+      return "conical";
   }
   return "unknown";
 }
@@ -204,19 +240,24 @@ double TrueOptics::theta_rad_at_radius(double r) const {
       const double br = std::clamp(tan_b_per_px * r, 0.0, kPi);
       return std::atan2(tan_a_cm / viewpoint_height_cm * std::sin(br), std::cos(br));
     }
-    case MirrorProfile::kSpherical: return 2.0 * std::asin(std::clamp(r / sphere_radius_px, 0.0, 1.0));
+    case MirrorProfile::kSpherical:
+      return 2.0 * std::asin(std::clamp(r / sphere_radius_px, 0.0, 1.0));
     case MirrorProfile::kConical:
-      return std::min(kPi, deg_to_rad(cone_tip_deg * std::tanh(r / cone_tip_px) + cone_deg_per_px * r));
+      return std::min(kPi,
+                      deg_to_rad(cone_tip_deg * std::tanh(r / cone_tip_px) + cone_deg_per_px * r));
   }
   return 0.0;
 }
 
 double TrueOptics::radius_px_at_theta(double theta) const {
   switch (profile) {
-    case MirrorProfile::kHyperbolic: return focal_px * std::sin(theta) / (std::cos(theta) + xi);
+    case MirrorProfile::kHyperbolic:
+      return focal_px * std::sin(theta) / (std::cos(theta) + xi);
     case MirrorProfile::kTangent:
-      return std::atan2(viewpoint_height_cm / tan_a_cm * std::sin(theta), std::cos(theta)) / tan_b_per_px;
-    case MirrorProfile::kSpherical: return sphere_radius_px * std::sin(theta / 2.0);
+      return std::atan2(viewpoint_height_cm / tan_a_cm * std::sin(theta), std::cos(theta)) /
+             tan_b_per_px;
+    case MirrorProfile::kSpherical:
+      return sphere_radius_px * std::sin(theta / 2.0);
     case MirrorProfile::kConical: {
       // No closed form: theta(r) increases strictly, so bisect to the last bit.
       double lo = 0.0, hi = 180.0 / cone_deg_per_px;
@@ -236,10 +277,12 @@ Eigen::Vector3d TrueOptics::ray_of_pixel(const Eigen::Vector2d& px) const {
   const double mb = (centre_px.y() - px.y()) / focal_px;
   const double m2 = ma * ma + mb * mb;
   const double lambda = (xi + std::sqrt(1.0 + (1.0 - xi * xi) * m2)) / (1.0 + m2);
-  const Eigen::Vector3d img = tilt_rotation(*this) * Eigen::Vector3d(lambda * ma, lambda * mb, lambda - xi);
+  const Eigen::Vector3d img =
+      tilt_rotation(*this) * Eigen::Vector3d(lambda * ma, lambda * mb, lambda - xi);
   // Image angle = bearing + yaw offset: turn back by the offset into the robot frame.
   const double c = std::cos(deg_to_rad(-yaw_offset_deg)), s = std::sin(deg_to_rad(-yaw_offset_deg));
-  return Eigen::Vector3d(c * img.x() - s * img.y(), s * img.x() + c * img.y(), img.z()).normalized();
+  return Eigen::Vector3d(c * img.x() - s * img.y(), s * img.x() + c * img.y(), img.z())
+      .normalized();
 }
 
 std::optional<Eigen::Vector2d> TrueOptics::pixel_of_robot_point(const Eigen::Vector3d& p) const {
@@ -250,11 +293,13 @@ std::optional<Eigen::Vector2d> TrueOptics::pixel_of_robot_point(const Eigen::Vec
   const Eigen::Vector3d x = tilt_rotation(*this).transpose() * img;
   if (x.z() + xi <= 1e-9) return std::nullopt;
   const double ma = x.x() / (x.z() + xi), mb = x.y() / (x.z() + xi);
-  return Eigen::Vector2d(centre_px.x() + focal_px * ma * (mirrored ? -1.0 : 1.0), centre_px.y() - focal_px * mb);
+  return Eigen::Vector2d(centre_px.x() + focal_px * ma * (mirrored ? -1.0 : 1.0),
+                         centre_px.y() - focal_px * mb);
 }
 
 double TrueOptics::radius_px_at_ground(double d) const {
-  if (profile != MirrorProfile::kHyperbolic) return radius_px_at_theta(std::atan2(d, viewpoint_height_cm));
+  if (profile != MirrorProfile::kHyperbolic)
+    return radius_px_at_theta(std::atan2(d, viewpoint_height_cm));
   const double h = viewpoint_height_cm;
   return focal_px * d / (h + xi * std::sqrt(d * d + h * h));
 }
@@ -266,11 +311,13 @@ double TrueOptics::ground_cm_at_radius(double r) const {
   }
   if (profile != MirrorProfile::kHyperbolic) {
     const double theta = theta_rad_at_radius(r);
-    return theta < kPi / 2.0 ? viewpoint_height_cm * std::tan(theta) : std::numeric_limits<double>::quiet_NaN();
+    return theta < kPi / 2.0 ? viewpoint_height_cm * std::tan(theta)
+                             : std::numeric_limits<double>::quiet_NaN();
   }
   const double m = r / focal_px;
   const double lambda = (xi + std::sqrt(1.0 + (1.0 - xi * xi) * m * m)) / (1.0 + m * m);
-  if (lambda - xi <= 1e-12) return std::numeric_limits<double>::quiet_NaN();  // at or above the horizon
+  if (lambda - xi <= 1e-12)
+    return std::numeric_limits<double>::quiet_NaN();  // at or above the horizon
   return viewpoint_height_cm * lambda * m / (lambda - xi);
 }
 
@@ -284,12 +331,14 @@ CameraModel nominal_camera(const TrueOptics& o, double max_ground_cm) {
   cam.body_radius_px = o.radius_px_at_ground(o.body_radius_cm);
   cam.radius_lut.clear();
   const double r_end = std::min(o.mirror_radius_px, o.radius_px_at_ground(max_ground_cm));
-  for (double r = 0.0; r < r_end; r += 4.0) cam.radius_lut.push_back({r, r == 0.0 ? 0.0 : o.ground_cm_at_radius(r)});
+  for (double r = 0.0; r < r_end; r += 4.0)
+    cam.radius_lut.push_back({r, r == 0.0 ? 0.0 : o.ground_cm_at_radius(r)});
   cam.radius_lut.push_back({r_end, o.ground_cm_at_radius(r_end)});
   return cam;
 }
 
-// --- scene ----------------------------------------------------------------------------------------
+// --- scene
+// ----------------------------------------------------------------------------------------
 
 RenderOptions realistic(std::uint64_t seed) {
   RenderOptions o;
@@ -315,8 +364,10 @@ Scene realistic_scene(const FieldGeometry& f, const Pose2& pose, const RenderOpt
   if (palette.empty()) throw std::invalid_argument("SceneLook: no wall colours");
   // (n - 0.001: today's uni(0, 3.999) for the four default paints.)
   const double n_walls = static_cast<double>(palette.size()) - 0.001;
-  for (const auto& [a, b] : {std::pair{c00, c10}, std::pair{c10, c11}, std::pair{c11, c01}, std::pair{c01, c00}})
-    sc.panels.push_back({a, b, r.wall_height_cm, palette[static_cast<std::size_t>(uni(0, n_walls))], true});
+  for (const auto& [a, b] :
+       {std::pair{c00, c10}, std::pair{c10, c11}, std::pair{c11, c01}, std::pair{c01, c00}})
+    sc.panels.push_back(
+        {a, b, r.wall_height_cm, palette[static_cast<std::size_t>(uni(0, n_walls))], true});
   // Goal boxes: back wall and two sides behind each goal line, painted.
   const double cy = f.centre_cm().y(), gw = f.goal.width_cm / 2.0, gd = f.goal.depth_cm;
   const GoalColour at_max = colour_at_x_max(f, r);
@@ -340,23 +391,26 @@ Scene realistic_scene(const FieldGeometry& f, const Pose2& pose, const RenderOpt
     for (int k = 0, attempt = 0; k < count && attempt < 2000; ++attempt) {
       const Eigen::Vector2d q(uni(-m0, X + m1), uni(-m2, Y + m3));
       Column c = make(q);
-      const bool in_room = q.x() - c.radius_cm > -m0 && q.x() + c.radius_cm < X + m1 && q.y() - c.radius_cm > -m2 &&
-                           q.y() + c.radius_cm < Y + m3;
-      const bool off_carpet = q.x() < -c.radius_cm || q.x() > X + c.radius_cm || q.y() < -c.radius_cm || q.y() > Y + c.radius_cm;
+      const bool in_room = q.x() - c.radius_cm > -m0 && q.x() + c.radius_cm < X + m1 &&
+                           q.y() - c.radius_cm > -m2 && q.y() + c.radius_cm < Y + m3;
+      const bool off_carpet = q.x() < -c.radius_cm || q.x() > X + c.radius_cm ||
+                              q.y() < -c.radius_cm || q.y() > Y + c.radius_cm;
       if (!in_room || !off_carpet || !clear_of(q, c.radius_cm)) continue;
       sc.columns.push_back(c);
       ++k;
     }
   };
   const cv::Vec3f dark = r.look.robot_dark;
-  for (const auto& o : opt.obstacles) sc.columns.push_back({o.position_cm, o.radius_cm, 60.0, dark, dark, false});
+  for (const auto& o : opt.obstacles)
+    sc.columns.push_back({o.position_cm, o.radius_cm, 60.0, dark, dark, false});
   // Robots: dark bodies, some with a coloured top (team markers), 60..250 cm away on the carpet.
   const cv::Vec3f tops[] = {dark, {180, 40, 200}, {200, 190, 40}, {60, 60, 200}};
   for (int k = 0, attempt = 0; k < r.robots && attempt < 2000; ++attempt) {
     const double d = uni(60, 250), a = uni(0, 2 * kPi);
     const Eigen::Vector2d q = p + d * Eigen::Vector2d(std::cos(a), std::sin(a));
     if (!on_look_carpet(f, r.look, q) || !clear_of(q, 22.0)) continue;
-    sc.columns.push_back({q, 22.0, uni(55, 75), dark, tops[static_cast<int>(uni(0, 3.999))], false});
+    sc.columns.push_back(
+        {q, 22.0, uni(55, 75), dark, tops[static_cast<int>(uni(0, 3.999))], false});
     ++k;
   }
   if (r.ball) {
@@ -370,7 +424,8 @@ Scene realistic_scene(const FieldGeometry& f, const Pose2& pose, const RenderOpt
     }
   }
   on_floor_ring(r.people, [&](const Eigen::Vector2d& q) {
-    const cv::Vec3f shirt(static_cast<float>(uni(20, 230)), static_cast<float>(uni(20, 230)), static_cast<float>(uni(20, 230)));
+    const cv::Vec3f shirt(static_cast<float>(uni(20, 230)), static_cast<float>(uni(20, 230)),
+                          static_cast<float>(uni(20, 230)));
     return Column{q, 22.0, uni(160, 185), cv::Vec3f(60, 40, 30), shirt, false};
   });
   on_floor_ring(r.furniture, [&](const Eigen::Vector2d& q) {
@@ -384,16 +439,19 @@ Scene realistic_scene(const FieldGeometry& f, const Pose2& pose, const RenderOpt
   return sc;
 }
 
-// --- renderer -------------------------------------------------------------------------------------
+// --- renderer
+// -------------------------------------------------------------------------------------
 
-RealisticRenderer::RealisticRenderer(FieldGeometry field, TrueOptics optics) : field_(std::move(field)), optics_(std::move(optics)) {
+RealisticRenderer::RealisticRenderer(FieldGeometry field, TrueOptics optics)
+    : field_(std::move(field)), optics_(std::move(optics)) {
   const TrueOptics& o = optics_;
   check_optics(o);
   const double body_px = o.radius_px_at_ground(o.body_radius_cm);
   rays_.resize(static_cast<std::size_t>(o.width_px) * static_cast<std::size_t>(o.height_px));
   for (int v = 0; v < o.height_px; ++v) {
     for (int u = 0; u < o.width_px; ++u) {
-      PixelRay& pr = rays_[static_cast<std::size_t>(v) * static_cast<std::size_t>(o.width_px) + static_cast<std::size_t>(u)];
+      PixelRay& pr = rays_[static_cast<std::size_t>(v) * static_cast<std::size_t>(o.width_px) +
+                           static_cast<std::size_t>(u)];
       pr = {1.0f, 0.0f, 0.0f, 1.0f, 0.0f, Kind::kScene};
       const Eigen::Vector2d px(u, v), rel = px - o.centre_px;
       const double r = rel.norm();
@@ -408,7 +466,8 @@ RealisticRenderer::RealisticRenderer(FieldGeometry field, TrueOptics optics) : f
       }
       bool rod = false;
       for (const auto& rd : o.rods) {
-        const Eigen::Vector2d dir(std::cos(deg_to_rad(rd.image_angle_deg)), -std::sin(deg_to_rad(rd.image_angle_deg)));
+        const Eigen::Vector2d dir(std::cos(deg_to_rad(rd.image_angle_deg)),
+                                  -std::sin(deg_to_rad(rd.image_angle_deg)));
         const double along = rel.dot(dir), across = std::abs(dir.x() * rel.y() - dir.y() * rel.x());
         rod = rod || (along > 0.6 * body_px && across <= rd.width_px / 2.0);
       }
@@ -435,7 +494,8 @@ RealisticRenderer::RealisticRenderer(FieldGeometry field, TrueOptics optics) : f
         const Eigen::Vector3d dd = o.ray_of_pixel(q);
         return dd.z() > 1e-9 ? o.viewpoint_height_cm * std::hypot(dd.x(), dd.y()) / dd.z() : 1e6;
       };
-      pr.footprint_cm = static_cast<float>(std::clamp(std::abs(floor_at(px + 0.5 * e) - floor_at(px - 0.5 * e)), 0.2, 1e3));
+      pr.footprint_cm = static_cast<float>(
+          std::clamp(std::abs(floor_at(px + 0.5 * e) - floor_at(px - 0.5 * e)), 0.2, 1e3));
     }
   }
 }
@@ -444,8 +504,11 @@ cv::Mat RealisticRenderer::render(const Pose2& pose, const RenderOptions& opt) c
   return render(pose, opt, realistic_scene(field_, pose, opt));
 }
 
-cv::Mat RealisticRenderer::render(const Pose2& pose, const RenderOptions& opt, const Scene& sc) const {
-  if (!opt.realism.enabled) throw std::invalid_argument("RealisticRenderer: options.realism.enabled is not set (use realistic(seed))");
+cv::Mat RealisticRenderer::render(const Pose2& pose, const RenderOptions& opt,
+                                  const Scene& sc) const {
+  if (!opt.realism.enabled)
+    throw std::invalid_argument(
+        "RealisticRenderer: options.realism.enabled is not set (use realistic(seed))");
   const TrueOptics& o = optics_;
   const RealismOptions& rz = opt.realism;
   const SceneLook& lk = rz.look;
@@ -458,10 +521,12 @@ cv::Mat RealisticRenderer::render(const Pose2& pose, const RenderOptions& opt, c
   std::mt19937_64 rng(opt.seed * 0x9E3779B97F4A7C15ull + 5);
   std::uniform_real_distribution<double> u01(0.0, 1.0);
   std::vector<Eigen::Vector2d> lights;
-  for (int k = 0; k < 3; ++k) lights.emplace_back(u01(rng) * field_.total_x_cm(), u01(rng) * field_.total_y_cm());
+  for (int k = 0; k < 3; ++k)
+    lights.emplace_back(u01(rng) * field_.total_x_cm(), u01(rng) * field_.total_y_cm());
   auto light = [&](const Eigen::Vector2d& q) {
     double g = 0.0;
-    for (const auto& l : lights) g = std::max(g, std::exp(-(q - l).squaredNorm() / (2.0 * 280.0 * 280.0)));
+    for (const auto& l : lights)
+      g = std::max(g, std::exp(-(q - l).squaredNorm() / (2.0 * 280.0 * 280.0)));
     return static_cast<float>(1.0 - rz.light_unevenness + 2.0 * rz.light_unevenness * g);
   };
   const std::uint64_t tex_seed = opt.seed * 31 + 7;
@@ -471,16 +536,26 @@ cv::Mat RealisticRenderer::render(const Pose2& pose, const RenderOptions& opt, c
   cv::Mat3f img(o.height_px, o.width_px);
   for (int v = 0; v < o.height_px; ++v) {
     auto* row = img.ptr<cv::Vec3f>(v);
-    const PixelRay* prs = rays_.data() + static_cast<std::size_t>(v) * static_cast<std::size_t>(o.width_px);
+    const PixelRay* prs =
+        rays_.data() + static_cast<std::size_t>(v) * static_cast<std::size_t>(o.width_px);
     for (int u = 0; u < o.width_px; ++u) {
       const PixelRay& pr = prs[u];
       cv::Vec3f colour;
       switch (pr.kind) {
-        case Kind::kHousing: colour = lk.housing; break;
-        case Kind::kRing: colour = lk.ring; break;
-        case Kind::kRod: colour = lk.rod; break;
+        case Kind::kHousing:
+          colour = lk.housing;
+          break;
+        case Kind::kRing:
+          colour = lk.ring;
+          break;
+        case Kind::kRod:
+          colour = lk.rod;
+          break;
         case Kind::kBody:
-          colour = pr.radius_frac * o.mirror_radius_px < o.lens_fraction * o.radius_px_at_ground(o.body_radius_cm) ? lk.lens : lk.body;
+          colour = pr.radius_frac * o.mirror_radius_px <
+                           o.lens_fraction * o.radius_px_at_ground(o.body_radius_cm)
+                       ? lk.lens
+                       : lk.body;
           break;
         case Kind::kScene: {
           const Eigen::Vector2d dir(cy * pr.dx - sy * pr.dy, sy * pr.dx + cy * pr.dy);
@@ -511,14 +586,18 @@ cv::Mat RealisticRenderer::render(const Pose2& pose, const RenderOptions& opt, c
             if (t_near >= hit.t) continue;
             const double z_near = h - t_near * cot;
             if (z_near >= 0.0 && z_near <= c.height_cm) {
-              hit = {Hit::kColumnSide, t_near, static_cast<int>(i), std::atan2(fvec.y(), fvec.x()), z_near};
+              hit = {Hit::kColumnSide, t_near, static_cast<int>(i), std::atan2(fvec.y(), fvec.x()),
+                     z_near};
             } else if (z_near > c.height_cm && cot > 1e-9) {
               const double t_top = (h - c.height_cm) / cot;
-              if (t_top >= t_near && t_top <= t_far && t_top < hit.t) hit = {Hit::kColumnTop, t_top, static_cast<int>(i), 0.0, c.height_cm};
+              if (t_top >= t_near && t_top <= t_far && t_top < hit.t)
+                hit = {Hit::kColumnTop, t_top, static_cast<int>(i), 0.0, c.height_cm};
             }
           }
           switch (hit.type) {
-            case Hit::kNone: colour = lk.ceiling; break;
+            case Hit::kNone:
+              colour = lk.ceiling;
+              break;
             case Hit::kFloor: {
               const Eigen::Vector2d q = p + hit.t * dir;
               bool x_max = false;
@@ -527,30 +606,44 @@ cv::Mat RealisticRenderer::render(const Pose2& pose, const RenderOptions& opt, c
               } else if (on_look_carpet(field_, lk, q)) {
                 colour = carpet_colour(field_, sc, lk, q, pr.footprint_cm, tex_seed);
               } else {
-                colour = lk.floor_beyond * (0.8f + 0.4f * static_cast<float>(cell_hash(std::lround(q.x() / 20.0), std::lround(q.y() / 20.0), tex_seed + 1)));
+                colour = lk.floor_beyond *
+                         (0.8f + 0.4f * static_cast<float>(cell_hash(std::lround(q.x() / 20.0),
+                                                                     std::lround(q.y() / 20.0),
+                                                                     tex_seed + 1)));
               }
               colour *= light(q);
               break;
             }
             case Hit::kPanel: {
               const Panel& pn = sc.panels[static_cast<std::size_t>(hit.index)];
-              colour = pn.colour * (pn.textured ? block_factor(hit.s, hit.z, 45.0, 35.0, tex_seed + 3 + static_cast<std::uint64_t>(hit.index)) : 1.0f);
+              colour =
+                  pn.colour *
+                  (pn.textured ? block_factor(hit.s, hit.z, 45.0, 35.0,
+                                              tex_seed + 3 + static_cast<std::uint64_t>(hit.index))
+                               : 1.0f);
               break;
             }
             case Hit::kColumnSide: {
               const Column& c = sc.columns[static_cast<std::size_t>(hit.index)];
               colour = hit.z > 0.5 * c.height_cm ? c.top_colour : c.colour;
-              if (c.textured) colour *= block_factor(hit.s * 50.0, hit.z, 30.0, 25.0, tex_seed + 101 + static_cast<std::uint64_t>(hit.index));
+              if (c.textured)
+                colour *= block_factor(hit.s * 50.0, hit.z, 30.0, 25.0,
+                                       tex_seed + 101 + static_cast<std::uint64_t>(hit.index));
               break;
             }
-            case Hit::kColumnTop: colour = sc.columns[static_cast<std::size_t>(hit.index)].top_colour * 1.1f; break;
+            case Hit::kColumnTop:
+              colour = sc.columns[static_cast<std::size_t>(hit.index)].top_colour * 1.1f;
+              break;
           }
           break;
         }
       }
-      float gain = static_cast<float>(1.0 - rz.vignetting * std::min(1.0f, pr.radius_frac) * std::min(1.0f, pr.radius_frac));
+      float gain = static_cast<float>(1.0 - rz.vignetting * std::min(1.0f, pr.radius_frac) *
+                                                std::min(1.0f, pr.radius_frac));
       if (opt.gradient_strength != 0.0) {
-        const double along = ((u - o.centre_px.x()) * std::cos(gd) + (v - o.centre_px.y()) * std::sin(gd)) / half_diag;
+        const double along =
+            ((u - o.centre_px.x()) * std::cos(gd) + (v - o.centre_px.y()) * std::sin(gd)) /
+            half_diag;
         gain *= static_cast<float>(1.0 + opt.gradient_strength * along);
       }
       row[u] = cast ? cv::Vec3f(colour.mul(lk.colour_cast)) * gain : colour * gain;
@@ -569,7 +662,8 @@ cv::Mat RealisticRenderer::render(const Pose2& pose, const RenderOptions& opt, c
           my(v, u) = static_cast<float>(o.centre_px.y() + (v - o.centre_px.y()) * (1.0 - sign * k));
         }
       cv::Mat out;
-      cv::remap(ch[static_cast<std::size_t>(index)], out, mx, my, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+      cv::remap(ch[static_cast<std::size_t>(index)], out, mx, my, cv::INTER_LINEAR,
+                cv::BORDER_REPLICATE);
       ch[static_cast<std::size_t>(index)] = out;
     }
     cv::merge(ch, img);

@@ -51,7 +51,8 @@ OmniRenderer::OmniRenderer(FieldGeometry field, CameraModel camera)
   rays_.resize(static_cast<std::size_t>(cam.width_px) * static_cast<std::size_t>(cam.height_px));
   for (int v = 0; v < cam.height_px; ++v) {
     for (int u = 0; u < cam.width_px; ++u) {
-      PixelRay& pr = rays_[static_cast<std::size_t>(v) * static_cast<std::size_t>(cam.width_px) + static_cast<std::size_t>(u)];
+      PixelRay& pr = rays_[static_cast<std::size_t>(v) * static_cast<std::size_t>(cam.width_px) +
+                           static_cast<std::size_t>(u)];
       pr = {0.0f, 0.0f, Kind::kFloor};
       const double du = (u - cam.center_px.x()) * (cam.mirrored ? -1.0 : 1.0);
       const double dv = cam.center_px.y() - v;
@@ -78,7 +79,8 @@ OmniRenderer::OmniRenderer(FieldGeometry field, CameraModel camera)
 
 cv::Mat OmniRenderer::render(const Pose2& pose, const RenderOptions& opt) const {
   if (opt.realism.enabled) {
-    throw std::invalid_argument("OmniRenderer: realistic options need the true optics (use RealisticRenderer)");
+    throw std::invalid_argument(
+        "OmniRenderer: realistic options need the true optics (use RealisticRenderer)");
   }
   const CameraModel& cam = camera_;
   cv::Mat3f img(cam.height_px, cam.width_px);
@@ -88,13 +90,20 @@ cv::Mat OmniRenderer::render(const Pose2& pose, const RenderOptions& opt) const 
   const double half_diag = 0.5 * std::hypot(cam.width_px, cam.height_px);
   for (int v = 0; v < cam.height_px; ++v) {
     auto* row = img.ptr<cv::Vec3f>(v);
-    const PixelRay* pr = rays_.data() + static_cast<std::size_t>(v) * static_cast<std::size_t>(cam.width_px);
+    const PixelRay* pr =
+        rays_.data() + static_cast<std::size_t>(v) * static_cast<std::size_t>(cam.width_px);
     for (int u = 0; u < cam.width_px; ++u) {
       cv::Vec3f colour;
       switch (pr[u].kind) {
-        case Kind::kRim: colour = kMirrorRim; break;
-        case Kind::kBody: colour = kBody; break;
-        case Kind::kMast: colour = kMast; break;
+        case Kind::kRim:
+          colour = kMirrorRim;
+          break;
+        case Kind::kBody:
+          colour = kBody;
+          break;
+        case Kind::kMast:
+          colour = kMast;
+          break;
         case Kind::kFloor: {
           const double rx = pr[u].x_cm, ry = pr[u].y_cm;
           const Eigen::Vector2d q(p.x() + c * rx - s * ry, p.y() + s * rx + c * ry);
@@ -111,7 +120,9 @@ cv::Mat OmniRenderer::render(const Pose2& pose, const RenderOptions& opt) const 
         }
       }
       if (opt.gradient_strength != 0.0) {
-        const double along = ((u - cam.center_px.x()) * std::cos(gd) + (v - cam.center_px.y()) * std::sin(gd)) / half_diag;
+        const double along =
+            ((u - cam.center_px.x()) * std::cos(gd) + (v - cam.center_px.y()) * std::sin(gd)) /
+            half_diag;
         colour *= static_cast<float>(1.0 + opt.gradient_strength * along);
       }
       row[u] = colour;
@@ -129,11 +140,13 @@ cv::Mat OmniRenderer::render(const Pose2& pose, const RenderOptions& opt) const 
   return out;
 }
 
-cv::Mat render_omni(const FieldGeometry& field, const CameraModel& camera, const Pose2& pose, const RenderOptions& opt) {
+cv::Mat render_omni(const FieldGeometry& field, const CameraModel& camera, const Pose2& pose,
+                    const RenderOptions& opt) {
   return OmniRenderer(field, camera).render(pose, opt);
 }
 
-std::vector<Obstacle> random_obstacles(const FieldGeometry& field, const Pose2& pose, int count, std::uint64_t seed) {
+std::vector<Obstacle> random_obstacles(const FieldGeometry& field, const Pose2& pose, int count,
+                                       std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> dist(60.0, 250.0), ang(0.0, 2.0 * kPi);
   std::vector<Obstacle> out;
@@ -143,7 +156,8 @@ std::vector<Obstacle> random_obstacles(const FieldGeometry& field, const Pose2& 
     Obstacle o{p + d * Eigen::Vector2d(std::cos(a), std::sin(a)), 20.0};
     if (!on_carpet(field, o.position_cm)) continue;
     bool clear = true;
-    for (const auto& e : out) clear = clear && (e.position_cm - o.position_cm).norm() > 2.0 * o.radius_cm + 10.0;
+    for (const auto& e : out)
+      clear = clear && (e.position_cm - o.position_cm).norm() > 2.0 * o.radius_cm + 10.0;
     if (clear) out.push_back(o);
   }
   return out;

@@ -54,13 +54,19 @@ struct SimCamera::Worker {
   }
 };
 
-SimCamera::SimCamera(const OmniRenderer& renderer, SimTruthLog& truth, double fps, RenderOptions options)
-    : renderer_(renderer), truth_(truth), period_ms_(1000.0 / fps), options_(std::move(options)),
+SimCamera::SimCamera(const OmniRenderer& renderer, SimTruthLog& truth, double fps,
+                     RenderOptions options)
+    : renderer_(renderer),
+      truth_(truth),
+      period_ms_(1000.0 / fps),
+      options_(std::move(options)),
       worker_(std::make_unique<Worker>(renderer)) {
   truth_.set_on_added([this](double t_ms) { on_truth(t_ms); });
 }
 
-SimCamera::~SimCamera() { truth_.set_on_added({}); }
+SimCamera::~SimCamera() {
+  truth_.set_on_added({});
+}
 
 void SimCamera::on_truth(double t_ms) {
   // Frame k can be rendered once the log holds a sample at or after its time (truth interpolates).
@@ -70,7 +76,8 @@ void SimCamera::on_truth(double t_ms) {
     const auto pose = truth_.truth(t);
     if (!pose) continue;
     RenderOptions o = options_;
-    o.seed = options_.seed + static_cast<std::uint64_t>(next_job_k_);  // fresh sensor noise per frame
+    o.seed =
+        options_.seed + static_cast<std::uint64_t>(next_job_k_);  // fresh sensor noise per frame
     {
       std::lock_guard lock(worker_->mu);
       worker_->jobs.push_back({next_job_k_, *pose, o});
@@ -97,7 +104,8 @@ std::optional<CameraFrame> SimCamera::poll(double now_ms) {
   // Frames before k that were never polled are dropped, rendered or not.
   std::erase_if(worker_->jobs, [k](const Worker::Job& j) { return j.k < k; });
   const bool queued = worker_->done.count(k) != 0 || worker_->rendering == k ||
-                      std::any_of(worker_->jobs.begin(), worker_->jobs.end(), [k](const Worker::Job& j) { return j.k == k; });
+                      std::any_of(worker_->jobs.begin(), worker_->jobs.end(),
+                                  [k](const Worker::Job& j) { return j.k == k; });
   last_k_ = k;
   if (!queued) {
     // Truth was missing for that frame when the log passed it (outside the kept span).

@@ -24,8 +24,8 @@ constexpr std::uint8_t kEpIn = 0x83;
 constexpr std::uint8_t kEpOut = 0x04;
 constexpr std::uint16_t kPortB = 2;
 
-/// Device and configuration descriptors of an FT2232H (bcdDevice 7.00): two vendor-class interfaces,
-/// A with bulk 0x81/0x02 and B with bulk 0x83/0x04, 512-byte packets.
+/// Device and configuration descriptors of an FT2232H (bcdDevice 7.00): two vendor-class
+/// interfaces, A with bulk 0x81/0x02 and B with bulk 0x83/0x04, 512-byte packets.
 constexpr const char* kDescriptorsHex =
     "1201000200000040030410600007010203010902370002010080320904000002"
     "ffffff0207058102000200070502020002000904010002ffffff020705830200"
@@ -67,11 +67,14 @@ EmulatedUsb::EmulatedUsb() : impl_(std::make_unique<Impl>()) {
   if (!umockdev_in_mock_environment()) {
     g_object_unref(impl_->testbed);
     throw std::runtime_error(
-        "the emulated USB bus needs libumockdev-preload: run this program under `umockdev-wrapper`");
+        "the emulated USB bus needs libumockdev-preload: run this program under "
+        "`umockdev-wrapper`");
   }
 }
 
-EmulatedUsb::~EmulatedUsb() { g_object_unref(impl_->testbed); }
+EmulatedUsb::~EmulatedUsb() {
+  g_object_unref(impl_->testbed);
+}
 
 struct Ft2232hModel::Impl {
   EmulatedUsb& usb;
@@ -83,7 +86,7 @@ struct Ft2232hModel::Impl {
 
   mutable std::mutex mu;
   Ft2232hState st;
-  std::deque<Urb> done;      // completed, waiting to be reaped
+  std::deque<Urb> done;  // completed, waiting to be reaped
   std::deque<Urb> pending_in;
   std::uint8_t line_bits = 0;
   int line_count = 0;
@@ -111,7 +114,8 @@ struct Ft2232hModel::Impl {
         return true;
       }
       case USBDEVFS_GETDRIVER: {
-        UMockdevIoctlData* d = umockdev_ioctl_data_resolve(arg, 0, sizeof(usbdevfs_getdriver), nullptr);
+        UMockdevIoctlData* d =
+            umockdev_ioctl_data_resolve(arg, 0, sizeof(usbdevfs_getdriver), nullptr);
         auto* g = reinterpret_cast<usbdevfs_getdriver*>(d->data);
         const bool bound = cfg.kernel_driver_bound && !st.driver_detached && g->interface == 1;
         if (bound) std::snprintf(g->driver, sizeof g->driver, "ftdi_sio");
@@ -159,10 +163,13 @@ struct Ft2232hModel::Impl {
         umockdev_ioctl_client_complete(client, err ? -1 : 0, err);
         return true;
       }
-      case USBDEVFS_SUBMITURB: return submit(client, arg);
+      case USBDEVFS_SUBMITURB:
+        return submit(client, arg);
       case USBDEVFS_REAPURB:
-      case USBDEVFS_REAPURBNDELAY: return reap(client, arg);
-      case USBDEVFS_DISCARDURB: return discard(client, arg);
+      case USBDEVFS_REAPURBNDELAY:
+        return reap(client, arg);
+      case USBDEVFS_DISCARDURB:
+        return discard(client, arg);
       default:
         st.unhandled_ioctls.push_back(request);
         return false;
@@ -189,7 +196,8 @@ struct Ft2232hModel::Impl {
       control(u);
       done.push_back(u);
     } else if (urb->type == USBDEVFS_URB_TYPE_BULK && urb->endpoint == kEpOut) {
-      const auto* bytes = u.buffer ? reinterpret_cast<const std::uint8_t*>(u.buffer->data) : nullptr;
+      const auto* bytes =
+          u.buffer ? reinterpret_cast<const std::uint8_t*>(u.buffer->data) : nullptr;
       const auto n = static_cast<std::size_t>(std::max(urb->buffer_length, 0));
       if (bytes && n > 0) uart.to_board(std::span<const std::uint8_t>(bytes, n));
       st.bulk_out_bytes += n;
@@ -219,19 +227,31 @@ struct Ft2232hModel::Impl {
     const std::size_t room = static_cast<std::size_t>(urb->buffer_length) - 8;
     std::vector<std::uint8_t> reply;
     bool ok = true;
-    if (c.request_type == 0x80 && c.request == 6 && (c.value >> 8) == 3) {  // GET_DESCRIPTOR(STRING)
+    if (c.request_type == 0x80 && c.request == 6 &&
+        (c.value >> 8) == 3) {  // GET_DESCRIPTOR(STRING)
       switch (c.value & 0xFF) {
-        case 0: reply = {4, 3, 0x09, 0x04}; break;  // LANGID en-US
-        case 1: reply = string_descriptor(cfg.manufacturer); break;
-        case 2: reply = string_descriptor(cfg.product); break;
-        case 3: reply = string_descriptor(cfg.serial); break;
-        default: ok = false;
+        case 0:
+          reply = {4, 3, 0x09, 0x04};
+          break;  // LANGID en-US
+        case 1:
+          reply = string_descriptor(cfg.manufacturer);
+          break;
+        case 2:
+          reply = string_descriptor(cfg.product);
+          break;
+        case 3:
+          reply = string_descriptor(cfg.serial);
+          break;
+        default:
+          ok = false;
       }
     } else if (c.request_type == 0x40) {
       ok = vendor_out(c);
-    } else if (c.request_type == 0xC0 && c.request == 5 && (c.index & 0xFF) == kPortB) {  // poll modem status
+    } else if (c.request_type == 0xC0 && c.request == 5 &&
+               (c.index & 0xFF) == kPortB) {  // poll modem status
       reply = {cfg.modem_status, 0x60};
-    } else if (c.request_type == 0xC0 && c.request == 10 && (c.index & 0xFF) == kPortB) {  // get latency timer
+    } else if (c.request_type == 0xC0 && c.request == 10 &&
+               (c.index & 0xFF) == kPortB) {  // get latency timer
       reply = {static_cast<std::uint8_t>(st.latency_ms)};
     } else {
       ok = false;
@@ -263,19 +283,27 @@ struct Ft2232hModel::Impl {
           return false;
         }
         return true;
-      case 1: return true;  // modem control
-      case 2: st.flow_control = static_cast<std::uint16_t>(c.index & 0xFF00); return true;
+      case 1:
+        return true;  // modem control
+      case 2:
+        st.flow_control = static_cast<std::uint16_t>(c.index & 0xFF00);
+        return true;
       case 3:
         st.baud_value = c.value;
         st.baud_index = c.index;
         return true;
-      case 4: st.data_characteristics = c.value; return true;
+      case 4:
+        st.data_characteristics = c.value;
+        return true;
       case 9:
         if (c.value < 1 || c.value > 255) return false;
         st.latency_ms = c.value;
         return true;
-      case 11: st.bitmode = c.value; return true;
-      default: return false;
+      case 11:
+        st.bitmode = c.value;
+        return true;
+      default:
+        return false;
     }
   }
 
@@ -343,8 +371,9 @@ struct Ft2232hModel::Impl {
 
   bool discard(UMockdevIoctlClient* client, UMockdevIoctlData* arg) {
     const auto addr = reinterpret_cast<std::uintptr_t>(*reinterpret_cast<void**>(arg->data));
-    auto in = std::find_if(pending_in.begin(), pending_in.end(),
-                           [&](const Urb& u) { return u.client == client && u.client_addr == addr; });
+    auto in = std::find_if(pending_in.begin(), pending_in.end(), [&](const Urb& u) {
+      return u.client == client && u.client_addr == addr;
+    });
     if (in == pending_in.end()) {
       umockdev_ioctl_client_complete(client, -1, EINVAL);
       return true;
@@ -382,14 +411,15 @@ Ft2232hModel::Ft2232hModel(EmulatedUsb& usb, UartSide& uart, Ft2232hConfig confi
   char devnum[8];
   std::snprintf(busnum, sizeof busnum, "%03d", d.cfg.bus);
   std::snprintf(devnum, sizeof devnum, "%03d", d.cfg.address);
-  const std::string record = "P: " + d.syspath + "\nN: " + node + "\nE: SUBSYSTEM=usb\nE: DEVTYPE=usb_device\n" +
-                             "E: DRIVER=usb\nE: BUSNUM=" + busnum + "\nE: DEVNUM=" + devnum + "\nE: DEVNAME=" +
-                             d.devnode + "\nE: PRODUCT=403/6010/700\nA: busnum=" + std::to_string(d.cfg.bus) +
-                             "\\n\nA: devnum=" + std::to_string(d.cfg.address) +
-                             "\\n\nA: bConfigurationValue=1\\n\nA: speed=480\\n\nA: idVendor=0403\\n\n" +
-                             "A: idProduct=6010\\n\nA: manufacturer=" + d.cfg.manufacturer + "\\n\nA: product=" +
-                             d.cfg.product + "\\n\nA: serial=" + d.cfg.serial + "\\n\nH: descriptors=" +
-                             kDescriptorsHex + "\n";
+  const std::string record =
+      "P: " + d.syspath + "\nN: " + node + "\nE: SUBSYSTEM=usb\nE: DEVTYPE=usb_device\n" +
+      "E: DRIVER=usb\nE: BUSNUM=" + busnum + "\nE: DEVNUM=" + devnum + "\nE: DEVNAME=" + d.devnode +
+      "\nE: PRODUCT=403/6010/700\nA: busnum=" + std::to_string(d.cfg.bus) +
+      "\\n\nA: devnum=" + std::to_string(d.cfg.address) +
+      "\\n\nA: bConfigurationValue=1\\n\nA: speed=480\\n\nA: idVendor=0403\\n\n" +
+      "A: idProduct=6010\\n\nA: manufacturer=" + d.cfg.manufacturer +
+      "\\n\nA: product=" + d.cfg.product + "\\n\nA: serial=" + d.cfg.serial +
+      "\\n\nH: descriptors=" + kDescriptorsHex + "\n";
   if (!umockdev_testbed_add_from_string(tb, record.c_str(), &err)) {
     const std::string msg = err ? err->message : "unknown error";
     if (err) g_error_free(err);
@@ -424,6 +454,8 @@ Ft2232hState Ft2232hModel::state() const {
   return impl_->st;
 }
 
-std::string Ft2232hModel::devnode() const { return impl_->devnode; }
+std::string Ft2232hModel::devnode() const {
+  return impl_->devnode;
+}
 
 }  // namespace omniloc::sim

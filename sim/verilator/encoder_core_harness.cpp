@@ -96,13 +96,15 @@ BusResult EncoderCoreHarness::read(std::uint8_t addr) {
   issue_read(addr);
   for (int i = 0; i < kBusLatency; ++i) {
     if (i > 0 && response()) {
-      throw std::logic_error("encoder_core: reg_ack_o too early after a read of address " + std::to_string(addr));
+      throw std::logic_error("encoder_core: reg_ack_o too early after a read of address " +
+                             std::to_string(addr));
     }
     step();
   }
   const auto r = response();
-  if (!r) throw std::logic_error("encoder_core: no reg_ack_o " + std::to_string(kBusLatency) + " cycles after a read of address " +
-                                 std::to_string(addr));
+  if (!r)
+    throw std::logic_error("encoder_core: no reg_ack_o " + std::to_string(kBusLatency) +
+                           " cycles after a read of address " + std::to_string(addr));
   return *r;
 }
 
@@ -110,21 +112,31 @@ BusResult EncoderCoreHarness::write(std::uint8_t addr, std::uint32_t data) {
   issue_write(addr, data);
   for (int i = 0; i < kBusLatency; ++i) {
     if (i > 0 && response()) {
-      throw std::logic_error("encoder_core: reg_ack_o too early after a write of address " + std::to_string(addr));
+      throw std::logic_error("encoder_core: reg_ack_o too early after a write of address " +
+                             std::to_string(addr));
     }
     step();
   }
   const auto r = response();
-  if (!r) throw std::logic_error("encoder_core: no reg_ack_o " + std::to_string(kBusLatency) + " cycles after a write of address " +
-                                 std::to_string(addr));
+  if (!r)
+    throw std::logic_error("encoder_core: no reg_ack_o " + std::to_string(kBusLatency) +
+                           " cycles after a write of address " + std::to_string(addr));
   return *r;
 }
 
-void EncoderCoreHarness::consume_window() { top_->win_consumed_i = 1; }
+void EncoderCoreHarness::consume_window() {
+  top_->win_consumed_i = 1;
+}
 
-bool EncoderCoreHarness::win_valid() const { return top_->win_valid_o != 0; }
-bool EncoderCoreHarness::tick() const { return top_->tick_o != 0; }
-bool EncoderCoreHarness::stream_enabled() const { return top_->stream_en_o != 0; }
+bool EncoderCoreHarness::win_valid() const {
+  return top_->win_valid_o != 0;
+}
+bool EncoderCoreHarness::tick() const {
+  return top_->tick_o != 0;
+}
+bool EncoderCoreHarness::stream_enabled() const {
+  return top_->stream_en_o != 0;
+}
 
 CoreWindow EncoderCoreHarness::window() const {
   CoreWindow w;

@@ -9,11 +9,11 @@ DemoDrive demo_drive(double duration_s) {
   auto& t = d.trajectory;
   // The field lines are at x = 75 / 675 and y = 75 / 475: the boundary legs run 5-10 cm inside
   // them, where the paper's image-only method fails (its Fig. 18 boundary points).
-  t.line_to({665.0, 275.0}, 0.0, lim);    // to the right goal line
-  t.line_to({670.0, 470.0}, 90.0, lim);   // along it to the top-right corner
-  t.line_to({80.0, 470.0}, 180.0, lim);   // along the top line
-  t.line_to({80.0, 80.0}, 270.0, lim);    // along the left goal line
-  t.line_to({670.0, 80.0}, 360.0, lim);   // along the bottom line
+  t.line_to({665.0, 275.0}, 0.0, lim);   // to the right goal line
+  t.line_to({670.0, 470.0}, 90.0, lim);  // along it to the top-right corner
+  t.line_to({80.0, 470.0}, 180.0, lim);  // along the top line
+  t.line_to({80.0, 80.0}, 270.0, lim);   // along the left goal line
+  t.line_to({670.0, 80.0}, 360.0, lim);  // along the bottom line
   t.line_to({450.0, 220.0}, 360.0, lim);
   t.wait(0.6);
   d.kidnap_s = t.duration_s() - 0.3;

@@ -9,14 +9,17 @@ namespace {
 constexpr std::int64_t kOne = std::int64_t{1} << kFracBits;
 
 // ceil(a / b) for b > 0.
-std::int64_t ceil_div(std::int64_t a, std::int64_t b) { return -floor_div(-a, b); }
+std::int64_t ceil_div(std::int64_t a, std::int64_t b) {
+  return -floor_div(-a, b);
+}
 
 }  // namespace
 
 QuadratureStream::QuadratureStream(const WorldConfig& config, Trajectory trajectory)
     : world_(config, std::move(trajectory)) {
   for (int m = 0; m < 4; ++m) {
-    quarter_[static_cast<std::size_t>(m)] = quarter_of(world_.last_step().end_pos[static_cast<std::size_t>(m)]);
+    quarter_[static_cast<std::size_t>(m)] =
+        quarter_of(world_.last_step().end_pos[static_cast<std::size_t>(m)]);
     next_cycle_[static_cast<std::size_t>(m)] = -1;
   }
   levels_ = levels();
@@ -26,7 +29,8 @@ std::uint8_t QuadratureStream::levels() const {
   std::uint8_t v = 0;
   for (int m = 0; m < 4; ++m) {
     const std::int64_t q = quarter_[static_cast<std::size_t>(m)];
-    v = static_cast<std::uint8_t>(v | (level_a(q) ? 1u << (2 * m) : 0u) | (level_b(q) ? 1u << (2 * m + 1) : 0u));
+    v = static_cast<std::uint8_t>(v | (level_a(q) ? 1u << (2 * m) : 0u) |
+                                  (level_b(q) ? 1u << (2 * m + 1) : 0u));
   }
   return v;
 }

@@ -16,7 +16,8 @@ Gyro::Gyro(const GyroModel& model, double initial_yaw_deg, std::mt19937_64& rng)
 void Gyro::step(double true_dyaw_deg, double dt_s, std::mt19937_64& rng) {
   std::normal_distribution<double> n(0.0, 1.0);
   // Angle random walk: integrated white rate noise has sigma ARW * sqrt(dt) per step.
-  const double noise_deg = model_.arw_deg_per_sqrt_s > 0.0 ? model_.arw_deg_per_sqrt_s * std::sqrt(dt_s) * n(rng) : 0.0;
+  const double noise_deg =
+      model_.arw_deg_per_sqrt_s > 0.0 ? model_.arw_deg_per_sqrt_s * std::sqrt(dt_s) * n(rng) : 0.0;
   yaw_deg_ += true_dyaw_deg * (1.0 + scale_) + bias_ * dt_s + noise_deg;
   if (model_.bias_walk_deg_per_s_per_sqrt_s > 0.0)
     bias_ += model_.bias_walk_deg_per_s_per_sqrt_s * std::sqrt(dt_s) * n(rng);

@@ -8,7 +8,9 @@ namespace omniloc::sim {
 namespace {
 
 FrameRender omni_render(const OmniRenderer& renderer) {
-  return [&renderer](double, const Pose2& truth, const RenderOptions& options) { return renderer.render(truth, options); };
+  return [&renderer](double, const Pose2& truth, const RenderOptions& options) {
+    return renderer.render(truth, options);
+  };
 }
 
 }  // namespace
@@ -24,9 +26,11 @@ void run_simulation(World& world, const FrameRender& renderer, const SimRunOptio
                     const std::function<void(const SimFrame&)>& on_frame) {
   const double clock_hz = world.config().robot.clock_hz;
   const double window_ms = static_cast<double>(world.config().window_cycles) * 1000.0 / clock_hz;
-  const double end_s = options.max_duration_s > 0.0 ? options.max_duration_s : world.trajectory().duration_s();
+  const double end_s =
+      options.max_duration_s > 0.0 ? options.max_duration_s : world.trajectory().duration_s();
   double next_frame_ms = options.first_frame_ms;
-  double next_window_ms = static_cast<double>(world.config().first_window_end_cycles) * 1000.0 / clock_hz;
+  double next_window_ms =
+      static_cast<double>(world.config().first_window_end_cycles) * 1000.0 / clock_hz;
   RenderOptions render = options.render;
   const std::uint64_t seed0 = render.seed;
   std::uint64_t frame_index = 0;
@@ -54,13 +58,16 @@ void run_simulation(World& world, const FrameRender& renderer, const SimRunOptio
 
 void record_simulation(const std::filesystem::path& dir, World& world, const OmniRenderer& renderer,
                        const SimRunOptions& options, const std::string& field_name,
-                       const std::optional<Pose2>& initial_pose, const RecordingOptions& recording) {
-  record_simulation(dir, world, renderer.camera(), omni_render(renderer), options, field_name, initial_pose, recording);
+                       const std::optional<Pose2>& initial_pose,
+                       const RecordingOptions& recording) {
+  record_simulation(dir, world, renderer.camera(), omni_render(renderer), options, field_name,
+                    initial_pose, recording);
 }
 
 void record_simulation(const std::filesystem::path& dir, World& world, const CameraModel& camera,
-                       const FrameRender& renderer, const SimRunOptions& options, const std::string& field_name,
-                       const std::optional<Pose2>& initial_pose, const RecordingOptions& recording) {
+                       const FrameRender& renderer, const SimRunOptions& options,
+                       const std::string& field_name, const std::optional<Pose2>& initial_pose,
+                       const RecordingOptions& recording) {
   RecordingMeta meta;
   meta.field = field_name;
   meta.field_geometry = load_field(field_name).spec;
@@ -78,8 +85,8 @@ void record_simulation(const std::filesystem::path& dir, World& world, const Cam
   writer.close();
 }
 
-LocalizedRun localize_simulation(World& world, const OmniRenderer& renderer, const SimRunOptions& options,
-                                 Localizer& localizer) {
+LocalizedRun localize_simulation(World& world, const OmniRenderer& renderer,
+                                 const SimRunOptions& options, Localizer& localizer) {
   LocalizedRun run;
   run_simulation(
       world, renderer, options,

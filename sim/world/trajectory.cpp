@@ -45,7 +45,8 @@ double Trapezoid::speed(double t) const {
   return accel * (duration() - t);
 }
 
-Trajectory::Trajectory(std::string name, const Pose2& start) : name_(std::move(name)), start_(start) {}
+Trajectory::Trajectory(std::string name, const Pose2& start)
+    : name_(std::move(name)), start_(start) {}
 
 void Trajectory::push(Leg leg) {
   leg.t0 = duration_s_;
@@ -59,7 +60,8 @@ Pose2 Trajectory::end_pose() const {
   return sample(duration_s_).pose;
 }
 
-Trajectory& Trajectory::line_to(const Eigen::Vector2d& target, double yaw_deg, const MotionLimits& lim) {
+Trajectory& Trajectory::line_to(const Eigen::Vector2d& target, double yaw_deg,
+                                const MotionLimits& lim) {
   const Pose2 s = end_pose();
   Leg leg;
   leg.kind = Kind::kLine;
@@ -68,7 +70,8 @@ Trajectory& Trajectory::line_to(const Eigen::Vector2d& target, double yaw_deg, c
   leg.direction = len > 0.0 ? Eigen::Vector2d(delta / len) : Eigen::Vector2d(1.0, 0.0);
   leg.move = Trapezoid::make(len, lim.max_speed_cm_per_s, lim.max_accel_cm_per_s2);
   const double dyaw = angle_diff_deg(yaw_deg, s.yaw_deg);
-  leg.turn = Trapezoid::make(std::abs(dyaw), lim.max_yaw_rate_deg_per_s, lim.max_yaw_accel_deg_per_s2);
+  leg.turn =
+      Trapezoid::make(std::abs(dyaw), lim.max_yaw_rate_deg_per_s, lim.max_yaw_accel_deg_per_s2);
   leg.turn_sign = dyaw < 0.0 ? -1.0 : 1.0;
   leg.duration = std::max(leg.move.duration(), leg.turn.duration());
   push(leg);
@@ -79,22 +82,24 @@ Trajectory& Trajectory::rotate_by(double delta_deg, const MotionLimits& lim) {
   Leg leg;
   leg.kind = Kind::kLine;
   leg.move = Trapezoid::make(0.0, 1.0, 1.0);
-  leg.turn = Trapezoid::make(std::abs(delta_deg), lim.max_yaw_rate_deg_per_s, lim.max_yaw_accel_deg_per_s2);
+  leg.turn = Trapezoid::make(std::abs(delta_deg), lim.max_yaw_rate_deg_per_s,
+                             lim.max_yaw_accel_deg_per_s2);
   leg.turn_sign = delta_deg < 0.0 ? -1.0 : 1.0;
   leg.duration = leg.turn.duration();
   push(leg);
   return *this;
 }
 
-Trajectory& Trajectory::arc(const Eigen::Vector2d& centre, double sweep_deg, bool yaw_follows_tangent,
-                            const MotionLimits& lim) {
+Trajectory& Trajectory::arc(const Eigen::Vector2d& centre, double sweep_deg,
+                            bool yaw_follows_tangent, const MotionLimits& lim) {
   const Pose2 s = end_pose();
   Leg leg;
   leg.kind = Kind::kArc;
   leg.centre = centre;
   const Eigen::Vector2d rel = Eigen::Vector2d(s.x_cm, s.y_cm) - centre;
   leg.radius = rel.norm();
-  if (!(leg.radius > 0.0)) throw std::invalid_argument("Trajectory::arc: the robot is at the centre");
+  if (!(leg.radius > 0.0))
+    throw std::invalid_argument("Trajectory::arc: the robot is at the centre");
   leg.start_angle_rad = std::atan2(rel.y(), rel.x());
   leg.sweep_sign = sweep_deg < 0.0 ? -1.0 : 1.0;
   leg.move = Trapezoid::make(deg_to_rad(std::abs(sweep_deg)) * leg.radius, lim.max_speed_cm_per_s,
@@ -107,11 +112,13 @@ Trajectory& Trajectory::arc(const Eigen::Vector2d& centre, double sweep_deg, boo
 }
 
 Trajectory& Trajectory::figure_eight(double radius_cm, const MotionLimits& lim) {
-  if (!(radius_cm > 0.0)) throw std::invalid_argument("Trajectory::figure_eight: radius_cm must be > 0");
+  if (!(radius_cm > 0.0))
+    throw std::invalid_argument("Trajectory::figure_eight: radius_cm must be > 0");
   Leg leg;
   leg.kind = Kind::kEight;
   leg.radius = radius_cm;
-  leg.move = Trapezoid::make(4.0 * kPi * radius_cm, lim.max_speed_cm_per_s, lim.max_accel_cm_per_s2);
+  leg.move =
+      Trapezoid::make(4.0 * kPi * radius_cm, lim.max_speed_cm_per_s, lim.max_accel_cm_per_s2);
   leg.turn = Trapezoid::make(0.0, 1.0, 1.0);
   leg.duration = leg.move.duration();
   push(leg);
@@ -166,11 +173,13 @@ TrajectorySample Trajectory::sample(double t_s) const {
       const double lap = 2.0 * kPi * leg.radius;
       if (s <= lap) {  // counter-clockwise around the centre above the start
         const double a = -0.5 * kPi + s / leg.radius;
-        p = p0 + Eigen::Vector2d(0.0, leg.radius) + leg.radius * Eigen::Vector2d(std::cos(a), std::sin(a));
+        p = p0 + Eigen::Vector2d(0.0, leg.radius) +
+            leg.radius * Eigen::Vector2d(std::cos(a), std::sin(a));
         vel = v * Eigen::Vector2d(-std::sin(a), std::cos(a));
       } else {  // clockwise around the centre below it
         const double a = 0.5 * kPi - (s - lap) / leg.radius;
-        p = p0 - Eigen::Vector2d(0.0, leg.radius) + leg.radius * Eigen::Vector2d(std::cos(a), std::sin(a));
+        p = p0 - Eigen::Vector2d(0.0, leg.radius) +
+            leg.radius * Eigen::Vector2d(std::cos(a), std::sin(a));
         vel = v * Eigen::Vector2d(std::sin(a), -std::cos(a));
       }
       break;
@@ -199,11 +208,14 @@ namespace {
 Trajectory boundary_tour(const PlayingArea& f) {
   const double in = 25.0;   // centre this far inside a line while driving along it
   const double out = 40.0;  // and this far outside it at each excursion across it
-  const double x0 = f.x_min_cm + in, x1 = f.x_max_cm - in, y0 = f.y_min_cm + in, y1 = f.y_max_cm - in;
+  const double x0 = f.x_min_cm + in, x1 = f.x_max_cm - in, y0 = f.y_min_cm + in,
+               y1 = f.y_max_cm - in;
   const double xm = 0.5 * (f.x_min_cm + f.x_max_cm), ym = 0.5 * (f.y_min_cm + f.y_max_cm);
   const MotionLimits lim{100.0, 200.0, 120.0, 240.0};
   Trajectory t("boundary_tour", {x0, y0, 0.0});
-  t.line_to({xm, y0}, 0.0, lim).line_to({xm, f.y_min_cm - out}, 0.0, lim).line_to({xm, y0}, 0.0, lim);
+  t.line_to({xm, y0}, 0.0, lim)
+      .line_to({xm, f.y_min_cm - out}, 0.0, lim)
+      .line_to({xm, y0}, 0.0, lim);
   t.line_to({x1, y0}, 0.0, lim).line_to({x1, ym}, 90.0, lim);
   t.line_to({f.x_max_cm + out, ym}, 90.0, lim).line_to({x1, ym}, 90.0, lim);
   t.line_to({x1, y1}, 90.0, lim).line_to({xm, y1}, 180.0, lim);

@@ -10,7 +10,9 @@
 namespace omniloc::sim {
 namespace {
 
-std::int64_t cycles_for(double clock_hz, double ms) { return std::llround(clock_hz * ms / 1000.0); }
+std::int64_t cycles_for(double clock_hz, double ms) {
+  return std::llround(clock_hz * ms / 1000.0);
+}
 
 WorldConfig timed(const RobotConfig& robot, std::uint64_t seed) {
   WorldConfig c;
@@ -40,7 +42,8 @@ WorldConfig WorldConfig::noise_free(const RobotConfig& robot, std::uint64_t seed
   return c;
 }
 
-WorldConfig WorldConfig::default_noise(const RobotConfig& robot, std::uint64_t seed, const PlayingArea& f) {
+WorldConfig WorldConfig::default_noise(const RobotConfig& robot, std::uint64_t seed,
+                                       const PlayingArea& f) {
   WorldConfig c = timed(robot, seed);
   std::mt19937_64 rng(seed ^ 0xB0B5ULL);
   std::uniform_real_distribution<double> ux(f.x_min_cm, f.x_max_cm), uy(f.y_min_cm, f.y_max_cm);
@@ -57,10 +60,15 @@ std::int64_t position_at(const StepSpan& span, int w, std::int64_t cycle) {
 
 std::int64_t decoded_count(std::int64_t q, int decoding) {
   switch (decoding) {
-    case 4: return q;
-    case 2: return floor_div(q + 3, 4) + floor_div(q + 1, 4);
-    case 1: return floor_div(q + 3, 4);
-    default: throw std::invalid_argument("decoded_count: decoding must be 1, 2 or 4, got " + std::to_string(decoding));
+    case 4:
+      return q;
+    case 2:
+      return floor_div(q + 3, 4) + floor_div(q + 1, 4);
+    case 1:
+      return floor_div(q + 3, 4);
+    default:
+      throw std::invalid_argument("decoded_count: decoding must be 1, 2 or 4, got " +
+                                  std::to_string(decoding));
   }
 }
 
@@ -79,37 +87,48 @@ World::World(const WorldConfig& config, Trajectory trajectory)
   for (std::size_t i = 0; i < positions.size(); ++i) {
     wheel_position_[i] = positions[i];
     // The simulator counts X4 quarter-steps; the decoding is applied when a window is read.
-    cm_per_quarter_[i] = 2.0 * kPi * layout[i].wheel_radius_cm / (4.0 * layout[i].counts_per_rev * layout[i].gear_ratio);
+    cm_per_quarter_[i] = 2.0 * kPi * layout[i].wheel_radius_cm /
+                         (4.0 * layout[i].counts_per_rev * layout[i].gear_ratio);
   }
-  if (config.step_cycles <= 0 || config.window_cycles < config.step_cycles || config.first_window_end_cycles <= 0)
-    throw std::invalid_argument("WorldConfig: need step_cycles > 0, window_cycles >= step_cycles (got " +
-                                std::to_string(config.step_cycles) + ", " + std::to_string(config.window_cycles) +
-                                ") and first_window_end_cycles > 0");
+  if (config.step_cycles <= 0 || config.window_cycles < config.step_cycles ||
+      config.first_window_end_cycles <= 0)
+    throw std::invalid_argument(
+        "WorldConfig: need step_cycles > 0, window_cycles >= step_cycles (got " +
+        std::to_string(config.step_cycles) + ", " + std::to_string(config.window_cycles) +
+        ") and first_window_end_cycles > 0");
   for (std::size_t k = 1; k < config_.kidnaps.size(); ++k)
     if (config_.kidnaps[k].at_s < config_.kidnaps[k - 1].at_s)
       throw std::invalid_argument("WorldConfig: kidnap events must be in time order");
   for (const SlipEvent& s : config.slips)
     if (s.wheel < 1 || s.wheel > wheels_)
-      throw std::invalid_argument("WorldConfig: slip event wheel must be 1.." + std::to_string(wheels_) +
-                                  " for this robot, got " + std::to_string(s.wheel));
+      throw std::invalid_argument("WorldConfig: slip event wheel must be 1.." +
+                                  std::to_string(wheels_) + " for this robot, got " +
+                                  std::to_string(s.wheel));
   std::normal_distribution<double> n(0.0, 1.0);
   std::uniform_real_distribution<double> phase(0.0, 4.0);
   // Only the robot's wheels draw (a fourth, absent encoder stays at 0 and never moves).
   for (std::size_t i = 0; i < static_cast<std::size_t>(wheels_); ++i) {
     wheel_scale_[i] = config.encoder.scale_sigma * n(rng_);
     quarters_[i] = config.random_encoder_phase ? phase(rng_) : 0.0;
-    span_.end_pos[i] = std::llround(quarters_[i] * static_cast<double>(std::int64_t{1} << kFracBits));
+    span_.end_pos[i] =
+        std::llround(quarters_[i] * static_cast<double>(std::int64_t{1} << kFracBits));
     window_start_quarter_[i] = decoded_count(quarter_of(span_.end_pos[i]), config.robot.decoding);
   }
   span_.begin_pos = span_.end_pos;
   prev_gyro_raw_deg_ = gyro_.raw_yaw_deg();
 }
 
-double World::time_s() const { return static_cast<double>(span_.end_cycle) / config_.robot.clock_hz; }
+double World::time_s() const {
+  return static_cast<double>(span_.end_cycle) / config_.robot.clock_hz;
+}
 
-bool World::finished() const { return time_s() >= trajectory_.duration_s(); }
+bool World::finished() const {
+  return time_s() >= trajectory_.duration_s();
+}
 
-Eigen::Vector2d World::wheel_position_cm(int w) const { return wheel_position_.at(static_cast<std::size_t>(w)); }
+Eigen::Vector2d World::wheel_position_cm(int w) const {
+  return wheel_position_.at(static_cast<std::size_t>(w));
+}
 
 TrajectorySample World::reference(double t_s) const {
   TrajectorySample s = trajectory_.sample(t_s);
@@ -147,7 +166,8 @@ void World::step() {
     const TrajectorySample now = reference(t0);
     const TrajectorySample mid = reference(t0 + 0.5 * dt);
     const double k = config_.tracking_gain_per_s;
-    v_field = mid.velocity_cm_per_s + k * Eigen::Vector2d(now.pose.x_cm - pose_.x_cm, now.pose.y_cm - pose_.y_cm);
+    v_field = mid.velocity_cm_per_s +
+              k * Eigen::Vector2d(now.pose.x_cm - pose_.x_cm, now.pose.y_cm - pose_.y_cm);
     omega_deg = mid.yaw_rate_deg_per_s + k * angle_diff_deg(now.pose.yaw_deg, pose_.yaw_deg);
   }
   const Eigen::Vector2d v_body = field_to_robot(v_field, pose_.yaw_deg + 0.5 * omega_deg * dt);
@@ -157,10 +177,12 @@ void World::step() {
   const double dth = omega_rad * dt;
   const double a = std::abs(dth) < 1e-9 ? 1.0 : std::sin(dth) / dth;
   const double b = std::abs(dth) < 1e-9 ? 0.5 * dth : (1.0 - std::cos(dth)) / dth;
-  const Eigen::Vector2d chord_body(dt * (a * v_body.x() - b * v_body.y()), dt * (b * v_body.x() + a * v_body.y()));
+  const Eigen::Vector2d chord_body(dt * (a * v_body.x() - b * v_body.y()),
+                                   dt * (b * v_body.x() + a * v_body.y()));
   const Eigen::Vector2d dp = robot_to_field(chord_body, pose_.yaw_deg);
 
-  const Eigen::Vector4d ground = jacobian_ * Eigen::Vector3d(v_body.x(), v_body.y(), omega_rad) * dt;
+  const Eigen::Vector4d ground =
+      jacobian_ * Eigen::Vector3d(v_body.x(), v_body.y(), omega_rad) * dt;
   Eigen::Vector4d travel = ground;
 
   // Slip: extra spin in the wheel's direction of travel, for the part of the step it overlaps.
@@ -200,9 +222,11 @@ void World::step() {
     const auto i = static_cast<std::size_t>(w);
     double meas = travel[w] * (1.0 + wheel_scale_[i]);
     if (config_.encoder.rolling_noise_cm_per_sqrt_cm > 0.0)
-      meas += config_.encoder.rolling_noise_cm_per_sqrt_cm * std::sqrt(std::abs(ground[w])) * n(rng_);
+      meas +=
+          config_.encoder.rolling_noise_cm_per_sqrt_cm * std::sqrt(std::abs(ground[w])) * n(rng_);
     quarters_[i] += meas / cm_per_quarter_[i];
-    span_.end_pos[i] = std::llround(quarters_[i] * static_cast<double>(std::int64_t{1} << kFracBits));
+    span_.end_pos[i] =
+        std::llround(quarters_[i] * static_cast<double>(std::int64_t{1} << kFracBits));
   }
 
   prev_pose_ = pose_;
@@ -219,18 +243,21 @@ SimWindow World::next_window() {
   while (span_.end_cycle < next_window_end_) step();
   const std::int64_t c = next_window_end_;
   // Where inside the last step the window ends (1 when aligned with the step end).
-  const double f = static_cast<double>(c - span_.begin_cycle) / static_cast<double>(span_.end_cycle - span_.begin_cycle);
+  const double f = static_cast<double>(c - span_.begin_cycle) /
+                   static_cast<double>(span_.end_cycle - span_.begin_cycle);
   SimWindow out;
   out.t_end_cycles = c;
   out.window.seq = seq_++;
   out.window.t_end_ms = static_cast<double>(c) * 1000.0 / config_.robot.clock_hz;
   for (int w = 0; w < 4; ++w) {
     const auto i = static_cast<std::size_t>(w);
-    const std::int64_t count = decoded_count(quarter_of(position_at(span_, w, c)), config_.robot.decoding);
+    const std::int64_t count =
+        decoded_count(quarter_of(position_at(span_, w, c)), config_.robot.decoding);
     out.window.counts[i] = static_cast<std::int32_t>(count - window_start_quarter_[i]);
     window_start_quarter_[i] = count;
   }
-  out.window.gyro_yaw_deg = gyro_.report(prev_gyro_raw_deg_ + f * (gyro_.raw_yaw_deg() - prev_gyro_raw_deg_));
+  out.window.gyro_yaw_deg =
+      gyro_.report(prev_gyro_raw_deg_ + f * (gyro_.raw_yaw_deg() - prev_gyro_raw_deg_));
   out.truth = {prev_pose_.x_cm + f * (pose_.x_cm - prev_pose_.x_cm),
                prev_pose_.y_cm + f * (pose_.y_cm - prev_pose_.y_cm),
                wrap_deg(prev_pose_.yaw_deg + f * (pose_.yaw_deg - prev_pose_.yaw_deg))};

@@ -9,10 +9,10 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "../host/test_data_path.hpp"
 #include "omniloc/calibration.hpp"
 #include "omniloc/field.hpp"
 #include "omniloc_sim/renderer.hpp"
-#include "../host/test_data_path.hpp"
 #include "ratio_reporter.hpp"
 
 namespace omniloc {
@@ -24,7 +24,8 @@ void BM_CalibrateRealFrame(benchmark::State& state) {
   const FieldGeometry field = load_field("fira-robosot");
   const auto path = test_data("tku-robosot-centre-spot.png");
   if (path.empty()) {
-    state.SkipWithError("tests/data/tku-robosot-centre-spot.png not found (run from the build directory)");
+    state.SkipWithError(
+        "tests/data/tku-robosot-centre-spot.png not found (run from the build directory)");
     return;
   }
   const CalibrationFrame f{cv::imread(path.string()), "tku", {375.0, 275.0}, std::nullopt};
@@ -38,7 +39,8 @@ void BM_CalibrateRealisticFrame(benchmark::State& state) {
   const FieldGeometry field = load_field("fira-robosot");
   const sim::TrueOptics truth;
   const sim::RealisticRenderer renderer(field, truth);
-  const CalibrationFrame f{renderer.render({150.0, 375.0, 30.0}, sim::realistic(7)), "penalty", {150.0, 375.0}, 30.0};
+  const CalibrationFrame f{
+      renderer.render({150.0, 375.0, 30.0}, sim::realistic(7)), "penalty", {150.0, 375.0}, 30.0};
   for (auto _ : state) benchmark::DoNotOptimize(calibrate_camera({f}, field));
   state.SetItemsProcessed(state.iterations());
 }
@@ -54,7 +56,8 @@ int main(int argc, char** argv) {
   omniloc::bench::RatioReporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
   for (const auto& [name, ns] : reporter.ns_per_item)
-    std::printf("%-28s %.2f s per frame (CPU)   budget 10 s   %.1fx inside it\n", name.c_str(), ns / 1e9, 10.0 / (ns / 1e9));
+    std::printf("%-28s %.2f s per frame (CPU)   budget 10 s   %.1fx inside it\n", name.c_str(),
+                ns / 1e9, 10.0 / (ns / 1e9));
   benchmark::Shutdown();
   return 0;
 }

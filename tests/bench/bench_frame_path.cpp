@@ -1,29 +1,32 @@
 // The whole per-frame path as the daemon runs it (issue 13 item 8): the robot-frame line extraction
 // of one frame at the localizer's rays per degree (one LineExtractor kept from frame to frame), the
 // field-frame scan at the heading, the local search in the fuzzy range around the odometry's
-// prediction, and the sub-grid refinement (interpolation, then ray casting). Measured on five frames:
+// prediction, and the sub-grid refinement (interpolation, then ray casting). Measured on five
+// frames:
 //   0  rendered 640 x 480      (OmniRenderer, common/cameras/default.json, two robots in view)
-//   1  rendered 1280 x 1024    (the same camera scaled by 2: a larger sensor behind the same mirror;
+//   1  rendered 1280 x 1024    (the same camera scaled by 2: a larger sensor behind the same
+//   mirror;
 //                               its 477 px view sampled every 1.88 px, CameraModel::scan_step_px)
 //   2  realistic 640 x 480     (RealisticRenderer: hyperbolic tilted mirror, walls, people, robots,
 //                               noise, JPEG; matched with the optics' nominal camera)
 //   3  realistic 1280 x 1024   (the same optics scaled by 2)
 //   4  the real frame          (tests/data/tku-robosot-centre-spot.png with its calibrated camera)
 // Each beside the reference, the same path as the code stood before this benchmark's speed work
-// (LineExtractor::Walk::kBinWalk and refine_match_previous), in the same run; the ratio is printed at
-// the end. Both give the same pose (checked here on every frame, and byte for byte in the tests).
+// (LineExtractor::Walk::kBinWalk and refine_match_previous), in the same run; the ratio is printed
+// at the end. Both give the same pose (checked here on every frame, and byte for byte in the
+// tests).
 #include <benchmark/benchmark.h>
 
 #include "ratio_reporter.hpp"
 
 #include <algorithm>
 #include <cstdio>
-#include <ctime>
-#include <vector>
 #include <cstdlib>
+#include <ctime>
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -37,8 +40,9 @@ namespace omniloc {
 namespace {
 
 constexpr int kCases = 5;
-const char* const kCaseNames[kCases] = {"rendered 640 x 480", "rendered 1280 x 1024", "realistic 640 x 480",
-                                        "realistic 1280 x 1024", "real frame 640 x 480"};
+const char* const kCaseNames[kCases] = {"rendered 640 x 480", "rendered 1280 x 1024",
+                                        "realistic 640 x 480", "realistic 1280 x 1024",
+                                        "real frame 640 x 480"};
 
 CameraModel scaled_camera(const CameraModel& base, double factor, int width_px, int height_px) {
   CameraModel c = base;
@@ -94,16 +98,19 @@ Setup* build(int which) {
     if (img.empty() || cam.empty()) return nullptr;
     s->image = cv::imread(img.string(), cv::IMREAD_COLOR);
     s->camera = load_camera(cam.string());
-    s->truth = {375.0, 275.0, 0.0};  // the centre spot; heading as `omniloc locate` finds it (-0.2 deg)
+    s->truth = {375.0, 275.0,
+                0.0};  // the centre spot; heading as `omniloc locate` finds it (-0.2 deg)
   }
   s->predicted_cm = Eigen::Vector2d(s->truth.x_cm + 3.0, s->truth.y_cm - 4.0);
   s->db = build_feature_db(s->field, s->camera, GridSpec::covering(s->field, 10.0));
-  s->range_cm = fuzzy_search_range(s->config.fuzzy, 100.0).snapped_cm;  // 100 cm/s: 20 cm, 5 x 5 points
+  s->range_cm =
+      fuzzy_search_range(s->config.fuzzy, 100.0).snapped_cm;  // 100 cm/s: 20 cm, 5 x 5 points
   s->fast = std::make_unique<LineExtractor>(s->camera);
   s->reference = std::make_unique<LineExtractor>(s->camera);
   // The first frame is walked twice (measuring the light): not what is measured.
   (void)s->fast->extract(s->image, s->config.scan_rays_per_degree);
-  (void)s->reference->extract_with(LineExtractor::Walk::kBinWalk, s->image, s->config.scan_rays_per_degree);
+  (void)s->reference->extract_with(LineExtractor::Walk::kBinWalk, s->image,
+                                   s->config.scan_rays_per_degree);
   return s.release();
 }
 
@@ -123,11 +130,13 @@ MatchOptions options(const Setup& s) {
 }
 
 BearingScan scan_step(const Setup& s, bool reference) {
-  return reference ? s.reference->extract_with(LineExtractor::Walk::kBinWalk, s.image, s.config.scan_rays_per_degree)
+  return reference ? s.reference->extract_with(LineExtractor::Walk::kBinWalk, s.image,
+                                               s.config.scan_rays_per_degree)
                    : s.fast->extract(s.image, s.config.scan_rays_per_degree);
 }
 
-void refine_step(const Setup& s, const FieldScan& scan, MatchResult& m, const MatchOptions& mo, bool reference) {
+void refine_step(const Setup& s, const FieldScan& scan, MatchResult& m, const MatchOptions& mo,
+                 bool reference) {
   if (reference) {
     refine_match_previous(s.field, s.camera, scan, m, mo);
   } else {
@@ -148,14 +157,19 @@ MatchResult frame(const Setup& s, bool reference) {
 void run_frames(benchmark::State& state, bool reference) {
   const Setup* s = setup(static_cast<int>(state.range(0)));
   if (s == nullptr) {
-    state.SkipWithError("tests/data/tku-robosot-centre-spot.png not found (run from the build directory)");
+    state.SkipWithError(
+        "tests/data/tku-robosot-centre-spot.png not found (run from the build directory)");
     return;
   }
   for (auto _ : state) benchmark::DoNotOptimize(frame(*s, reference).position_cm);
   state.SetItemsProcessed(state.iterations());
 }
-void BM_FramePath(benchmark::State& state) { run_frames(state, false); }
-void BM_FramePathReference(benchmark::State& state) { run_frames(state, true); }
+void BM_FramePath(benchmark::State& state) {
+  run_frames(state, false);
+}
+void BM_FramePathReference(benchmark::State& state) {
+  run_frames(state, true);
+}
 
 // The steps alone, for the breakdown.
 void extract_only(benchmark::State& state, bool reference) {
@@ -167,8 +181,12 @@ void extract_only(benchmark::State& state, bool reference) {
   for (auto _ : state) benchmark::DoNotOptimize(scan_step(*s, reference));
   state.SetItemsProcessed(state.iterations());
 }
-void BM_ScanStep(benchmark::State& state) { extract_only(state, false); }
-void BM_ScanStepReference(benchmark::State& state) { extract_only(state, true); }
+void BM_ScanStep(benchmark::State& state) {
+  extract_only(state, false);
+}
+void BM_ScanStepReference(benchmark::State& state) {
+  extract_only(state, true);
+}
 
 void refine_only(benchmark::State& state, bool reference) {
   const Setup* s = setup(static_cast<int>(state.range(0)));
@@ -187,8 +205,12 @@ void refine_only(benchmark::State& state, bool reference) {
   }
   state.SetItemsProcessed(state.iterations());
 }
-void BM_RefineStep(benchmark::State& state) { refine_only(state, false); }
-void BM_RefineStepReference(benchmark::State& state) { refine_only(state, true); }
+void BM_RefineStep(benchmark::State& state) {
+  refine_only(state, false);
+}
+void BM_RefineStepReference(benchmark::State& state) {
+  refine_only(state, true);
+}
 
 BENCHMARK(BM_FramePath)->DenseRange(0, kCases - 1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_FramePathReference)->DenseRange(0, kCases - 1)->Unit(benchmark::kMillisecond);
@@ -238,8 +260,10 @@ int main(int argc, char** argv) {
   omniloc::bench::RatioReporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
   const auto& m = reporter.ns_per_item;
-  std::printf("\nper frame, CPU ms, median of 41 alternating rounds of 5 frames: new path | reference (the code before) "
-              "| ratio | target | same pose | steps above (extraction + refinement), new | reference\n");
+  std::printf(
+      "\nper frame, CPU ms, median of 41 alternating rounds of 5 frames: new path | reference (the "
+      "code before) "
+      "| ratio | target | same pose | steps above (extraction + refinement), new | reference\n");
   int failures = 0;
   for (int c = 0; c < omniloc::kCases; ++c) {
     const auto at = [&](const std::string& name) {
@@ -256,8 +280,9 @@ int main(int argc, char** argv) {
     const bool big = s.camera.width_px > 1000;
     std::printf("%-22s %6.3f ms | %6.3f ms | %5.2fx | %s %-7s | %-3s | %.3f + %.3f | %.3f + %.3f\n",
                 omniloc::kCaseNames[c], fast, ref, ref / fast, big ? "< 3 ms" : "< 1 ms",
-                fast < (big ? 3.0 : 1.0) ? "met" : "NOT met", same ? "yes" : "NO", at("BM_ScanStep"),
-                at("BM_RefineStep"), at("BM_ScanStepReference"), at("BM_RefineStepReference"));
+                fast < (big ? 3.0 : 1.0) ? "met" : "NOT met", same ? "yes" : "NO",
+                at("BM_ScanStep"), at("BM_RefineStep"), at("BM_ScanStepReference"),
+                at("BM_RefineStepReference"));
   }
   benchmark::Shutdown();
   return failures == 0 ? 0 : 1;

@@ -2,14 +2,14 @@
 // rendered camera): for every window, host wall time from the transport handing over the bytes
 // that held it (the board's tick plus the line time, which is the link's and not counted) to its
 // datagram having left the UDP socket (the observer's on_pose runs right after the send); for every
-// camera frame, from the frame source handing it over to the first datagram that used it (below). Percentiles
-// over a 10 s drive, beside the reference measured in the same run: the same datagram sent alone on
-// a loopback socket (what the path cannot go below), printing the ratio. Targets: window p99 below
-// 2 ms, frame below 3 ms. The drive runs twice: with the cross-check's global search inline on the
-// frame that triggers it (cross_check_worker false: the code before issue 15.6's fix, the reference)
-// and on its worker (the default), the frame path split at the localizer
-// having taken the frame (on_image: the lines, and the match when a window already covers the
-// frame's time) and the next window's way to its datagram.
+// camera frame, from the frame source handing it over to the first datagram that used it (below).
+// Percentiles over a 10 s drive, beside the reference measured in the same run: the same datagram
+// sent alone on a loopback socket (what the path cannot go below), printing the ratio. Targets:
+// window p99 below 2 ms, frame below 3 ms. The drive runs twice: with the cross-check's global
+// search inline on the frame that triggers it (cross_check_worker false: the code before
+// issue 15.6's fix, the reference) and on its worker (the default), the frame path split at the
+// localizer having taken the frame (on_image: the lines, and the match when a window already covers
+// the frame's time) and the next window's way to its datagram.
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
@@ -34,7 +34,9 @@ namespace omniloc {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+double ms_since(Clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
 
 /// Passes the simulated board through, keeping when its last read returned bytes.
 class TimedTransport : public Transport {
@@ -58,7 +60,8 @@ class TimedTransport : public Transport {
 /// Passes the simulated camera through, keeping when it handed a frame over.
 class TimedCamera : public daemon::FrameSource {
  public:
-  TimedCamera(daemon::FrameSource& inner, std::optional<Clock::time_point>& handed) : inner_(inner), handed_(handed) {}
+  TimedCamera(daemon::FrameSource& inner, std::optional<Clock::time_point>& handed)
+      : inner_(inner), handed_(handed) {}
   std::optional<daemon::CameraFrame> poll(double now_ms) override {
     auto f = inner_.poll(now_ms);
     if (f) handed_ = Clock::now();
@@ -80,7 +83,9 @@ Percentiles percentiles(std::vector<double> v) {
   p.n = v.size();
   if (v.empty()) return p;
   std::sort(v.begin(), v.end());
-  const auto at = [&](double q) { return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))]; };
+  const auto at = [&](double q) {
+    return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
+  };
   p.p50 = at(0.50);
   p.p99 = at(0.99);
   p.max = v.back();
@@ -101,7 +106,8 @@ std::vector<double> bare_sends(const std::string& datagram, int count) {
   char buf[2048];
   for (int i = 0; i < count; ++i) {
     const auto t0 = Clock::now();
-    (void)::sendto(s, datagram.data(), datagram.size(), 0, reinterpret_cast<sockaddr*>(&a), sizeof a);
+    (void)::sendto(s, datagram.data(), datagram.size(), 0, reinterpret_cast<sockaddr*>(&a),
+                   sizeof a);
     out.push_back(ms_since(t0));
     (void)::recv(r, buf, sizeof buf, 0);
   }
@@ -134,8 +140,9 @@ Run drive(const daemon::DaemonModels& models) {
   Run out;
   // A frame's time to the pose: its handover to the localizer having taken it (the line
   // extraction, and the match if a window already covers the frame's time; else the frame waits
-  // and is matched with the next window), plus the next window's bytes-in to datagram. The wall time in between is the simulator's, making the
-  // board's next 10 ms, which a real robot spends waiting.
+  // and is matched with the next window), plus the next window's bytes-in to datagram. The wall
+  // time in between is the simulator's, making the board's next 10 ms, which a real robot spends
+  // waiting.
   std::optional<double> frame_taken_ms;
   io.observer.on_pose = [&](const daemon::PoseEvent& e) {
     if (!e.from_window || !last_bytes) return;
@@ -188,10 +195,13 @@ int run() {
   const Run worker_run = drive(models);
   std::printf("cross-check on its worker: %s\n", worker_run.report.c_str());
   const std::string& gram = worker_run.datagram.empty() ? inline_run.datagram : worker_run.datagram;
-  const Percentiles ref = percentiles(bare_sends(gram.empty() ? std::string(300, 'x') : gram, 2000));
-  std::printf("\n%-58s %8s %8s %8s %8s\n", "latency (ms, host wall clock)", "n", "p50", "p99", "max");
-  for (const auto& [label, r] : {std::pair<const char*, const Run*>{"cross-check inline (before)", &inline_run},
-                                 std::pair<const char*, const Run*>{"cross-check on its worker (now)", &worker_run}}) {
+  const Percentiles ref =
+      percentiles(bare_sends(gram.empty() ? std::string(300, 'x') : gram, 2000));
+  std::printf("\n%-58s %8s %8s %8s %8s\n", "latency (ms, host wall clock)", "n", "p50", "p99",
+              "max");
+  for (const auto& [label, r] :
+       {std::pair<const char*, const Run*>{"cross-check inline (before)", &inline_run},
+        std::pair<const char*, const Run*>{"cross-check on its worker (now)", &worker_run}}) {
     std::printf("%s:\n", label);
     print_row("  window bytes in -> datagram sent", r->window);
     print_row("  camera frame handed over -> its pose sent", r->frame);
@@ -200,15 +210,19 @@ int run() {
   }
   print_row("reference: the datagram's sendto alone", ref);
   const Run& w = worker_run;
-  std::printf("ratio window path / bare send: p50 %.1f x, p99 %.1f x\n", w.window.p50 / ref.p50, w.window.p99 / ref.p99);
-  std::printf("ratio frame path inline / worker: p50 %.2f x, p99 %.2f x\n", inline_run.frame.p50 / w.frame.p50,
-              inline_run.frame.p99 / w.frame.p99);
-  std::printf("targets (worker): window p99 %.3f ms (< 2 ms: %s), frame p99 %.3f ms (< 3 ms: %s)\n", w.window.p99,
-              w.window.p99 < 2.0 ? "met" : "NOT met", w.frame.p99, w.frame.p99 < 3.0 ? "met" : "NOT met");
+  std::printf("ratio window path / bare send: p50 %.1f x, p99 %.1f x\n", w.window.p50 / ref.p50,
+              w.window.p99 / ref.p99);
+  std::printf("ratio frame path inline / worker: p50 %.2f x, p99 %.2f x\n",
+              inline_run.frame.p50 / w.frame.p50, inline_run.frame.p99 / w.frame.p99);
+  std::printf("targets (worker): window p99 %.3f ms (< 2 ms: %s), frame p99 %.3f ms (< 3 ms: %s)\n",
+              w.window.p99, w.window.p99 < 2.0 ? "met" : "NOT met", w.frame.p99,
+              w.frame.p99 < 3.0 ? "met" : "NOT met");
   return 0;
 }
 
 }  // namespace
 }  // namespace omniloc
 
-int main() { return omniloc::run(); }
+int main() {
+  return omniloc::run();
+}

@@ -10,11 +10,11 @@
 #include <cstdint>
 #include <cstdio>
 
+#include "Vomniloc_top_reference.h"
 #include "omniloc/protocol.hpp"
 #include "omniloc/regmap.hpp"
 #include "omniloc_sim/board_sim.hpp"
 #include "ratio_reporter.hpp"
-#include "Vomniloc_top_reference.h"
 
 namespace {
 
@@ -25,7 +25,8 @@ namespace rm = omniloc::regmap;
 constexpr double kCyclesPerByte = 10.0 * BoardSim::kClockHz / BoardSim::kBaud;
 
 // Sends one request and runs the board cycle by cycle until the whole answer is out of the FPGA.
-std::int64_t round_trip_cycles(BoardSim& board, const std::vector<std::uint8_t>& request, std::size_t answer_bytes) {
+std::int64_t round_trip_cycles(BoardSim& board, const std::vector<std::uint8_t>& request,
+                               std::size_t answer_bytes) {
   const std::int64_t start = board.cycle();
   board.to_board(request);
   std::size_t got = 0;
@@ -37,7 +38,8 @@ std::int64_t round_trip_cycles(BoardSim& board, const std::vector<std::uint8_t>&
   return board.cycle() - start;
 }
 
-void report(benchmark::State& state, std::int64_t cycles, std::size_t bytes_out, std::size_t bytes_in) {
+void report(benchmark::State& state, std::int64_t cycles, std::size_t bytes_out,
+            std::size_t bytes_in) {
   const double line = static_cast<double>(bytes_out + bytes_in) * kCyclesPerByte;
   state.counters["cycles"] = static_cast<double>(cycles);
   state.counters["us"] = static_cast<double>(cycles) * 1e6 / BoardSim::kClockHz;
@@ -70,7 +72,8 @@ constexpr std::int64_t kSpeedSlice = BoardSim::kClockHz / 100;
 void speed_counters(benchmark::State& state) {
   const auto cycles = static_cast<double>(state.iterations() * kSpeedSlice);
   state.counters["cycles_per_s"] = benchmark::Counter(cycles, benchmark::Counter::kIsRate);
-  state.counters["x_real_time"] = benchmark::Counter(cycles / BoardSim::kClockHz, benchmark::Counter::kIsRate);
+  state.counters["x_real_time"] =
+      benchmark::Counter(cycles / BoardSim::kClockHz, benchmark::Counter::kIsRate);
   state.SetItemsProcessed(state.iterations() * kSpeedSlice);
 }
 
@@ -127,9 +130,11 @@ int main(int argc, char** argv) {
   const auto a = m.find("BM_BoardSimulationSpeed/min_time:1.000");
   const auto b = m.find("BM_BoardSimulationSpeedEvalBothEdges/min_time:1.000");
   if (a != m.end() && b != m.end()) {
-    std::printf("%-38s %6.2f M cycles/s (CPU), %.2fx real time (12 M cycles/s), %.2fx the reference %s (%.2f M cycles/s)\n",
-                "BM_BoardSimulationSpeed", 1e3 / a->second, 1e9 / a->second / BoardSim::kClockHz, b->second / a->second,
-                "BM_BoardSimulationSpeedEvalBothEdges", 1e3 / b->second);
+    std::printf(
+        "%-38s %6.2f M cycles/s (CPU), %.2fx real time (12 M cycles/s), %.2fx the reference %s "
+        "(%.2f M cycles/s)\n",
+        "BM_BoardSimulationSpeed", 1e3 / a->second, 1e9 / a->second / BoardSim::kClockHz,
+        b->second / a->second, "BM_BoardSimulationSpeedEvalBothEdges", 1e3 / b->second);
   }
   benchmark::Shutdown();
   return 0;

@@ -1,8 +1,8 @@
 // The live view's cost per overlay image (live_view.hpp): LiveState::frame_jpeg (what the page
 // shows) and frame_png (lossless, on request) on a new 640 x 480 rendered frame each time (the line
 // extraction, the goal observation, locate_overlay, the encoding), beside the reference measured in
-// the same run: the line extraction alone, which the localizer runs on every frame (60 Hz). The live
-// view makes at most 5 images a second, so its load is ratio x 5 / 60 of the extraction's.
+// the same run: the line extraction alone, which the localizer runs on every frame (60 Hz). The
+// live view makes at most 5 images a second, so its load is ratio x 5 / 60 of the extraction's.
 #include <benchmark/benchmark.h>
 
 #include "ratio_reporter.hpp"
@@ -58,8 +58,12 @@ void frame_image(benchmark::State& state, bool png) {
   state.SetItemsProcessed(state.iterations());
   state.counters["kB"] = static_cast<double>(bytes) / 1024.0;
 }
-void BM_LiveViewFrameJpeg(benchmark::State& state) { frame_image(state, false); }
-void BM_LiveViewFramePng(benchmark::State& state) { frame_image(state, true); }
+void BM_LiveViewFrameJpeg(benchmark::State& state) {
+  frame_image(state, false);
+}
+void BM_LiveViewFramePng(benchmark::State& state) {
+  frame_image(state, true);
+}
 BENCHMARK(BM_LiveViewFrameJpeg)->Unit(benchmark::kMillisecond)->MinTime(1.0);
 BENCHMARK(BM_LiveViewFramePng)->Unit(benchmark::kMillisecond)->MinTime(1.0);
 
@@ -92,9 +96,11 @@ int main(int argc, char** argv) {
     for (const char* name : {"BM_LiveViewFrameJpeg", "BM_LiveViewFramePng"}) {
       const double t = find(name);
       if (t > 0)
-        std::printf("%-22s %.2f ms | %.2fx the extraction; at 5 images/s against 60 frames/s: %.0f%% of the "
-                    "extraction's load\n",
-                    name + 3, t / 1e6, t / ref, 100.0 * (t / ref) * 5.0 / 60.0);
+        std::printf(
+            "%-22s %.2f ms | %.2fx the extraction; at 5 images/s against 60 frames/s: %.0f%% of "
+            "the "
+            "extraction's load\n",
+            name + 3, t / 1e6, t / ref, 100.0 * (t / ref) * 5.0 / 60.0);
     }
   }
   benchmark::Shutdown();

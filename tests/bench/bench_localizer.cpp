@@ -29,8 +29,10 @@ struct Setup {
 const Setup& setup() {
   static const Setup s = [] {
     Setup x;
-    x.renderer = std::make_unique<sim::OmniRenderer>(load_field("fira-robosot"), load_camera("default"));
-    x.db = build_feature_db(x.renderer->field(), x.renderer->camera(), GridSpec::covering(x.renderer->field(), 10.0));
+    x.renderer =
+        std::make_unique<sim::OmniRenderer>(load_field("fira-robosot"), load_camera("default"));
+    x.db = build_feature_db(x.renderer->field(), x.renderer->camera(),
+                            GridSpec::covering(x.renderer->field(), 10.0));
     x.image = x.renderer->render(x.truth, sim::RenderOptions{});
     x.scan = scan_image(x.image, x.renderer->camera(), x.truth.yaw_deg);
     return x;
@@ -83,7 +85,8 @@ void BM_FullModeFramePerFrame(benchmark::State& state) {
   const Setup& s = setup();
   for (auto _ : state) {
     const BearingScan b = scan_image_bearings(s.image, s.renderer->camera(), 4);
-    const FieldScan scan = make_field_scan(b, s.truth.yaw_deg);  // rotated and prepared once, as the localizer does
+    const FieldScan scan =
+        make_field_scan(b, s.truth.yaw_deg);  // rotated and prepared once, as the localizer does
     MatchResult m = local_search(s.db, scan, {s.truth.x_cm, s.truth.y_cm}, 20.0);
     MatchOptions mo;
     mo.refinement = Refinement::kRayCast;
@@ -93,7 +96,6 @@ void BM_FullModeFramePerFrame(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_FullModeFramePerFrame)->Unit(benchmark::kMillisecond);
-
 
 }  // namespace
 }  // namespace omniloc
@@ -108,8 +110,8 @@ int main(int argc, char** argv) {
     const auto a = m.find(name);
     const auto b = m.find(naive);
     if (a == m.end() || b == m.end()) return;
-    std::printf("%-30s %10.4f ms per frame (CPU)   %.1fx faster than the naive %s\n", name, a->second / 1e6,
-                b->second / a->second, naive);
+    std::printf("%-30s %10.4f ms per frame (CPU)   %.1fx faster than the naive %s\n", name,
+                a->second / 1e6, b->second / a->second, naive);
   };
   ratio("BM_FuzzyLocalSearchPerFrame", "BM_NaiveGlobalSearchPerFrame");
   ratio("BM_FullModeFramePerFrame", "BM_NaiveFramePerFrame");

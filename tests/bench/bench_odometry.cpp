@@ -2,8 +2,9 @@
 // reference that rebuilds eq. (9)'s matrix and its pseudo-inverse (SVD) at every window, and the
 // paper variant. Windows come from the simulator (random walk, default noise, one slip event).
 // Prints updates/s and the ratio to the naive reference measured in the same run.
-// Also the cycle-level encoder waveform: QuadratureStream::levels_at per clock cycle beside the naive
-// per-cycle evaluation of all four encoder positions (what a testbench would do without the stream).
+// Also the cycle-level encoder waveform: QuadratureStream::levels_at per clock cycle beside the
+// naive per-cycle evaluation of all four encoder positions (what a testbench would do without the
+// stream).
 #include <benchmark/benchmark.h>
 
 #include "ratio_reporter.hpp"
@@ -42,7 +43,8 @@ struct NaiveOdometry {
   double last_gyro = 0.0;
   void update(const EncoderWindow& w) {
     const Eigen::Matrix<double, 4, 3> j = wheel_jacobian(c.motor_angle_deg, c.center_to_wheel_cm);
-    const Eigen::MatrixXd pinv = Eigen::MatrixXd(j).completeOrthogonalDecomposition().pseudoInverse();
+    const Eigen::MatrixXd pinv =
+        Eigen::MatrixXd(j).completeOrthogonalDecomposition().pseudoInverse();
     Eigen::VectorXd travel(4);
     for (int i = 0; i < 4; ++i) travel[i] = w.counts[static_cast<std::size_t>(i)] * cm_per_count(c);
     const Eigen::VectorXd x = pinv * travel;
@@ -130,7 +132,8 @@ BENCHMARK(BM_NaiveWaveformPerCycle)->Unit(benchmark::kMillisecond);
 
 void BM_QuadratureStreamPerCycle(benchmark::State& state) {
   const sim::WorldConfig cfg = sim::WorldConfig::default_noise(RobotConfig{}, 5);
-  auto stream = std::make_unique<sim::QuadratureStream>(cfg, sim::make_trajectory("random_walk", 5));
+  auto stream =
+      std::make_unique<sim::QuadratureStream>(cfg, sim::make_trajectory("random_walk", 5));
   std::int64_t c = 1;
   unsigned acc = 0;
   for (auto _ : state) {
@@ -147,7 +150,6 @@ void BM_QuadratureStreamPerCycle(benchmark::State& state) {
 }
 BENCHMARK(BM_QuadratureStreamPerCycle)->Unit(benchmark::kMillisecond);
 
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -160,8 +162,8 @@ int main(int argc, char** argv) {
     const auto a = m.find(name);
     const auto b = m.find(naive);
     if (a == m.end() || b == m.end()) return;
-    std::printf("%-30s %12.0f %s (CPU)   %.1fx the naive reference %s\n", name, 1e9 / a->second, unit,
-                b->second / a->second, naive);
+    std::printf("%-30s %12.0f %s (CPU)   %.1fx the naive reference %s\n", name, 1e9 / a->second,
+                unit, b->second / a->second, naive);
   };
   ratio("BM_OdometryUpdate", "BM_NaivePseudoInversePerUpdate", "updates/s");
   ratio("BM_PaperOdometryUpdate", "BM_NaivePseudoInversePerUpdate", "updates/s");

@@ -27,7 +27,8 @@ const std::vector<std::uint8_t>& stream() {
       protocol::encode_into(protocol::Telemetry{w}, out);
     }
     std::uniform_int_distribution<std::size_t> at(0, out.size() - 1);
-    for (std::size_t i = 0; i < out.size() / 100; ++i) out[at(rng)] = static_cast<std::uint8_t>(rng());
+    for (std::size_t i = 0; i < out.size() / 100; ++i)
+      out[at(rng)] = static_cast<std::uint8_t>(rng());
     return out;
   }();
   return s;
@@ -38,7 +39,9 @@ std::uint16_t crc_bitwise(const std::vector<std::uint8_t>& bytes) {
   std::uint16_t crc = 0xFFFF;
   for (const std::uint8_t b : bytes) {
     crc ^= static_cast<std::uint16_t>(b << 8);
-    for (int i = 0; i < 8; ++i) crc = (crc & 0x8000) ? static_cast<std::uint16_t>((crc << 1) ^ 0x1021) : static_cast<std::uint16_t>(crc << 1);
+    for (int i = 0; i < 8; ++i)
+      crc = (crc & 0x8000) ? static_cast<std::uint16_t>((crc << 1) ^ 0x1021)
+                           : static_cast<std::uint16_t>(crc << 1);
   }
   return crc;
 }
@@ -58,7 +61,8 @@ class NaiveParser {
       }
       const std::size_t total = *body + 5;
       if (buf_.size() < total) return frames;
-      std::vector<std::uint8_t> covered(buf_.begin() + 1, buf_.begin() + static_cast<std::ptrdiff_t>(total - 2));
+      std::vector<std::uint8_t> covered(buf_.begin() + 1,
+                                        buf_.begin() + static_cast<std::ptrdiff_t>(total - 2));
       const auto crc = static_cast<std::uint16_t>((buf_[total - 2] << 8) | buf_[total - 1]);
       if (crc_bitwise(covered) != crc) {
         buf_.pop_front();
@@ -100,7 +104,8 @@ void BM_NaiveParser(benchmark::State& state) {
   std::size_t frames = 0;
   for (auto _ : state) {
     NaiveParser p;
-    for (std::size_t at = 0; at < s.size(); at += kChunk) frames += p.feed(s.data() + at, std::min(kChunk, s.size() - at));
+    for (std::size_t at = 0; at < s.size(); at += kChunk)
+      frames += p.feed(s.data() + at, std::min(kChunk, s.size() - at));
   }
   state.SetBytesProcessed(static_cast<std::int64_t>(state.iterations() * s.size()));
   state.counters["frames"] = static_cast<double>(frames) / static_cast<double>(state.iterations());
@@ -131,8 +136,8 @@ int main(int argc, char** argv) {
   const auto naive = m.find("BM_NaiveParser");
   const double bytes = static_cast<double>(stream().size());
   for (const auto& [name, ns] : m) {
-    std::printf("%-16s %8.1f MB/s  %10.0f frames/s  (%.0f frames accepted of 20000)", name.c_str(), bytes / ns * 1e3,
-                reporter.frames[name] / ns * 1e9, reporter.frames[name]);
+    std::printf("%-16s %8.1f MB/s  %10.0f frames/s  (%.0f frames accepted of 20000)", name.c_str(),
+                bytes / ns * 1e3, reporter.frames[name] / ns * 1e9, reporter.frames[name]);
     if (naive != m.end()) std::printf("  %.1fx the naive reference", naive->second / ns);
     std::printf("\n");
   }

@@ -1,10 +1,11 @@
 // Vision benchmarks: each fast path beside its straightforward reference in the same run; the
 // ratios, the targets and the database size are printed at the end.
 //   line scan of one 640 x 480 image        scan_image vs scan_image_reference (OpenCV whole image)
-//   line extraction, 360 x 4 rays           LineExtractor::extract vs extract_reference (+ fixed thresholds)
-//   global search (75 x 55)                 global_search vs global_search_reference (scalar SAD)
-//   local search, range 0/10/20/30 cm       local_search vs a scalar loop over the same window
-//   image to pose (local 20 cm, global)     scan + search + refinement vs reference scan + scalar search
+//   line extraction, 360 x 4 rays           LineExtractor::extract vs extract_reference (+ fixed
+//   thresholds) global search (75 x 55)                 global_search vs global_search_reference
+//   (scalar SAD) local search, range 0/10/20/30 cm       local_search vs a scalar loop over the
+//   same window image to pose (local 20 cm, global)     scan + search + refinement vs reference
+//   scan + scalar search
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
@@ -44,7 +45,8 @@ Fixture& fx() {
 }
 
 // The naive local search: the same window, scalar SAD, keep the minimum.
-int local_reference(const FeatureDb& db, const Scan& scan, const Eigen::Vector2d& c, double range_cm) {
+int local_reference(const FeatureDb& db, const Scan& scan, const Eigen::Vector2d& c,
+                    double range_cm) {
   const GridSpec& g = db.grid;
   const int ci = static_cast<int>(std::lround((c.x() - g.x0_cm) / g.step_cm));
   const int cj = static_cast<int>(std::lround((c.y() - g.y0_cm) / g.step_cm));
@@ -64,10 +66,12 @@ int local_reference(const FeatureDb& db, const Scan& scan, const Eigen::Vector2d
 }
 
 void BM_LineScan_Fast(benchmark::State& st) {
-  for (auto _ : st) benchmark::DoNotOptimize(scan_image(fx().image, fx().camera, fx().truth.yaw_deg));
+  for (auto _ : st)
+    benchmark::DoNotOptimize(scan_image(fx().image, fx().camera, fx().truth.yaw_deg));
 }
 void BM_LineScan_Reference(benchmark::State& st) {
-  for (auto _ : st) benchmark::DoNotOptimize(scan_image_reference(fx().image, fx().camera, fx().truth.yaw_deg));
+  for (auto _ : st)
+    benchmark::DoNotOptimize(scan_image_reference(fx().image, fx().camera, fx().truth.yaw_deg));
 }
 // The line extraction (LineExtractor::extract, 360 x 4 rays, adaptive carpet-relative classes)
 // against its reference walk (extract_reference: every pixel's HSV on every ray touching it; the
@@ -98,16 +102,20 @@ void BM_GlobalSearch_Reference(benchmark::State& st) {
 }
 void BM_LocalSearch_Fast(benchmark::State& st) {
   const Eigen::Vector2d c(fx().truth.x_cm + 7.0, fx().truth.y_cm - 4.0);
-  for (auto _ : st) benchmark::DoNotOptimize(local_search(fx().db, fx().scan, c, static_cast<double>(st.range(0))));
+  for (auto _ : st)
+    benchmark::DoNotOptimize(local_search(fx().db, fx().scan, c, static_cast<double>(st.range(0))));
 }
 void BM_LocalSearch_Reference(benchmark::State& st) {
   const Eigen::Vector2d c(fx().truth.x_cm + 7.0, fx().truth.y_cm - 4.0);
-  for (auto _ : st) benchmark::DoNotOptimize(local_reference(fx().db, fx().scan, c, static_cast<double>(st.range(0))));
+  for (auto _ : st)
+    benchmark::DoNotOptimize(
+        local_reference(fx().db, fx().scan, c, static_cast<double>(st.range(0))));
 }
 void BM_ImageToPose_Local20_Fast(benchmark::State& st) {
   const Eigen::Vector2d c(fx().truth.x_cm + 7.0, fx().truth.y_cm - 4.0);
   for (auto _ : st) {
-    benchmark::DoNotOptimize(image_to_position(fx().image, fx().camera, fx().field, fx().db, fx().truth.yaw_deg, &c, 20.0));
+    benchmark::DoNotOptimize(image_to_position(fx().image, fx().camera, fx().field, fx().db,
+                                               fx().truth.yaw_deg, &c, 20.0));
   }
 }
 void BM_ImageToPose_Local20_Reference(benchmark::State& st) {
@@ -119,7 +127,8 @@ void BM_ImageToPose_Local20_Reference(benchmark::State& st) {
 }
 void BM_ImageToPose_Global_Fast(benchmark::State& st) {
   for (auto _ : st) {
-    benchmark::DoNotOptimize(image_to_position(fx().image, fx().camera, fx().field, fx().db, fx().truth.yaw_deg, nullptr, 0.0));
+    benchmark::DoNotOptimize(image_to_position(fx().image, fx().camera, fx().field, fx().db,
+                                               fx().truth.yaw_deg, nullptr, 0.0));
   }
 }
 void BM_ImageToPose_Global_Reference(benchmark::State& st) {
@@ -137,7 +146,8 @@ void BM_Refine_Only(benchmark::State& st) {
   }
 }
 void BM_BuildDatabase_2Threads(benchmark::State& st) {
-  for (auto _ : st) benchmark::DoNotOptimize(build_feature_db(fx().field, fx().camera, fx().db.grid, {}, 2));
+  for (auto _ : st)
+    benchmark::DoNotOptimize(build_feature_db(fx().field, fx().camera, fx().db.grid, {}, 2));
 }
 
 BENCHMARK(BM_LineScan_Fast)->Unit(benchmark::kMicrosecond);
@@ -148,7 +158,12 @@ BENCHMARK(BM_ExtractFixedThresholds)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_GlobalSearch_Fast)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_GlobalSearch_Reference)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_LocalSearch_Fast)->Arg(0)->Arg(10)->Arg(20)->Arg(30)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_LocalSearch_Reference)->Arg(0)->Arg(10)->Arg(20)->Arg(30)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_LocalSearch_Reference)
+    ->Arg(0)
+    ->Arg(10)
+    ->Arg(20)
+    ->Arg(30)
+    ->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ImageToPose_Local20_Fast)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ImageToPose_Local20_Reference)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ImageToPose_Global_Fast)->Unit(benchmark::kMicrosecond);
@@ -156,12 +171,14 @@ BENCHMARK(BM_ImageToPose_Global_Reference)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Refine_Only)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_BuildDatabase_2Threads)->Unit(benchmark::kMillisecond)->Iterations(3);
 
-// Remembers each run's CPU time per iteration (the machine is shared) (microseconds) to print the ratios afterwards.
+// Remembers each run's CPU time per iteration (the machine is shared) (microseconds) to print the
+// ratios afterwards.
 class RatioReporter : public benchmark::ConsoleReporter {
  public:
   void ReportRuns(const std::vector<Run>& runs) override {
     for (const auto& r : runs) {
-      const double us = r.GetAdjustedCPUTime() * 1e6 / benchmark::GetTimeUnitMultiplier(r.time_unit);
+      const double us =
+          r.GetAdjustedCPUTime() * 1e6 / benchmark::GetTimeUnitMultiplier(r.time_unit);
       times_[r.benchmark_name()] = us;
     }
     ConsoleReporter::ReportRuns(runs);
@@ -175,22 +192,22 @@ class RatioReporter : public benchmark::ConsoleReporter {
       ref.replace(pos, 5, "_Reference");
       const auto it = times_.find(ref);
       if (it == times_.end()) continue;
-      std::printf("  %-40s %9.1f us   reference %9.1f us   speed-up x%.1f\n", name.c_str(), fast_us, it->second,
-                  it->second / fast_us);
+      std::printf("  %-40s %9.1f us   reference %9.1f us   speed-up x%.1f\n", name.c_str(), fast_us,
+                  it->second, it->second / fast_us);
     }
     auto show = [&](const char* name, const char* label, double target_us) {
       const auto it = times_.find(name);
       if (it == times_.end()) return;
-      std::printf("  %-44s %8.3f ms  (target < %.2f ms: %s)\n", label, it->second / 1000.0, target_us / 1000.0,
-                  it->second < target_us ? "met" : "NOT met");
+      std::printf("  %-44s %8.3f ms  (target < %.2f ms: %s)\n", label, it->second / 1000.0,
+                  target_us / 1000.0, it->second < target_us ? "met" : "NOT met");
     };
     std::printf("\ntargets:\n");
     show("BM_Extract_Fast/4", "line extraction, 360 x 4 rays (LineExtractor)", 350.0);
     show("BM_ImageToPose_Local20_Fast", "image to pose, 20 cm local search + refine", 1000.0);
     show("BM_GlobalSearch_Fast", "global search (75 x 55)", 2000.0);
     show("BM_ImageToPose_Global_Fast", "image to pose, global search + refine", 2000.0);
-    std::printf("  database in memory: %zu bytes (%d grid points x %d bytes)\n", fx().db.bytes_in_memory(),
-                fx().db.grid.cells(), kFeatureBytes);
+    std::printf("  database in memory: %zu bytes (%d grid points x %d bytes)\n",
+                fx().db.bytes_in_memory(), fx().db.grid.cells(), kFeatureBytes);
   }
 
  private:

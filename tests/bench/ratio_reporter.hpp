@@ -17,7 +17,8 @@ class RatioReporter : public benchmark::ConsoleReporter {
     for (const Run& r : runs) {
       if (r.run_type != Run::RT_Iteration) continue;
       const auto items = r.counters.find("items_per_second");
-      if (items != r.counters.end() && items->second.value > 0) ns_per_item[r.benchmark_name()] = 1e9 / items->second.value;
+      if (items != r.counters.end() && items->second.value > 0)
+        ns_per_item[r.benchmark_name()] = 1e9 / items->second.value;
     }
     ConsoleReporter::ReportRuns(runs);
   }

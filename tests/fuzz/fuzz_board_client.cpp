@@ -31,9 +31,10 @@ using omniloc::fuzz::fuzz_check;
 namespace protocol = omniloc::protocol;
 namespace regmap = omniloc::regmap;
 
-constexpr std::uint8_t kTypes[] = {regmap::kFrameReadReq,      regmap::kFrameWriteReq,  regmap::kFrameSnapshotReq,
-                                   regmap::kFrameReadResp,     regmap::kFrameWriteAck,  regmap::kFrameSnapshotResp,
-                                   regmap::kFrameTelemetry,    regmap::kFrameError};
+constexpr std::uint8_t kTypes[] = {regmap::kFrameReadReq,     regmap::kFrameWriteReq,
+                                   regmap::kFrameSnapshotReq, regmap::kFrameReadResp,
+                                   regmap::kFrameWriteAck,    regmap::kFrameSnapshotResp,
+                                   regmap::kFrameTelemetry,   regmap::kFrameError};
 
 class ScriptedTransport : public omniloc::Transport {
  public:
@@ -54,26 +55,31 @@ class ScriptedTransport : public omniloc::Transport {
     const std::uint8_t op = script_[at_++];
     if (op < 0x40) {
       const std::size_t n = std::min<std::size_t>(op + 1u, script_.size() - at_);
-      pending_.assign(script_.begin() + static_cast<std::ptrdiff_t>(at_), script_.begin() + static_cast<std::ptrdiff_t>(at_ + n));
+      pending_.assign(script_.begin() + static_cast<std::ptrdiff_t>(at_),
+                      script_.begin() + static_cast<std::ptrdiff_t>(at_ + n));
       at_ += n;
     } else if (op < 0xC0) {
       const std::uint8_t type = kTypes[op & 7];
       const std::size_t body = *protocol::body_bytes(type);
       pending_ = {regmap::kFrameSync, static_cast<std::uint8_t>(body + 1), type};
-      for (std::size_t i = 0; i < body; ++i) pending_.push_back(at_ < script_.size() ? script_[at_++] : 0);
+      for (std::size_t i = 0; i < body; ++i)
+        pending_.push_back(at_ < script_.size() ? script_[at_++] : 0);
       const std::uint16_t crc = protocol::crc16_ccitt(std::span(pending_).subspan(1));
       pending_.push_back(static_cast<std::uint8_t>(crc >> 8));
       pending_.push_back(static_cast<std::uint8_t>(crc & 0xFF));
     } else if (op < 0xFE) {
       return time_out(timeout);
     } else {
-      throw omniloc::TransportError(op == 0xFE ? omniloc::TransportErrorKind::kDeviceGone : omniloc::TransportErrorKind::kIo,
-                                    "scripted transport: fault");
+      throw omniloc::TransportError(
+          op == 0xFE ? omniloc::TransportErrorKind::kDeviceGone : omniloc::TransportErrorKind::kIo,
+          "scripted transport: fault");
     }
     return give(out);
   }
 
-  [[nodiscard]] omniloc::TransportStatus status() const override { return {true, false, "scripted", {}}; }
+  [[nodiscard]] omniloc::TransportStatus status() const override {
+    return {true, false, "scripted", {}};
+  }
   [[nodiscard]] std::chrono::steady_clock::time_point now() const override { return now_; }
 
   protocol::FrameDecoder written_;
@@ -113,14 +119,30 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     for (int k = 0; k < 5; ++k) {
       switch ((ops >> (3 * k)) & 7) {
-        case 0: (void)client.read_register(regmap::kRegId); break;
-        case 1: (void)client.read_register(regmap::kRegControl); break;
-        case 2: client.write_register(regmap::kRegControl, 0); break;
-        case 3: (void)client.snapshot(); break;
-        case 4: client.set_streaming(true); break;
-        case 5: client.set_streaming(false); break;
-        case 6: (void)client.poll_telemetry(std::chrono::milliseconds(0)); break;
-        default: (void)client.poll_telemetry(std::chrono::milliseconds(30)); break;
+        case 0:
+          (void)client.read_register(regmap::kRegId);
+          break;
+        case 1:
+          (void)client.read_register(regmap::kRegControl);
+          break;
+        case 2:
+          client.write_register(regmap::kRegControl, 0);
+          break;
+        case 3:
+          (void)client.snapshot();
+          break;
+        case 4:
+          client.set_streaming(true);
+          break;
+        case 5:
+          client.set_streaming(false);
+          break;
+        case 6:
+          (void)client.poll_telemetry(std::chrono::milliseconds(0));
+          break;
+        default:
+          (void)client.poll_telemetry(std::chrono::milliseconds(30));
+          break;
       }
     }
   } catch (const omniloc::BoardError&) {
@@ -130,7 +152,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::uint64_t frames = 0;
   while (const auto f = transport.written_.next()) {
     ++frames;
-    fuzz_check(std::holds_alternative<protocol::ReadReq>(*f) || std::holds_alternative<protocol::WriteReq>(*f) ||
+    fuzz_check(std::holds_alternative<protocol::ReadReq>(*f) ||
+                   std::holds_alternative<protocol::WriteReq>(*f) ||
                    std::holds_alternative<protocol::SnapshotReq>(*f),
                "the client sent a frame that is not a request");
   }

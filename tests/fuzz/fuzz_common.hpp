@@ -7,13 +7,13 @@
 // properties a harness asserts about what the entry point returned.
 #pragma once
 
+#include <unistd.h>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
 #include <string_view>
-#include <unistd.h>
 
 namespace omniloc::fuzz {
 

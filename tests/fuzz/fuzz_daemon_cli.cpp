@@ -61,9 +61,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       const std::string text = json.is_string() ? json.get<std::string>() : json.dump();
       omniloc::daemon::set_daemon_key(back, k.name, text, "round trip");
     }
-    fuzz_check(back == c, "a configuration from the command line does not read back from its own text");
+    fuzz_check(back == c,
+               "a configuration from the command line does not read back from its own text");
   } catch (const omniloc::ConfigError& e) {
-    fuzz_check(std::strstr(e.what(), "command line") != nullptr, "a ConfigError that does not name the command line");
+    fuzz_check(std::strstr(e.what(), "command line") != nullptr,
+               "a ConfigError that does not name the command line");
   }
   return 0;
 }

@@ -23,7 +23,8 @@ std::uint16_t reference_crc(std::span<const std::uint8_t> bytes) {
   std::uint16_t crc = 0xFFFF;
   for (const std::uint8_t b : bytes) {
     crc ^= static_cast<std::uint16_t>(b << 8);
-    for (int i = 0; i < 8; ++i) crc = static_cast<std::uint16_t>((crc & 0x8000) ? (crc << 1) ^ 0x1021 : crc << 1);
+    for (int i = 0; i < 8; ++i)
+      crc = static_cast<std::uint16_t>((crc & 0x8000) ? (crc << 1) ^ 0x1021 : crc << 1);
   }
   return crc;
 }
@@ -55,7 +56,8 @@ Reference reference_decode(std::span<const std::uint8_t> s) {
     }
     const std::size_t total = *body + 5;
     if (s.size() - i < total) break;
-    const std::uint16_t got = static_cast<std::uint16_t>((s[i + total - 2] << 8) | s[i + total - 1]);
+    const std::uint16_t got =
+        static_cast<std::uint16_t>((s[i + total - 2] << 8) | s[i + total - 1]);
     if (reference_crc(s.subspan(i + 1, total - 3)) != got) {
       ++i;
       continue;
@@ -63,8 +65,9 @@ Reference reference_decode(std::span<const std::uint8_t> s) {
     const auto frame = s.subspan(i, total);
     i += total;
     if (frame[2] == regmap::kFrameTelemetry) {
-      const std::uint32_t seq = static_cast<std::uint32_t>(frame[3]) | static_cast<std::uint32_t>(frame[4]) << 8 |
-                                static_cast<std::uint32_t>(frame[5]) << 16 | static_cast<std::uint32_t>(frame[6]) << 24;
+      const std::uint32_t seq =
+          static_cast<std::uint32_t>(frame[3]) | static_cast<std::uint32_t>(frame[4]) << 8 |
+          static_cast<std::uint32_t>(frame[5]) << 16 | static_cast<std::uint32_t>(frame[6]) << 24;
       if (last_seq && static_cast<std::uint32_t>(seq - *last_seq) - 1u >= 0x7FFFFFFFu) {
         ++r.stale;
         continue;
@@ -97,14 +100,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
 
   const Reference ref = reference_decode(stream);
-  fuzz_check(got == ref.frames, "the decoder's frames differ from the reference reading of the stream");
+  fuzz_check(got == ref.frames,
+             "the decoder's frames differ from the reference reading of the stream");
   const auto& c = decoder.counters();
   fuzz_check(c.telemetry_stale == ref.stale, "telemetry_stale differs from the reference");
-  fuzz_check(c.frames_ok == ref.frames.size() + ref.stale, "frames_ok is not returned + stale frames");
-  std::uint64_t accepted_bytes = ref.stale * protocol::frame_bytes(regmap::kFrameTelemetryBodyBytes);
+  fuzz_check(c.frames_ok == ref.frames.size() + ref.stale,
+             "frames_ok is not returned + stale frames");
+  std::uint64_t accepted_bytes =
+      ref.stale * protocol::frame_bytes(regmap::kFrameTelemetryBodyBytes);
   for (const auto& f : ref.frames) accepted_bytes += f.size();
   fuzz_check(accepted_bytes + c.resync_bytes + decoder.pending_bytes() == stream.size(),
              "accepted + resync + pending bytes != bytes fed");
-  fuzz_check(decoder.pending_bytes() == stream.size() - ref.consumed, "pending bytes differ from the reference");
+  fuzz_check(decoder.pending_bytes() == stream.size() - ref.consumed,
+             "pending bytes differ from the reference");
   return 0;
 }

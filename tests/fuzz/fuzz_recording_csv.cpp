@@ -20,7 +20,8 @@ template <class Rows, class Time>
 void check_times(const Rows& rows, Time t_of) {
   for (std::size_t i = 0; i < rows.size(); ++i) {
     fuzz_check(std::isfinite(t_of(rows[i])), "a row with a non-finite time was accepted");
-    if (i > 0) fuzz_check(t_of(rows[i]) > t_of(rows[i - 1]), "times that do not increase were accepted");
+    if (i > 0)
+      fuzz_check(t_of(rows[i]) > t_of(rows[i - 1]), "times that do not increase were accepted");
   }
 }
 
@@ -39,7 +40,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         const auto rows = omniloc::read_encoders_csv(path);
         fuzz_check(rows.size() <= lines, "more rows than lines");
         check_times(rows, [](const auto& w) { return w.t_end_ms; });
-        for (const auto& w : rows) fuzz_check(std::isfinite(w.gyro_yaw_deg), "a non-finite gyro yaw was accepted");
+        for (const auto& w : rows)
+          fuzz_check(std::isfinite(w.gyro_yaw_deg), "a non-finite gyro yaw was accepted");
         break;
       }
       case 1: {
@@ -48,8 +50,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         check_times(rows, [](const auto& r) { return r.t_ms; });
         for (const auto& r : rows) {
           fuzz_check(!r.file.empty(), "an empty frame file name was accepted");
-          fuzz_check(r.file.find(',') == std::string::npos && r.file.find('\n') == std::string::npos,
-                     "a frame file name holds a separator");
+          fuzz_check(
+              r.file.find(',') == std::string::npos && r.file.find('\n') == std::string::npos,
+              "a frame file name holds a separator");
         }
         break;
       }
@@ -58,7 +61,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         fuzz_check(rows.size() <= lines, "more rows than lines");
         check_times(rows, [](const auto& s) { return s.t_ms; });
         for (const auto& s : rows)
-          fuzz_check(std::isfinite(s.pose.x_cm) && std::isfinite(s.pose.y_cm) && std::isfinite(s.pose.yaw_deg),
+          fuzz_check(std::isfinite(s.pose.x_cm) && std::isfinite(s.pose.y_cm) &&
+                         std::isfinite(s.pose.yaw_deg),
                      "a non-finite truth pose was accepted");
         break;
       }
@@ -69,7 +73,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       }
     }
   } catch (const omniloc::RecordingError& e) {
-    fuzz_check(std::string_view(e.what()).starts_with(path.string()), "a RecordingError that does not start with the file");
+    fuzz_check(std::string_view(e.what()).starts_with(path.string()),
+               "a RecordingError that does not start with the file");
   }
   return 0;
 }

@@ -21,8 +21,8 @@
 
 namespace {
 
-using omniloc::fuzz::fuzz_check;
 using omniloc::NumberError;
+using omniloc::fuzz::fuzz_check;
 
 constexpr std::int64_t kI64Min = std::numeric_limits<std::int64_t>::min();
 constexpr std::int64_t kI64Max = std::numeric_limits<std::int64_t>::max();
@@ -31,16 +31,26 @@ constexpr std::uint64_t kU64Max = std::numeric_limits<std::uint64_t>::max();
 struct IntRange {
   std::int64_t min, max;
 };
-constexpr IntRange kIntRanges[] = {{kI64Min, kI64Max}, {0, 65535}, {1, 65535}, {-1, 1}, {-(std::int64_t{1} << 53), std::int64_t{1} << 53}, {7, 7}};
+constexpr IntRange kIntRanges[] = {{kI64Min, kI64Max},
+                                   {0, 65535},
+                                   {1, 65535},
+                                   {-1, 1},
+                                   {-(std::int64_t{1} << 53), std::int64_t{1} << 53},
+                                   {7, 7}};
 struct UintRange {
   std::uint64_t min, max;
 };
-constexpr UintRange kUintRanges[] = {{0, kU64Max}, {0, 65535}, {1, std::uint64_t{1} << 53}, {kU64Max, kU64Max}};
+constexpr UintRange kUintRanges[] = {
+    {0, kU64Max}, {0, 65535}, {1, std::uint64_t{1} << 53}, {kU64Max, kU64Max}};
 struct DoubleRange {
   double min, max;
 };
-constexpr DoubleRange kDoubleRanges[] = {{-std::numeric_limits<double>::max(), std::numeric_limits<double>::max()},
-                                         {0.0, 1e4}, {-360.0, 360.0}, {1e-300, 1e300}, {0.5, 0.5}};
+constexpr DoubleRange kDoubleRanges[] = {
+    {-std::numeric_limits<double>::max(), std::numeric_limits<double>::max()},
+    {0.0, 1e4},
+    {-360.0, 360.0},
+    {1e-300, 1e300},
+    {0.5, 0.5}};
 
 /// The integer `text` spells (optional '-' for signed, then one or more digits), or nullopt.
 std::optional<__int128> reference_integer(std::string_view text, bool allow_minus) {
@@ -55,7 +65,8 @@ std::optional<__int128> reference_integer(std::string_view text, bool allow_minu
   for (; i < text.size(); ++i) {
     if (text[i] < '0' || text[i] > '9') return std::nullopt;
     v = v * 10 + (text[i] - '0');
-    if (v > (static_cast<__int128>(1) << 70)) v = static_cast<__int128>(1) << 70;  // beyond any range: saturate
+    if (v > (static_cast<__int128>(1) << 70))
+      v = static_cast<__int128>(1) << 70;  // beyond any range: saturate
   }
   return neg ? -v : v;
 }
@@ -91,7 +102,8 @@ bool refused(F&& f) {
     f();
     return false;
   } catch (const NumberError& e) {
-    fuzz_check(std::strstr(e.what(), "fuzz-setting: must be ") == e.what(), "a NumberError does not name the setting");
+    fuzz_check(std::strstr(e.what(), "fuzz-setting: must be ") == e.what(),
+               "a NumberError does not name the setting");
     return true;
   }
 }
@@ -120,7 +132,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::uint64_t got = 0;
     const bool no = refused([&] { got = omniloc::parse_uint(text, what, r.min, r.max); });
     fuzz_check(no == !ok, "parse_uint accepts or refuses differently from the reference");
-    if (ok) fuzz_check(got == static_cast<std::uint64_t>(*ref), "parse_uint returned another value");
+    if (ok)
+      fuzz_check(got == static_cast<std::uint64_t>(*ref), "parse_uint returned another value");
   } else if (mode == 2) {
     const DoubleRange r = kDoubleRanges[pick % std::size(kDoubleRanges)];
     double got = 0.0;
@@ -132,7 +145,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const std::string z(text);
     errno = 0;
     const double ref = std::strtod(z.c_str(), nullptr);
-    if (errno == ERANGE) return 0;  // overflow (refused as not finite) or underflow: either answer is fine
+    if (errno == ERANGE)
+      return 0;  // overflow (refused as not finite) or underflow: either answer is fine
     const bool ok = std::isfinite(ref) && ref >= r.min && ref <= r.max;
     fuzz_check(no == !ok, "parse_double accepts or refuses differently from strtod");
     if (ok) fuzz_check(got == ref, "parse_double returned another value than strtod");
@@ -141,7 +155,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::memcpy(&v, text.data(), std::min(text.size(), sizeof v));
     if (mode == 3) {
       const IntRange r = kIntRanges[3 + pick % 3];  // the ranges representable exactly in a double
-      const bool ok = std::isfinite(v) && v == std::trunc(v) && v >= static_cast<double>(r.min) && v <= static_cast<double>(r.max);
+      const bool ok = std::isfinite(v) && v == std::trunc(v) && v >= static_cast<double>(r.min) &&
+                      v <= static_cast<double>(r.max);
       std::int64_t got = 0;
       const bool no = refused([&] { got = omniloc::exact_int(v, what, r.min, r.max); });
       fuzz_check(no == !ok, "exact_int accepts or refuses wrongly");

@@ -19,8 +19,9 @@ namespace omniloc::test {
 /// A fresh directory for this test (removed by the caller if it cares; /tmp is cleaned anyway).
 inline std::filesystem::path temp_dir() {
   const auto* info = testing::UnitTest::GetInstance()->current_test_info();
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("omniloc_cfg_" + std::to_string(::getpid()) + "_" + info->test_suite_name() + "_" + info->name());
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("omniloc_cfg_" + std::to_string(::getpid()) + "_" +
+                                                info->test_suite_name() + "_" + info->name());
   std::filesystem::create_directories(dir);
   return dir;
 }
@@ -58,15 +59,17 @@ struct BadCase {
 
 /// Writes each case to a file, loads it with `load(path)` and checks the message is
 /// "<file>:<path>: ..." (or "<file>: ..." for an empty path) and contains `why`.
-inline void expect_errors(const std::function<void(const std::string&)>& load, const std::vector<BadCase>& cases) {
+inline void expect_errors(const std::function<void(const std::string&)>& load,
+                          const std::vector<BadCase>& cases) {
   int i = 0;
   for (const BadCase& c : cases) {
     const std::string file = write_file("bad" + std::to_string(i++) + ".json", c.json).string();
     const std::string msg = error_of([&] { load(file); });
     const std::string where = file + (c.path.empty() ? "" : ":" + c.path) + ": ";
-    EXPECT_EQ(msg.rfind(where, 0), 0u) << "want the message to start with '" << where << "'\n  json: " << c.json
-                                       << "\n  got:  " << msg;
-    EXPECT_NE(msg.find(c.why), std::string::npos) << "want '" << c.why << "'\n  json: " << c.json << "\n  got:  " << msg;
+    EXPECT_EQ(msg.rfind(where, 0), 0u) << "want the message to start with '" << where
+                                       << "'\n  json: " << c.json << "\n  got:  " << msg;
+    EXPECT_NE(msg.find(c.why), std::string::npos)
+        << "want '" << c.why << "'\n  json: " << c.json << "\n  got:  " << msg;
   }
 }
 

@@ -12,7 +12,8 @@
 namespace omniloc::test {
 
 /// The exit status of `cmd` (-1 when it did not exit), its stdout+stderr in `output`.
-inline int run_command(const std::string& cmd, const std::filesystem::path& log, std::string& output) {
+inline int run_command(const std::string& cmd, const std::filesystem::path& log,
+                       std::string& output) {
   const int status = std::system((cmd + " >" + log.string() + " 2>&1").c_str());
   std::ifstream in(log);
   std::ostringstream os;

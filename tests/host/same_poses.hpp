@@ -11,7 +11,8 @@
 
 namespace omniloc::test {
 
-inline void expect_same_poses(const std::vector<LocalizedPose>& csv, const std::vector<LocalizedPose>& library) {
+inline void expect_same_poses(const std::vector<LocalizedPose>& csv,
+                              const std::vector<LocalizedPose>& library) {
   ASSERT_EQ(csv.size(), library.size());
   for (std::size_t k = 0; k < csv.size(); ++k) {
     ASSERT_EQ(csv[k].source, library[k].source) << k;

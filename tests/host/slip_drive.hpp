@@ -23,10 +23,13 @@ inline std::vector<SlipEvent> random_slips(std::mt19937_64& rng, int n_wheels, i
   std::uniform_int_distribution<int> uwheel(1, n_wheels);
   std::uniform_real_distribution<double> ustart(1.0, 20.0), udur(0.1, 0.6), uspeed(15.0, 60.0);
   std::vector<SlipEvent> slips;
-  for (int k = 0; k < count; ++k) slips.push_back({uwheel(rng), ustart(rng), udur(rng), uspeed(rng)});
-  std::sort(slips.begin(), slips.end(), [](const SlipEvent& a, const SlipEvent& b) { return a.start_s < b.start_s; });
+  for (int k = 0; k < count; ++k)
+    slips.push_back({uwheel(rng), ustart(rng), udur(rng), uspeed(rng)});
+  std::sort(slips.begin(), slips.end(),
+            [](const SlipEvent& a, const SlipEvent& b) { return a.start_s < b.start_s; });
   for (std::size_t k = 1; k < slips.size(); ++k)
-    slips[k].start_s = std::max(slips[k].start_s, slips[k - 1].start_s + slips[k - 1].duration_s + 0.5);
+    slips[k].start_s =
+        std::max(slips[k].start_s, slips[k - 1].start_s + slips[k - 1].duration_s + 0.5);
   return slips;
 }
 
@@ -35,7 +38,9 @@ struct SlipEventScore {
   int detect_window = -1;  ///< first flagged window during the event; -1: never flagged
   int detected_wheel = 0;  ///< the wheel that flag named
   [[nodiscard]] bool seen() const { return first_window >= 0; }
-  [[nodiscard]] bool in_time() const { return detect_window >= 0 && detect_window - first_window <= 1; }
+  [[nodiscard]] bool in_time() const {
+    return detect_window >= 0 && detect_window - first_window <= 1;
+  }
 };
 
 struct SlipDriveResult {
@@ -48,11 +53,12 @@ struct SlipDriveResult {
   double final_err_cm = 0.0, blind_final_err_cm = 0.0;
 };
 
-inline SlipDriveResult slip_drive(const RobotConfig& robot, const WorldConfig& cfg, const std::string& trajectory,
-                                  std::uint64_t traj_seed) {
+inline SlipDriveResult slip_drive(const RobotConfig& robot, const WorldConfig& cfg,
+                                  const std::string& trajectory, std::uint64_t traj_seed) {
   World world(cfg, make_trajectory(trajectory, traj_seed));
   RobotConfig blind_robot = robot;
-  blind_robot.slip_threshold_cm_per_s = 10000.0;  // the config's upper bound: no realistic slip reaches it
+  blind_robot.slip_threshold_cm_per_s =
+      10000.0;  // the config's upper bound: no realistic slip reaches it
   Odometry odo(robot), blind(blind_robot);
   odo.reset(world.truth());
   blind.reset(world.truth());
@@ -67,7 +73,8 @@ inline SlipDriveResult slip_drive(const RobotConfig& robot, const WorldConfig& c
     int active = -1;  // which event (if any) touches this window
     const double t1 = sw.window.t_end_ms / 1000.0, t0 = t1 - 0.01;
     for (std::size_t k = 0; k < cfg.slips.size(); ++k)
-      if (cfg.slips[k].start_s < t1 && cfg.slips[k].start_s + cfg.slips[k].duration_s > t0) active = static_cast<int>(k);
+      if (cfg.slips[k].start_s < t1 && cfg.slips[k].start_s + cfg.slips[k].duration_s > t0)
+        active = static_cast<int>(k);
     if (active >= 0) {
       SlipEventScore& s = r.events[static_cast<std::size_t>(active)];
       if (s.first_window < 0) s.first_window = window_index;
@@ -76,11 +83,13 @@ inline SlipDriveResult slip_drive(const RobotConfig& robot, const WorldConfig& c
         s.detected_wheel = e.slip.wheel;
       }
       ++r.slip_windows;
-      r.slip_windows_flagged_right += e.slip.detected && e.slip.wheel == cfg.slips[static_cast<std::size_t>(active)].wheel;
+      r.slip_windows_flagged_right +=
+          e.slip.detected && e.slip.wheel == cfg.slips[static_cast<std::size_t>(active)].wheel;
       since_slip = 0;
     } else if (++since_slip > 2) {
       ++r.clean_windows;
-      r.max_clean_residual = std::max(r.max_clean_residual, e.slip.residual_cm_per_s / e.slip.threshold_cm_per_s);
+      r.max_clean_residual =
+          std::max(r.max_clean_residual, e.slip.residual_cm_per_s / e.slip.threshold_cm_per_s);
       r.false_alarms += e.slip.detected ? 1 : 0;
       if (sw.bump_wheels) {
         ++r.bump_windows;
@@ -90,7 +99,8 @@ inline SlipDriveResult slip_drive(const RobotConfig& robot, const WorldConfig& c
     ++window_index;
   }
   const auto err = [&](const Odometry& o) {
-    return std::hypot(o.estimate().pose.x_cm - sw.truth.x_cm, o.estimate().pose.y_cm - sw.truth.y_cm);
+    return std::hypot(o.estimate().pose.x_cm - sw.truth.x_cm,
+                      o.estimate().pose.y_cm - sw.truth.y_cm);
   };
   r.distance_cm = sw.truth_distance_cm;
   r.final_err_cm = err(odo);

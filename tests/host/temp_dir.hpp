@@ -12,7 +12,8 @@ namespace omniloc::test {
 struct TempDir {
   std::filesystem::path path;
   explicit TempDir(const std::string& name)
-      : path(std::filesystem::temp_directory_path() / ("omniloc_test_" + name + "_" + std::to_string(::getpid()))) {
+      : path(std::filesystem::temp_directory_path() /
+             ("omniloc_test_" + name + "_" + std::to_string(::getpid()))) {
     std::filesystem::remove_all(path);
     std::filesystem::create_directories(path);
   }

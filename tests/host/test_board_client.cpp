@@ -1,5 +1,6 @@
 // BoardClient against the reference board model (the golden model of the board protocol): register
-// reads and writes, errors naming the register, snapshots, streamed telemetry and wrap-safe positions.
+// reads and writes, errors naming the register, snapshots, streamed telemetry and wrap-safe
+// positions.
 #include <gtest/gtest.h>
 
 #include <string>
@@ -18,7 +19,8 @@ std::array<std::int32_t, 4> script(std::uint32_t seq) {
 }
 
 struct Rig {
-  explicit Rig(sim::ReferenceBoardConfig cfg = {}) : board(cfg, script), link(board), client(link, fast()) {}
+  explicit Rig(sim::ReferenceBoardConfig cfg = {})
+      : board(cfg, script), link(board), client(link, fast()) {}
   static BoardClientOptions fast() {
     BoardClientOptions o;
     o.response_timeout = std::chrono::milliseconds(5);
@@ -33,7 +35,8 @@ TEST(BoardClient, ReadsIdVersionAndResetValues) {
   Rig rig;
   EXPECT_EQ(rig.client.read_register(r::kRegId), 0x4F4D4E4Cu);
   EXPECT_EQ(rig.client.read_register(r::kRegVersion), 0x00000300u);  // 0.3.0: CONFIG.CHANNELS
-  EXPECT_EQ(rig.client.read_register(r::kRegPeriod), 120'000u);  // 12 MHz / 100 Hz (the board clock of common/regmap.json)
+  EXPECT_EQ(rig.client.read_register(r::kRegPeriod),
+            120'000u);  // 12 MHz / 100 Hz (the board clock of common/regmap.json)
   EXPECT_EQ(rig.client.read_register(r::kRegControl), 0u);
   EXPECT_EQ(rig.client.counters().retries, 0u);
 }
@@ -172,8 +175,10 @@ TEST(BoardClient, BoardAnswersMalformedRequests) {
   const auto f1 = d.next();
   const auto f2 = d.next();
   ASSERT_TRUE(f1 && f2);
-  EXPECT_EQ(std::get<protocol::ErrorResp>(*f1), (protocol::ErrorResp{r::kErrMalformed, r::kFrameWriteAck}));
-  EXPECT_EQ(std::get<protocol::ErrorResp>(*f2), (protocol::ErrorResp{r::kErrBadCrc, r::kFrameWriteReq}));
+  EXPECT_EQ(std::get<protocol::ErrorResp>(*f1),
+            (protocol::ErrorResp{r::kErrMalformed, r::kFrameWriteAck}));
+  EXPECT_EQ(std::get<protocol::ErrorResp>(*f2),
+            (protocol::ErrorResp{r::kErrBadCrc, r::kFrameWriteReq}));
   EXPECT_EQ(board.reg(r::kRegFilter), 0u);
   EXPECT_TRUE(board.applied_writes().empty());
   EXPECT_EQ(board.rx_counters().bad_crc, 1u);

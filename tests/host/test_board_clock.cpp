@@ -22,7 +22,8 @@ struct Window {
 };
 
 // Windows every 10 ms of board time for `seconds`, on `crystal`, arrivals from `usb`.
-std::vector<Window> drive(const sim::BoardCrystal& crystal, sim::UsbArrivals& usb, double host_from_ms, double seconds) {
+std::vector<Window> drive(const sim::BoardCrystal& crystal, sim::UsbArrivals& usb,
+                          double host_from_ms, double seconds) {
   std::vector<Window> out;
   const double b0 = std::ceil(crystal.board_ms(host_from_ms) / 10.0) * 10.0;
   for (double b = b0; crystal.host_ms(b) < host_from_ms + seconds * 1000.0; b += 10.0) {
@@ -55,7 +56,8 @@ TEST(BoardClock, FiftyPpmWithJitterAndBurstsStaysWithinPointThreeMsOfTruth) {
     sim::UsbArrivals usb(usb_config(5.0), seed);
     const auto ws = drive(crystal, usb, 0.0, 600.0);
     BoardClockModel model;
-    const double anchor = ws.front().arrival_ms - ws.front().board_ms;  // the daemon before issue 18
+    const double anchor =
+        ws.front().arrival_ms - ws.front().board_ms;  // the daemon before issue 18
     double max_err = 0.0, max_anchor_err = 0.0, max_in_burst = 0.0;
     int within_sigma3 = 0, scored = 0;
     for (const Window& w : ws) {
@@ -70,14 +72,18 @@ TEST(BoardClock, FiftyPpmWithJitterAndBurstsStaysWithinPointThreeMsOfTruth) {
       within_sigma3 += err <= 3.0 * e.uncertainty_ms;
       EXPECT_TRUE(e.converged);
     }
-    std::printf("%+.0f ppm over 600 s: model max error %.4f ms (in bursts %.4f), drift %+.2f ppm, unc %.3f ms; "
-                "first-window anchor max error %.2f ms\n",
-                ppm, max_err, max_in_burst, model.last().drift_ppm, model.last().uncertainty_ms, max_anchor_err);
+    std::printf(
+        "%+.0f ppm over 600 s: model max error %.4f ms (in bursts %.4f), drift %+.2f ppm, unc %.3f "
+        "ms; "
+        "first-window anchor max error %.2f ms\n",
+        ppm, max_err, max_in_burst, model.last().drift_ppm, model.last().uncertainty_ms,
+        max_anchor_err);
     EXPECT_LT(max_err, 0.3);
     EXPECT_LT(max_in_burst, 0.3);  // the bursts do not pull the line
     // host = board (1 - ppm) + ...: the model's drift is the host's rate against the board's.
     EXPECT_NEAR(model.last().drift_ppm, -ppm / (1.0 + ppm * 1e-6), 1.0);
-    EXPECT_GT(max_anchor_err, 25.0);  // 50 ppm over 10 minutes: 30 ms, which the anchor never corrects
+    EXPECT_GT(max_anchor_err,
+              25.0);  // 50 ppm over 10 minutes: 30 ms, which the anchor never corrects
     EXPECT_GE(within_sigma3, scored * 99 / 100) << "the stated uncertainty is honest";
     EXPECT_EQ(model.resets(), 0u);
   }
@@ -94,7 +100,8 @@ TEST(BoardClock, ALongBurstSpoilingThreeBucketsDoesNotMoveTheLine) {
   double max_err = 0.0;
   for (const Window& w : ws) {
     const BoardClockEstimate e = model.add(w.board_ms, w.arrival_ms);
-    if (w.true_host_ms > 10'000.0) max_err = std::max(max_err, std::abs(e.host_ms - w.true_host_ms));
+    if (w.true_host_ms > 10'000.0)
+      max_err = std::max(max_err, std::abs(e.host_ms - w.true_host_ms));
   }
   std::printf("3.5 s burst of 20 ms: max error %.4f ms\n", max_err);
   EXPECT_LT(max_err, 0.3);
@@ -107,13 +114,15 @@ TEST(BoardClock, AReconnectWithAStaleQueueKeepsTheLine) {
   const auto ws = drive(crystal, usb, 0.0, 90.0);
   BoardClockModel model;
   double max_err = 0.0;
-  // Link down from 40 s to 42 s; the 100 windows of its last second wait and are read at once at 42 s.
+  // Link down from 40 s to 42 s; the 100 windows of its last second wait and are read at once at 42
+  // s.
   for (const Window& w : ws) {
     double arrival = w.arrival_ms;
     if (w.true_host_ms >= 40'000.0 && w.true_host_ms < 41'000.0) continue;  // lost with the link
     if (w.true_host_ms >= 41'000.0 && w.true_host_ms < 42'000.0) arrival = 42'000.5;
     const BoardClockEstimate e = model.add(w.board_ms, std::max(arrival, w.arrival_ms));
-    if (w.true_host_ms > 10'000.0) max_err = std::max(max_err, std::abs(e.host_ms - w.true_host_ms));
+    if (w.true_host_ms > 10'000.0)
+      max_err = std::max(max_err, std::abs(e.host_ms - w.true_host_ms));
   }
   std::printf("reconnect with a 1 s stale queue: max error %.4f ms, resets %llu\n", max_err,
               static_cast<unsigned long long>(model.resets()));
@@ -140,10 +149,14 @@ TEST(BoardClock, ABoardResetIsDetectedAndReanchored) {
       const double err = std::abs(e.host_ms - w.true_host_ms);
       if (w.true_host_ms > restart_host_ms + 2'000.0 && w.true_host_ms < restart_host_ms + 10'000.0)
         max_err = std::max(max_err, err);
-      if (w.true_host_ms > restart_host_ms + 10'000.0) max_err_settled = std::max(max_err_settled, err);
+      if (w.true_host_ms > restart_host_ms + 10'000.0)
+        max_err_settled = std::max(max_err_settled, err);
     }
-    std::printf("reset, board time from %.0f ms: resets %llu, error 2-10 s after %.4f ms, after 10 s %.4f ms\n",
-                restart_board_ms, static_cast<unsigned long long>(model.resets()), max_err, max_err_settled);
+    std::printf(
+        "reset, board time from %.0f ms: resets %llu, error 2-10 s after %.4f ms, after 10 s %.4f "
+        "ms\n",
+        restart_board_ms, static_cast<unsigned long long>(model.resets()), max_err,
+        max_err_settled);
     EXPECT_EQ(model.resets(), 1u);
     EXPECT_LT(max_err, 2.5);
     EXPECT_LT(max_err_settled, 0.3);
@@ -156,7 +169,8 @@ TEST(BoardClock, BoardTimeContinuesThroughAReconnectButNotThroughAReset) {
   const double hz = 40e6;
   const BoardTimeMark last{4'000'000'000u, 50'000.0, 1'000.0, hz};
   const auto cycles_after = [&](double ms) {
-    return static_cast<std::uint32_t>((4'000'000'000ull + static_cast<std::uint64_t>(ms * hz / 1000.0)) & 0xFFFFFFFFu);
+    return static_cast<std::uint32_t>(
+        (4'000'000'000ull + static_cast<std::uint64_t>(ms * hz / 1000.0)) & 0xFFFFFFFFu);
   };
   // Back after 2 s (the counter wrapped once meanwhile), the window arriving 3 ms late.
   auto b = continued_board_ms(last, cycles_after(2'000.0), hz, 1'000.0 + 2'003.0);
@@ -167,7 +181,8 @@ TEST(BoardClock, BoardTimeContinuesThroughAReconnectButNotThroughAReset) {
   ASSERT_TRUE(b.has_value());
   EXPECT_NEAR(*b, 50'000.0 + 250'012.5, 1e-3);
   // The board restarted while away: its counter is at 1.5 s after 4 s of host time.
-  EXPECT_FALSE(continued_board_ms(last, static_cast<std::uint32_t>(1.5 * hz), hz, 5'000.0).has_value());
+  EXPECT_FALSE(
+      continued_board_ms(last, static_cast<std::uint32_t>(1.5 * hz), hz, 5'000.0).has_value());
   // Another board (another clock).
   EXPECT_FALSE(continued_board_ms(last, cycles_after(2'000.0), 12e6, 3'000.0).has_value());
   // And the model: restart() starts a new epoch at the next window.

@@ -1,9 +1,9 @@
 // BoardSession against a scripted board written here from the protocol document (a register file
 // that answers READ/WRITE requests and sends the telemetry frames the test queues), independent of
 // the reference board and the RTL: the session's conversation (ID, VERSION, CONFIG, CONTROL, PERIOD
-// reads, then one CONTROL write), its refusals (wrong ID, other major version, bad decoding, a robot
-// with another number of wheels than the board's channels, a CONFIG out of range) and its window
-// times across a 32-bit timestamp wrap, all against hand-computed values.
+// reads, then one CONTROL write), its refusals (wrong ID, other major version, bad decoding, a
+// robot with another number of wheels than the board's channels, a CONFIG out of range) and its
+// window times across a 32-bit timestamp wrap, all against hand-computed values.
 #include <gtest/gtest.h>
 
 #include <map>
@@ -19,7 +19,7 @@ namespace r = omniloc::regmap;
 
 struct Script {
   std::map<std::uint8_t, std::uint32_t> regs;
-  std::vector<protocol::Frame> requests;        // in arrival order
+  std::vector<protocol::Frame> requests;           // in arrival order
   std::vector<std::vector<std::uint8_t>> pending;  // telemetry to send after the configuration
 };
 
@@ -48,7 +48,9 @@ class ScriptedTransport final : public Transport {
     out_.erase(out_.begin(), out_.begin() + static_cast<std::ptrdiff_t>(n));
     return n;
   }
-  [[nodiscard]] TransportStatus status() const override { return {true, false, "scripted board", {}}; }
+  [[nodiscard]] TransportStatus status() const override {
+    return {true, false, "scripted board", {}};
+  }
 
  private:
   void answer(const protocol::Frame& f) {
@@ -70,7 +72,8 @@ Script good_board() {
   return s;
 }
 
-std::vector<std::uint8_t> telemetry(std::uint32_t seq, std::uint32_t ts, std::array<std::int32_t, 4> counts) {
+std::vector<std::uint8_t> telemetry(std::uint32_t seq, std::uint32_t ts,
+                                    std::array<std::int32_t, 4> counts) {
   protocol::Window w;
   w.seq = seq;
   w.timestamp_cycles = ts;
@@ -90,8 +93,10 @@ TEST(BoardSession, IdentifiesConfiguresForTheRobotsDecodingAndUnwrapsTime) {
     EXPECT_EQ(session.identity().period_cycles, 120'000u);
     // Five reads in this order, then one write of CONTROL = ENABLE | DECODE << 1 | STREAM << 3.
     ASSERT_EQ(s.requests.size(), 6u);
-    const std::uint8_t order[] = {r::kRegId, r::kRegVersion, r::kRegConfig, r::kRegControl, r::kRegPeriod};
-    for (int i = 0; i < 5; ++i) EXPECT_EQ(std::get<protocol::ReadReq>(s.requests[i]).addr, order[i]);
+    const std::uint8_t order[] = {r::kRegId, r::kRegVersion, r::kRegConfig, r::kRegControl,
+                                  r::kRegPeriod};
+    for (int i = 0; i < 5; ++i)
+      EXPECT_EQ(std::get<protocol::ReadReq>(s.requests[i]).addr, order[i]);
     EXPECT_EQ(session.identity().channels, 4);
     const auto& w = std::get<protocol::WriteReq>(s.requests[5]);
     EXPECT_EQ(w.addr, r::kRegControl);
@@ -100,7 +105,8 @@ TEST(BoardSession, IdentifiesConfiguresForTheRobotsDecodingAndUnwrapsTime) {
 
   // Window times: the cycle counter wraps at 2^32 between the second and the third window.
   Script s = good_board();
-  s.pending = {telemetry(7, 0xFFFF0000u, {1, -2, 3, -4}), telemetry(8, 0xFFFF0000u + 120'000u, {0, 0, 0, 0}),
+  s.pending = {telemetry(7, 0xFFFF0000u, {1, -2, 3, -4}),
+               telemetry(8, 0xFFFF0000u + 120'000u, {0, 0, 0, 0}),
                telemetry(9, 0xFFFF0000u + 240'000u, {5, 6, 7, 8})};
   BoardSession session(std::make_unique<ScriptedTransport>(s), BoardSessionOptions{});
   const auto a = session.next_window(std::chrono::milliseconds(5));
@@ -124,14 +130,19 @@ TEST(BoardSession, RefusesAForeignBoardAnotherMajorVersionAndABadDecoding) {
     BoardSession session(std::make_unique<ScriptedTransport>(foreign), BoardSessionOptions{});
     FAIL() << "a board with ID 0x12345678 was accepted";
   } catch (const BoardIdentityError& e) {
-    EXPECT_NE(std::string(e.what()).find("scripted board: register ID reads 0x12345678"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("scripted board: register ID reads 0x12345678"),
+              std::string::npos)
+        << e.what();
   }
   EXPECT_EQ(foreign.requests.size(), 1u) << "nothing but the ID read before refusing";
 
   Script newer = good_board();
-  newer.regs[r::kRegVersion] = r::kVersionMajor.put(r::kVersionValue, r::kVersionMajor.get(r::kVersionValue) + 1);
-  EXPECT_THROW(BoardSession(std::make_unique<ScriptedTransport>(newer), BoardSessionOptions{}), BoardIdentityError);
-  EXPECT_EQ(newer.regs[r::kRegControl], 0u) << "a board of another major version must not be configured";
+  newer.regs[r::kRegVersion] =
+      r::kVersionMajor.put(r::kVersionValue, r::kVersionMajor.get(r::kVersionValue) + 1);
+  EXPECT_THROW(BoardSession(std::make_unique<ScriptedTransport>(newer), BoardSessionOptions{}),
+               BoardIdentityError);
+  EXPECT_EQ(newer.regs[r::kRegControl], 0u)
+      << "a board of another major version must not be configured";
 
   // Below 1.0 a minor version changes the layout: the board of before CONFIG (0.2.0, which has no
   // channel count) is refused by this host (0.3.0), naming both versions.
@@ -141,18 +152,22 @@ TEST(BoardSession, RefusesAForeignBoardAnotherMajorVersionAndABadDecoding) {
     BoardSession session(std::make_unique<ScriptedTransport>(before_gyro), BoardSessionOptions{});
     FAIL() << "a 0.2.0 board was accepted";
   } catch (const BoardIdentityError& e) {
-    EXPECT_NE(std::string(e.what()).find("register map is version 0.2.0, this host speaks 0.3.0"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("register map is version 0.2.0, this host speaks 0.3.0"),
+              std::string::npos)
         << e.what();
   }
-  EXPECT_EQ(before_gyro.regs[r::kRegControl], 0u) << "a board of another layout must not be configured";
+  EXPECT_EQ(before_gyro.regs[r::kRegControl], 0u)
+      << "a board of another layout must not be configured";
   EXPECT_TRUE(version_compatible(0x000201u, 0x000200u));
   EXPECT_FALSE(version_compatible(0x000100u, 0x000200u));
-  EXPECT_TRUE(version_compatible(0x010300u, 0x010200u)) << "from 1.0 on a minor version is compatible";
+  EXPECT_TRUE(version_compatible(0x010300u, 0x010200u))
+      << "from 1.0 on a minor version is compatible";
   EXPECT_FALSE(version_compatible(0x020000u, 0x010000u));
 
   // A patch-level difference is accepted and reported.
   Script patched = good_board();
-  patched.regs[r::kRegVersion] = r::kVersionPatch.put(r::kVersionValue, r::kVersionPatch.get(r::kVersionValue) + 1);
+  patched.regs[r::kRegVersion] =
+      r::kVersionPatch.put(r::kVersionValue, r::kVersionPatch.get(r::kVersionValue) + 1);
   BoardSession ok(std::make_unique<ScriptedTransport>(patched), BoardSessionOptions{});
   EXPECT_TRUE(version_differs(ok.identity()));
 
@@ -184,11 +199,13 @@ TEST(BoardSession, TheBoardsChannelCountMustMatchTheRobotsWheels) {
     BoardSession session(std::make_unique<ScriptedTransport>(three), four_wheels);
     FAIL() << "a 3-channel board was accepted for a 4-wheel robot";
   } catch (const BoardIdentityError& e) {
-    EXPECT_NE(std::string(e.what()).find("the board counts 3 encoder channels but the robot config has 4"),
+    EXPECT_NE(std::string(e.what()).find(
+                  "the board counts 3 encoder channels but the robot config has 4"),
               std::string::npos)
         << e.what();
   }
-  EXPECT_EQ(three.regs[r::kRegControl], 0u) << "a board that does not fit the robot must not be configured";
+  EXPECT_EQ(three.regs[r::kRegControl], 0u)
+      << "a board that does not fit the robot must not be configured";
   BoardSessionOptions three_wheels;
   three_wheels.wheels = 3;
   BoardSession ok(std::make_unique<ScriptedTransport>(three), three_wheels);
@@ -200,7 +217,8 @@ TEST(BoardSession, TheBoardsChannelCountMustMatchTheRobotsWheels) {
     BoardSession session(std::make_unique<ScriptedTransport>(four), three_wheels);
     FAIL() << "a 4-channel board was accepted for a 3-wheel robot";
   } catch (const BoardIdentityError& e) {
-    EXPECT_NE(std::string(e.what()).find("the board counts 4 encoder channels but the robot config has 3"),
+    EXPECT_NE(std::string(e.what()).find(
+                  "the board counts 4 encoder channels but the robot config has 3"),
               std::string::npos)
         << e.what();
   }
@@ -213,7 +231,8 @@ TEST(BoardSession, TheBoardsChannelCountMustMatchTheRobotsWheels) {
       BoardSession session(std::make_unique<ScriptedTransport>(s), BoardSessionOptions{});
       FAIL() << "CONFIG " << bad << " was accepted";
     } catch (const BoardIdentityError& e) {
-      EXPECT_NE(std::string(e.what()).find("register CONFIG reads 0x"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("register CONFIG reads 0x"), std::string::npos)
+          << e.what();
       EXPECT_NE(std::string(e.what()).find("is not 3 or 4"), std::string::npos) << e.what();
     }
   }

@@ -7,14 +7,16 @@ namespace omniloc {
 namespace {
 
 TEST(CacheDir, XdgCacheHomeWinsWhenAbsolute) {
-  EXPECT_EQ(user_cache_dir("/var/cache/me", "/home/me"), std::filesystem::path("/var/cache/me/omniloc"));
+  EXPECT_EQ(user_cache_dir("/var/cache/me", "/home/me"),
+            std::filesystem::path("/var/cache/me/omniloc"));
 }
 
 TEST(CacheDir, HomeDotCacheOtherwise) {
   EXPECT_EQ(user_cache_dir(nullptr, "/home/me"), std::filesystem::path("/home/me/.cache/omniloc"));
   EXPECT_EQ(user_cache_dir("", "/home/me"), std::filesystem::path("/home/me/.cache/omniloc"));
   // The specification: a relative XDG_CACHE_HOME is invalid and ignored.
-  EXPECT_EQ(user_cache_dir("relative/cache", "/home/me"), std::filesystem::path("/home/me/.cache/omniloc"));
+  EXPECT_EQ(user_cache_dir("relative/cache", "/home/me"),
+            std::filesystem::path("/home/me/.cache/omniloc"));
 }
 
 TEST(CacheDir, NeitherUsableIsAnErrorNamingBoth) {

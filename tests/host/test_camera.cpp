@@ -56,7 +56,8 @@ TEST(Camera, RoundTripPixelToFloorAndBack) {
       cam.yaw_offset_deg = offset;
       for (double d = 5.0; d <= 500.0; d += 12.5) {
         for (double b = -180.0; b < 180.0; b += 11.0) {
-          const Eigen::Vector2d p(d * std::cos(b * 3.14159265358979 / 180), d * std::sin(b * 3.14159265358979 / 180));
+          const Eigen::Vector2d p(d * std::cos(b * 3.14159265358979 / 180),
+                                  d * std::sin(b * 3.14159265358979 / 180));
           const auto px = cam.pixel_of_robot_point(p);
           ASSERT_TRUE(px);
           const auto back = cam.robot_point_of_pixel(*px);
@@ -68,12 +69,14 @@ TEST(Camera, RoundTripPixelToFloorAndBack) {
   }
 }
 
-// --- camera files ---------------------------------------------------------------------------------
+// --- camera files
+// ---------------------------------------------------------------------------------
 
 using test::error_of;
 
-const std::vector<std::string> kEveryKey = {"description", "width", "height", "center_px", "radius_lut",
-                                            "yaw_offset_deg", "mirrored", "mask"};
+const std::vector<std::string> kEveryKey = {"description", "width",      "height",
+                                            "center_px",   "radius_lut", "yaw_offset_deg",
+                                            "mirrored",    "mask"};
 
 CameraModel parse_block(const std::string& json) {
   return camera_from_json(config::parse_json_text(json, "meta.json").root() / "camera");
@@ -121,7 +124,8 @@ TEST(CameraFile, EveryKeyReachesItsMember) {
 }
 
 TEST(CameraFile, ReadsTheMetaJsonCameraBlockWithoutAMask) {
-  const CameraModel cam = parse_block(R"({"camera": {"width": 640, "height": 480, "center_px": [321.5, 238],
+  const CameraModel cam =
+      parse_block(R"({"camera": {"width": 640, "height": 480, "center_px": [321.5, 238],
       "radius_lut": [[0, 0], [100, 100], [230, 500]], "yaw_offset_deg": -2.5, "mirrored": true}})");
   EXPECT_DOUBLE_EQ(cam.center_px.x(), 321.5);
   EXPECT_DOUBLE_EQ(cam.yaw_offset_deg, -2.5);
@@ -140,35 +144,47 @@ TEST(CameraFile, RejectsBadInputWithFileAndFieldPath) {
   test::expect_errors(
       [](const std::string& f) { (void)load_camera(f); },
       {
-          {replaced(v, "[200, 200]", "[90, 200]"), "radius_lut[2]", "strictly increasing in both radius and distance"},
+          {replaced(v, "[200, 200]", "[90, 200]"), "radius_lut[2]",
+           "strictly increasing in both radius and distance"},
           {replaced(v, "[200, 200]", "[200]"), "radius_lut[2]", "must be an array of 2 elements"},
-          {replaced(v, "[320, 240]", "[700, 240]"), "center_px", "outside the 640 x 480 image (got [700, 240])"},
+          {replaced(v, "[320, 240]", "[700, 240]"), "center_px",
+           "outside the 640 x 480 image (got [700, 240])"},
           {replaced(v, ", \"mirrored\": false", ""), "mirrored", "missing (required)"},
-          {replaced(v, "\"mirrored\": false", "\"mirrored\": 0"), "mirrored", "must be true or false, not a number"},
+          {replaced(v, "\"mirrored\": false", "\"mirrored\": 0"), "mirrored",
+           "must be true or false, not a number"},
           // Issue 16 item 6: 7 was once taken as true and every frame was then rejected silently.
-          {replaced(v, "\"mirrored\": false", "\"mirrored\": 7"), "mirrored", "must be true or false, not a number (got 7)"},
+          {replaced(v, "\"mirrored\": false", "\"mirrored\": 7"), "mirrored",
+           "must be true or false, not a number (got 7)"},
           {replaced(v, "\"yaw_offset_deg\": 0", "\"yaw_offset_deg\": 1e9"), "yaw_offset_deg",
            "must be an angle within [-360, 360] degrees (got 1000000000)"},
           {replaced(v, "\"width\": 640", "\"width\": 640.0"), "width", "must be an integer"},
           {replaced(v, "\"width\": 640", "\"width\": 20000"), "width", "1..16384 (got 20000)"},
-          {replaced(v, "\"width\": 640", "\"width\": \"640\""), "width", "must be an integer, not a string"},
-          {replaced(v, "\"yaw_offset_deg\": 0", "\"yaw_offset_deg\": true"), "yaw_offset_deg", "not a boolean"},
-          {replaced(v, "\"yaw_offset_deg\": 0", "\"yaw_offset_deg\": NaN"), "yaw_offset_deg", "not valid JSON"},
+          {replaced(v, "\"width\": 640", "\"width\": \"640\""), "width",
+           "must be an integer, not a string"},
+          {replaced(v, "\"yaw_offset_deg\": 0", "\"yaw_offset_deg\": true"), "yaw_offset_deg",
+           "not a boolean"},
+          {replaced(v, "\"yaw_offset_deg\": 0", "\"yaw_offset_deg\": NaN"), "yaw_offset_deg",
+           "not valid JSON"},
           {replaced(v, "\"yaw_offset_deg\": 0", "\"yaw_offset_deg\": -1e400"), "yaw_offset_deg",
            "number out of range"},
-          {replaced(v, "[[0, 0], [100, 100], [200, 200]]", "[[0, 0]]"), "radius_lut", "at least two"},
-          {replaced(v, "\"body_radius_px\": 10", "\"body_radius_px\": 199"), "", "no visible floor ring"},
-          {replaced(v, "\"half_width_deg\": 4", "\"half_width_deg\": 90"), "mask.masts[0].half_width_deg",
-           "must be in [0, 90) (got 90)"},
-          {replaced(v, "\"half_width_deg\": 4", "\"half_width\": 4"), "mask.masts[0].half_width", "unknown key"},
+          {replaced(v, "[[0, 0], [100, 100], [200, 200]]", "[[0, 0]]"), "radius_lut",
+           "at least two"},
+          {replaced(v, "\"body_radius_px\": 10", "\"body_radius_px\": 199"), "",
+           "no visible floor ring"},
+          {replaced(v, "\"half_width_deg\": 4", "\"half_width_deg\": 90"),
+           "mask.masts[0].half_width_deg", "must be in [0, 90) (got 90)"},
+          {replaced(v, "\"half_width_deg\": 4", "\"half_width\": 4"), "mask.masts[0].half_width",
+           "unknown key"},
           {replaced(v, "\"body_radius_px\": 10", "\"body_radius_px\": 10, \"body_radius_px\": 11"),
            "mask.body_radius_px", "duplicate key"},
-          {replaced(v, "\"mirrored\": false", "\"mirrored\": false, \"mirror\": true"), "mirror", "unknown key"},
+          {replaced(v, "\"mirrored\": false", "\"mirrored\": false, \"mirror\": true"), "mirror",
+           "unknown key"},
       });
 }
 
 TEST(CameraFile, MissingFileAndDirectoryAreNamed) {
-  EXPECT_EQ(error_of([] { (void)load_camera("/nonexistent/cam.json"); }), "/nonexistent/cam.json: no such file");
+  EXPECT_EQ(error_of([] { (void)load_camera("/nonexistent/cam.json"); }),
+            "/nonexistent/cam.json: no such file");
   const std::string dir = test::temp_dir().string();
   EXPECT_EQ(error_of([&] { (void)load_camera(dir); }), dir + ": is a directory, not a JSON file");
 }

@@ -33,12 +33,14 @@ cv::Mat read_frame(const std::string& name) {
 
 bool in_window(const CarpetColour& c, const cv::Vec3b& hsv) {
   const double dh = std::abs(hsv[0] - c.hue);
-  return std::min(dh, 180.0 - dh) <= c.hue_half_width && hsv[1] >= c.sat_min && hsv[2] >= c.val_min && hsv[2] <= c.val_max;
+  return std::min(dh, 180.0 - dh) <= c.hue_half_width && hsv[1] >= c.sat_min &&
+         hsv[2] >= c.val_min && hsv[2] <= c.val_max;
 }
 
 // Fraction of the pixels of the ring [r0, r1] about `centre` inside the carpet window, and the
 // same for the pixels of [r2, r3].
-double window_fraction(const cv::Mat& bgr, const CarpetColour& c, const cv::Point2d& centre, double r0, double r1) {
+double window_fraction(const cv::Mat& bgr, const CarpetColour& c, const cv::Point2d& centre,
+                       double r0, double r1) {
   cv::Mat hsv;
   cv::cvtColor(bgr, hsv, cv::COLOR_BGR2HSV);
   int in = 0, n = 0;
@@ -66,10 +68,14 @@ TEST(CarpetEstimate, TkuFrameCarpetFillsTheCalibratedView) {
   const auto c = estimate_carpet_colour(img, s, &why);
   ASSERT_TRUE(c.has_value()) << why;
   const cv::Point2d centre(cam.center_px.x(), cam.center_px.y());
-  const double inside = window_fraction(img, *c, centre, cam.body_radius_px + 8.0, cam.view_radius_px() - 8.0);
-  const double beyond = window_fraction(img, *c, centre, cam.view_radius_px() + 25.0, rim.radius_px - 5.0);
-  std::printf("TKU: carpet hue %.0f +- %.0f, S >= %.0f, V %.0f..%.0f; in the window: %.2f of the view, %.2f beyond it\n",
-              c->hue, c->hue_half_width, c->sat_min, c->val_min, c->val_max, inside, beyond);
+  const double inside =
+      window_fraction(img, *c, centre, cam.body_radius_px + 8.0, cam.view_radius_px() - 8.0);
+  const double beyond =
+      window_fraction(img, *c, centre, cam.view_radius_px() + 25.0, rim.radius_px - 5.0);
+  std::printf(
+      "TKU: carpet hue %.0f +- %.0f, S >= %.0f, V %.0f..%.0f; in the window: %.2f of the view, "
+      "%.2f beyond it\n",
+      c->hue, c->hue_half_width, c->sat_min, c->val_min, c->val_max, inside, beyond);
   EXPECT_GT(inside, 0.75);
   EXPECT_LT(beyond, 0.10);
 }
@@ -78,7 +84,8 @@ TEST(CarpetEstimate, TkuFrameCarpetFillsTheCalibratedView) {
 // hue band their README states), and it is the larger part of the disc's middle.
 struct RealFrame {
   const char* file;
-  double hue_min, hue_max;  // OpenCV hue of the carpet as the frames show it (teal 75..100, green 45..75)
+  double hue_min,
+      hue_max;  // OpenCV hue of the carpet as the frames show it (teal 75..100, green 45..75)
 };
 
 class CarpetOnRealFrames : public ::testing::TestWithParam<RealFrame> {};
@@ -88,26 +95,30 @@ TEST_P(CarpetOnRealFrames, TheCarpetIsTheFloorAroundTheRobot) {
   const cv::Mat img = read_frame(f.file);
   ASSERT_FALSE(img.empty()) << f.file;
   const FrameAnalysis a = analyse_frame(img, f.file);
-  std::printf("%s: rim (%.1f, %.1f) r %.1f; carpet hue %.0f +- %.0f S >= %.0f V %.0f..%.0f; body %.1f view %.1f px; %zu line px\n",
-              f.file, a.rim.centre_px.x(), a.rim.centre_px.y(), a.rim.radius_px, a.carpet.hue, a.carpet.hue_half_width,
-              a.carpet.sat_min, a.carpet.val_min, a.carpet.val_max, a.body_radius_px, a.view_radius_px, a.line_pixels.size());
+  std::printf(
+      "%s: rim (%.1f, %.1f) r %.1f; carpet hue %.0f +- %.0f S >= %.0f V %.0f..%.0f; body %.1f view "
+      "%.1f px; %zu line px\n",
+      f.file, a.rim.centre_px.x(), a.rim.centre_px.y(), a.rim.radius_px, a.carpet.hue,
+      a.carpet.hue_half_width, a.carpet.sat_min, a.carpet.val_min, a.carpet.val_max,
+      a.body_radius_px, a.view_radius_px, a.line_pixels.size());
   EXPECT_GE(a.carpet.hue, f.hue_min);
   EXPECT_LE(a.carpet.hue, f.hue_max);
   EXPECT_GT(a.line_pixels.size(), 300u);
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Venues, CarpetOnRealFrames,
-    ::testing::Values(RealFrame{"nubot-msl-lab-frame0.png", 70, 105}, RealFrame{"nubot-msl-lab-frame1.png", 70, 105},
-                      RealFrame{"rcj-omicam-frame6.jpg", 40, 80}, RealFrame{"rcj-omicam-goals-frame9.jpg", 40, 80},
-                      RealFrame{"tku-robosot-centre-spot.png", 70, 105}),
-    [](const auto& info) {
-      std::string n = info.param.file;
-      n = n.substr(0, n.find('.'));
-      for (char& ch : n)
-        if (ch == '-') ch = '_';
-      return n;
-    });
+INSTANTIATE_TEST_SUITE_P(Venues, CarpetOnRealFrames,
+                         ::testing::Values(RealFrame{"nubot-msl-lab-frame0.png", 70, 105},
+                                           RealFrame{"nubot-msl-lab-frame1.png", 70, 105},
+                                           RealFrame{"rcj-omicam-frame6.jpg", 40, 80},
+                                           RealFrame{"rcj-omicam-goals-frame9.jpg", 40, 80},
+                                           RealFrame{"tku-robosot-centre-spot.png", 70, 105}),
+                         [](const auto& info) {
+                           std::string n = info.param.file;
+                           n = n.substr(0, n.find('.'));
+                           for (char& ch : n)
+                             if (ch == '-') ch = '_';
+                           return n;
+                         });
 
 sim::RenderOptions plain(std::uint64_t seed) {
   sim::RenderOptions o = sim::realistic(seed);
@@ -127,12 +138,14 @@ TEST(CarpetEstimate, LargeBodyOnRenderedFramesIsNotTakenForTheCarpet) {
   const sim::RealisticRenderer rr(field, o);
   int old_wrong = 0;
   for (std::uint64_t seed = 2100; seed < 2106; ++seed) {
-    const Pose2 pose{150.0 + static_cast<double>((seed * 37) % 450), 120.0 + static_cast<double>((seed * 53) % 310),
+    const Pose2 pose{150.0 + static_cast<double>((seed * 37) % 450),
+                     120.0 + static_cast<double>((seed * 53) % 310),
                      static_cast<double>((seed * 71) % 360)};
     const cv::Mat img = rr.render(pose, plain(seed));
     const double body_px = o.radius_px_at_ground(o.body_radius_cm);
-    std::printf("seed %llu at (%.0f, %.0f, %.0f): body %.0f px of the rim's %.0f\n", static_cast<unsigned long long>(seed),
-                pose.x_cm, pose.y_cm, pose.yaw_deg, body_px, o.mirror_radius_px);
+    std::printf("seed %llu at (%.0f, %.0f, %.0f): body %.0f px of the rim's %.0f\n",
+                static_cast<unsigned long long>(seed), pose.x_cm, pose.y_cm, pose.yaw_deg, body_px,
+                o.mirror_radius_px);
     CarpetSearch s;
     s.centre_px = {o.centre_px.x(), o.centre_px.y()};
     s.outer_px = o.mirror_radius_px;
@@ -148,7 +161,8 @@ TEST(CarpetEstimate, LargeBodyOnRenderedFramesIsNotTakenForTheCarpet) {
     for (int v = 0; v < hsv.rows; ++v)
       for (int u = 0; u < hsv.cols; ++u) {
         const double r = std::hypot(u - o.centre_px.x(), v - o.centre_px.y());
-        if (r >= 0.15 * o.mirror_radius_px && r <= 0.5 * o.mirror_radius_px) ring.push_back(hsv.at<cv::Vec3b>(v, u));
+        if (r >= 0.15 * o.mirror_radius_px && r <= 0.5 * o.mirror_radius_px)
+          ring.push_back(hsv.at<cv::Vec3b>(v, u));
       }
     const auto old = carpet_colour_from_samples(ring, &why);
     old_wrong += !old || std::abs(old->hue - kPaintHue) > 8.0;
@@ -167,8 +181,9 @@ TEST(CarpetEstimate, GreyCarpetIsAWindowOfBrightnessAndItsLinesAreFound) {
   cv::cvtColor(img, grey, cv::COLOR_BGR2GRAY);
   cv::cvtColor(grey, img, cv::COLOR_GRAY2BGR);
   const FrameAnalysis a = analyse_frame(img, "grey");
-  std::printf("grey: carpet V %.0f..%.0f (median %.0f), %zu line pixels, view %.1f px\n", a.carpet.val_min, a.carpet.val_max,
-              a.carpet.median_val, a.line_pixels.size(), a.view_radius_px);
+  std::printf("grey: carpet V %.0f..%.0f (median %.0f), %zu line pixels, view %.1f px\n",
+              a.carpet.val_min, a.carpet.val_max, a.carpet.median_val, a.line_pixels.size(),
+              a.view_radius_px);
   EXPECT_TRUE(is_grey_carpet(a.carpet.hue_half_width));
   EXPECT_GT(a.line_pixels.size(), 1000u);
   // The carpet's grey level is the paint's (BGR (70, 140, 35) -> grey ~100, lit and vignetted).
@@ -192,7 +207,8 @@ TEST(CarpetEstimate, ThePixelGivenChoosesTheCluster) {
   s.centre_px = {rim.centre_px.x(), rim.centre_px.y()};
   s.outer_px = rim.radius_px;
   std::string why;
-  const cv::Point carpet(380, 250), wall(150, 330);  // right of the robot inside the centre circle; the white wall left
+  const cv::Point carpet(380, 250),
+      wall(150, 330);  // right of the robot inside the centre circle; the white wall left
   s.carpet_at = cv::Point2d(carpet.x, carpet.y);
   const auto on_carpet = estimate_carpet_colour(img, s, &why);
   ASSERT_TRUE(on_carpet.has_value()) << why;
@@ -200,10 +216,13 @@ TEST(CarpetEstimate, ThePixelGivenChoosesTheCluster) {
   s.carpet_at = cv::Point2d(wall.x, wall.y);
   const auto on_wall = estimate_carpet_colour(img, s, &why);
   ASSERT_TRUE(on_wall.has_value()) << why;
-  std::printf("named on the carpet: hue %.0f +- %.0f V %.0f..%.0f; on the wall: hue %.0f +- %.0f V %.0f..%.0f\n",
-              on_carpet->hue, on_carpet->hue_half_width, on_carpet->val_min, on_carpet->val_max, on_wall->hue,
-              on_wall->hue_half_width, on_wall->val_min, on_wall->val_max);
-  EXPECT_GT(on_wall->val_min, on_carpet->val_max);  // the bright cluster (walls, lines), not the carpet
+  std::printf(
+      "named on the carpet: hue %.0f +- %.0f V %.0f..%.0f; on the wall: hue %.0f +- %.0f V "
+      "%.0f..%.0f\n",
+      on_carpet->hue, on_carpet->hue_half_width, on_carpet->val_min, on_carpet->val_max,
+      on_wall->hue, on_wall->hue_half_width, on_wall->val_min, on_wall->val_max);
+  EXPECT_GT(on_wall->val_min,
+            on_carpet->val_max);  // the bright cluster (walls, lines), not the carpet
   EXPECT_FALSE(in_window(*on_wall, hsv_at(img, carpet.x, carpet.y)));
   s.carpet_at = cv::Point2d(1000.0, 10.0);
   EXPECT_FALSE(estimate_carpet_colour(img, s, &why).has_value());

@@ -11,17 +11,26 @@ namespace omniloc::control {
 namespace {
 
 TEST(ControlRequest, EveryCommandReadsItsFields) {
-  EXPECT_TRUE(std::holds_alternative<Status>(parse_request(R"({"id": 1, "cmd": "status"})").command));
-  const Request p = parse_request(R"({"id": 2, "cmd": "set_pose", "x_cm": 375, "y_cm": -20.5, "yaw_deg": -90})");
+  EXPECT_TRUE(
+      std::holds_alternative<Status>(parse_request(R"({"id": 1, "cmd": "status"})").command));
+  const Request p =
+      parse_request(R"({"id": 2, "cmd": "set_pose", "x_cm": 375, "y_cm": -20.5, "yaw_deg": -90})");
   ASSERT_EQ(p.id, 2);
   const auto& sp = std::get<SetPose>(p.command);
   EXPECT_EQ(sp.x_cm, 375.0);
   EXPECT_EQ(sp.y_cm, -20.5);
   EXPECT_EQ(sp.yaw_deg, -90.0);
-  EXPECT_EQ(std::get<SetSide>(parse_request(R"({"cmd": "set_side", "side": "yellow"})").command).side, "yellow");
-  EXPECT_TRUE(std::holds_alternative<Relocalize>(parse_request(R"({"id": 3, "cmd": "relocalize"})").command));
-  EXPECT_EQ(std::get<RecordStart>(parse_request(R"({"cmd": "record", "action": "start", "dir": "/d"})").command).dir, "/d");
-  EXPECT_TRUE(std::holds_alternative<RecordStop>(parse_request(R"({"cmd": "record", "action": "stop"})").command));
+  EXPECT_EQ(
+      std::get<SetSide>(parse_request(R"({"cmd": "set_side", "side": "yellow"})").command).side,
+      "yellow");
+  EXPECT_TRUE(std::holds_alternative<Relocalize>(
+      parse_request(R"({"id": 3, "cmd": "relocalize"})").command));
+  EXPECT_EQ(std::get<RecordStart>(
+                parse_request(R"({"cmd": "record", "action": "start", "dir": "/d"})").command)
+                .dir,
+            "/d");
+  EXPECT_TRUE(std::holds_alternative<RecordStop>(
+      parse_request(R"({"cmd": "record", "action": "stop"})").command));
   EXPECT_FALSE(parse_request(R"({"cmd": "status"})").id.has_value());
   EXPECT_FALSE(parse_request(R"({"id": null, "cmd": "status"})").id.has_value());
 }
@@ -38,24 +47,35 @@ TEST(ControlRequest, BadRequestsSayWhatIsWrong) {
       {"{\"cmd\": \"status\"", std::nullopt, "not valid JSON"},
       {"[1]", std::nullopt, "must be a JSON object (got array)"},
       {R"({"id": 1.5, "cmd": "status"})", std::nullopt, "field 'id' must be an integer (got 1.5)"},
-      {R"({"id": "7", "cmd": "status"})", std::nullopt, "field 'id' must be an integer (got \"7\")"},
-      {R"({"id": 18446744073709551615, "cmd": "status"})", std::nullopt, "field 'id' is out of range"},
+      {R"({"id": "7", "cmd": "status"})", std::nullopt,
+       "field 'id' must be an integer (got \"7\")"},
+      {R"({"id": 18446744073709551615, "cmd": "status"})", std::nullopt,
+       "field 'id' is out of range"},
       {R"({"id": 4})", 4, "missing field 'cmd'"},
       {R"({"id": 4, "cmd": 9})", 4, "field 'cmd' must be a string (got 9)"},
-      {R"({"id": 4, "cmd": "fly"})", 4, "unknown cmd 'fly' (record, relocalize, set_pose, set_side, status)"},
+      {R"({"id": 4, "cmd": "fly"})", 4,
+       "unknown cmd 'fly' (record, relocalize, set_pose, set_side, status)"},
       {R"({"id": 5, "cmd": "status", "verbose": true})", 5, "status: unknown field 'verbose'"},
-      {R"({"id": 6, "cmd": "set_pose", "x_cm": 1, "y_cm": 2})", 6, "set_pose: missing field 'yaw_deg'"},
+      {R"({"id": 6, "cmd": "set_pose", "x_cm": 1, "y_cm": 2})", 6,
+       "set_pose: missing field 'yaw_deg'"},
       {R"({"id": 6, "cmd": "set_pose", "x_cm": "1", "y_cm": 2, "yaw_deg": 0})", 6,
        "set_pose: field 'x_cm' must be a number (got \"1\")"},
-      {R"({"id": 6, "cmd": "set_pose", "x_cm": 1e9, "y_cm": 2, "yaw_deg": 0})", 6, "field 'x_cm' must be within +-10000"},
-      {R"({"id": 6, "cmd": "set_pose", "x_cm": 1, "y_cm": 2, "yaw_deg": 400})", 6, "field 'yaw_deg' must be within +-360"},
-      {R"({"id": 6, "cmd": "set_pose", "x_cm": 1e999, "y_cm": 2, "yaw_deg": 0})", std::nullopt, "not valid JSON"},
-      {R"({"id": 7, "cmd": "set_side", "side": "red"})", 7, "set_side: field 'side' must be \"blue\" or \"yellow\" (got \"red\")"},
+      {R"({"id": 6, "cmd": "set_pose", "x_cm": 1e9, "y_cm": 2, "yaw_deg": 0})", 6,
+       "field 'x_cm' must be within +-10000"},
+      {R"({"id": 6, "cmd": "set_pose", "x_cm": 1, "y_cm": 2, "yaw_deg": 400})", 6,
+       "field 'yaw_deg' must be within +-360"},
+      {R"({"id": 6, "cmd": "set_pose", "x_cm": 1e999, "y_cm": 2, "yaw_deg": 0})", std::nullopt,
+       "not valid JSON"},
+      {R"({"id": 7, "cmd": "set_side", "side": "red"})", 7,
+       "set_side: field 'side' must be \"blue\" or \"yellow\" (got \"red\")"},
       {R"({"id": 8, "cmd": "record"})", 8, "record: missing field 'action'"},
-      {R"({"id": 8, "cmd": "record", "action": "pause"})", 8, "record: field 'action' must be \"start\" or \"stop\""},
+      {R"({"id": 8, "cmd": "record", "action": "pause"})", 8,
+       "record: field 'action' must be \"start\" or \"stop\""},
       {R"({"id": 8, "cmd": "record", "action": "start"})", 8, "record: missing field 'dir'"},
-      {R"({"id": 8, "cmd": "record", "action": "start", "dir": ""})", 8, "field 'dir' must not be empty"},
-      {R"({"id": 8, "cmd": "record", "action": "stop", "dir": "/d"})", 8, "'dir' is for action \"start\" only"},
+      {R"({"id": 8, "cmd": "record", "action": "start", "dir": ""})", 8,
+       "field 'dir' must not be empty"},
+      {R"({"id": 8, "cmd": "record", "action": "stop", "dir": "/d"})", 8,
+       "'dir' is for action \"start\" only"},
       {std::string(kMaxRequestBytes + 1, ' '), std::nullopt, "bytes is larger than 4096"},
   };
   for (const Bad& c : cases) {
@@ -63,7 +83,8 @@ TEST(ControlRequest, BadRequestsSayWhatIsWrong) {
       (void)parse_request(c.request);
       ADD_FAILURE() << "accepted: " << c.request;
     } catch (const ControlError& e) {
-      EXPECT_NE(std::string(e.what()).find(c.says), std::string::npos) << c.request << " -> " << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.says), std::string::npos)
+          << c.request << " -> " << e.what();
       EXPECT_EQ(e.id(), c.id) << c.request;
     }
   }
@@ -75,7 +96,8 @@ TEST(ControlReply, OneLineJsonWithTheIdEchoed) {
   const std::string err = error_reply(std::nullopt, "set_pose: \"quoted\"\nand a newline");
   EXPECT_EQ(err.find('\n'), std::string::npos) << "one datagram, one line";
   EXPECT_EQ(nlohmann::json::parse(err),
-            nlohmann::json::parse(R"({"id": null, "ok": false, "error": "set_pose: \"quoted\"\nand a newline"})"));
+            nlohmann::json::parse(
+                R"({"id": null, "ok": false, "error": "set_pose: \"quoted\"\nand a newline"})"));
   // A file name that is not UTF-8 does not make the reply unwritable.
   const auto bad_utf8 = nlohmann::json::parse(error_reply(1, std::string("record: /tmp/\xff")));
   EXPECT_EQ(bad_utf8["ok"], false);

@@ -64,7 +64,8 @@ TEST(Conventions, WheelJacobianAt30DegreesByHand) {
                                  {0.5, -0.8660254037844386, 20.0},
                                  {0.5, 0.8660254037844386, 20.0}};
   for (int r = 0; r < 4; ++r)
-    for (int c = 0; c < 3; ++c) EXPECT_NEAR(j(r, c), expected[r][c], 1e-12) << "row " << r + 1 << " col " << c + 1;
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(j(r, c), expected[r][c], 1e-12) << "row " << r + 1 << " col " << c + 1;
   const Eigen::Vector4d v = j * Eigen::Vector3d(10.0, 4.0, 0.5);
   EXPECT_NEAR(v(0), 1.5358983848622456, 1e-12);
   EXPECT_NEAR(v(1), 8.4641016151377544, 1e-12);
@@ -75,7 +76,8 @@ TEST(Conventions, WheelJacobianAt30DegreesByHand) {
 void expect_pose_near(const Pose2& got, const Pose2& want, double tol = 1e-9) {
   EXPECT_NEAR(got.x_cm, want.x_cm, tol);
   EXPECT_NEAR(got.y_cm, want.y_cm, tol);
-  EXPECT_NEAR(angle_diff_deg(got.yaw_deg, want.yaw_deg), 0.0, tol) << got.yaw_deg << " vs " << want.yaw_deg;
+  EXPECT_NEAR(angle_diff_deg(got.yaw_deg, want.yaw_deg), 0.0, tol)
+      << got.yaw_deg << " vs " << want.yaw_deg;
 }
 
 // a = (100, 50) facing +y (90 deg). 10 cm forward in a's frame is +10 along field y; (10, 5) in
@@ -104,7 +106,8 @@ TEST(Pose2Algebra, ComposeWithA90DegreeTurnByHand) {
 TEST(Pose2Algebra, InverseComposedGivesIdentity) {
   const Pose2 a{100.0, 50.0, 90.0};
   expect_pose_near(a.inverse(), {-50.0, 100.0, -90.0});
-  for (const Pose2& p : {a, Pose2{-3.0, 7.5, -135.0}, Pose2{375.0, 275.0, 180.0}, Pose2{1.0, 2.0, 33.3}}) {
+  for (const Pose2& p :
+       {a, Pose2{-3.0, 7.5, -135.0}, Pose2{375.0, 275.0, 180.0}, Pose2{1.0, 2.0, 33.3}}) {
     expect_pose_near(p * p.inverse(), {0.0, 0.0, 0.0});
     expect_pose_near(p.inverse() * p, {0.0, 0.0, 0.0});
     // The relative pose of q seen from p, carried back by p, is q.
@@ -134,7 +137,8 @@ TEST(Pose2Algebra, InterpolationIsLinearAndTakesTheShortArcAcrossTheSeam) {
 }
 
 TEST(Pose2Algebra, DistanceAndYawDifference) {
-  EXPECT_DOUBLE_EQ(distance_cm(Pose2{1.0, 2.0, 0.0}, Pose2{4.0, 6.0, 90.0}), 5.0);  // 3-4-5, heading ignored
+  EXPECT_DOUBLE_EQ(distance_cm(Pose2{1.0, 2.0, 0.0}, Pose2{4.0, 6.0, 90.0}),
+                   5.0);  // 3-4-5, heading ignored
   EXPECT_DOUBLE_EQ(yaw_difference_deg(Pose2{0, 0, 10.0}, Pose2{0, 0, 350.0}), 20.0);
   EXPECT_DOUBLE_EQ(yaw_difference_deg(Pose2{0, 0, -170.0}, Pose2{0, 0, 170.0}), 20.0);
   EXPECT_DOUBLE_EQ(yaw_difference_deg(Pose2{0, 0, 170.0}, Pose2{0, 0, -170.0}), -20.0);

@@ -18,12 +18,34 @@ namespace {
 using test::error_of;
 
 // Every key of DaemonConfig, written down here by hand (not taken from the reader's table).
-const std::vector<std::string> kEveryKey = {
-    "board_serial", "reconnect_period_ms", "camera",     "camera_fps",  "camera_timeout_ms", "camera_latency_ms", "field",
-    "camera_model", "robot",               "localizer",  "database",    "grid_step_cm",      "side",  "udp_address",
-    "udp_port",     "control_port",        "publish_hz",          "record_dir", "record_overwrite", "record_format",
-    "status_period_s", "log_level", "duration_s", "ros2_domain_id", "ros2_namespace", "ros2_frame_id",
-    "http_port", "http_address"};
+const std::vector<std::string> kEveryKey = {"board_serial",
+                                            "reconnect_period_ms",
+                                            "camera",
+                                            "camera_fps",
+                                            "camera_timeout_ms",
+                                            "camera_latency_ms",
+                                            "field",
+                                            "camera_model",
+                                            "robot",
+                                            "localizer",
+                                            "database",
+                                            "grid_step_cm",
+                                            "side",
+                                            "udp_address",
+                                            "udp_port",
+                                            "control_port",
+                                            "publish_hz",
+                                            "record_dir",
+                                            "record_overwrite",
+                                            "record_format",
+                                            "status_period_s",
+                                            "log_level",
+                                            "duration_s",
+                                            "ros2_domain_id",
+                                            "ros2_namespace",
+                                            "ros2_frame_id",
+                                            "http_port",
+                                            "http_address"};
 
 // Every key set to a value that differs from its default (publish_hz has only one valid value).
 const std::string kEveryKeyJson = R"({
@@ -104,13 +126,15 @@ TEST(DaemonConfig, EveryKeyReachesItsMember) {
 TEST(DaemonConfig, EachKeyOfTheFullFileMatters) {
   // Dropping any one key from the full file changes the result: each key is read into a member of
   // its own (a table entry pointing at the wrong member, or at none, fails here).
-  const DaemonConfig full = load_daemon_config(test::write_file("every.json", kEveryKeyJson).string());
+  const DaemonConfig full =
+      load_daemon_config(test::write_file("every.json", kEveryKeyJson).string());
   const auto json = test::read_json(test::write_file("every.json", kEveryKeyJson));
   for (const std::string& k : kEveryKey) {
     if (k == "publish_hz") continue;  // its only valid value is the default
     auto without = json;
     without.erase(k);
-    const DaemonConfig c = load_daemon_config(test::write_file("without.json", without.dump()).string());
+    const DaemonConfig c =
+        load_daemon_config(test::write_file("without.json", without.dump()).string());
     EXPECT_FALSE(c == full) << k << " made no difference";
   }
 }
@@ -127,48 +151,57 @@ TEST(DaemonConfig, FileValuesOverrideTheBaseAndOthersKeepIt) {
 }
 
 TEST(DaemonConfig, BadFilesNameTheFileAndTheField) {
-  test::expect_errors([](const std::string& f) { (void)load_daemon_config(f); },
-                      {
-                          {R"({"udp_prot": 5600})", "udp_prot", "unknown key (known keys: board_serial, "},
-                          {R"({"board": "usb"})", "board", "unknown key"},  // the simulator keys are gone
-                          {R"({"sim_seed": 1})", "sim_seed", "unknown key"},
-                          {R"({"udp_port": 5600, "udp_port": 5601})", "udp_port", "duplicate key"},
-                          {R"({"udp_port": "5600"})", "udp_port", "must be an integer, not a string (got \"5600\")"},
-                          {R"({"udp_port": 56.5})", "udp_port", "must be an integer"},
-                          {R"({"udp_port": 5600.0})", "udp_port", "must be an integer"},
-                          {R"({"camera_fps": true})", "camera_fps", "must be a number, not a boolean (got true)"},
-                          {R"({"camera": 7})", "camera", "must be a string, not a number (got 7)"},
-                          {R"({"camera_fps": NaN})", "camera_fps", "not valid JSON"},
-                          {R"({"duration_s": Infinity})", "duration_s", "not valid JSON"},
-                          {R"({"duration_s": 1e400})", "duration_s", "number out of range: beyond a double (got 1e400)"},
-                          {R"({"udp_port": 70000})", "udp_port", "out of range: must be in [1, 65535] (got 70000)"},
-                          {R"({"udp_port": 1e10})", "udp_port", "must be an integer"},
-                          {R"({"udp_port": 99999999999})", "udp_port", "out of range: must be in [1, 65535] (got 99999999999)"},
-                          {R"({"udp_address": "localhost"})", "udp_address", "dotted IPv4 address (got \"localhost\")"},
-                          {R"({"publish_hz": 50})", "publish_hz", "must be 100"},
-                          {R"({"camera_timeout_ms": 0})", "camera_timeout_ms", "[10, 60000] (got 0)"},
-                          {R"({"camera_latency_ms": -1})", "camera_latency_ms", "[0, 1000] (got -1)"},
-                          {R"({"duration_s": -1})", "duration_s", ">= 0 (got -1)"},
-                          {R"({"control_port": 70000})", "control_port", "must be 0 (off) or in [1, 65535] (got 70000)"},
-                          {R"({"ros2_domain_id": 233})", "ros2_domain_id", "must be -1 (off) or in [0, 232] (got 233)"},
-                          {R"({"ros2_namespace": "omniloc"})", "ros2_namespace", "absolute ROS 2 name"},
-                          {R"({"ros2_namespace": "/a//b"})", "ros2_namespace", "absolute ROS 2 name"},
-                          {R"({"grid_step_cm": 1})", "grid_step_cm", "[2, 50] (got 1)"},
-                          {R"({"http_port": -1})", "http_port", "must be 0 (off) or in [1, 65535] (got -1)"},
-                          {R"({"http_port": 65536})", "http_port", "must be 0 (off) or in [1, 65535] (got 65536)"},
-                          {R"({"http_address": "localhost"})", "http_address", "dotted IPv4 address (got \"localhost\")"},
-                          {R"({"camera": ""})", "camera", "must not be empty"},
-                          {"{\"udp_port\" 5600}", "udp_port", "not valid JSON: parse error at line 1"},
-                          {"{\"udp_port\": 5600 \"camera\": \"0\"}", "", "not valid JSON: parse error at line 1"},
-                          {"[1, 2]", "", "must be an object"},
-                      });
+  test::expect_errors(
+      [](const std::string& f) { (void)load_daemon_config(f); },
+      {
+          {R"({"udp_prot": 5600})", "udp_prot", "unknown key (known keys: board_serial, "},
+          {R"({"board": "usb"})", "board", "unknown key"},  // the simulator keys are gone
+          {R"({"sim_seed": 1})", "sim_seed", "unknown key"},
+          {R"({"udp_port": 5600, "udp_port": 5601})", "udp_port", "duplicate key"},
+          {R"({"udp_port": "5600"})", "udp_port",
+           "must be an integer, not a string (got \"5600\")"},
+          {R"({"udp_port": 56.5})", "udp_port", "must be an integer"},
+          {R"({"udp_port": 5600.0})", "udp_port", "must be an integer"},
+          {R"({"camera_fps": true})", "camera_fps", "must be a number, not a boolean (got true)"},
+          {R"({"camera": 7})", "camera", "must be a string, not a number (got 7)"},
+          {R"({"camera_fps": NaN})", "camera_fps", "not valid JSON"},
+          {R"({"duration_s": Infinity})", "duration_s", "not valid JSON"},
+          {R"({"duration_s": 1e400})", "duration_s",
+           "number out of range: beyond a double (got 1e400)"},
+          {R"({"udp_port": 70000})", "udp_port", "out of range: must be in [1, 65535] (got 70000)"},
+          {R"({"udp_port": 1e10})", "udp_port", "must be an integer"},
+          {R"({"udp_port": 99999999999})", "udp_port",
+           "out of range: must be in [1, 65535] (got 99999999999)"},
+          {R"({"udp_address": "localhost"})", "udp_address",
+           "dotted IPv4 address (got \"localhost\")"},
+          {R"({"publish_hz": 50})", "publish_hz", "must be 100"},
+          {R"({"camera_timeout_ms": 0})", "camera_timeout_ms", "[10, 60000] (got 0)"},
+          {R"({"camera_latency_ms": -1})", "camera_latency_ms", "[0, 1000] (got -1)"},
+          {R"({"duration_s": -1})", "duration_s", ">= 0 (got -1)"},
+          {R"({"control_port": 70000})", "control_port",
+           "must be 0 (off) or in [1, 65535] (got 70000)"},
+          {R"({"ros2_domain_id": 233})", "ros2_domain_id",
+           "must be -1 (off) or in [0, 232] (got 233)"},
+          {R"({"ros2_namespace": "omniloc"})", "ros2_namespace", "absolute ROS 2 name"},
+          {R"({"ros2_namespace": "/a//b"})", "ros2_namespace", "absolute ROS 2 name"},
+          {R"({"grid_step_cm": 1})", "grid_step_cm", "[2, 50] (got 1)"},
+          {R"({"http_port": -1})", "http_port", "must be 0 (off) or in [1, 65535] (got -1)"},
+          {R"({"http_port": 65536})", "http_port", "must be 0 (off) or in [1, 65535] (got 65536)"},
+          {R"({"http_address": "localhost"})", "http_address",
+           "dotted IPv4 address (got \"localhost\")"},
+          {R"({"camera": ""})", "camera", "must not be empty"},
+          {"{\"udp_port\" 5600}", "udp_port", "not valid JSON: parse error at line 1"},
+          {"{\"udp_port\": 5600 \"camera\": \"0\"}", "", "not valid JSON: parse error at line 1"},
+          {"[1, 2]", "", "must be an object"},
+      });
 }
 
 TEST(DaemonConfig, MissingFileAndDirectoryAreNamed) {
   EXPECT_EQ(error_of([] { (void)load_daemon_config("/nonexistent/omnilocd.json"); }),
             "/nonexistent/omnilocd.json: no such file");
   const std::string dir = test::temp_dir().string();
-  EXPECT_EQ(error_of([&] { (void)load_daemon_config(dir); }), dir + ": is a directory, not a JSON file");
+  EXPECT_EQ(error_of([&] { (void)load_daemon_config(dir); }),
+            dir + ": is a directory, not a JSON file");
   EXPECT_THROW((void)load_daemon_config(dir), ConfigError);
 }
 
@@ -185,7 +218,9 @@ struct CommandLine {
   }
 };
 
-DaemonConfig parse_flags(std::vector<std::string> args) { return CommandLine().parse(std::move(args)); }
+DaemonConfig parse_flags(std::vector<std::string> args) {
+  return CommandLine().parse(std::move(args));
+}
 
 std::string flag_error(std::vector<std::string> args) {
   try {
@@ -199,7 +234,8 @@ std::string flag_error(std::vector<std::string> args) {
 }
 
 TEST(DaemonConfig, FlagsOverrideTheFileWhateverTheirOrder) {
-  const auto p = test::write_file("flags.json", R"({"udp_port": 6001, "camera": "none", "duration_s": 3})");
+  const auto p =
+      test::write_file("flags.json", R"({"udp_port": 6001, "camera": "none", "duration_s": 3})");
   const std::string ps = p.string();
   CommandLine c;
   const DaemonConfig a = c.parse({"--udp-port", "6002", "--config", ps, "--camera-fps=15"});
@@ -218,13 +254,19 @@ TEST(DaemonConfig, FlagsOverrideTheFileWhateverTheirOrder) {
 }
 
 TEST(DaemonConfig, BadFlagsAreRefusedWithTheFlagNamed) {
-  EXPECT_EQ(flag_error({"--udp-port", "abc"}), "command line:udp_port: must be a number (got \"abc\")");
-  EXPECT_EQ(flag_error({"--udp-port=5600.5"}).rfind("command line:udp_port: must be an integer", 0), 0u);
-  EXPECT_EQ(flag_error({"--camera-fps", "nan"}), "command line:camera_fps: must be a number (got \"nan\")");
-  EXPECT_EQ(flag_error({"--udp-port", "0"}), "command line:udp_port: out of range: must be in [1, 65535] (got 0)");
+  EXPECT_EQ(flag_error({"--udp-port", "abc"}),
+            "command line:udp_port: must be a number (got \"abc\")");
+  EXPECT_EQ(flag_error({"--udp-port=5600.5"}).rfind("command line:udp_port: must be an integer", 0),
+            0u);
+  EXPECT_EQ(flag_error({"--camera-fps", "nan"}),
+            "command line:camera_fps: must be a number (got \"nan\")");
+  EXPECT_EQ(flag_error({"--udp-port", "0"}),
+            "command line:udp_port: out of range: must be in [1, 65535] (got 0)");
   // What is not an option of the table is refused by the parser, naming it.
   for (const auto& [args, named] : std::vector<std::pair<std::vector<std::string>, std::string>>{
-           {{"--no-such-key", "1"}, "--no-such-key"}, {{"--board", "sim"}, "--board"}, {{"stray"}, "stray"},
+           {{"--no-such-key", "1"}, "--no-such-key"},
+           {{"--board", "sim"}, "--board"},
+           {{"stray"}, "stray"},
            {{"--udp-port"}, "--udp-port"}}) {
     const std::string e = flag_error(args);
     EXPECT_EQ(e.rfind("usage: ", 0), 0u) << e;
@@ -245,7 +287,8 @@ TEST(DaemonConfig, HelpListsEveryKeyAsAFlagWithItsDefault) {
   EXPECT_NE(help.find("5600"), std::string::npos);
   EXPECT_NE(help.find("\"fira-robosot\""), std::string::npos);
   EXPECT_NE(help.find("\"\""), std::string::npos);  // an empty default is shown as ""
-  for (const char* gone : {"--board ", "--sim-", "sim |"}) EXPECT_EQ(help.find(gone), std::string::npos) << gone;
+  for (const char* gone : {"--board ", "--sim-", "sim |"})
+    EXPECT_EQ(help.find(gone), std::string::npos) << gone;
 }
 
 // Issue 17.3: log levels from the key table (--log-level, the config file) and -v / -q on top.

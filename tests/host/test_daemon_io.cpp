@@ -20,7 +20,8 @@ using namespace omniloc::daemon;
 namespace fs = std::filesystem;
 
 struct TempDir {
-  fs::path path = fs::temp_directory_path() / ("omniloc_test_daemon_io_" + std::to_string(::getpid()));
+  fs::path path =
+      fs::temp_directory_path() / ("omniloc_test_daemon_io_" + std::to_string(::getpid()));
   TempDir() { fs::create_directories(path); }
   ~TempDir() { fs::remove_all(path); }
 };
@@ -46,15 +47,17 @@ TEST(SteadyClock, StartsAtZeroNeverGoesBackAndWaitsAtLeastAsLongAsAsked) {
 }
 
 /// Grey level of frame i: far enough apart that JPEG cannot blur one into the next.
-int level(int i) { return 20 + 20 * i; }
+int level(int i) {
+  return 20 + 20 * i;
+}
 
 TEST(OpenCvCamera, ReadsAVideoFileInOrderStampedWithItsOwnTimesThenStops) {
   TempDir dir;
   const fs::path video = dir.path / "grey.avi";
   constexpr int kFrames = 10;
   {
-    cv::VideoWriter w(video.string(), cv::CAP_OPENCV_MJPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 30.0,
-                      cv::Size(64, 48));
+    cv::VideoWriter w(video.string(), cv::CAP_OPENCV_MJPEG,
+                      cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 30.0, cv::Size(64, 48));
     ASSERT_TRUE(w.isOpened()) << "OpenCV's own MJPEG writer must be available";
     for (int i = 0; i < kFrames; ++i) w.write(cv::Mat(48, 64, CV_8UC3, cv::Scalar::all(level(i))));
   }

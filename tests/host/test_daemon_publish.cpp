@@ -43,15 +43,18 @@ PoseMessage sample_message() {
 }
 
 TEST(DaemonPublish, DatagramTextIsExactlyTheDocumentedSchema) {
-  EXPECT_EQ(omniloc::daemon::pose_json(sample_message()),
-            R"({"seq":42,"t_ms":1234.500,"t_uncertainty_ms":0.120,"x_cm":375.125,"y_cm":-2.500,"yaw_deg":179.750,)"
-            R"("source":"integrated",)"
-            R"("match_error":7.250,"search_range_cm":20.0,"uncertainty_cm":1.500,"uncertainty_yaw_deg":0.250,)"
-            R"("vx_cm_s":120.50,"vy_cm_s":-3.25,"omega_deg_s":45.00,"mono_ms":98765.432,"wall_ms":1796280000123.500,)"
-            R"("status":"ok"})");
+  EXPECT_EQ(
+      omniloc::daemon::pose_json(sample_message()),
+      R"({"seq":42,"t_ms":1234.500,"t_uncertainty_ms":0.120,"x_cm":375.125,"y_cm":-2.500,"yaw_deg":179.750,)"
+      R"("source":"integrated",)"
+      R"("match_error":7.250,"search_range_cm":20.0,"uncertainty_cm":1.500,"uncertainty_yaw_deg":0.250,)"
+      R"("vx_cm_s":120.50,"vy_cm_s":-3.25,"omega_deg_s":45.00,"mono_ms":98765.432,"wall_ms":1796280000123.500,)"
+      R"("status":"ok"})");
   PoseMessage global = sample_message();  // the last image result came from a global search
   global.search_range_cm = -1;
-  EXPECT_NE(omniloc::daemon::pose_json(global).find(R"("match_error":7.250,"search_range_cm":-1.0,)"), std::string::npos)
+  EXPECT_NE(
+      omniloc::daemon::pose_json(global).find(R"("match_error":7.250,"search_range_cm":-1.0,)"),
+      std::string::npos)
       << omniloc::daemon::pose_json(global);
   PoseMessage none = sample_message();
   none.match_error = -1;
@@ -59,10 +62,11 @@ TEST(DaemonPublish, DatagramTextIsExactlyTheDocumentedSchema) {
   none.source = "a\"b";
   none.status = DaemonStatus::kDegraded;
   none.t_uncertainty_ms.reset();  // not a board time: the key is left out
-  EXPECT_EQ(omniloc::daemon::pose_json(none),
-            R"({"seq":42,"t_ms":1234.500,"x_cm":375.125,"y_cm":-2.500,"yaw_deg":179.750,"source":"a\"b",)"
-            R"("uncertainty_cm":1.500,"uncertainty_yaw_deg":0.250,"vx_cm_s":120.50,"vy_cm_s":-3.25,"omega_deg_s":45.00,)"
-            R"("mono_ms":98765.432,"wall_ms":1796280000123.500,"status":"degraded"})");
+  EXPECT_EQ(
+      omniloc::daemon::pose_json(none),
+      R"({"seq":42,"t_ms":1234.500,"x_cm":375.125,"y_cm":-2.500,"yaw_deg":179.750,"source":"a\"b",)"
+      R"("uncertainty_cm":1.500,"uncertainty_yaw_deg":0.250,"vx_cm_s":120.50,"vy_cm_s":-3.25,"omega_deg_s":45.00,)"
+      R"("mono_ms":98765.432,"wall_ms":1796280000123.500,"status":"degraded"})");
 }
 
 TEST(DaemonPublish, StatusNamesAreTheDocumentedOnes) {
@@ -75,8 +79,8 @@ TEST(DaemonPublish, StatusNamesAreTheDocumentedOnes) {
 }
 
 // A broadcast destination works (the docs offer one): 127.255.255.255 is the loopback network's
-// broadcast address, refused with EACCES unless the socket asks for SO_BROADCAST, and delivered to a
-// receiver bound to INADDR_ANY. A failed send keeps its reason for the status line.
+// broadcast address, refused with EACCES unless the socket asks for SO_BROADCAST, and delivered to
+// a receiver bound to INADDR_ANY. A failed send keeps its reason for the status line.
 TEST(DaemonPublish, BroadcastAddressesAreSentToAndFailuresSayWhy) {
   const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
   ASSERT_GE(fd, 0);
@@ -104,7 +108,8 @@ TEST(DaemonPublish, BroadcastAddressesAreSentToAndFailuresSayWhy) {
   omniloc::daemon::StatusSnapshot st;
   st.send_failed = pub.failed();
   st.send_error = pub.last_error();
-  EXPECT_NE(omniloc::daemon::status_line(st).find("dropped=1 send_error=Message too long"), std::string::npos)
+  EXPECT_NE(omniloc::daemon::status_line(st).find("dropped=1 send_error=Message too long"),
+            std::string::npos)
       << omniloc::daemon::status_line(st);
 }
 
@@ -154,7 +159,8 @@ TEST(DaemonPublish, DatagramsArriveOnLoopbackAndParseBackToTheSameValues) {
   for (int i = 0; i < 3; ++i) {
     const std::string d = rx.receive();
     ASSERT_FALSE(d.empty()) << "datagram " << i << " did not arrive within 2 s";
-    cv::FileStorage fs(d, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_JSON);
+    cv::FileStorage fs(
+        d, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_JSON);
     EXPECT_EQ(static_cast<int>(fs["seq"].real()), 100 + i);
     EXPECT_EQ(fs["x_cm"].real(), 10.0 * i + 0.125);
     EXPECT_EQ(fs["y_cm"].real(), -2.5);
@@ -193,7 +199,8 @@ TEST(DaemonPublish, StatusLineShowsEveryFigure) {
   s.send_failed = 2;
   s.reconnects = 1;
   EXPECT_EQ(omniloc::daemon::status_line(s),
-            "t=12.0s odometry_only pose=(375.2,275.1,-90.0) src=odometry err=- sigma=3.2cm drift=-0.012deg/s win=100/s cam=0/s "
+            "t=12.0s odometry_only pose=(375.2,275.1,-90.0) src=odometry err=- sigma=3.2cm "
+            "drift=-0.012deg/s win=100/s cam=0/s "
             "sent=1200 dropped=2 reconnects=1");
 }
 

@@ -1,13 +1,13 @@
 // omnilocd's core run in-process on a simulated robot: the world simulator drives the C++ reference
-// board (the golden model of the board's protocol, sim/include/omniloc_sim/reference_board.hpp) behind
-// a Transport, the renderer is the camera, and the daemon's clock is the simulation's. One 7-second
-// run checks: poses reach a UDP socket on 127.0.0.1 and match truth; the board unplugged for 0.6 s
-// (the transport throws kDeviceGone) gives degraded poses, then a reconnect and good poses again; a
-// camera that stops gives odometry-only poses, flagged; the recording reads back with the
-// recording reader. Truth never passes through the daemon: the test looks it up in the simulator's
-// truth log for each published pose, and writes truth.csv from a window observer, as omnilocd-sim
-// does. (The Verilated board behind the same daemon is what `omnilocd-sim` and `make demo` run;
-// test_sim_programs runs those.)
+// board (the golden model of the board's protocol, sim/include/omniloc_sim/reference_board.hpp)
+// behind a Transport, the renderer is the camera, and the daemon's clock is the simulation's. One
+// 7-second run checks: poses reach a UDP socket on 127.0.0.1 and match truth; the board unplugged
+// for 0.6 s (the transport throws kDeviceGone) gives degraded poses, then a reconnect and good
+// poses again; a camera that stops gives odometry-only poses, flagged; the recording reads back
+// with the recording reader. Truth never passes through the daemon: the test looks it up in the
+// simulator's truth log for each published pose, and writes truth.csv from a window observer, as
+// omnilocd-sim does. (The Verilated board behind the same daemon is what `omnilocd-sim` and `make
+// demo` run; test_sim_programs runs those.)
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -25,8 +25,8 @@
 
 #include "omniloc/daemon.hpp"
 #include "omniloc/recording.hpp"
-#include "omniloc_sim/sim_robot.hpp"
 #include "omniloc_sim/reference_board.hpp"
+#include "omniloc_sim/sim_robot.hpp"
 #include "omniloc_sim/trajectory.hpp"
 #include "omniloc_sim/world.hpp"
 #include "udp_receiver.hpp"
@@ -107,11 +107,14 @@ class RigTransport final : public Transport {
       check();
     }
   }
-  [[nodiscard]] TransportStatus status() const override { return {true, false, "reference board (C++ model)", {}}; }
+  [[nodiscard]] TransportStatus status() const override {
+    return {true, false, "reference board (C++ model)", {}};
+  }
   /// BoardClient's deadlines run on the simulation's clock, like SimTransport's.
   [[nodiscard]] std::chrono::steady_clock::time_point now() const override {
-    return std::chrono::steady_clock::time_point(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-        std::chrono::duration<double, std::milli>(rig_.now_ms)));
+    return std::chrono::steady_clock::time_point(
+        std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+            std::chrono::duration<double, std::milli>(rig_.now_ms)));
   }
 
  private:
@@ -140,13 +143,16 @@ sim::RenderOptions render_options(std::uint64_t seed) {
   return o;
 }
 
-double position_error(const Pose2& a, const Pose2& b) { return std::hypot(a.x_cm - b.x_cm, a.y_cm - b.y_cm); }
+double position_error(const Pose2& a, const Pose2& b) {
+  return std::hypot(a.x_cm - b.x_cm, a.y_cm - b.y_cm);
+}
 
 TEST(DaemonSim, PublishesTrackedPosesSurvivesUnplugAndCameraStop) {
   const std::uint64_t seed = 7;
   std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
   const auto& mod = models();
-  Rig rig(sim::WorldConfig::default_noise(mod.robot, seed), sim::make_trajectory("figure_eight", seed));
+  Rig rig(sim::WorldConfig::default_noise(mod.robot, seed),
+          sim::make_trajectory("figure_eight", seed));
   rig.unplug_from_ms = 2500.0;
   rig.unplug_to_ms = 3100.0;
   const double camera_stop_ms = 5500.0;
@@ -158,7 +164,8 @@ TEST(DaemonSim, PublishesTrackedPosesSurvivesUnplugAndCameraStop) {
   omniloc::test::UdpReceiver rx;
   ASSERT_GT(rx.port(), 0);
 
-  const auto rec_dir = std::filesystem::temp_directory_path() / ("omniloc_test_daemon_rec_" + std::to_string(::getpid()));
+  const auto rec_dir = std::filesystem::temp_directory_path() /
+                       ("omniloc_test_daemon_rec_" + std::to_string(::getpid()));
   std::filesystem::remove_all(rec_dir);
   DaemonConfig cfg;
   cfg.udp_address = "127.0.0.1";
@@ -216,7 +223,8 @@ TEST(DaemonSim, PublishesTrackedPosesSurvivesUnplugAndCameraStop) {
   const auto grams = rx.drain();
   ASSERT_EQ(grams.size(), events.size()) << "datagrams lost on loopback";
   for (std::size_t i = 0; i < grams.size(); i += 97) {
-    cv::FileStorage fs(grams[i], cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_JSON);
+    cv::FileStorage fs(
+        grams[i], cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_JSON);
     EXPECT_EQ(static_cast<std::uint64_t>(fs["seq"].real()), events[i].message.seq);
     EXPECT_NEAR(fs["x_cm"].real(), events[i].message.x_cm, 5e-4);
     EXPECT_NEAR(fs["y_cm"].real(), events[i].message.y_cm, 5e-4);
@@ -259,14 +267,18 @@ TEST(DaemonSim, PublishesTrackedPosesSurvivesUnplugAndCameraStop) {
       max_yaw_err = std::max(max_yaw_err, yaw_err);
       ++ok_checked;
     }
-    if (st == DaemonStatus::kOdometryOnly && t > camera_stop_ms) max_err_odo = std::max(max_err_odo, err);
+    if (st == DaemonStatus::kOdometryOnly && t > camera_stop_ms)
+      max_err_odo = std::max(max_err_odo, err);
     if (std::getenv("DAEMON_SIM_TRACE") && static_cast<long>(t) % 100 < 10)
       std::printf("t=%.0f %s src=%s err=%.2f true=(%.1f,%.1f,%.1f) est=(%.1f,%.1f,%.1f)\n", t,
-                  std::string(to_string(st)).c_str(), e.message.source.c_str(), err, truth->x_cm, truth->y_cm,
-                  truth->yaw_deg, e.localized.pose.x_cm, e.localized.pose.y_cm, e.localized.pose.yaw_deg);
+                  std::string(to_string(st)).c_str(), e.message.source.c_str(), err, truth->x_cm,
+                  truth->y_cm, truth->yaw_deg, e.localized.pose.x_cm, e.localized.pose.y_cm,
+                  e.localized.pose.yaw_deg);
   }
-  std::printf("checked %d ok poses: max error %.2f cm, yaw %.2f deg; %d degraded; %d odometry-only, max error %.2f cm\n",
-              ok_checked, max_err_tracking, max_yaw_err, degraded, odo_only, max_err_odo);
+  std::printf(
+      "checked %d ok poses: max error %.2f cm, yaw %.2f deg; %d degraded; %d odometry-only, max "
+      "error %.2f cm\n",
+      ok_checked, max_err_tracking, max_yaw_err, degraded, odo_only, max_err_odo);
   EXPECT_TRUE(saw_ok_after_reconnect);
   EXPECT_GE(ok_checked, 200);
   EXPECT_LT(max_err_tracking, 10.0);
@@ -348,7 +360,9 @@ TEST(DaemonSim, NoCameraAndNoStartPoseIsOdometryOnly) {
   volatile std::sig_atomic_t stop = 0;
   DaemonIo io;
   io.clock = &clock;
-  io.open_board = [&rig]() -> std::unique_ptr<Transport> { return std::make_unique<RigTransport>(rig); };
+  io.open_board = [&rig]() -> std::unique_ptr<Transport> {
+    return std::make_unique<RigTransport>(rig);
+  };
   io.heading = &rig.log;
   io.observer.on_pose = [&](const PoseEvent& e) {
     statuses.push_back(e.message.status);
@@ -378,7 +392,9 @@ TEST(DaemonSim, StopFlagEndsTheRunAndSwitchesStreamingOff) {
   volatile std::sig_atomic_t stop = 0;
   DaemonIo io;
   io.clock = &clock;
-  io.open_board = [&rig]() -> std::unique_ptr<Transport> { return std::make_unique<RigTransport>(rig); };
+  io.open_board = [&rig]() -> std::unique_ptr<Transport> {
+    return std::make_unique<RigTransport>(rig);
+  };
   io.heading = &rig.log;
   std::vector<std::optional<Pose2>> truths;
   io.observer.on_pose = [&](const PoseEvent& e) {
@@ -400,7 +416,8 @@ TEST(DaemonSim, StopFlagEndsTheRunAndSwitchesStreamingOff) {
   EXPECT_EQ(omniloc::regmap::kControlEnable.get(rig.board.reg(omniloc::regmap::kRegControl)), 1u);
   double max_err = 0;
   for (std::size_t i = 0; i < events.size(); ++i) {
-    EXPECT_EQ(events[i].message.status, DaemonStatus::kOdometryOnly) << "t=" << events[i].message.t_ms;
+    EXPECT_EQ(events[i].message.status, DaemonStatus::kOdometryOnly)
+        << "t=" << events[i].message.t_ms;
     ASSERT_TRUE(truths[i].has_value());
     max_err = std::max(max_err, position_error(events[i].localized.pose, *truths[i]));
   }

@@ -1,4 +1,5 @@
-// tests/data/<name> found from the working directory (the build directory) upwards; empty if absent.
+// tests/data/<name> found from the working directory (the build directory) upwards; empty if
+// absent.
 #pragma once
 
 #include <filesystem>

@@ -1,8 +1,9 @@
-// The drive `omniloc-sim demo` runs (sim/include/omniloc_sim/demo_drive.hpp) through the world simulator with the
-// demo's events: 30 s long, the robot on the carpet all the time with its centre at most 10 cm
-// outside the field lines (the world moves the reference rigidly after the kidnapping; keeping it on
-// the field is the drive's job), within 10 cm of each of the four boundary lines at some point, one kidnapping at the stated time and
-// place, and the wheel-2 slip in the stated windows.
+// The drive `omniloc-sim demo` runs (sim/include/omniloc_sim/demo_drive.hpp) through the world
+// simulator with the demo's events: 30 s long, the robot on the carpet all the time with its centre
+// at most 10 cm outside the field lines (the world moves the reference rigidly after the
+// kidnapping; keeping it on the field is the drive's job), within 10 cm of each of the four
+// boundary lines at some point, one kidnapping at the stated time and place, and the wheel-2 slip
+// in the stated windows.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -65,8 +66,8 @@ TEST(DemoDrive, ThirtySecondsOnTheFieldPastEveryBoundaryWithOneKidnapAndTheSlip)
     prev = p;
   }
   EXPECT_EQ(windows, 3000);
-  std::printf("closest to the lines: left %.1f right %.1f bottom %.1f top %.1f cm\n", min_left, min_right, min_bottom,
-              min_top);
+  std::printf("closest to the lines: left %.1f right %.1f bottom %.1f top %.1f cm\n", min_left,
+              min_right, min_bottom, min_top);
   EXPECT_LE(min_left, 10.0);
   EXPECT_LE(min_right, 10.0);
   EXPECT_LE(min_bottom, 10.0);

@@ -25,7 +25,8 @@ std::array<std::int32_t, 4> script(std::uint32_t seq) {
   return {s * 1013 - 70000, -s * 7, (s % 3 == 0) ? -123456 : 654321, s ^ 0x5A5A};
 }
 
-/// Logs where each host write starts in the host->board byte stream (one write = one request frame).
+/// Logs where each host write starts in the host->board byte stream (one write = one request
+/// frame).
 struct WriteRecorder final : sim::UartSide {
   explicit WriteRecorder(sim::UartSide& inner) : inner(inner) {}
   void to_board(std::span<const std::uint8_t> b) override {
@@ -47,7 +48,8 @@ bool damaged(const std::vector<std::uint64_t>& offsets, std::uint64_t begin, std
 TEST(FaultInjection, NothingCorruptIsAcceptedAndEveryLossIsCounted) {
   const char* env = std::getenv("OMNILOC_SEED");
   const std::uint64_t seed = env ? std::strtoull(env, nullptr, 0) : 0xF00DCAFEull;
-  std::printf("seed %llu (set OMNILOC_SEED to repeat another)\n", static_cast<unsigned long long>(seed));
+  std::printf("seed %llu (set OMNILOC_SEED to repeat another)\n",
+              static_cast<unsigned long long>(seed));
 
   sim::FaultRates rates;
   rates.corrupt_per_byte = 1e-3;
@@ -101,12 +103,14 @@ TEST(FaultInjection, NothingCorruptIsAcceptedAndEveryLossIsCounted) {
   while (auto w = client.poll_telemetry(std::chrono::milliseconds(5))) take(*w);
   const std::uint32_t total = static_cast<std::uint32_t>(kWindows) + 2;
 
-  // 1. No corrupted sample: every accepted window is exactly the board's window of that sequence number.
+  // 1. No corrupted sample: every accepted window is exactly the board's window of that sequence
+  // number.
   const auto truth = board.windows();
   ASSERT_EQ(truth.size(), total);
   for (const auto& [seq, w] : received) ASSERT_EQ(w, truth[seq - 1]) << "window " << seq;
 
-  // 2. Resync within one frame: the frames accepted are exactly the telemetry frames whose bytes all
+  // 2. Resync within one frame: the frames accepted are exactly the telemetry frames whose bytes
+  // all
   //    arrived unharmed; each frame after a damaged one is accepted.
   const auto& from_log = faulty.from_board_log();
   std::set<std::uint32_t> intact;
@@ -131,10 +135,12 @@ TEST(FaultInjection, NothingCorruptIsAcceptedAndEveryLossIsCounted) {
   EXPECT_EQ(dc.telemetry_stale, 0u);
   EXPECT_GT(dc.bad_crc + dc.bad_length + dc.unknown_type, 0u);
 
-  // 4. Register writes: the board applied only values the host sent, and FILTER ends as last written.
+  // 4. Register writes: the board applied only values the host sent, and FILTER ends as last
+  // written.
   for (const auto& w : board.applied_writes()) {
     if (w.addr == r::kRegFilter) {
-      ASSERT_NE(std::find(filters_written.begin(), filters_written.end(), w.value), filters_written.end())
+      ASSERT_NE(std::find(filters_written.begin(), filters_written.end(), w.value),
+                filters_written.end())
           << "board applied a FILTER value the host never sent: " << w.value;
     } else {
       ASSERT_EQ(w.addr, r::kRegControl);
@@ -145,32 +151,45 @@ TEST(FaultInjection, NothingCorruptIsAcceptedAndEveryLossIsCounted) {
   // 5. Host->board losses: every damaged request was sent again.
   const auto& to_log = faulty.to_board_log();
   int requests_damaged = 0;
-  for (const auto& [off, n] : recorder.chunks) requests_damaged += damaged(to_log.damaged_offsets, off, n) ? 1 : 0;
+  for (const auto& [off, n] : recorder.chunks)
+    requests_damaged += damaged(to_log.damaged_offsets, off, n) ? 1 : 0;
   const auto& cc = client.counters();
   EXPECT_GE(cc.retries, static_cast<std::uint64_t>(requests_damaged));
   EXPECT_GT(requests_damaged, 0);
   const auto board_rx = board.rx_counters();
 
   std::printf(
-      "board->host: %llu bytes, %llu corrupted, %llu dropped (%llu truncations); telemetry %u sent, %d damaged, "
-      "%zu accepted, %llu counted lost in %llu gaps; decoder rejected %llu bad CRC, %llu bad LEN, %llu unknown TYPE, "
+      "board->host: %llu bytes, %llu corrupted, %llu dropped (%llu truncations); telemetry %u "
+      "sent, %d damaged, "
+      "%zu accepted, %llu counted lost in %llu gaps; decoder rejected %llu bad CRC, %llu bad LEN, "
+      "%llu unknown TYPE, "
       "%llu resync bytes\n",
-      static_cast<unsigned long long>(from_log.bytes_seen), static_cast<unsigned long long>(from_log.corrupted),
-      static_cast<unsigned long long>(from_log.dropped), static_cast<unsigned long long>(from_log.truncations), total,
-      telemetry_damaged, received.size(), static_cast<unsigned long long>(dc.telemetry_lost),
-      static_cast<unsigned long long>(dc.telemetry_gaps), static_cast<unsigned long long>(dc.bad_crc),
-      static_cast<unsigned long long>(dc.bad_length), static_cast<unsigned long long>(dc.unknown_type),
+      static_cast<unsigned long long>(from_log.bytes_seen),
+      static_cast<unsigned long long>(from_log.corrupted),
+      static_cast<unsigned long long>(from_log.dropped),
+      static_cast<unsigned long long>(from_log.truncations), total, telemetry_damaged,
+      received.size(), static_cast<unsigned long long>(dc.telemetry_lost),
+      static_cast<unsigned long long>(dc.telemetry_gaps),
+      static_cast<unsigned long long>(dc.bad_crc), static_cast<unsigned long long>(dc.bad_length),
+      static_cast<unsigned long long>(dc.unknown_type),
       static_cast<unsigned long long>(dc.resync_bytes));
   std::printf(
-      "host->board: %llu bytes, %llu corrupted, %llu dropped (%llu truncations); %zu requests (%d reads checked), "
-      "%d damaged; host %llu retries, %llu timeouts, %llu BAD_CRC/MALFORMED answers; board served %llu requests, "
+      "host->board: %llu bytes, %llu corrupted, %llu dropped (%llu truncations); %zu requests (%d "
+      "reads checked), "
+      "%d damaged; host %llu retries, %llu timeouts, %llu BAD_CRC/MALFORMED answers; board served "
+      "%llu requests, "
       "rejected %llu bad CRC, %llu malformed (%llu cut short)\n",
-      static_cast<unsigned long long>(to_log.bytes_seen), static_cast<unsigned long long>(to_log.corrupted),
-      static_cast<unsigned long long>(to_log.dropped), static_cast<unsigned long long>(to_log.truncations),
-      recorder.chunks.size(), reads, requests_damaged, static_cast<unsigned long long>(cc.retries),
-      static_cast<unsigned long long>(cc.timeouts), static_cast<unsigned long long>(cc.board_rejected),
-      static_cast<unsigned long long>(board_rx.requests), static_cast<unsigned long long>(board_rx.bad_crc),
-      static_cast<unsigned long long>(board_rx.malformed), static_cast<unsigned long long>(board_rx.aborted));
+      static_cast<unsigned long long>(to_log.bytes_seen),
+      static_cast<unsigned long long>(to_log.corrupted),
+      static_cast<unsigned long long>(to_log.dropped),
+      static_cast<unsigned long long>(to_log.truncations), recorder.chunks.size(), reads,
+      requests_damaged, static_cast<unsigned long long>(cc.retries),
+      static_cast<unsigned long long>(cc.timeouts),
+      static_cast<unsigned long long>(cc.board_rejected),
+      static_cast<unsigned long long>(board_rx.requests),
+      static_cast<unsigned long long>(board_rx.bad_crc),
+      static_cast<unsigned long long>(board_rx.malformed),
+      static_cast<unsigned long long>(board_rx.aborted));
 }
 
 }  // namespace

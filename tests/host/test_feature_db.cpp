@@ -64,9 +64,11 @@ double white_margin_cm(const FieldGeometry& f, const Eigen::Vector2d& q) {
     double m = hw - std::abs(r - a.radius_cm);
     const double span = a.end_deg - a.start_deg;
     if (span < 360.0) {
-      double rel = std::fmod(std::atan2(dy, dx) * 180.0 / 3.14159265358979323846 - a.start_deg, 360.0);
+      double rel =
+          std::fmod(std::atan2(dy, dx) * 180.0 / 3.14159265358979323846 - a.start_deg, 360.0);
       if (rel < 0.0) rel += 360.0;
-      const double ang_deg = rel <= span ? std::min(rel, span - rel) : -std::min(rel - span, 360.0 - rel);
+      const double ang_deg =
+          rel <= span ? std::min(rel, span - rel) : -std::min(rel - span, 360.0 - rel);
       m = std::min(m, ang_deg * 3.14159265358979323846 / 180.0 * std::max(r, 1e-9));
     }
     best = std::max(best, m);
@@ -92,7 +94,8 @@ struct ReferenceRay {
   bool on_edge = false;
 };
 
-ReferenceRay reference_ray(const FieldGeometry& f, const CameraModel& cam, const Eigen::Vector2d& p, int k) {
+ReferenceRay reference_ray(const FieldGeometry& f, const CameraModel& cam, const Eigen::Vector2d& p,
+                           int k) {
   const double a = k * 3.14159265358979323846 / 180.0;
   const Eigen::Vector2d dir(std::cos(a), std::sin(a));
   const int r0 = static_cast<int>(std::ceil(cam.min_radius_px()));
@@ -105,7 +108,8 @@ ReferenceRay reference_ray(const FieldGeometry& f, const CameraModel& cam, const
     const double m = white_margin_cm(f, p + ground_cm(cam, r) * dir);
     out.on_edge = out.on_edge || std::abs(m) < 1e-6;
     if (m >= 0.0) {
-      if (gap >= min_gap && found < kCrossingsPerRay) out.radii[static_cast<std::size_t>(found++)] = static_cast<std::uint8_t>(r);
+      if (gap >= min_gap && found < kCrossingsPerRay)
+        out.radii[static_cast<std::size_t>(found++)] = static_cast<std::uint8_t>(r);
       gap = 0;
     } else {
       ++gap;
@@ -119,8 +123,8 @@ struct Comparison {
 };
 
 /// Compares the database entries of `cells` with the reference ray by ray.
-Comparison compare_with_reference(const FeatureDb& db, const FieldGeometry& f, const CameraModel& cam,
-                                  const std::vector<int>& cells) {
+Comparison compare_with_reference(const FeatureDb& db, const FieldGeometry& f,
+                                  const CameraModel& cam, const std::vector<int>& cells) {
   Comparison c;
   for (const int cell : cells) {
     const Eigen::Vector2d p = db.grid.position(cell);
@@ -132,17 +136,20 @@ Comparison compare_with_reference(const FeatureDb& db, const FieldGeometry& f, c
         ++c.on_edge;
         continue;
       }
-      const bool same = std::equal(ref.radii.begin(), ref.radii.end(), entry + k * kCrossingsPerRay);
+      const bool same =
+          std::equal(ref.radii.begin(), ref.radii.end(), entry + k * kCrossingsPerRay);
       if (!same && c.differing++ < 5) {
-        ADD_FAILURE() << "cell " << cell << " at (" << p.x() << ", " << p.y() << ") ray " << k << ": database "
-                      << int{entry[4 * k]} << " " << int{entry[4 * k + 1]} << " " << int{entry[4 * k + 2]} << " "
-                      << int{entry[4 * k + 3]} << ", reference " << int{ref.radii[0]} << " " << int{ref.radii[1]} << " "
-                      << int{ref.radii[2]} << " " << int{ref.radii[3]};
+        ADD_FAILURE() << "cell " << cell << " at (" << p.x() << ", " << p.y() << ") ray " << k
+                      << ": database " << int{entry[4 * k]} << " " << int{entry[4 * k + 1]} << " "
+                      << int{entry[4 * k + 2]} << " " << int{entry[4 * k + 3]} << ", reference "
+                      << int{ref.radii[0]} << " " << int{ref.radii[1]} << " " << int{ref.radii[2]}
+                      << " " << int{ref.radii[3]};
       }
     }
   }
-  std::printf("%zu cells, %d rays: %d identical, %d left out (a sample on a line edge), %d differing\n", cells.size(),
-              c.rays, c.rays - c.on_edge - c.differing, c.on_edge, c.differing);
+  std::printf(
+      "%zu cells, %d rays: %d identical, %d left out (a sample on a line edge), %d differing\n",
+      cells.size(), c.rays, c.rays - c.on_edge - c.differing, c.on_edge, c.differing);
   return c;
 }
 
@@ -153,15 +160,17 @@ class FeatureDbTest : public ::testing::Test {
     camera_ = std::make_unique<CameraModel>(load_camera("default"));
     const auto t0 = std::chrono::steady_clock::now();
     int calls = 0, last_done = 0;
-    db_ = std::make_unique<FeatureDb>(build_feature_db(*field_, *camera_, GridSpec::covering(*field_, 10.0),
-                                                       [&](int done, int total) {
-                                                         ++calls;
-                                                         EXPECT_GT(done, last_done);
-                                                         EXPECT_EQ(total, 75 * 55);
-                                                         last_done = done;
-                                                       }));
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    std::printf("full 75 x 55 database: %.0f ms to build (informational), %zu bytes\n", ms, db_->bytes_in_memory());
+    db_ = std::make_unique<FeatureDb>(build_feature_db(
+        *field_, *camera_, GridSpec::covering(*field_, 10.0), [&](int done, int total) {
+          ++calls;
+          EXPECT_GT(done, last_done);
+          EXPECT_EQ(total, 75 * 55);
+          last_done = done;
+        }));
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    std::printf("full 75 x 55 database: %.0f ms to build (informational), %zu bytes\n", ms,
+                db_->bytes_in_memory());
     EXPECT_EQ(calls, 55);
     EXPECT_EQ(last_done, 75 * 55);
   }
@@ -171,7 +180,8 @@ class FeatureDbTest : public ::testing::Test {
     db_.reset();
   }
   void SetUp() override {
-    path_ = (fs::temp_directory_path() / ("omniloc_db_" + std::to_string(::getpid()) + ".bin")).string();
+    path_ = (fs::temp_directory_path() / ("omniloc_db_" + std::to_string(::getpid()) + ".bin"))
+                .string();
   }
   void TearDown() override { fs::remove(path_); }
 
@@ -180,9 +190,11 @@ class FeatureDbTest : public ::testing::Test {
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   }
   void write_file(const std::vector<char>& bytes) const {
-    std::ofstream(path_, std::ios::binary | std::ios::trunc).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    std::ofstream(path_, std::ios::binary | std::ios::trunc)
+        .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   }
-  void expect_refused(const std::string& what, const FieldGeometry& field, const CameraModel& camera) const {
+  void expect_refused(const std::string& what, const FieldGeometry& field,
+                      const CameraModel& camera) const {
     try {
       (void)load_feature_db(path_, field, camera);
       FAIL() << "loaded a database that should be refused (" << what << ")";
@@ -232,18 +244,21 @@ TEST_F(FeatureDbTest, EntriesMatchNoiseFreeRenderedImages) {
   for (int cell = 17; cell < db_->grid.cells(); cell += 211) {
     const Eigen::Vector2d p = db_->grid.position(cell);
     const double yaw = static_cast<double>(cell % 360);
-    const Scan s = scan_image(renderer.render({p.x(), p.y(), yaw}, sim::noise_free()), *camera_, yaw);
+    const Scan s =
+        scan_image(renderer.render({p.x(), p.y(), yaw}, sim::noise_free()), *camera_, yaw);
     int c = 0, w = 0;
     for (int i = 0; i < kFeatureBytes; ++i) {
       if (s.ray_end_px[static_cast<std::size_t>(i / kCrossingsPerRay)] != kRayToViewEnd) continue;
       ++c;
-      w += std::abs(int{s.radii_px[static_cast<std::size_t>(i)]} - int{db_->cell_features(cell)[i]}) <= 1;
+      w += std::abs(int{s.radii_px[static_cast<std::size_t>(i)]} -
+                    int{db_->cell_features(cell)[i]}) <= 1;
     }
     EXPECT_GE(w, c * 90 / 100) << "cell " << cell;
     compared += c;
     within += w;
   }
-  std::printf("database vs noise-free images: %.1f %% of %d crossings within 1 px\n", 100.0 * within / compared, compared);
+  std::printf("database vs noise-free images: %.1f %% of %d crossings within 1 px\n",
+              100.0 * within / compared, compared);
   EXPECT_GE(within, compared * 95 / 100);
 }
 
@@ -328,7 +343,6 @@ void patch_with_valid_checksum(std::vector<char>& bytes, std::size_t offset, T v
   std::memcpy(bytes.data() + body, &h, sizeof h);
 }
 
-
 // Files whose checksum is valid but whose grid is nonsense for the field (a NaN or shifted origin,
 // an infinite or tiny step, a 1 x 1 grid) used to load, and a NaN origin then hung refine_match;
 // a directory or a device is refused by name before anything is read.
@@ -349,7 +363,8 @@ TEST_F(FeatureDbTest, RefusesAValidChecksumOverANonsenseGridAndFilesThatAreNotFi
       {"tiny step", 40, 1e-300, "corrupt grid"},
       {"shifted origin", 24, 25.0, "is not the grid of field"},
       {"other step", 40, 20.0, "is not the grid of field"},
-      {"other radius step", 80, 2.0, "radii sampled every 2.000000 px, the camera in use samples every 1.000000 px"},
+      {"other radius step", 80, 2.0,
+       "radii sampled every 2.000000 px, the camera in use samples every 1.000000 px"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.what);
@@ -377,20 +392,23 @@ TEST_F(FeatureDbTest, RefusesAValidChecksumOverANonsenseGridAndFilesThatAreNotFi
     (void)load_feature_db(dir.string(), *field_, *camera_);
     ADD_FAILURE() << "a directory loaded";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find(dir.string() + ": is a directory"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(dir.string() + ": is a directory"), std::string::npos)
+        << e.what();
   }
   fs::remove_all(dir);
   try {
     (void)load_feature_db("/dev/zero", *field_, *camera_);
     ADD_FAILURE() << "/dev/zero loaded";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("/dev/zero: not a regular file"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("/dev/zero: not a regular file"), std::string::npos)
+        << e.what();
   }
 }
 
 // A grid with one point along a side (a step above half the carpet's side) cannot localise along
-// it; it used to load when it was the field's own covering grid (found by fuzz_feature_db, issue 16;
-// regression input tests/fuzz/regressions/feature_db/). Field: 40 x 30 cm carpet, as the harness's.
+// it; it used to load when it was the field's own covering grid (found by fuzz_feature_db, issue
+// 16; regression input tests/fuzz/regressions/feature_db/). Field: 40 x 30 cm carpet, as the
+// harness's.
 TEST_F(FeatureDbTest, RefusesAGridWithOnePointAlongASideEvenWhenItIsTheFieldsOwnGrid) {
   FieldSpec spec = field_->spec;
   spec.name = "tiny";
@@ -412,7 +430,8 @@ TEST_F(FeatureDbTest, RefusesAGridWithOnePointAlongASideEvenWhenItIsTheFieldsOwn
     int nx, ny;
     bool loads;
   };
-  for (const Case& c : {Case{30, 1, 1, false}, Case{20, 2, 1, false}, Case{15, 2, 2, true}, Case{10, 4, 3, true}}) {
+  for (const Case& c :
+       {Case{30, 1, 1, false}, Case{20, 2, 1, false}, Case{15, 2, 2, true}, Case{10, 4, 3, true}}) {
     SCOPED_TRACE(c.step_cm);
     const GridSpec g = GridSpec::covering(tiny, c.step_cm);
     ASSERT_EQ(g.nx, c.nx);

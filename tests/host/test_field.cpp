@@ -1,9 +1,10 @@
-// Field model: geometry files, white-line membership and ray intervals against hand-computed values.
+// Field model: geometry files, white-line membership and ray intervals against hand-computed
+// values.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -36,15 +37,15 @@ TEST(Field, WhitePointsByHand) {
   EXPECT_TRUE(white(437.4, 275));   // inside the 5 cm line
   EXPECT_FALSE(white(437.6, 275));  // just outside it
   EXPECT_FALSE(white(300, 300));
-  EXPECT_TRUE(white(75, 200));      // left boundary
+  EXPECT_TRUE(white(75, 200));  // left boundary
   EXPECT_TRUE(white(72.6, 200));
   EXPECT_FALSE(white(72.4, 200));
-  EXPECT_TRUE(white(115, 275));     // left goal area front (75 + 40)
-  EXPECT_TRUE(white(150, 180));     // left penalty area side line at y = 275 - 100 = 175 (+- 2.5)
-  EXPECT_TRUE(white(210, 275));     // left penalty arc: centre (150, 275), r 60, front half only
-  EXPECT_FALSE(white(150 - 42.43, 275 + 42.43));  // the arc's back half is not drawn
+  EXPECT_TRUE(white(115, 275));  // left goal area front (75 + 40)
+  EXPECT_TRUE(white(150, 180));  // left penalty area side line at y = 275 - 100 = 175 (+- 2.5)
+  EXPECT_TRUE(white(210, 275));  // left penalty arc: centre (150, 275), r 60, front half only
+  EXPECT_FALSE(white(150 - 42.43, 275 + 42.43));             // the arc's back half is not drawn
   EXPECT_TRUE(white(75 + 25 * 0.70711, 75 + 25 * 0.70711));  // corner arc r 25
-  EXPECT_TRUE(white(300, 175));     // mark at centre + (-75, -100), r 5
+  EXPECT_TRUE(white(300, 175));                              // mark at centre + (-75, -100), r 5
   EXPECT_FALSE(white(305.5, 175));
   EXPECT_TRUE(on_carpet(f, {0, 0}));
   EXPECT_TRUE(on_carpet(f, {750, 550}));
@@ -58,7 +59,8 @@ TEST(Field, RayIntervalsByHand) {
   // at 375, right penalty arc at 540 (centre 600, r 60), right penalty area front at 600, right
   // goal area front at 635.
   white_intervals(f, {200, 275}, {1, 0}, 0.0, 450.0, iv);
-  const double expected[][2] = {{7.5, 12.5}, {112.5, 117.5}, {172.5, 177.5}, {232.5, 237.5}, {337.5, 342.5}, {397.5, 402.5}, {432.5, 437.5}};
+  const double expected[][2] = {{7.5, 12.5},    {112.5, 117.5}, {172.5, 177.5}, {232.5, 237.5},
+                                {337.5, 342.5}, {397.5, 402.5}, {432.5, 437.5}};
   ASSERT_EQ(iv.size(), 7u);
   for (std::size_t i = 0; i < iv.size(); ++i) {
     EXPECT_NEAR(iv[i].enter_cm, expected[i][0], 1e-9) << i;
@@ -80,16 +82,19 @@ TEST(Field, RayIntervalsAgreeWithPointSamplingEverywhere) {
   for (double x = 30; x < 750; x += 97.3) {
     for (double y = 20; y < 550; y += 83.1) {
       for (int k = 0; k < 360; k += 23) {
-        const Eigen::Vector2d o(x, y), u(std::cos(k * 3.14159265358979 / 180), std::sin(k * 3.14159265358979 / 180));
+        const Eigen::Vector2d o(x, y),
+            u(std::cos(k * 3.14159265358979 / 180), std::sin(k * 3.14159265358979 / 180));
         white_intervals(f, o, u, 10.0, 300.0, iv);
         for (double t = 10.0; t <= 300.0; t += 0.05) {
           bool in = false, near_edge = false;
           for (const auto& w : iv) {
             in = in || (t >= w.enter_cm && t <= w.exit_cm);
-            near_edge = near_edge || std::abs(t - w.enter_cm) < 1e-6 || std::abs(t - w.exit_cm) < 1e-6;
+            near_edge =
+                near_edge || std::abs(t - w.enter_cm) < 1e-6 || std::abs(t - w.exit_cm) < 1e-6;
           }
           if (near_edge) continue;
-          ASSERT_EQ(in, is_white(f, o + t * u)) << "ray from (" << x << ", " << y << ") at " << k << " deg, t " << t;
+          ASSERT_EQ(in, is_white(f, o + t * u))
+              << "ray from (" << x << ", " << y << ") at " << k << " deg, t " << t;
           ++checked;
         }
       }
@@ -114,9 +119,12 @@ TEST(Field, LinePointsLieOnTheLinesAtTheStep) {
     for (const auto& q : pts) off += !is_white(field, q);
     EXPECT_EQ(off, 0) << step;
     // n = ceil(len / step) + 1 per piece: between len / step + 1 and len / step + 2 per piece.
-    EXPECT_GE(static_cast<double>(pts.size()), length_cm / step + static_cast<double>(pieces)) << step;
-    EXPECT_LE(static_cast<double>(pts.size()), length_cm / step + 2.0 * static_cast<double>(pieces)) << step;
-    std::printf("step %.1f cm: %zu points over %.0f cm of lines in %zu pieces\n", step, pts.size(), length_cm, pieces);
+    EXPECT_GE(static_cast<double>(pts.size()), length_cm / step + static_cast<double>(pieces))
+        << step;
+    EXPECT_LE(static_cast<double>(pts.size()), length_cm / step + 2.0 * static_cast<double>(pieces))
+        << step;
+    std::printf("step %.1f cm: %zu points over %.0f cm of lines in %zu pieces\n", step, pts.size(),
+                length_cm, pieces);
   }
 }
 
@@ -142,14 +150,15 @@ TEST(Field, RoboCupMslIsASecondGeometry) {
   EXPECT_DOUBLE_EQ(m.total_y_cm(), 1600.0);
   EXPECT_EQ(m.arcs.size(), 5u);  // no penalty arcs: centre circle + 4 corners
   EXPECT_EQ(m.discs.size(), 3u);
-  EXPECT_TRUE(is_white(m, {1200 + 200, 800}));           // centre circle r 200
-  EXPECT_TRUE(is_white(m, {100 + 225, 800}));            // penalty area front
-  EXPECT_TRUE(is_white(m, {100 + 6.0, 500}));            // 12.5 cm boundary line
+  EXPECT_TRUE(is_white(m, {1200 + 200, 800}));  // centre circle r 200
+  EXPECT_TRUE(is_white(m, {100 + 225, 800}));   // penalty area front
+  EXPECT_TRUE(is_white(m, {100 + 6.0, 500}));   // 12.5 cm boundary line
   EXPECT_FALSE(is_white(m, {100 + 6.5, 500}));
   EXPECT_NE(m.fingerprint(), load_field("fira-robosot").fingerprint());
 }
 
-// --- geometry files ---------------------------------------------------------------------------------
+// --- geometry files
+// ---------------------------------------------------------------------------------
 
 using test::error_of;
 using test::replaced;
@@ -182,13 +191,14 @@ TEST(FieldFile, ShippedFilesHaveEveryKey) {
 }
 
 TEST(FieldFile, EveryKeyReachesItsMember) {
-  const std::string file = test::write_file("f.json", R"({"name": "test-field", "description": "d", "units": "cm",
+  const std::string file =
+      test::write_file("f.json", R"({"name": "test-field", "description": "d", "units": "cm",
       "field_length_cm": 900, "field_width_cm": 600, "border_cm": 50, "line_width_cm": 8,
       "centre_circle_radius_cm": 75, "goal": {"width_cm": 120, "depth_cm": 40, "colour_at_x_max": "yellow"},
       "goal_area": {"depth_cm": 50, "width_cm": 250},
       "penalty_area": {"depth_cm": 150, "width_cm": 400}, "penalty_arc": {"radius_cm": 40, "centre_from_goal_line_cm": 120},
       "corner_arc_radius_cm": 30, "marks": {"radius_cm": 6, "from_centre_cm": [[200, 50], [-200, -50]]}})")
-                               .string();
+          .string();
   const FieldSpec s = parse_field_spec(config::parse_json_file(file).root());
   EXPECT_EQ(s.name, "test-field");
   EXPECT_EQ(s.field_length_cm, 900.0);
@@ -222,9 +232,9 @@ TEST(FieldFile, EveryKeyReachesItsMember) {
   ASSERT_EQ(f.discs.size(), 2u);
   EXPECT_EQ(f.discs[0].centre_cm, Eigen::Vector2d(700, 400));
   EXPECT_EQ(f.discs[1].radius_cm, 6.0);
-  EXPECT_TRUE(is_white(f, {500 + 75, 350}));   // centre circle r 75
-  EXPECT_TRUE(is_white(f, {50 + 50, 350}));    // left goal area front at x 50 + 50
-  EXPECT_TRUE(is_white(f, {50 + 160, 350}));   // left penalty arc: centre 50 + 120, r 40
+  EXPECT_TRUE(is_white(f, {500 + 75, 350}));  // centre circle r 75
+  EXPECT_TRUE(is_white(f, {50 + 50, 350}));   // left goal area front at x 50 + 50
+  EXPECT_TRUE(is_white(f, {50 + 160, 350}));  // left penalty arc: centre 50 + 120, r 40
 }
 
 TEST(FieldFile, ErrorsNameFileAndFieldPath) {
@@ -232,39 +242,52 @@ TEST(FieldFile, ErrorsNameFileAndFieldPath) {
   test::expect_errors(
       [](const std::string& f) { (void)load_field(f); },
       {
-          {replaced(v, "\"line_width_cm\": 5", "\"line_width_cm\": -5"), "line_width_cm", "must be > 0 (got -5)"},
-          // Issue 16 item 6: a line 10 m wide was accepted; a length of 1e7 cm ended in std::bad_alloc
-          // (with no file named) when the database was laid over it.
+          {replaced(v, "\"line_width_cm\": 5", "\"line_width_cm\": -5"), "line_width_cm",
+           "must be > 0 (got -5)"},
+          // Issue 16 item 6: a line 10 m wide was accepted; a length of 1e7 cm ended in
+          // std::bad_alloc (with no file named) when the database was laid over it.
           {replaced(v, "\"line_width_cm\": 5", "\"line_width_cm\": 1000"), "line_width_cm",
            "must be at most 50 cm (got 1000)"},
           {replaced(v, "\"field_length_cm\": 600", "\"field_length_cm\": 1e7"), "field_length_cm",
            "must be at most 5000 cm (50 m) (got 10000000)"},
           {replaced(v, "\"field_width_cm\": 400", "\"field_width_cm\": 1e7"), "field_width_cm",
            "must be at most 5000 cm (50 m)"},
-          {replaced(v, "\"border_cm\": 75", "\"border_cm\": 1e6"), "border_cm", "must be at most 1000 cm"},
+          {replaced(v, "\"border_cm\": 75", "\"border_cm\": 1e6"), "border_cm",
+           "must be at most 1000 cm"},
           {replaced(v, "\"field_length_cm\": 600,", ""), "field_length_cm", "missing (required)"},
           {replaced(v, "\"centre_circle_radius_cm\": 60", "\"centre_circle_radius_cm\": \"big\""),
            "centre_circle_radius_cm", "must be a number, not a string (got \"big\")"},
           {replaced(v, "\"depth_cm\": 75", "\"depth_cm\": 400"), "penalty_area.depth_cm",
            "must be < field_length_cm / 2 (got 400)"},
-          {replaced(v, "\"depth_cm\": 75", "\"depth_cm\": 75, \"depth\": 1"), "penalty_area.depth", "unknown key"},
-          {replaced(v, "[75, 100]", "[75]"), "marks.from_centre_cm[0]", "must be an array of 2 elements"},
-          {replaced(v, "[75, 100]", "[375, 100]"), "marks.from_centre_cm[0]", "outside the playing area (got [375, 100])"},
-          {replaced(v, "\"units\": \"cm\"", "\"units\": \"mm\""), "units", "the only unit is \"cm\""},
+          {replaced(v, "\"depth_cm\": 75", "\"depth_cm\": 75, \"depth\": 1"), "penalty_area.depth",
+           "unknown key"},
+          {replaced(v, "[75, 100]", "[75]"), "marks.from_centre_cm[0]",
+           "must be an array of 2 elements"},
+          {replaced(v, "[75, 100]", "[375, 100]"), "marks.from_centre_cm[0]",
+           "outside the playing area (got [375, 100])"},
+          {replaced(v, "\"units\": \"cm\"", "\"units\": \"mm\""), "units",
+           "the only unit is \"cm\""},
           {replaced(v, "\"border_cm\": 75", "\"border_cm\": true"), "border_cm", "not a boolean"},
           {replaced(v, "\"border_cm\": 75", "\"border_cm\": NaN"), "border_cm", "not valid JSON"},
-          {replaced(v, "\"border_cm\": 75", "\"border_cm\": 1e400"), "border_cm", "number out of range"},
-          {replaced(v, "\"border_cm\": 75", "\"border_cm\": 75, \"border_cm\": 76"), "border_cm", "duplicate key"},
-          {replaced(v, "\"border_cm\": 75", "\"border_cm\": 75, \"border\": 76"), "border", "unknown key"},
-          {replaced(v, "\"width_cm\": 100", "\"width_cm\": 0"), "goal.width_cm", "must be > 0 (got 0)"},
-          {replaced(v, "\"depth_cm\": 30", "\"depth_cm\": 80"), "goal.depth_cm", "must be <= border_cm (got 80)"},
+          {replaced(v, "\"border_cm\": 75", "\"border_cm\": 1e400"), "border_cm",
+           "number out of range"},
+          {replaced(v, "\"border_cm\": 75", "\"border_cm\": 75, \"border_cm\": 76"), "border_cm",
+           "duplicate key"},
+          {replaced(v, "\"border_cm\": 75", "\"border_cm\": 75, \"border\": 76"), "border",
+           "unknown key"},
+          {replaced(v, "\"width_cm\": 100", "\"width_cm\": 0"), "goal.width_cm",
+           "must be > 0 (got 0)"},
+          {replaced(v, "\"depth_cm\": 30", "\"depth_cm\": 80"), "goal.depth_cm",
+           "must be <= border_cm (got 80)"},
           {replaced(v, "\"depth_cm\": 30", "\"depth_cm\": 30, \"colour_at_x_max\": \"red\""),
            "goal.colour_at_x_max", "must be one of \"blue\", \"yellow\""},
-          {replaced(v, "\"goal\": { \"width_cm\": 100, \"depth_cm\": 30 },", ""), "goal", "missing (required)"},
+          {replaced(v, "\"goal\": { \"width_cm\": 100, \"depth_cm\": 30 },", ""), "goal",
+           "missing (required)"},
           {"{ \"name\": \"x\", ", "", "not valid JSON"},
       });
   EXPECT_THROW((void)load_field("no-such-field"), ConfigError);
-  EXPECT_NE(error_of([] { (void)load_field("no-such-field"); }).find("no-such-field"), std::string::npos);
+  EXPECT_NE(error_of([] { (void)load_field("no-such-field"); }).find("no-such-field"),
+            std::string::npos);
 }
 
 TEST(FieldFile, ShippedGoalsAndTheirColourAreKnownOrAbsent) {
@@ -272,13 +295,17 @@ TEST(FieldFile, ShippedGoalsAndTheirColourAreKnownOrAbsent) {
   EXPECT_EQ(f.goal.width_cm, 100.0);
   EXPECT_EQ(f.goal.depth_cm, 30.0);
   EXPECT_EQ(f.goal.colour_at_x_max, GoalColour::kUnknown);  // learnt at calibration
-  const std::string blue = test::write_file("g.json", replaced(fira_text(), "\"depth_cm\": 30", "\"depth_cm\": 30, \"colour_at_x_max\": \"blue\"")).string();
+  const std::string blue =
+      test::write_file("g.json", replaced(fira_text(), "\"depth_cm\": 30",
+                                          "\"depth_cm\": 30, \"colour_at_x_max\": \"blue\""))
+          .string();
   EXPECT_EQ(load_field(blue).goal.colour_at_x_max, GoalColour::kBlue);
   EXPECT_EQ(load_field(blue).fingerprint(), f.fingerprint());  // goals are not lines
 }
 
 TEST(FieldFile, MissingFileAndDirectoryAreNamed) {
-  EXPECT_EQ(error_of([] { (void)load_field("/nonexistent/f.json"); }), "/nonexistent/f.json: no such file");
+  EXPECT_EQ(error_of([] { (void)load_field("/nonexistent/f.json"); }),
+            "/nonexistent/f.json: no such file");
   const std::string dir = test::temp_dir().string();
   EXPECT_EQ(error_of([&] { (void)load_field(dir); }), dir + ": is a directory, not a JSON file");
 }

@@ -69,7 +69,14 @@ TEST(Fuzzy, CentroidsMatchHandDerivedShapes) {
       {20.0, {{0, 1}, {3, 1}, {8, 0}, {30, 0}}, 0.0},
       // v = 30: VL 2/3, L 1/3. VL clipped at 2/3 until its slope reaches 2/3 at 8 - 10/3, falls
       // to 1/3 at 8 - 5/3 where the clipped L takes over until 17 - 5/3.
-      {30.0, {{0, 2.0 / 3}, {14.0 / 3, 2.0 / 3}, {19.0 / 3, 1.0 / 3}, {46.0 / 3, 1.0 / 3}, {17, 0}, {30, 0}}, 10.0},
+      {30.0,
+       {{0, 2.0 / 3},
+        {14.0 / 3, 2.0 / 3},
+        {19.0 / 3, 1.0 / 3},
+        {46.0 / 3, 1.0 / 3},
+        {17, 0},
+        {30, 0}},
+       10.0},
       // v = 35: VL = L = 0.5: flat 0.5 from 0 to 14.5, down to 0 at 17.
       {35.0, {{0, 0.5}, {14.5, 0.5}, {17, 0}, {30, 0}}, 10.0},
       // L core: the L set, symmetric about 10.
@@ -105,17 +112,19 @@ TEST(Fuzzy, FiringStrengthsAndRules) {
   EXPECT_EQ(r.speed_degrees[2], 0.0);
   EXPECT_EQ(r.speed_degrees[3], 0.0);
   // Rules from the config: map every speed term to VH -> the VH shape whatever the speed.
-  c.rules = {FuzzyTerm::kVeryHigh, FuzzyTerm::kVeryHigh, FuzzyTerm::kVeryHigh, FuzzyTerm::kVeryHigh};
+  c.rules = {FuzzyTerm::kVeryHigh, FuzzyTerm::kVeryHigh, FuzzyTerm::kVeryHigh,
+             FuzzyTerm::kVeryHigh};
   const FuzzyResult vh = fuzzy_search_range(c, 60.0);
   EXPECT_NEAR(vh.crisp_cm, exact_centroid({{0, 0}, {22, 0}, {27, 1}, {30, 1}}), 1e-3);
   EXPECT_EQ(vh.output_clip[3], 1.0);
-  EXPECT_THROW((void)fuzzy_search_range(c, std::numeric_limits<double>::quiet_NaN()), std::invalid_argument);
+  EXPECT_THROW((void)fuzzy_search_range(c, std::numeric_limits<double>::quiet_NaN()),
+               std::invalid_argument);
 }
 
 TEST(Fuzzy, SnapToRanges) {
   const std::vector<double> r{0, 10, 20, 30};
   EXPECT_EQ(snap_to_ranges(4.99, r), 0.0);
-  EXPECT_EQ(snap_to_ranges(5.0, r), 10.0);  // ties go up: search wider when unsure
+  EXPECT_EQ(snap_to_ranges(5.0, r), 10.0);           // ties go up: search wider when unsure
   EXPECT_EQ(snap_to_ranges(15.0 - 1e-12, r), 20.0);  // a tie up to rounding is still a tie
   EXPECT_EQ(snap_to_ranges(14.9, r), 10.0);
   EXPECT_EQ(snap_to_ranges(26.0, r), 30.0);
@@ -123,7 +132,8 @@ TEST(Fuzzy, SnapToRanges) {
   EXPECT_EQ(snap_to_ranges(99.0, r), 30.0);
 }
 
-// --- config files: the fuzzy block and the localizer file around it --------------------------------
+// --- config files: the fuzzy block and the localizer file around it
+// --------------------------------
 
 using test::error_of;
 
@@ -181,45 +191,75 @@ TEST(FuzzyConfig, ClearErrorsNameTheFieldPath) {
   EXPECT_EQ(fuzzy_error_of(kGood), "(no error)");
   auto expect_error = [](const std::string& json, const std::string& path, const std::string& why) {
     const std::string e = fuzzy_error_of(json);
-    EXPECT_EQ(e.rfind("cfg.json:" + path + ": ", 0), 0u) << "want cfg.json:" << path << " in: " << e;
+    EXPECT_EQ(e.rfind("cfg.json:" + path + ": ", 0), 0u)
+        << "want cfg.json:" << path << " in: " << e;
     EXPECT_NE(e.find(why), std::string::npos) << "want '" << why << "' in: " << e;
   };
-  expect_error(replaced(kGood, "\"L\": [20, 50, 80, 120]", "\"L\": [20, 90, 80, 120]"), "speed_terms.L",
-               "a <= b <= c <= d (got [20, 90, 80, 120])");
-  expect_error(replaced(kGood, "\"VH\": [150, 200, 300, 300]", "\"VH\": [150, 200, 300, 400]"), "speed_terms.VH",
-               "must lie in [0, 300]");
+  expect_error(replaced(kGood, "\"L\": [20, 50, 80, 120]", "\"L\": [20, 90, 80, 120]"),
+               "speed_terms.L", "a <= b <= c <= d (got [20, 90, 80, 120])");
+  expect_error(replaced(kGood, "\"VH\": [150, 200, 300, 300]", "\"VH\": [150, 200, 300, 400]"),
+               "speed_terms.VH", "must lie in [0, 300]");
   // A gap between L and H: speeds 121..129 would fire no rule.
-  expect_error(replaced(kGood, "\"H\": [80, 120, 150, 200]", "\"H\": [130, 140, 150, 200]"), "speed_terms",
-               "uncovered");
-  expect_error(replaced(kGood, "\"H\": \"H\"", "\"H\": \"XX\""), "rules.H", "must be one of \"VL\", \"L\", \"H\", \"VH\"");
+  expect_error(replaced(kGood, "\"H\": [80, 120, 150, 200]", "\"H\": [130, 140, 150, 200]"),
+               "speed_terms", "uncovered");
+  expect_error(replaced(kGood, "\"H\": \"H\"", "\"H\": \"XX\""), "rules.H",
+               "must be one of \"VL\", \"L\", \"H\", \"VH\"");
   expect_error(replaced(kGood, "\"H\": \"H\"", "\"HH\": \"H\""), "rules.HH", "unknown term");
-  expect_error(replaced(kGood, "\"L\": [3, 8, 12, 17]", "\"L\": [3, 8, 12]"), "range_terms.L", "array of 4");
-  expect_error(replaced(kGood, "\"L\": [3, 8, 12, 17]", "\"L\": [3, 8, true, 17]"), "range_terms.L[2]",
-               "must be a number, not a boolean");
-  expect_error(replaced(kGood, "\"L\": [3, 8, 12, 17]", "\"L\": [3, 8, 12, 17], \"L\": [3, 8, 12, 17]"),
-               "range_terms.L", "duplicate key");
+  expect_error(replaced(kGood, "\"L\": [3, 8, 12, 17]", "\"L\": [3, 8, 12]"), "range_terms.L",
+               "array of 4");
+  expect_error(replaced(kGood, "\"L\": [3, 8, 12, 17]", "\"L\": [3, 8, true, 17]"),
+               "range_terms.L[2]", "must be a number, not a boolean");
+  expect_error(
+      replaced(kGood, "\"L\": [3, 8, 12, 17]", "\"L\": [3, 8, 12, 17], \"L\": [3, 8, 12, 17]"),
+      "range_terms.L", "duplicate key");
   expect_error(replaced(kGood, "\"resolution_cm\": 0.01", "\"resolution_cm\": 0"), "resolution_cm",
                "at most a tenth of range_max_cm (got 0)");
   expect_error(replaced(kGood, "[0, 10, 20, 30]", "[0, 20, 10, 30]"), "snap_ranges_cm[2]",
                "strictly increasing (after 20) (got 10)");
-  expect_error(replaced(kGood, "[0, 10, 20, 30]", "[0, 10, NaN, 30]"), "snap_ranges_cm[2]", "not valid JSON");
+  expect_error(replaced(kGood, "[0, 10, 20, 30]", "[0, 10, NaN, 30]"), "snap_ranges_cm[2]",
+               "not valid JSON");
   expect_error(replaced(kGood, "[0, 10, 20, 30]", "[0, 10, 1e400, 30]"), "snap_ranges_cm[2]",
                "number out of range: beyond a double (got 1e400)");
-  expect_error(replaced(kGood, "\"range_max_cm\": 30", "\"range_max_cm\": 30, \"speed_maximum\": 1"), "speed_maximum",
-               "unknown key");
+  expect_error(
+      replaced(kGood, "\"range_max_cm\": 30", "\"range_max_cm\": 30, \"speed_maximum\": 1"),
+      "speed_maximum", "unknown key");
   expect_error(replaced(kGood, "\"range_max_cm\": 30,", ""), "range_max_cm", "missing (required)");
 }
 
-// --- the localizer file ---------------------------------------------------------------------------
+// --- the localizer file
+// ---------------------------------------------------------------------------
 
 // Every key of LocalizerConfig, by hand, in the shipped file's order.
-const std::vector<std::string> kEveryLocalizerKey = {
-    "mode", "match_cost", "crossing_cap_px", "e_th", "ambiguity_ratio", "reset_period_ms", "history_ms", "scan_rays_per_degree", "refinement", "min_range_cm",
-    "refuse_ambiguous", "image_sigma_cm", "image_sigma_yaw_deg", "lost_after_bad_frames", "check_period_ms",
-    "disagree_min_cm", "disagree_sigmas", "disagree_error_ratio", "disagree_frames", "cross_check_worker", "gyro_yaw_known",
-    "yaw_correction", "yaw_search_deg", "yaw_gain", "yaw_rate_gain", "yaw_rate_max_deg_per_s", "fuzzy"};
-const std::vector<std::string> kEveryFuzzyKey = {"speed_max_cm_per_s", "speed_terms", "range_max_cm", "range_terms",
-                                                 "rules", "resolution_cm", "snap_ranges_cm"};
+const std::vector<std::string> kEveryLocalizerKey = {"mode",
+                                                     "match_cost",
+                                                     "crossing_cap_px",
+                                                     "e_th",
+                                                     "ambiguity_ratio",
+                                                     "reset_period_ms",
+                                                     "history_ms",
+                                                     "scan_rays_per_degree",
+                                                     "refinement",
+                                                     "min_range_cm",
+                                                     "refuse_ambiguous",
+                                                     "image_sigma_cm",
+                                                     "image_sigma_yaw_deg",
+                                                     "lost_after_bad_frames",
+                                                     "check_period_ms",
+                                                     "disagree_min_cm",
+                                                     "disagree_sigmas",
+                                                     "disagree_error_ratio",
+                                                     "disagree_frames",
+                                                     "cross_check_worker",
+                                                     "gyro_yaw_known",
+                                                     "yaw_correction",
+                                                     "yaw_search_deg",
+                                                     "yaw_gain",
+                                                     "yaw_rate_gain",
+                                                     "yaw_rate_max_deg_per_s",
+                                                     "fuzzy"};
+const std::vector<std::string> kEveryFuzzyKey = {
+    "speed_max_cm_per_s", "speed_terms",   "range_max_cm", "range_terms", "rules",
+    "resolution_cm",      "snap_ranges_cm"};
 
 LocalizerConfig parse_localizer(const std::string& json) {
   return parse_localizer_config(config::parse_json_text(json, "loc.json").root());
@@ -258,7 +298,8 @@ TEST(LocalizerConfigFile, EveryKeyReachesItsMember) {
     "disagree_sigmas": 3, "disagree_error_ratio": 0.6, "disagree_frames": 5, "gyro_yaw_known": false,
     "yaw_correction": false, "yaw_search_deg": 4, "yaw_gain": 0.1, "yaw_rate_gain": 0.01,
     "yaw_rate_max_deg_per_s": 1.5,
-    "fuzzy": )" + replaced(kGood, "\"resolution_cm\": 0.01", "\"resolution_cm\": 0.05") + "}");
+    "fuzzy": )" + replaced(kGood, "\"resolution_cm\": 0.01", "\"resolution_cm\": 0.05") +
+                                            "}");
   EXPECT_EQ(c.mode, LocalizerMode::kFull);
   EXPECT_EQ(c.match_cost, MatchCost::kBounded);
   EXPECT_EQ(c.crossing_cap_px, 20);
@@ -290,7 +331,8 @@ TEST(LocalizerConfigFile, EveryKeyReachesItsMember) {
   EXPECT_TRUE(p == LocalizerConfig::paper());
   EXPECT_EQ(p.mode, LocalizerMode::kPaper);
   EXPECT_EQ(p.refinement, Refinement::kNone);
-  const LocalizerConfig q = parse_localizer("{\"mode\": \"paper\", \"refinement\": \"raycast\", \"fuzzy\": " + kGood + "}");
+  const LocalizerConfig q = parse_localizer(
+      "{\"mode\": \"paper\", \"refinement\": \"raycast\", \"fuzzy\": " + kGood + "}");
   EXPECT_EQ(q.mode, LocalizerMode::kPaper);
   EXPECT_EQ(q.refinement, Refinement::kRayCast);
 }
@@ -304,12 +346,18 @@ TEST(LocalizerConfigFile, EachKeyOfTheShippedFileMattersWhenChanged) {
     if (k == "fuzzy") continue;
     auto changed = shipped;
     auto& v = changed[k];
-    if (v.is_boolean()) v = !v.get<bool>();
-    else if (v.is_number_integer()) v = v.get<int>() + 1;
-    else if (v.is_number()) v = v.get<double>() * 0.9;
-    else if (k == "mode") v = "paper";
-    else if (k == "refinement") v = "interpolate";
-    else if (k == "match_cost") v = "paper_sad";
+    if (v.is_boolean())
+      v = !v.get<bool>();
+    else if (v.is_number_integer())
+      v = v.get<int>() + 1;
+    else if (v.is_number())
+      v = v.get<double>() * 0.9;
+    else if (k == "mode")
+      v = "paper";
+    else if (k == "refinement")
+      v = "interpolate";
+    else if (k == "match_cost")
+      v = "paper_sad";
     const LocalizerConfig c = parse_localizer(changed.dump());
     EXPECT_FALSE(c == base) << k << " made no difference";
   }
@@ -317,7 +365,8 @@ TEST(LocalizerConfigFile, EachKeyOfTheShippedFileMattersWhenChanged) {
 
 TEST(LocalizerConfigFile, ClearErrorsNameTheFileAndField) {
   EXPECT_EQ(localizer_error_of(""), "(no error)");
-  auto expect_error = [](const std::string& extra, const std::string& path, const std::string& why) {
+  auto expect_error = [](const std::string& extra, const std::string& path,
+                         const std::string& why) {
     const std::string e = localizer_error_of(extra);
     EXPECT_EQ(e.rfind("loc.json:" + path + ": ", 0), 0u) << "got: " << e;
     EXPECT_NE(e.find(why), std::string::npos) << "want '" << why << "' in: " << e;
@@ -326,13 +375,17 @@ TEST(LocalizerConfigFile, ClearErrorsNameTheFileAndField) {
   expect_error("\"yaw_gain\": 1.5, ", "yaw_gain", "(got 1.5)");
   // Upper bounds (issue 16 item 6): the history is kept in memory, periods are not 1e-300 ms.
   expect_error("\"history_ms\": 1e12, ", "history_ms", "must be at most 60000 ms");
-  expect_error("\"reset_period_ms\": 1e-300, ", "reset_period_ms", "must be at least 1 ms (got 1e-300)");
-  expect_error("\"min_range_cm\": 1e9, ", "min_range_cm", "must be at most 10000 cm (got 1000000000)");
-  expect_error("\"image_sigma_yaw_deg\": 1000, ", "image_sigma_yaw_deg", "must be at most 180 degrees");
+  expect_error("\"reset_period_ms\": 1e-300, ", "reset_period_ms",
+               "must be at least 1 ms (got 1e-300)");
+  expect_error("\"min_range_cm\": 1e9, ", "min_range_cm",
+               "must be at most 10000 cm (got 1000000000)");
+  expect_error("\"image_sigma_yaw_deg\": 1000, ", "image_sigma_yaw_deg",
+               "must be at most 180 degrees");
   expect_error("\"yaw_rate_gain\": 1, ", "yaw_rate_gain", "[0, 1)");
   expect_error("\"yaw_search_deg\": 45, ", "yaw_search_deg", "(0, 30]");
   expect_error("\"yaw_rate_max_deg_per_s\": -1, ", "yaw_rate_max_deg_per_s", ">= 0 (got -1)");
-  expect_error("\"yaw_correction\": 2, ", "yaw_correction", "must be true or false, not a number (got 2)");
+  expect_error("\"yaw_correction\": 2, ", "yaw_correction",
+               "must be true or false, not a number (got 2)");
   expect_error("\"yaw_correction\": 1, ", "yaw_correction", "must be true or false");
   expect_error("\"e_th\": -3, ", "e_th", "positive");
   expect_error("\"e_th\": \"20\", ", "e_th", "must be a number, not a string");
@@ -342,25 +395,30 @@ TEST(LocalizerConfigFile, ClearErrorsNameTheFileAndField) {
   expect_error("\"crossing_cap_px\": 0, ", "crossing_cap_px", "must be 1..127 px");
   expect_error("\"crossing_cap_px\": 128, ", "crossing_cap_px", "(got 128)");
   expect_error("\"e_th\": 17, ", "e_th", "must not exceed crossing_cap_px");
-  expect_error("\"match_cost\": \"sad\", ", "match_cost", "must be one of \"bounded\", \"paper_sad\" (got \"sad\")");
+  expect_error("\"match_cost\": \"sad\", ", "match_cost",
+               "must be one of \"bounded\", \"paper_sad\" (got \"sad\")");
   expect_error("\"ambiguity_ratio\": 0.9, ", "ambiguity_ratio", ">= 1 (got 0.9)");
   expect_error("\"disagree_frames\": 0, ", "disagree_frames", ">= 1 (got 0)");
   expect_error("\"disagree_frames\": 2.5, ", "disagree_frames", "must be an integer");
   expect_error("\"mode\": \"fast\", ", "mode", "must be one of \"full\", \"paper\" (got \"fast\")");
   expect_error("\"refinement\": 1, ", "refinement", "must be a string");
-  expect_error("\"yaw_corection\": true, ", "yaw_corection", "unknown key");  // a typo is not silently ignored
+  expect_error("\"yaw_corection\": true, ", "yaw_corection",
+               "unknown key");  // a typo is not silently ignored
   EXPECT_EQ(error_of([] { (void)parse_localizer("{}"); }), "loc.json:fuzzy: missing (required)");
   // The fuzzy block's errors carry the path through the localizer file.
   const std::string e = error_of([] {
-    (void)parse_localizer("{\"fuzzy\": " + replaced(kGood, "[0, 10, 20, 30]", "[0, 10, -20, 30]") + "}");
+    (void)parse_localizer("{\"fuzzy\": " + replaced(kGood, "[0, 10, 20, 30]", "[0, 10, -20, 30]") +
+                          "}");
   });
   EXPECT_EQ(e, "loc.json:fuzzy.snap_ranges_cm[2]: ranges must be finite and >= 0 (got -20)");
 }
 
 TEST(LocalizerConfigFile, MissingFileAndDirectoryAreNamed) {
-  EXPECT_EQ(error_of([] { (void)load_localizer_config("/nonexistent/loc.json"); }), "/nonexistent/loc.json: no such file");
+  EXPECT_EQ(error_of([] { (void)load_localizer_config("/nonexistent/loc.json"); }),
+            "/nonexistent/loc.json: no such file");
   const std::string dir = test::temp_dir().string();
-  EXPECT_EQ(error_of([&] { (void)load_localizer_config(dir); }), dir + ": is a directory, not a JSON file");
+  EXPECT_EQ(error_of([&] { (void)load_localizer_config(dir); }),
+            dir + ": is a directory, not a JSON file");
 }
 
 }  // namespace

@@ -19,10 +19,12 @@ constexpr double kOdrHz = 1000.0;
 
 class GyroHeadingTest : public ::testing::Test {
  protected:
-  GyroHeadingTest() : robot_(load_named_robot_config("default")), heading_(robot_, {kLsbPerDps, kOdrHz}) {}
+  GyroHeadingTest()
+      : robot_(load_named_robot_config("default")), heading_(robot_, {kLsbPerDps, kOdrHz}) {}
 
   /// The next 10 ms window: the gyro's sum over 10 samples, flags, and every wheel's count.
-  EncoderWindow window(std::int64_t sum_lsb, std::int32_t counts, std::uint8_t flags = 0, std::uint32_t samples = 10) {
+  EncoderWindow window(std::int64_t sum_lsb, std::int32_t counts, std::uint8_t flags = 0,
+                       std::uint32_t samples = 10) {
     EncoderWindow w;
     w.seq = seq_++;
     w.t_end_ms = 10.0 * seq_;
@@ -40,7 +42,9 @@ class GyroHeadingTest : public ::testing::Test {
 // The default robot (eq. (9), R = 20 cm, wheel radius 5 cm, 500 CPR x4, gear 19): one count is
 // 2 pi 5 / 38000 cm; equal counts on all four wheels are a pure rotation of travel / R.
 constexpr double kCmPerCount = 2.0 * 3.14159265358979323846 * 5.0 / 38000.0;
-double wheel_rotation_deg(int counts) { return counts * kCmPerCount / 20.0 * 180.0 / 3.14159265358979323846; }
+double wheel_rotation_deg(int counts) {
+  return counts * kCmPerCount / 20.0 * 180.0 / 3.14159265358979323846;
+}
 
 TEST_F(GyroHeadingTest, OneDegreeIsTheDatasheetSensitivityTimesTheRate) {
   // 100 deg/s for 10 ms = 1 deg: ten samples of 1640 LSB.

@@ -28,7 +28,8 @@ Agreement compare(const Scan& image, const Scan& geometry) {
     auto clip = [end](int r) { return r >= end ? int{kNoCrossing} : r; };
     for (int n = 0; n < kCrossingsPerRay; ++n) {
       const int i = k * kCrossingsPerRay + n;
-      const int x = clip(image.radii_px[static_cast<std::size_t>(i)]), y = clip(geometry.radii_px[static_cast<std::size_t>(i)]);
+      const int x = clip(image.radii_px[static_cast<std::size_t>(i)]),
+                y = clip(geometry.radii_px[static_cast<std::size_t>(i)]);
       ++a.compared;
       a.exact += x == y;
       a.within_1px += std::abs(x - y) <= 1;
@@ -58,13 +59,15 @@ TEST_F(LineScan, NoiseFreeImagesMatchTheGeometricScan) {
   Agreement total;
   for (int i = 0; i < 40; ++i) {
     const Pose2 pose{ux(rng), uy(rng), uyaw(rng)};
-    const Scan img = scan_image(renderer_->render(pose, sim::noise_free()), renderer_->camera(), pose.yaw_deg);
+    const Scan img =
+        scan_image(renderer_->render(pose, sim::noise_free()), renderer_->camera(), pose.yaw_deg);
     const Scan geo = expected_scan(renderer_->field(), renderer_->camera(), {pose.x_cm, pose.y_cm});
     const Agreement a = compare(img, geo);
     // Exactly the mast's rays are missing on a noise-free image without obstacles: the field
     // directions k whose bearing k - yaw lies within 180 +- 4 deg.
     int mast_rays = 0;
-    for (int k = 0; k < kScanRays; ++k) mast_rays += std::abs(angle_diff_deg(k - pose.yaw_deg, 180.0)) <= 4.0;
+    for (int k = 0; k < kScanRays; ++k)
+      mast_rays += std::abs(angle_diff_deg(k - pose.yaw_deg, 180.0)) <= 4.0;
     EXPECT_EQ(img.rays_valid(), kScanRays - mast_rays) << "pose " << pose.x_cm << ", " << pose.y_cm;
     EXPECT_GE(a.within_1px, a.compared * 90 / 100) << "pose " << pose.x_cm << ", " << pose.y_cm;
     total.compared += a.compared;
@@ -92,7 +95,9 @@ TEST(LineScanCamera, MirroredCameraWithYawOffsetGivesTheSameFieldFrameScan) {
     total.compared += a.compared;
     total.within_1px += a.within_1px;
     // The mast is at robot bearing 180: field directions yaw + 180 +- 4 are missing.
-    EXPECT_EQ(img.ray_end_px[static_cast<std::size_t>(std::lround(wrap_deg(pose.yaw_deg + 180.0) + 360.0) % 360)], kRayHidden);
+    EXPECT_EQ(img.ray_end_px[static_cast<std::size_t>(
+                  std::lround(wrap_deg(pose.yaw_deg + 180.0) + 360.0) % 360)],
+              kRayHidden);
   }
   EXPECT_GE(total.within_1px, total.compared * 95 / 100);
 }
@@ -109,7 +114,8 @@ TEST_F(LineScan, NoisyImagesWithGradientStillMatchMostly) {
     opt.seed = seed + static_cast<std::uint64_t>(i);
     opt.gradient_direction_deg = 17.0 * i;
     const Scan img = scan_image(renderer_->render(pose, opt), renderer_->camera(), pose.yaw_deg);
-    const Agreement a = compare(img, expected_scan(renderer_->field(), renderer_->camera(), {pose.x_cm, pose.y_cm}));
+    const Agreement a = compare(
+        img, expected_scan(renderer_->field(), renderer_->camera(), {pose.x_cm, pose.y_cm}));
     total.compared += a.compared;
     total.exact += a.exact;
     total.within_1px += a.within_1px;
@@ -151,19 +157,24 @@ TEST_F(LineScan, MastHidesRaysAndObstaclesEndThem) {
     EXPECT_NEAR(s.ray_end_px[ray], cam.radius_px_at_ground(hit_cm), 1.5) << k;
     for (int n = 0; n < kCrossingsPerRay; ++n) {
       const std::size_t i = ray * kCrossingsPerRay + static_cast<std::size_t>(n);
-      if (geometry.radii_px[i] < s.ray_end_px[ray]) EXPECT_NEAR(s.radii_px[i], geometry.radii_px[i], 1.0) << k;
-      else EXPECT_EQ(s.radii_px[i], kNoCrossing) << k;
+      if (geometry.radii_px[i] < s.ray_end_px[ray])
+        EXPECT_NEAR(s.radii_px[i], geometry.radii_px[i], 1.0) << k;
+      else
+        EXPECT_EQ(s.radii_px[i], kNoCrossing) << k;
     }
   }
   EXPECT_GT(s.radii_px[0], 0);  // the centre circle, 60 cm away, is before the obstacle
   EXPECT_LT(s.radii_px[0], s.ray_end_px[0]);
-  for (int k : {-14, 14, 90, 180}) EXPECT_EQ(s.ray_end_px[static_cast<std::size_t>((k + 360) % 360)], kRayToViewEnd) << k;
+  for (int k : {-14, 14, 90, 180})
+    EXPECT_EQ(s.ray_end_px[static_cast<std::size_t>((k + 360) % 360)], kRayToViewEnd) << k;
   // The mast is at bearing 180 +- 4: field directions 40 + 180 +- 4.
-  for (int k = 216; k <= 224; ++k) EXPECT_EQ(s.ray_end_px[static_cast<std::size_t>(k)], kRayHidden) << k;
+  for (int k = 216; k <= 224; ++k)
+    EXPECT_EQ(s.ray_end_px[static_cast<std::size_t>(k)], kRayHidden) << k;
   EXPECT_EQ(s.ray_end_px[215], kRayToViewEnd);
   EXPECT_EQ(s.ray_end_px[225], kRayToViewEnd);
   // Hidden rays carry the sentinel, never zero radii.
-  for (int i = 0; i < kCrossingsPerRay; ++i) EXPECT_EQ(s.radii_px[220 * kCrossingsPerRay + i], kNoCrossing);
+  for (int i = 0; i < kCrossingsPerRay; ++i)
+    EXPECT_EQ(s.radii_px[220 * kCrossingsPerRay + i], kNoCrossing);
   EXPECT_EQ(s.rays_valid(), 360 - 9);  // all but the mast's 9
 }
 
@@ -180,8 +191,10 @@ TEST_F(LineScan, BearingScanRotatesIntoTheFieldFrame) {
 
 TEST_F(LineScan, RejectsImagesThatDoNotFitTheCamera) {
   EXPECT_THROW((void)scan_image(cv::Mat(), renderer_->camera(), 0.0), std::invalid_argument);
-  EXPECT_THROW((void)scan_image(cv::Mat(100, 100, CV_8UC3), renderer_->camera(), 0.0), std::invalid_argument);
-  EXPECT_THROW((void)scan_image(cv::Mat(480, 640, CV_8UC1), renderer_->camera(), 0.0), std::invalid_argument);
+  EXPECT_THROW((void)scan_image(cv::Mat(100, 100, CV_8UC3), renderer_->camera(), 0.0),
+               std::invalid_argument);
+  EXPECT_THROW((void)scan_image(cv::Mat(480, 640, CV_8UC1), renderer_->camera(), 0.0),
+               std::invalid_argument);
 }
 
 }  // namespace

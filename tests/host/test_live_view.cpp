@@ -76,14 +76,16 @@ daemon::PoseEvent pose_at(double t_ms, double x_cm, double y_cm, double error) {
   return e;
 }
 
-int count_colour(const cv::Mat& bgr, cv::Rect r, cv::Vec3b want, int tol = 0, cv::Point2d* centroid = nullptr) {
+int count_colour(const cv::Mat& bgr, cv::Rect r, cv::Vec3b want, int tol = 0,
+                 cv::Point2d* centroid = nullptr) {
   int n = 0;
   double sx = 0, sy = 0;
   r &= cv::Rect(0, 0, bgr.cols, bgr.rows);
   for (int y = r.y; y < r.y + r.height; ++y)
     for (int x = r.x; x < r.x + r.width; ++x) {
       const cv::Vec3b p = bgr.at<cv::Vec3b>(y, x);
-      if (std::abs(p[0] - want[0]) <= tol && std::abs(p[1] - want[1]) <= tol && std::abs(p[2] - want[2]) <= tol) {
+      if (std::abs(p[0] - want[0]) <= tol && std::abs(p[1] - want[1]) <= tol &&
+          std::abs(p[2] - want[2]) <= tol) {
         ++n;
         sx += x;
         sy += y;
@@ -93,10 +95,11 @@ int count_colour(const cv::Mat& bgr, cv::Rect r, cv::Vec3b want, int tol = 0, cv
   return n;
 }
 
-// Pixels of a hue (degrees, 0..360) within tol_deg, saturation >= s_min and value >= v_min (0..255):
-// the overlay's colours as they survive JPEG's chroma subsampling (the hue stays, the saturation
-// drops on 1 px marks).
-int count_hue(const cv::Mat& bgr, cv::Rect r, double hue_deg, double tol_deg, int s_min, int v_min) {
+// Pixels of a hue (degrees, 0..360) within tol_deg, saturation >= s_min and value >= v_min
+// (0..255): the overlay's colours as they survive JPEG's chroma subsampling (the hue stays, the
+// saturation drops on 1 px marks).
+int count_hue(const cv::Mat& bgr, cv::Rect r, double hue_deg, double tol_deg, int s_min,
+              int v_min) {
   r &= cv::Rect(0, 0, bgr.cols, bgr.rows);
   if (r.empty()) return 0;
   cv::Mat hsv;
@@ -173,7 +176,8 @@ TEST(LiveState, FrameIsTheLocateOverlayAtThePoseMadeOnlyForANewerFrameAndAtMostA
   // The same drawing `omniloc locate --overlay` makes, from the same extraction, at the pose.
   LineExtractor extractor(models.camera);
   const BearingScan bearings = extractor.extract(bgr, models.localizer.scan_rays_per_degree);
-  const GoalObservation goals = observe_goals(bgr, models.camera, models.field, goal_colour_models(models.camera.vision));
+  const GoalObservation goals =
+      observe_goals(bgr, models.camera, models.field, goal_colour_models(models.camera.vision));
   SingleFrameResult r;
   r.pose = Pose2{truth.x_cm, truth.y_cm, 30.0};  // the pose the live state was given (yaw 30)
   r.match.cell = 0;
@@ -188,21 +192,28 @@ TEST(LiveState, FrameIsTheLocateOverlayAtThePoseMadeOnlyForANewerFrameAndAtMostA
   ASSERT_EQ(got_jpeg.size(), want.size());
   const double jpeg_err = cv::norm(got_jpeg, want, cv::NORM_L1) / (want.total() * 3.0);
   const cv::Rect whole(0, 0, want.cols, want.rows);
-  const int magenta_png = count_hue(want, whole, 300, 20, 60, 100), magenta_jpeg = count_hue(got_jpeg, whole, 300, 20, 60, 100);
-  const int yellow_png = count_hue(want, whole, 60, 12, 60, 150), yellow_jpeg = count_hue(got_jpeg, whole, 60, 12, 60, 150);
-  std::printf("JPEG %zu bytes, PNG %zu bytes; JPEG mean abs error %.2f / 255; magenta-hue pixels %d (PNG %d), "
-              "yellow-hue %d (PNG %d)\n",
-              jpeg->size(), png->size(), jpeg_err, magenta_jpeg, magenta_png, yellow_jpeg, yellow_png);
+  const int magenta_png = count_hue(want, whole, 300, 20, 60, 100),
+            magenta_jpeg = count_hue(got_jpeg, whole, 300, 20, 60, 100);
+  const int yellow_png = count_hue(want, whole, 60, 12, 60, 150),
+            yellow_jpeg = count_hue(got_jpeg, whole, 60, 12, 60, 150);
+  std::printf(
+      "JPEG %zu bytes, PNG %zu bytes; JPEG mean abs error %.2f / 255; magenta-hue pixels %d (PNG "
+      "%d), "
+      "yellow-hue %d (PNG %d)\n",
+      jpeg->size(), png->size(), jpeg_err, magenta_jpeg, magenta_png, yellow_jpeg, yellow_png);
   EXPECT_LT(jpeg_err, 20.0);
   EXPECT_GT(magenta_jpeg, magenta_png / 2);
   EXPECT_GT(yellow_jpeg, yellow_png / 3);  // thin yellow on green carpet: the hue drifts greenwards
-  EXPECT_EQ(count_hue(bgr, whole, 300, 20, 60, 100), 0) << "the rendered frame has no magenta of its own";
+  EXPECT_EQ(count_hue(bgr, whole, 300, 20, 60, 100), 0)
+      << "the rendered frame has no magenta of its own";
   const cv::Rect all(0, 0, got.cols, got.rows);
-  const int magenta = count_colour(got, all, kCrossingMagenta), yellow = count_colour(got, all, kModelYellow);
+  const int magenta = count_colour(got, all, kCrossingMagenta),
+            yellow = count_colour(got, all, kModelYellow);
   std::printf("overlay: %d crossing pixels, %d field-model pixels\n", magenta, yellow);
   EXPECT_GT(magenta, 100);
   EXPECT_GT(yellow, 300);
-  EXPECT_EQ(count_colour(bgr, all, kCrossingMagenta), 0) << "the rendered frame has no overlay colours of its own";
+  EXPECT_EQ(count_colour(bgr, all, kCrossingMagenta), 0)
+      << "the rendered frame has no overlay colours of its own";
   const Json fr = Json::parse(s.state_json())["frame"];
   EXPECT_EQ(fr["seq"], 1);
   EXPECT_TRUE(fr["usable"].get<bool>());
@@ -252,7 +263,8 @@ std::optional<HttpReply> http_get(int port, const std::string& path) {
     ::close(fd);
     return std::nullopt;
   }
-  const std::string req = "GET " + path + " HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n";
+  const std::string req =
+      "GET " + path + " HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n";
   if (::send(fd, req.data(), req.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(req.size())) {
     ::close(fd);
     return std::nullopt;
@@ -287,7 +299,8 @@ int free_tcp_port() {
 }
 
 TEST(LiveViewServer, ServesThePageAndEveryEndpoint) {
-  if (!LiveViewServer::available()) GTEST_SKIP() << "built without cpp-httplib (libcpp-httplib-dev): no live view";
+  if (!LiveViewServer::available())
+    GTEST_SKIP() << "built without cpp-httplib (libcpp-httplib-dev): no live view";
   const auto models = small_models();
   LiveState s(models);
   LiveViewServer server(s, {});
@@ -330,13 +343,17 @@ TEST(LiveViewServer, ServesThePageAndEveryEndpoint) {
   const auto png = http_get(server.port(), "/frame.png");
   EXPECT_EQ(png->status, 200);
   EXPECT_NE(png->headers.find("image/png"), std::string::npos);
-  const cv::Mat img = cv::imdecode(std::vector<unsigned char>(png->body.begin(), png->body.end()), cv::IMREAD_COLOR);
+  const cv::Mat img = cv::imdecode(std::vector<unsigned char>(png->body.begin(), png->body.end()),
+                                   cv::IMREAD_COLOR);
   EXPECT_EQ(img.cols, 640);
   EXPECT_GT(count_colour(img, {0, 0, img.cols, img.rows}, kCrossingMagenta), 100);
   const auto jpg = http_get(server.port(), "/frame.jpg");
   EXPECT_EQ(jpg->status, 200);
   EXPECT_NE(jpg->headers.find("image/jpeg"), std::string::npos);
-  EXPECT_EQ(cv::imdecode(std::vector<unsigned char>(jpg->body.begin(), jpg->body.end()), cv::IMREAD_COLOR).cols, 640);
+  EXPECT_EQ(
+      cv::imdecode(std::vector<unsigned char>(jpg->body.begin(), jpg->body.end()), cv::IMREAD_COLOR)
+          .cols,
+      640);
   EXPECT_EQ(http_get(server.port(), "/nothing-here")->status, 404);
 
   // The same port again is refused, naming it.
@@ -346,7 +363,8 @@ TEST(LiveViewServer, ServesThePageAndEveryEndpoint) {
     LiveViewServer second(s, same);
     ADD_FAILURE() << "a second server on port " << server.port() << " started";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find(":" + std::to_string(server.port())), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(":" + std::to_string(server.port())), std::string::npos)
+        << e.what();
     std::printf("refused: %s\n", e.what());
   }
 }
@@ -425,7 +443,8 @@ double dist_to_segment(cv::Point2d p, cv::Point2d a, cv::Point2d b) {
 }
 
 TEST(OmnilocdSimLiveView, PageShowsThePoseOnTheFieldAndTheCameraOverlay) {
-  if (!LiveViewServer::available()) GTEST_SKIP() << "built without cpp-httplib (libcpp-httplib-dev): no live view";
+  if (!LiveViewServer::available())
+    GTEST_SKIP() << "built without cpp-httplib (libcpp-httplib-dev): no live view";
   const int seed = 3;
   std::printf("seed %d\n", seed);
   omniloc::test::TempDir dir("live_view");
@@ -433,10 +452,11 @@ TEST(OmnilocdSimLiveView, PageShowsThePoseOnTheFieldAndTheCameraOverlay) {
   const int port = free_tcp_port();
   ASSERT_GT(port, 0);
   const fs::path rec = dir.path / "rec";
-  Child daemon({OMNILOCD_SIM_PATH, "--trajectory", "circle", "--seed", std::to_string(seed), "--status-period-s", "0.5",
-                "--udp-port", std::to_string(rx.port()), "--control-port", "0", "--record-dir", rec.string(), "--http",
-                std::to_string(port)},
-               dir.path / "daemon.log");
+  Child daemon(
+      {OMNILOCD_SIM_PATH, "--trajectory", "circle", "--seed", std::to_string(seed),
+       "--status-period-s", "0.5", "--udp-port", std::to_string(rx.port()), "--control-port", "0",
+       "--record-dir", rec.string(), "--http", std::to_string(port)},
+      dir.path / "daemon.log");
   // Until the daemon has a fix, a frame and a status line (simulated time runs at 0.2-0.4x).
   Json state;
   for (int i = 0; i < 600; ++i) {
@@ -444,14 +464,17 @@ TEST(OmnilocdSimLiveView, PageShowsThePoseOnTheFieldAndTheCameraOverlay) {
     const auto r = http_get(port, "/state.json");
     if (r && r->status == 200) {
       state = Json::parse(r->body);
-      if (state["has_pose"].get<bool>() && state["pose"]["status"] == "ok" && state["frame"]["seq"].get<int>() > 0 &&
+      if (state["has_pose"].get<bool>() && state["pose"]["status"] == "ok" &&
+          state["frame"]["seq"].get<int>() > 0 &&
           !state["status_line"].get<std::string>().empty() && state["path"].size() >= 10)
         break;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
-  ASSERT_TRUE(state.contains("has_pose") && state["has_pose"].get<bool>()) << read_text(dir.path / "daemon.log");
-  EXPECT_NE(read_text(dir.path / "daemon.log").find("live view on http://127.0.0.1:" + std::to_string(port) + "/"),
+  ASSERT_TRUE(state.contains("has_pose") && state["has_pose"].get<bool>())
+      << read_text(dir.path / "daemon.log");
+  EXPECT_NE(read_text(dir.path / "daemon.log")
+                .find("live view on http://127.0.0.1:" + std::to_string(port) + "/"),
             std::string::npos);
   const auto pose_reply = http_get(port, "/pose.json");
   ASSERT_TRUE(pose_reply && pose_reply->status == 200);
@@ -460,11 +483,15 @@ TEST(OmnilocdSimLiveView, PageShowsThePoseOnTheFieldAndTheCameraOverlay) {
   EXPECT_NE(status["line"].get<std::string>().find("pose=("), std::string::npos) << status.dump();
   const auto frame = http_get(port, "/frame.png");
   ASSERT_TRUE(frame && frame->status == 200);
-  const cv::Mat frame_img = cv::imdecode(std::vector<unsigned char>(frame->body.begin(), frame->body.end()), cv::IMREAD_COLOR);
+  const cv::Mat frame_img = cv::imdecode(
+      std::vector<unsigned char>(frame->body.begin(), frame->body.end()), cv::IMREAD_COLOR);
   EXPECT_EQ(frame_img.cols, 640);
   const auto jpeg = http_get(port, "/frame.jpg");
   ASSERT_TRUE(jpeg && jpeg->status == 200);
-  EXPECT_EQ(cv::imdecode(std::vector<unsigned char>(jpeg->body.begin(), jpeg->body.end()), cv::IMREAD_COLOR).rows, 480);
+  EXPECT_EQ(cv::imdecode(std::vector<unsigned char>(jpeg->body.begin(), jpeg->body.end()),
+                         cv::IMREAD_COLOR)
+                .rows,
+            480);
 
   // The browser: headless Chromium renders the page and takes a screenshot.
   const std::string chromium = find_chromium();
@@ -476,12 +503,14 @@ TEST(OmnilocdSimLiveView, PageShowsThePoseOnTheFieldAndTheCameraOverlay) {
     fs::create_directories(png.parent_path());
     fs::remove(png);
     t_before = Json::parse(http_get(port, "/pose.json")->body)["t_ms"].get<double>();
-    const std::string cmd = "HOME=" + dir.path.string() + " timeout 60 " + chromium +
-                            " --headless --no-sandbox --disable-gpu --hide-scrollbars --no-first-run"
-                            " --user-data-dir=" + (dir.path / "chromium").string() +
-                            " --window-size=1280,800 --virtual-time-budget=3000 --screenshot=" + png.string() +
-                            " http://127.0.0.1:" + std::to_string(port) + "/ >" + (dir.path / "chromium.log").string() +
-                            " 2>&1";
+    const std::string cmd =
+        "HOME=" + dir.path.string() + " timeout 60 " + chromium +
+        " --headless --no-sandbox --disable-gpu --hide-scrollbars --no-first-run"
+        " --user-data-dir=" +
+        (dir.path / "chromium").string() +
+        " --window-size=1280,800 --virtual-time-budget=3000 --screenshot=" + png.string() +
+        " http://127.0.0.1:" + std::to_string(port) + "/ >" + (dir.path / "chromium.log").string() +
+        " 2>&1";
     const int rc = std::system(cmd.c_str());
     after = Json::parse(http_get(port, "/state.json")->body);
     t_after = after["pose"]["t_ms"].get<double>();
@@ -495,13 +524,16 @@ TEST(OmnilocdSimLiveView, PageShowsThePoseOnTheFieldAndTheCameraOverlay) {
   const Recording recording = load_recording(rec);
   const auto truth = truth_at(recording.truth, pose["t_ms"].get<double>());
   ASSERT_TRUE(truth);
-  const double err = std::hypot(pose["x_cm"].get<double>() - truth->x_cm, pose["y_cm"].get<double>() - truth->y_cm);
-  std::printf("/pose.json t=%.0f ms (%.1f, %.1f) vs truth (%.1f, %.1f): %.2f cm\n", pose["t_ms"].get<double>(),
-              pose["x_cm"].get<double>(), pose["y_cm"].get<double>(), truth->x_cm, truth->y_cm, err);
+  const double err = std::hypot(pose["x_cm"].get<double>() - truth->x_cm,
+                                pose["y_cm"].get<double>() - truth->y_cm);
+  std::printf("/pose.json t=%.0f ms (%.1f, %.1f) vs truth (%.1f, %.1f): %.2f cm\n",
+              pose["t_ms"].get<double>(), pose["x_cm"].get<double>(), pose["y_cm"].get<double>(),
+              truth->x_cm, truth->y_cm, err);
   EXPECT_LT(err, 10.0);
   EXPECT_EQ(pose["status"], "ok");
-  if (chromium.empty()) GTEST_SKIP() << "chromium not found (scripts/deps.sh installs it): the JSON endpoints passed, "
-                                        "the page's screenshot was not checked";
+  if (chromium.empty())
+    GTEST_SKIP() << "chromium not found (scripts/deps.sh installs it): the JSON endpoints passed, "
+                    "the page's screenshot was not checked";
   if (!shot) return;
 
   // The screenshot. The carpet (#2e7d32) gives the page's field-to-pixel map: its bounding box is
@@ -521,7 +553,9 @@ TEST(OmnilocdSimLiveView, PageShowsThePoseOnTheFieldAndTheCameraOverlay) {
   std::printf("carpet drawn at x %d..%d, y %d..%d: %.3f x %.3f px/cm\n", x0, x1, y0, y1, sx, sy);
   EXPECT_NEAR(sx, sy, 0.01) << "the field is not drawn to scale";
   EXPECT_GT(sx, 0.5);
-  auto to_px = [&](double x_cm, double y_cm) { return cv::Point2d(x0 + x_cm * sx, y1 + 1 - y_cm * sy); };
+  auto to_px = [&](double x_cm, double y_cm) {
+    return cv::Point2d(x0 + x_cm * sx, y1 + 1 - y_cm * sy);
+  };
   // The pose marker (#ff1744): on the daemon's path between the poses fetched just before and just
   // after the browser ran (the page drew one of them), within 3 px (about 4 cm).
   cv::Point2d marker;
@@ -534,14 +568,18 @@ TEST(OmnilocdSimLiveView, PageShowsThePoseOnTheFieldAndTheCameraOverlay) {
     if (t < t_before - 100.0 || t > t_after + 100.0) continue;
     poses.push_back(to_px(p[1].get<double>(), p[2].get<double>()));
     if (const auto tr = truth_at(recording.truth, t))
-      worst_truth_cm = std::max(worst_truth_cm, std::hypot(p[1].get<double>() - tr->x_cm, p[2].get<double>() - tr->y_cm));
+      worst_truth_cm = std::max(
+          worst_truth_cm, std::hypot(p[1].get<double>() - tr->x_cm, p[2].get<double>() - tr->y_cm));
   }
   ASSERT_GE(poses.size(), 2u);
   double best = 1e9;
-  for (std::size_t i = 1; i < poses.size(); ++i) best = std::min(best, dist_to_segment(marker, poses[i - 1], poses[i]));
-  std::printf("marker (%d px) at (%.1f, %.1f) px: %.2f px from the daemon's path between t=%.0f and %.0f ms "
-              "(%zu points, at most %.2f cm from truth)\n",
-              marker_px, marker.x, marker.y, best, t_before, t_after, poses.size(), worst_truth_cm);
+  for (std::size_t i = 1; i < poses.size(); ++i)
+    best = std::min(best, dist_to_segment(marker, poses[i - 1], poses[i]));
+  std::printf(
+      "marker (%d px) at (%.1f, %.1f) px: %.2f px from the daemon's path between t=%.0f and %.0f "
+      "ms "
+      "(%zu points, at most %.2f cm from truth)\n",
+      marker_px, marker.x, marker.y, best, t_before, t_after, poses.size(), worst_truth_cm);
   EXPECT_LT(best, 3.0);
   EXPECT_LT(worst_truth_cm, 10.0);
   EXPECT_GT(count_colour(img, field_panel, {0xff, 0xe5, 0x00}, 10), 20) << "no path (#00e5ff)";
@@ -552,34 +590,42 @@ TEST(OmnilocdSimLiveView, PageShowsThePoseOnTheFieldAndTheCameraOverlay) {
   const double radius_px = std::max(1.0, 2.0 * sigma_cm * sx);
   const cv::Rect around(static_cast<int>(marker.x) - 12, static_cast<int>(marker.y) - 12, 25, 25);
   const int ring = count_hue(img, around, 50, 8, 150, 200);
-  std::printf("2-sigma circle: %d px around the marker (sigma %.2f cm, radius %.1f px)\n", ring, sigma_cm, radius_px);
-  EXPECT_GE(ring, std::min(5, static_cast<int>(std::floor(4.0 * radius_px)))) << "no uncertainty circle";
-  EXPECT_EQ(count_hue(img, field_panel & cv::Rect(0, 0, 1280, static_cast<int>(marker.y) - 40), 50, 8, 150, 200), 0)
+  std::printf("2-sigma circle: %d px around the marker (sigma %.2f cm, radius %.1f px)\n", ring,
+              sigma_cm, radius_px);
+  EXPECT_GE(ring, std::min(5, static_cast<int>(std::floor(4.0 * radius_px))))
+      << "no uncertainty circle";
+  EXPECT_EQ(count_hue(img, field_panel & cv::Rect(0, 0, 1280, static_cast<int>(marker.y) - 40), 50,
+                      8, 150, 200),
+            0)
       << "the circle's colour away from the marker";
   // The camera panel shows the overlay: grey rays, magenta crossings, the yellow field model; none
   // of these in the field panel.
   // (The page shows the JPEG: grey within a tolerance, the marks by their hue.)
-  const int grey = count_colour(img, camera_panel, kRayGrey, 12), magenta = count_hue(img, camera_panel, 300, 20, 60, 100),
+  const int grey = count_colour(img, camera_panel, kRayGrey, 12),
+            magenta = count_hue(img, camera_panel, 300, 20, 60, 100),
             yellow = count_hue(img, camera_panel, 60, 12, 60, 150);
-  std::printf("camera panel: %d ray, %d crossing, %d field-model pixels; screenshot %s\n", grey, magenta, yellow,
-              png.c_str());
+  std::printf("camera panel: %d ray, %d crossing, %d field-model pixels; screenshot %s\n", grey,
+              magenta, yellow, png.c_str());
   EXPECT_GT(grey, 200);
   EXPECT_GT(magenta, 50);
   EXPECT_GT(yellow, 200);
   // The marker's antialiased edge over the cyan path can blend to a magenta hue (one such pixel
   // seen at the marker's rim, BGR (143, 106, 152)): the marker's neighbourhood is not a crossing.
-  EXPECT_EQ(count_hue(img, field_panel, 300, 20, 60, 100) - count_hue(img, field_panel & around, 300, 20, 60, 100), 0);
+  EXPECT_EQ(count_hue(img, field_panel, 300, 20, 60, 100) -
+                count_hue(img, field_panel & around, 300, 20, 60, 100),
+            0);
 }
 
 // The robot's own daemon (no simulator) serves the page too: without a board, no pose, no frame,
 // the status says so; a port already in use stops it at start-up with the port named.
 TEST(OmnilocdLiveView, RobotDaemonServesTheViewWithoutABoardAndRefusesAPortInUse) {
-  if (!LiveViewServer::available()) GTEST_SKIP() << "built without cpp-httplib (libcpp-httplib-dev): no live view";
+  if (!LiveViewServer::available())
+    GTEST_SKIP() << "built without cpp-httplib (libcpp-httplib-dev): no live view";
   omniloc::test::TempDir dir("live_view_robot");
   omniloc::test::UdpReceiver rx;
   const int port = free_tcp_port();
-  Child daemon({OMNILOCD_PATH, "--camera", "none", "--status-period-s", "0.2", "--udp-port", std::to_string(rx.port()),
-                "--control-port", "0", "--http", std::to_string(port)},
+  Child daemon({OMNILOCD_PATH, "--camera", "none", "--status-period-s", "0.2", "--udp-port",
+                std::to_string(rx.port()), "--control-port", "0", "--http", std::to_string(port)},
                dir.path / "daemon.log");
   Json state;
   for (int i = 0; i < 300; ++i) {
@@ -597,18 +643,21 @@ TEST(OmnilocdLiveView, RobotDaemonServesTheViewWithoutABoardAndRefusesAPortInUse
   EXPECT_EQ(state["pose"]["status"], "no_board");
   EXPECT_FALSE(state["has_pose"].get<bool>());
   EXPECT_EQ(state["path"].size(), 0u);
-  EXPECT_NE(state["status_line"].get<std::string>().find("no_board"), std::string::npos) << state.dump();
+  EXPECT_NE(state["status_line"].get<std::string>().find("no_board"), std::string::npos)
+      << state.dump();
   EXPECT_EQ(http_get(port, "/frame.png")->status, 503);
   EXPECT_EQ(http_get(port, "/")->status, 200);
   // A second daemon on the same port: exit 1, the address and port named.
   std::string out;
-  const int rc = std::system((std::string(OMNILOCD_PATH) + " --camera none --duration-s 1 --control-port 0 --udp-port " +
+  const int rc = std::system((std::string(OMNILOCD_PATH) +
+                              " --camera none --duration-s 1 --control-port 0 --udp-port " +
                               std::to_string(rx.port()) + " --http " + std::to_string(port) + " >" +
                               (dir.path / "second.log").string() + " 2>&1")
                                  .c_str());
   out = read_text(dir.path / "second.log");
   EXPECT_EQ(WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, 1) << out;
-  EXPECT_NE(out.find("omnilocd: error: live view: http://127.0.0.1:" + std::to_string(port) + "/: cannot listen"),
+  EXPECT_NE(out.find("omnilocd: error: live view: http://127.0.0.1:" + std::to_string(port) +
+                     "/: cannot listen"),
             std::string::npos)
       << out;
   EXPECT_EQ(daemon.stop(), 0) << read_text(dir.path / "daemon.log");

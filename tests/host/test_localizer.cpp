@@ -20,18 +20,20 @@ struct Point {
   double x_cm, y_cm;
 };
 // "Real" positions of Tables 5 (general) and 6 (boundary): the integrated-localization tables.
-constexpr Point kGeneral[] = {{"G1", 225, 170}, {"G2", 375, 173}, {"G3", 517, 166}, {"G4", 157, 278}, {"G5", 375, 275},
-                              {"G6", 595, 274}, {"G7", 225, 385}, {"G8", 368, 371}, {"G9", 507, 380}};
-constexpr Point kBoundary[] = {{"B1", 81, 82},   {"B2", 225, 73},  {"B3", 386, 78},  {"B4", 525, 80},
-                               {"B5", 661, 76},  {"B6", 89, 479},  {"B7", 245, 479}, {"B8", 386, 479},
-                               {"B9", 509, 475}, {"B10", 649, 479}};
+constexpr Point kGeneral[] = {{"G1", 225, 170}, {"G2", 375, 173}, {"G3", 517, 166},
+                              {"G4", 157, 278}, {"G5", 375, 275}, {"G6", 595, 274},
+                              {"G7", 225, 385}, {"G8", 368, 371}, {"G9", 507, 380}};
+constexpr Point kBoundary[] = {
+    {"B1", 81, 82},  {"B2", 225, 73},  {"B3", 386, 78},  {"B4", 525, 80},  {"B5", 661, 76},
+    {"B6", 89, 479}, {"B7", 245, 479}, {"B8", 386, 479}, {"B9", 509, 475}, {"B10", 649, 479}};
 
 class LocalizerSim : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    renderer_ = std::make_unique<sim::OmniRenderer>(load_field("fira-robosot"), load_camera("default"));
-    db_ = std::make_unique<FeatureDb>(
-        build_feature_db(renderer_->field(), renderer_->camera(), GridSpec::covering(renderer_->field(), 10.0)));
+    renderer_ =
+        std::make_unique<sim::OmniRenderer>(load_field("fira-robosot"), load_camera("default"));
+    db_ = std::make_unique<FeatureDb>(build_feature_db(
+        renderer_->field(), renderer_->camera(), GridSpec::covering(renderer_->field(), 10.0)));
     robot_ = load_named_robot_config("default");
   }
   static void TearDownTestSuite() {
@@ -43,7 +45,8 @@ class LocalizerSim : public ::testing::Test {
   }
   /// Drives 80 cm from a start beside the point (towards the field centre) onto it while
   /// turning by 40 degrees, then stands for 0.2 s; no initial pose (global search at start).
-  static sim::LocalizedRun drive_to(const Point& p, std::uint64_t seed, const LocalizerConfig& config) {
+  static sim::LocalizedRun drive_to(const Point& p, std::uint64_t seed,
+                                    const LocalizerConfig& config) {
     const Eigen::Vector2d target(p.x_cm, p.y_cm);
     Eigen::Vector2d towards = Eigen::Vector2d(375, 275) - target;
     if (towards.norm() < 1.0) towards = {1.0, 0.0};
@@ -71,12 +74,14 @@ RobotConfig LocalizerSim::robot_;
 /// Runs the points of one group, prints the table and checks the targets: mean below
 /// `mean_target_cm`, no point (nor any pose along the drives after the first fix) above 15 cm,
 /// yaw error below 1 degree.
-void check_group(const char* name, const Point* pts, int n, std::uint64_t seed, double mean_target_cm,
+void check_group(const char* name, const Point* pts, int n, std::uint64_t seed,
+                 double mean_target_cm,
                  sim::LocalizedRun (*drive)(const Point&, std::uint64_t, const LocalizerConfig&)) {
   std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
   double sum = 0.0, worst = 0.0, worst_yaw = 0.0, worst_along = 0.0;
   for (int i = 0; i < n; ++i) {
-    const sim::LocalizedRun run = drive(pts[i], seed + static_cast<std::uint64_t>(i), LocalizerConfig{});
+    const sim::LocalizedRun run =
+        drive(pts[i], seed + static_cast<std::uint64_t>(i), LocalizerConfig{});
     const LocalizedPose& last = run.poses.back();
     const Pose2& truth = run.windows.back().truth;
     const double e = std::hypot(last.pose.x_cm - truth.x_cm, last.pose.y_cm - truth.y_cm);
@@ -86,8 +91,10 @@ void check_group(const char* name, const Point* pts, int n, std::uint64_t seed, 
       if (run.poses[k].source != PoseSource::kNone)
         along = std::max(along, std::hypot(run.poses[k].pose.x_cm - run.windows[k].truth.x_cm,
                                            run.poses[k].pose.y_cm - run.windows[k].truth.y_cm));
-    std::printf("%-4s (%3.0f, %3.0f): error %5.2f cm, yaw %5.2f deg, worst along the drive %5.2f cm, source %s\n",
-                pts[i].label, truth.x_cm, truth.y_cm, e, ey, along, pose_source_name(last.source));
+    std::printf(
+        "%-4s (%3.0f, %3.0f): error %5.2f cm, yaw %5.2f deg, worst along the drive %5.2f cm, "
+        "source %s\n",
+        pts[i].label, truth.x_cm, truth.y_cm, e, ey, along, pose_source_name(last.source));
     EXPECT_NE(last.source, PoseSource::kNone) << pts[i].label;
     EXPECT_NE(last.source, PoseSource::kLost) << pts[i].label;
     sum += e;
@@ -95,23 +102,29 @@ void check_group(const char* name, const Point* pts, int n, std::uint64_t seed, 
     worst_yaw = std::max(worst_yaw, ey);
     worst_along = std::max(worst_along, along);
   }
-  std::printf("%s: mean %.2f cm, worst %.2f cm, worst yaw %.2f deg, worst along the drives %.2f cm\n", name, sum / n,
-              worst, worst_yaw, worst_along);
+  std::printf(
+      "%s: mean %.2f cm, worst %.2f cm, worst yaw %.2f deg, worst along the drives %.2f cm\n", name,
+      sum / n, worst, worst_yaw, worst_along);
   EXPECT_LT(sum / n, mean_target_cm);
   EXPECT_LT(worst, 15.0);
   EXPECT_LT(worst_along, 15.0);
   EXPECT_LT(worst_yaw, 1.0);
 }
 
-TEST_F(LocalizerSim, GeneralTestPointsMeetTheTargets) { check_group("general", kGeneral, 9, 7, 3.0, &drive_to); }
+TEST_F(LocalizerSim, GeneralTestPointsMeetTheTargets) {
+  check_group("general", kGeneral, 9, 7, 3.0, &drive_to);
+}
 
-TEST_F(LocalizerSim, BoundaryTestPointsMeetTheTargets) { check_group("boundary", kBoundary, 10, 17, 5.0, &drive_to); }
+TEST_F(LocalizerSim, BoundaryTestPointsMeetTheTargets) {
+  check_group("boundary", kBoundary, 10, 17, 5.0, &drive_to);
+}
 
 /// The kidnapping drive: 1.2 s in, the robot is carried from near (330, 200) to (560, 400, 120).
 struct KidnapRun {
   sim::LocalizedRun run;
   LocalizerStats stats;
-  double recovery_ms = 0.0;  ///< from the kidnapping to the first window from which every pose is within 10 cm
+  double recovery_ms =
+      0.0;  ///< from the kidnapping to the first window from which every pose is within 10 cm
   bool recovered = false;
 };
 KidnapRun kidnap_drive(const LocalizerConfig& config, std::uint64_t seed, const RobotConfig& robot,
@@ -132,7 +145,8 @@ KidnapRun kidnap_drive(const LocalizerConfig& config, std::uint64_t seed, const 
   std::size_t first_good = k.run.poses.size();
   for (std::size_t i = k.run.poses.size(); i-- > 0;) {
     const Pose2& t = k.run.windows[i].truth;
-    if (std::hypot(k.run.poses[i].pose.x_cm - t.x_cm, k.run.poses[i].pose.y_cm - t.y_cm) >= 10.0) break;
+    if (std::hypot(k.run.poses[i].pose.x_cm - t.x_cm, k.run.poses[i].pose.y_cm - t.y_cm) >= 10.0)
+      break;
     first_good = i;
   }
   k.recovered = first_good < k.run.poses.size();
@@ -145,8 +159,10 @@ TEST_F(LocalizerSim, RecoversFromAKidnappingWithinOneSecond) {
   std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
   const KidnapRun k = kidnap_drive(LocalizerConfig{}, seed, robot_, *renderer_, *db_);
   ASSERT_TRUE(k.recovered);
-  std::printf("kidnapped at 1200 ms; within 10 cm again %.0f ms later; lost events %d, relocalizations %d\n",
-              k.recovery_ms, k.stats.lost_events, k.stats.relocalizations);
+  std::printf(
+      "kidnapped at 1200 ms; within 10 cm again %.0f ms later; lost events %d, relocalizations "
+      "%d\n",
+      k.recovery_ms, k.stats.lost_events, k.stats.relocalizations);
   EXPECT_GT(k.recovery_ms, 0.0);  // it was wrong right after the kidnapping (the test can fail)
   EXPECT_LT(k.recovery_ms, 1000.0);
   EXPECT_GE(k.stats.lost_events, 1);
@@ -169,11 +185,13 @@ TEST_F(LocalizerSim, TheCrossCheckOnItsWorkerRecoversAsTheInlineOneAndRepeatsExa
   const KidnapRun w2 = kidnap_drive(LocalizerConfig{}, seed, robot_, *renderer_, *db_);
   ASSERT_TRUE(in.recovered);
   ASSERT_TRUE(w1.recovered);
-  std::printf("recovery: inline %.0f ms (global searches %d, lost events %d), worker %.0f ms (%d, %d)\n", in.recovery_ms,
-              in.stats.global_searches, in.stats.lost_events, w1.recovery_ms, w1.stats.global_searches,
-              w1.stats.lost_events);
+  std::printf(
+      "recovery: inline %.0f ms (global searches %d, lost events %d), worker %.0f ms (%d, %d)\n",
+      in.recovery_ms, in.stats.global_searches, in.stats.lost_events, w1.recovery_ms,
+      w1.stats.global_searches, w1.stats.lost_events);
   EXPECT_GE(w1.stats.lost_events, 1);
-  EXPECT_LE(w1.recovery_ms, in.recovery_ms + 4 * 1000.0 / 60.0) << "at most a few frames later than inline";
+  EXPECT_LE(w1.recovery_ms, in.recovery_ms + 4 * 1000.0 / 60.0)
+      << "at most a few frames later than inline";
   EXPECT_LT(w1.recovery_ms, 1000.0);
   ASSERT_EQ(w1.run.poses.size(), w2.run.poses.size());
   for (std::size_t i = 0; i < w1.run.poses.size(); ++i) {
@@ -184,8 +202,8 @@ TEST_F(LocalizerSim, TheCrossCheckOnItsWorkerRecoversAsTheInlineOneAndRepeatsExa
 }
 
 /// A gyro left with a bad start-up calibration (0.4 deg/s of bias on top of the default noise):
-/// over the 12 s drive the gyro heading drifts by ~5 degrees. The image heading must hold the yaw error
-/// below 1 degree once learnt, keep the position on target and learn the drift rate; with the
+/// over the 12 s drive the gyro heading drifts by ~5 degrees. The image heading must hold the yaw
+/// error below 1 degree once learnt, keep the position on target and learn the drift rate; with the
 /// correction off the same run ends far off (the scenario really is a drifting gyro).
 TEST_F(LocalizerSim, ImageHeadingCorrectsADriftingGyro) {
   const std::uint64_t seed = 23;
@@ -195,8 +213,13 @@ TEST_F(LocalizerSim, ImageHeadingCorrectsADriftingGyro) {
   const Pose2 start{250, 200, 10};
   auto run_once = [&](bool correct, double* drift_true, double* drift_learnt) {
     sim::Trajectory tr("drifting gyro", start);
-    tr.line_to({500, 200}, 60, limits).line_to({500, 350}, 150, limits).arc({375, 275}, 180, true, limits);
-    tr.line_to({250, 200}, -30, limits).rotate_by(90, limits).line_to({375, 275}, 45, limits).wait(0.5);
+    tr.line_to({500, 200}, 60, limits)
+        .line_to({500, 350}, 150, limits)
+        .arc({375, 275}, 180, true, limits);
+    tr.line_to({250, 200}, -30, limits)
+        .rotate_by(90, limits)
+        .line_to({375, 275}, 45, limits)
+        .wait(0.5);
     sim::WorldConfig wc = sim::WorldConfig::default_noise(robot_, seed);
     wc.gyro.bias_offset_deg_per_s = 0.4;
     sim::World world(wc, tr);
@@ -219,17 +242,20 @@ TEST_F(LocalizerSim, ImageHeadingCorrectsADriftingGyro) {
   int n = 0;
   for (std::size_t k = 0; k < run.poses.size(); ++k) {
     const double t = run.windows[k].window.t_end_ms;
-    const double ey = std::abs(angle_diff_deg(run.poses[k].pose.yaw_deg, run.windows[k].truth.yaw_deg));
+    const double ey =
+        std::abs(angle_diff_deg(run.poses[k].pose.yaw_deg, run.windows[k].truth.yaw_deg));
     const double exy = position_error(run.poses[k], run.windows[k].truth);
     if (t >= 4000.0) worst_yaw = std::max(worst_yaw, ey);
     worst_xy = std::max(worst_xy, exy);
     sum_xy += exy;
     ++n;
   }
-  std::printf("%.1f s, gyro bias %.3f deg/s (drift %.1f deg over the run); learnt correction %.3f deg/s\n",
-              duration_ms / 1000.0, bias, bias * duration_ms / 1000.0, learnt);
-  std::printf("corrected: worst yaw error after 4 s %.2f deg, position mean %.2f cm, worst %.2f cm\n", worst_yaw,
-              sum_xy / n, worst_xy);
+  std::printf(
+      "%.1f s, gyro bias %.3f deg/s (drift %.1f deg over the run); learnt correction %.3f deg/s\n",
+      duration_ms / 1000.0, bias, bias * duration_ms / 1000.0, learnt);
+  std::printf(
+      "corrected: worst yaw error after 4 s %.2f deg, position mean %.2f cm, worst %.2f cm\n",
+      worst_yaw, sum_xy / n, worst_xy);
   EXPECT_GT(duration_ms, 12000.0);
   EXPECT_LT(worst_yaw, 1.0);
   EXPECT_LT(sum_xy / n, 3.0);
@@ -239,7 +265,8 @@ TEST_F(LocalizerSim, ImageHeadingCorrectsADriftingGyro) {
 
   double bias_off = 0.0, learnt_off = 0.0;
   const sim::LocalizedRun off = run_once(false, &bias_off, &learnt_off);
-  const double final_yaw_off = std::abs(angle_diff_deg(off.poses.back().pose.yaw_deg, off.windows.back().truth.yaw_deg));
+  const double final_yaw_off =
+      std::abs(angle_diff_deg(off.poses.back().pose.yaw_deg, off.windows.back().truth.yaw_deg));
   std::printf("uncorrected: final yaw error %.2f deg\n", final_yaw_off);
   EXPECT_GT(final_yaw_off, 3.0);
   EXPECT_EQ(learnt_off, 0.0);
@@ -253,7 +280,8 @@ TEST_F(LocalizerSim, PaperModeDoesNotNoticeAKidnapping) {
   sim::WorldConfig wc = sim::WorldConfig::default_noise(robot_, seed);
   wc.kidnaps.push_back({1.2, Pose2{560, 400, 0}});
   sim::World world(wc, tr);
-  Localizer loc(LocalizerConfig::paper(), robot_, renderer_->field(), renderer_->camera(), *db_, Pose2{200, 200, 0});
+  Localizer loc(LocalizerConfig::paper(), robot_, renderer_->field(), renderer_->camera(), *db_,
+                Pose2{200, 200, 0});
   const sim::LocalizedRun run = sim::localize_simulation(world, *renderer_, {}, loc);
   // Without lost detection the local search keeps looking near the old place: the pose stays wrong.
   EXPECT_GT(position_error(run.poses.back(), run.windows.back().truth), 100.0);
@@ -301,8 +329,9 @@ TEST_F(LocalizerSim, FramesAreAppliedAtTheTimeTheyWereTaken) {
     worst_truth = std::max(worst_truth, position_error(late[k].first, late[k].second));
     worst_diff = std::max(worst_diff, position_error(late[k].first, Pose2{prompt[k].first.pose}));
   }
-  std::printf("late frames: worst error vs truth %.2f cm, worst difference to prompt frames %.2f cm\n", worst_truth,
-              worst_diff);
+  std::printf(
+      "late frames: worst error vs truth %.2f cm, worst difference to prompt frames %.2f cm\n",
+      worst_truth, worst_diff);
   EXPECT_LT(worst_truth, 3.0);
   EXPECT_LT(worst_diff, 3.0);
 }
@@ -315,7 +344,8 @@ TEST_F(LocalizerSim, ReportedUncertaintyCoversTheTrueError) {
   // it must not cover by being several times the error it describes.
   const std::uint64_t seed = 29;
   std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
-  sim::World world(sim::WorldConfig::default_noise(robot_, seed), sim::make_trajectory("random_walk", seed));
+  sim::World world(sim::WorldConfig::default_noise(robot_, seed),
+                   sim::make_trajectory("random_walk", seed));
   Localizer loc(LocalizerConfig{}, robot_, renderer_->field(), renderer_->camera(), *db_);
   sim::SimRunOptions opt;
   opt.render.seed = seed;
@@ -346,12 +376,14 @@ TEST_F(LocalizerSim, ReportedUncertaintyCoversTheTrueError) {
   ASSERT_GT(windows, 1000);
   ASSERT_GT(outage_windows, 250);
   std::sort(error_over_sigma.begin(), error_over_sigma.end());
-  const double rms_error = std::sqrt(sum_sq_error / windows), rms_sigma = std::sqrt(sum_sq_sigma / windows);
-  std::printf("uncertainty: %d windows, true error within 2 sigma in %.1f %% (outage: %.1f %% of %d); "
-              "error / sigma median %.2f, p90 %.2f; RMS error %.2f cm, RMS sigma %.2f cm\n",
-              windows, 100.0 * covered / windows, 100.0 * outage_covered / outage_windows, outage_windows,
-              error_over_sigma[error_over_sigma.size() / 2], error_over_sigma[error_over_sigma.size() * 9 / 10],
-              rms_error, rms_sigma);
+  const double rms_error = std::sqrt(sum_sq_error / windows),
+               rms_sigma = std::sqrt(sum_sq_sigma / windows);
+  std::printf(
+      "uncertainty: %d windows, true error within 2 sigma in %.1f %% (outage: %.1f %% of %d); "
+      "error / sigma median %.2f, p90 %.2f; RMS error %.2f cm, RMS sigma %.2f cm\n",
+      windows, 100.0 * covered / windows, 100.0 * outage_covered / outage_windows, outage_windows,
+      error_over_sigma[error_over_sigma.size() / 2],
+      error_over_sigma[error_over_sigma.size() * 9 / 10], rms_error, rms_sigma);
   EXPECT_GE(covered, 0.9 * windows);
   EXPECT_GE(outage_covered, 0.9 * outage_windows);
   EXPECT_LT(rms_sigma, 3.0 * rms_error) << "a sigma that covers only by being far too large";
@@ -362,15 +394,18 @@ TEST_F(LocalizerSim, FramesWithNoMeasurementLeaveTheOdometryStanding) {
   sim::Trajectory tr("line", Pose2{300, 275, 0});
   tr.line_to({400, 275}, 0, limits).wait(0.5);
   sim::World world(sim::WorldConfig::noise_free(robot_, 5), tr);
-  Localizer loc(LocalizerConfig{}, robot_, renderer_->field(), renderer_->camera(), *db_, Pose2{300, 275, 0});
+  Localizer loc(LocalizerConfig{}, robot_, renderer_->field(), renderer_->camera(), *db_,
+                Pose2{300, 275, 0});
   // A frame with no lines at all (camera covered by a green cloth).
-  const cv::Mat blank(renderer_->camera().height_px, renderer_->camera().width_px, CV_8UC3, cv::Scalar(40, 140, 40));
+  const cv::Mat blank(renderer_->camera().height_px, renderer_->camera().width_px, CV_8UC3,
+                      cv::Scalar(40, 140, 40));
   int frames = 0;
   std::vector<std::pair<LocalizedPose, Pose2>> out;
   sim::SimRunOptions opt;
   opt.render_frames = false;
   sim::run_simulation(
-      world, *renderer_, opt, [&](const sim::SimWindow& w) { out.emplace_back(loc.on_window(w.window), w.truth); },
+      world, *renderer_, opt,
+      [&](const sim::SimWindow& w) { out.emplace_back(loc.on_window(w.window), w.truth); },
       [&](const sim::SimFrame& f) {
         (void)loc.on_image(f.t_ms, blank);
         ++frames;
@@ -431,12 +466,15 @@ TEST_F(LocalizerSim, TheSideGivenDecidesTheTwinAtKickOff) {
     w.t_end_ms = 20.0;
     w.seq = 1;
     const LocalizedPose p = loc.on_window(w);
-    std::printf("truth (%.0f, %.0f, %.0f), side %s: %s, pose (%.1f, %.1f, %.1f), decided by side %d\n", truth.x_cm,
-                truth.y_cm, truth.yaw_deg, side ? goal_colour_name(*side) : "none", frame_outcome_name(r.outcome),
-                p.pose.x_cm, p.pose.y_cm, p.pose.yaw_deg, loc.stats().decided_by_side);
+    std::printf(
+        "truth (%.0f, %.0f, %.0f), side %s: %s, pose (%.1f, %.1f, %.1f), decided by side %d\n",
+        truth.x_cm, truth.y_cm, truth.yaw_deg, side ? goal_colour_name(*side) : "none",
+        frame_outcome_name(r.outcome), p.pose.x_cm, p.pose.y_cm, p.pose.yaw_deg,
+        loc.stats().decided_by_side);
     return std::make_pair(r.outcome, p);
   };
-  // In the blue half, facing the yellow goal, away from the centre: the twin stands in the other half.
+  // In the blue half, facing the yellow goal, away from the centre: the twin stands in the other
+  // half.
   const Pose2 truth{250, 200, 30};
   EXPECT_EQ(first_fix(truth, std::nullopt).first, FrameOutcome::kAmbiguous);
   const auto [blue_outcome, blue] = first_fix(truth, GoalColour::kBlue);
@@ -504,9 +542,10 @@ TEST_F(LocalizerSim, ARelativeGyroAlignedAtTheFirstFixKnowsTheHeadingAfterwards)
     loc.force_global_search();
     const FrameReport again = loc.on_image(t - 15.0, img);
     const LocalizedPose q = window(later_trust);
-    std::printf("later trust %s: %s, pose (%.1f, %.1f, %.1f), heading known %d, decided by side %d\n",
-                heading_trust_name(later_trust), frame_outcome_name(again.outcome), q.pose.x_cm, q.pose.y_cm,
-                q.pose.yaw_deg, loc.heading_known(), loc.stats().decided_by_side);
+    std::printf(
+        "later trust %s: %s, pose (%.1f, %.1f, %.1f), heading known %d, decided by side %d\n",
+        heading_trust_name(later_trust), frame_outcome_name(again.outcome), q.pose.x_cm,
+        q.pose.y_cm, q.pose.yaw_deg, loc.heading_known(), loc.stats().decided_by_side);
     return std::make_pair(again, q);
   };
   const auto [gyro_report, gyro_pose] = run(HeadingTrust::kRelative);
@@ -519,7 +558,8 @@ TEST_F(LocalizerSim, ARelativeGyroAlignedAtTheFirstFixKnowsTheHeadingAfterwards)
 }
 
 TEST_F(LocalizerSim, WindowsMustMoveForwardInTime) {
-  Localizer loc(LocalizerConfig{}, robot_, renderer_->field(), renderer_->camera(), *db_, Pose2{300, 275, 0});
+  Localizer loc(LocalizerConfig{}, robot_, renderer_->field(), renderer_->camera(), *db_,
+                Pose2{300, 275, 0});
   EncoderWindow w;
   w.seq = 4;
   w.t_end_ms = 10.0;
@@ -534,7 +574,8 @@ TEST_F(LocalizerSim, WindowsMustMoveForwardInTime) {
 }
 
 TEST_F(LocalizerSim, ResyncAcceptsARestartedTimeBase) {
-  Localizer loc(LocalizerConfig{}, robot_, renderer_->field(), renderer_->camera(), *db_, Pose2{300, 275, 0});
+  Localizer loc(LocalizerConfig{}, robot_, renderer_->field(), renderer_->camera(), *db_,
+                Pose2{300, 275, 0});
   EncoderWindow w;
   w.t_end_ms = 1000.0;
   // One window of straight driving: +x by 100 counts on every wheel of eq. (9)'s forward pattern.
@@ -550,11 +591,13 @@ TEST_F(LocalizerSim, ResyncAcceptsARestartedTimeBase) {
 }
 
 TEST_F(LocalizerSim, FramesWithoutWindowsAreBoundedAndDropped) {
-  Localizer loc(LocalizerConfig{}, robot_, renderer_->field(), renderer_->camera(), *db_, Pose2{300, 275, 0});
+  Localizer loc(LocalizerConfig{}, robot_, renderer_->field(), renderer_->camera(), *db_,
+                Pose2{300, 275, 0});
   BearingScan empty;
   empty.radii_px.assign(360 * 4 * 4, kNoCrossing);
   empty.ray_end_px.assign(360 * 4, kRayHidden);
-  for (int i = 0; i < 200; ++i) EXPECT_EQ(loc.on_bearings(5.0 + i, empty).outcome, FrameOutcome::kPending);
+  for (int i = 0; i < 200; ++i)
+    EXPECT_EQ(loc.on_bearings(5.0 + i, empty).outcome, FrameOutcome::kPending);
   EXPECT_EQ(loc.stats().dropped, 80);
   EXPECT_EQ(loc.take_frame_reports().size(), 80u);
 }
@@ -563,8 +606,8 @@ TEST_F(LocalizerSim, FramesWithoutWindowsAreBoundedAndDropped) {
 // fuzzy ranges 0/10/20/30 cm would search 1x1, 1x1, 3x3 and 3x3 points. The localizer refuses
 // such a database at construction, naming the range and the step.
 TEST_F(LocalizerSim, RefusesFuzzyRangesOffTheDatabaseGrid) {
-  const FeatureDb coarse =
-      build_feature_db(renderer_->field(), renderer_->camera(), GridSpec::covering(renderer_->field(), 20.0), {}, 1);
+  const FeatureDb coarse = build_feature_db(renderer_->field(), renderer_->camera(),
+                                            GridSpec::covering(renderer_->field(), 20.0), {}, 1);
   try {
     Localizer loc(LocalizerConfig{}, robot_, renderer_->field(), renderer_->camera(), coarse);
     FAIL() << "a 10 cm range on a 20 cm grid was accepted";

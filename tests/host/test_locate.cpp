@@ -1,8 +1,8 @@
-// `omniloc locate` (issue 13 items 4, 5, 7) run as a user runs it (child process) on frames rendered
-// at known poses (the simulator's truth), the goal colours telling a pose from its twin on frames
-// with goal-coloured boxes painted where the goals stand (projected through the camera at the true
-// pose), the Localizer's global search using the same cue, and the real TKU frame on the centre
-// spot (calibrated by `omniloc calibrate`, then located).
+// `omniloc locate` (issue 13 items 4, 5, 7) run as a user runs it (child process) on frames
+// rendered at known poses (the simulator's truth), the goal colours telling a pose from its twin on
+// frames with goal-coloured boxes painted where the goals stand (projected through the camera at
+// the true pose), the Localizer's global search using the same cue, and the real TKU frame on the
+// centre spot (calibrated by `omniloc calibrate`, then located).
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -22,10 +22,10 @@
 
 #include "omniloc/config_reader.hpp"
 #include "omniloc/goals.hpp"
-#include "omniloc/locate.hpp"
-#include "omniloc/vision.hpp"
 #include "omniloc/localizer.hpp"
+#include "omniloc/locate.hpp"
 #include "omniloc/robot_config.hpp"
+#include "omniloc/vision.hpp"
 #include "omniloc_sim/renderer.hpp"
 #include "test_data_path.hpp"
 
@@ -70,31 +70,40 @@ GoalColourModels models(GoalColour at_x_max) {
 /// The frame with each goal box (floor behind the goal line, the field file's width and depth)
 /// painted in its colour where the camera sees it from `pose`: what the renderer will draw once
 /// it renders goals (a box on the floor is the least a goal shows: its walls stand beyond it).
-cv::Mat paint_goals(cv::Mat img, const CameraModel& cam, const FieldGeometry& f, const Pose2& pose, GoalColour at_x_max) {
-  const double x_max_line = f.border_cm + f.field_length_cm, cy = f.centre_cm().y(), w = f.goal.width_cm / 2.0;
+cv::Mat paint_goals(cv::Mat img, const CameraModel& cam, const FieldGeometry& f, const Pose2& pose,
+                    GoalColour at_x_max) {
+  const double x_max_line = f.border_cm + f.field_length_cm, cy = f.centre_cm().y(),
+               w = f.goal.width_cm / 2.0;
   const cv::Vec3b max_bgr = at_x_max == GoalColour::kBlue ? kBlueBgr : kYellowBgr;
   const cv::Vec3b min_bgr = at_x_max == GoalColour::kBlue ? kYellowBgr : kBlueBgr;
   for (int v = 0; v < img.rows; ++v) {
     for (int u = 0; u < img.cols; ++u) {
       const auto rp = cam.robot_point_of_pixel({u, v});
-      if (!rp || std::hypot(u - cam.center_px.x(), v - cam.center_px.y()) < cam.min_radius_px()) continue;
+      if (!rp || std::hypot(u - cam.center_px.x(), v - cam.center_px.y()) < cam.min_radius_px())
+        continue;
       const Eigen::Vector2d q = pose * *rp;
       if (std::abs(q.y() - cy) > w) continue;
-      if (q.x() >= x_max_line && q.x() <= x_max_line + f.goal.depth_cm) img.at<cv::Vec3b>(v, u) = max_bgr;
-      if (q.x() <= f.border_cm && q.x() >= f.border_cm - f.goal.depth_cm) img.at<cv::Vec3b>(v, u) = min_bgr;
+      if (q.x() >= x_max_line && q.x() <= x_max_line + f.goal.depth_cm)
+        img.at<cv::Vec3b>(v, u) = max_bgr;
+      if (q.x() <= f.border_cm && q.x() >= f.border_cm - f.goal.depth_cm)
+        img.at<cv::Vec3b>(v, u) = min_bgr;
     }
   }
   return img;
 }
 
 /// The default camera file with a "vision" block holding the goal models (or none).
-void write_camera(const fs::path& path, const std::optional<GoalColourModels>& goals, int width = 0) {
+void write_camera(const fs::path& path, const std::optional<GoalColourModels>& goals,
+                  int width = 0) {
   std::ifstream in(resolve_data_file("cameras", "default"));
   nlohmann::ordered_json j = nlohmann::ordered_json::parse(in);
   if (width > 0) j["width"] = width;
   if (goals) {
     auto hsv = [](const GoalHsv& r) {
-      return nlohmann::ordered_json{{"hue", r.hue}, {"hue_half_width", r.hue_half_width}, {"sat_min", r.sat_min}, {"val_min", r.val_min}};
+      return nlohmann::ordered_json{{"hue", r.hue},
+                                    {"hue_half_width", r.hue_half_width},
+                                    {"sat_min", r.sat_min},
+                                    {"val_min", r.val_min}};
     };
     j["vision"]["goals"]["blue"] = hsv(*goals->blue);
     j["vision"]["goals"]["yellow"] = hsv(*goals->yellow);
@@ -113,17 +122,20 @@ double distance_to(const nlohmann::json& j, const Pose2& p) {
   return std::hypot(j["x_cm"].get<double>() - p.x_cm, j["y_cm"].get<double>() - p.y_cm);
 }
 
-/// The JSON object of the brief: exactly these keys (plus goal_cue and heading_ambiguous) with these types.
+/// The JSON object of the brief: exactly these keys (plus goal_cue and heading_ambiguous) with
+/// these types.
 void expect_schema(const nlohmann::json& j) {
   ASSERT_TRUE(j.is_object()) << j;
-  for (const char* k : {"x_cm", "y_cm", "yaw_deg", "match_error", "time_ms"}) EXPECT_TRUE(j.at(k).is_number()) << k << ": " << j;
+  for (const char* k : {"x_cm", "y_cm", "yaw_deg", "match_error", "time_ms"})
+    EXPECT_TRUE(j.at(k).is_number()) << k << ": " << j;
   EXPECT_TRUE(j.at("accepted").is_boolean()) << j;
   EXPECT_TRUE(j.at("ambiguous").is_boolean()) << j;
   EXPECT_TRUE(j.at("heading_ambiguous").is_boolean()) << j;
   EXPECT_TRUE(j.at("rays_used").is_number_integer()) << j;
   EXPECT_TRUE(j.at("goal_cue").is_string()) << j;
   const auto& t = j.at("twin");
-  EXPECT_TRUE(t.is_null() || (t.is_object() && t.at("x_cm").is_number() && t.at("y_cm").is_number() && t.at("yaw_deg").is_number()))
+  EXPECT_TRUE(t.is_null() || (t.is_object() && t.at("x_cm").is_number() &&
+                              t.at("y_cm").is_number() && t.at("yaw_deg").is_number()))
       << j;
   EXPECT_EQ(j.size(), 11u) << j;
 }
@@ -136,8 +148,10 @@ class LocateProgram : public ::testing::Test {
     fs::create_directories(dir_);
     field_ = std::make_unique<FieldGeometry>(load_field("fira-robosot"));
     renderer_ = std::make_unique<sim::OmniRenderer>(*field_, load_camera("default"));
-    db_ = std::make_unique<FeatureDb>(build_feature_db(*field_, renderer_->camera(), GridSpec::covering(*field_, 10.0)));
-    save_feature_db(*db_, (dir_ / "db.bin").string());  // every run loads it (--db) instead of building
+    db_ = std::make_unique<FeatureDb>(
+        build_feature_db(*field_, renderer_->camera(), GridSpec::covering(*field_, 10.0)));
+    save_feature_db(*db_,
+                    (dir_ / "db.bin").string());  // every run loads it (--db) instead of building
   }
   static void TearDownTestSuite() {
     fs::remove_all(dir_);
@@ -146,12 +160,14 @@ class LocateProgram : public ::testing::Test {
     field_.reset();
   }
   /// Runs `omniloc locate IMAGE --camera CAM --db db.bin --json EXTRA`, parses its one JSON line.
-  static nlohmann::json locate_json(const fs::path& image, const fs::path& camera, const std::string& extra, int& rc) {
+  static nlohmann::json locate_json(const fs::path& image, const fs::path& camera,
+                                    const std::string& extra, int& rc) {
     std::string out, err;
-    rc = run(std::string(OMNILOC_CLI_PATH) + " locate " + image.string() + " --camera " + camera.string() + " --db " +
-                 (dir_ / "db.bin").string() + " --json " + extra,
+    rc = run(std::string(OMNILOC_CLI_PATH) + " locate " + image.string() + " --camera " +
+                 camera.string() + " --db " + (dir_ / "db.bin").string() + " --json " + extra,
              dir_, out, err);
-    std::printf("locate %s %s -> rc %d: %s", image.filename().c_str(), extra.c_str(), rc, out.c_str());
+    std::printf("locate %s %s -> rc %d: %s", image.filename().c_str(), extra.c_str(), rc,
+                out.c_str());
     if (!err.empty()) std::printf("  stderr: %s", err.c_str());
     try {
       return nlohmann::json::parse(out);
@@ -182,9 +198,11 @@ TEST_F(LocateProgram, RenderedFramesAtAKnownHeadingLocateWithinAFewCm) {
   for (std::size_t i = 0; i < std::size(poses); ++i) {
     sim::RenderOptions opt;  // sensor noise, blur and a lighting gradient
     opt.seed = 11 + i;
-    const fs::path img = write_frame("known" + std::to_string(i) + ".png", renderer_->render(poses[i], opt));
+    const fs::path img =
+        write_frame("known" + std::to_string(i) + ".png", renderer_->render(poses[i], opt));
     int rc = -1;
-    const nlohmann::json j = locate_json(img, cam, "--yaw-deg " + std::to_string(poses[i].yaw_deg), rc);
+    const nlohmann::json j =
+        locate_json(img, cam, "--yaw-deg " + std::to_string(poses[i].yaw_deg), rc);
     EXPECT_EQ(rc, 0);
     expect_schema(j);
     if (!j.is_object()) continue;
@@ -202,9 +220,12 @@ TEST_F(LocateProgram, WithoutAHeadingTheTwinIsAmbiguousUnlessTheGoalColoursTell)
   sim::RenderOptions opt;
   opt.seed = 5;
   const cv::Mat plain = renderer_->render(truth, opt);
-  const cv::Mat painted = paint_goals(plain.clone(), renderer_->camera(), *field_, truth, GoalColour::kBlue);
-  const fs::path plain_png = write_frame("plain.png", plain), painted_png = write_frame("goals.png", painted);
-  const fs::path no_colours = dir_ / "cam-plain.json", blue_max = dir_ / "cam-blue.json", yellow_max = dir_ / "cam-yellow.json";
+  const cv::Mat painted =
+      paint_goals(plain.clone(), renderer_->camera(), *field_, truth, GoalColour::kBlue);
+  const fs::path plain_png = write_frame("plain.png", plain),
+                 painted_png = write_frame("goals.png", painted);
+  const fs::path no_colours = dir_ / "cam-plain.json", blue_max = dir_ / "cam-blue.json",
+                 yellow_max = dir_ / "cam-yellow.json";
   write_camera(no_colours, std::nullopt);
   write_camera(blue_max, models(GoalColour::kBlue));
   write_camera(yellow_max, models(GoalColour::kYellow));
@@ -227,7 +248,8 @@ TEST_F(LocateProgram, WithoutAHeadingTheTwinIsAmbiguousUnlessTheGoalColoursTell)
   EXPECT_FALSE(b["accepted"].get<bool>()) << b;
   EXPECT_NE(b["goal_cue"].get<std::string>().find("weak"), std::string::npos) << b;
   // 3. Colour models and painted goals: the true pose, accepted, the twin reported.
-  const nlohmann::json c = locate_json(painted_png, blue_max, "--overlay " + (dir_ / "overlay.png").string(), rc);
+  const nlohmann::json c =
+      locate_json(painted_png, blue_max, "--overlay " + (dir_ / "overlay.png").string(), rc);
   EXPECT_EQ(rc, 0);
   expect_schema(c);
   EXPECT_FALSE(c["ambiguous"].get<bool>()) << c;
@@ -254,7 +276,8 @@ TEST_F(LocateProgram, WithoutAHeadingTheTwinIsAmbiguousUnlessTheGoalColoursTell)
   }
   const nlohmann::json e = locate_json(painted_png, models_only, "", rc);
   EXPECT_TRUE(e["ambiguous"].get<bool>()) << "the side unknown: " << e;
-  const nlohmann::json g = locate_json(painted_png, models_only, "--field " + field_blue.string(), rc);
+  const nlohmann::json g =
+      locate_json(painted_png, models_only, "--field " + field_blue.string(), rc);
   EXPECT_FALSE(g["ambiguous"].get<bool>()) << g;
   EXPECT_LT(distance_to(g, truth), 5.0) << g;
 }
@@ -268,19 +291,23 @@ TEST_F(LocateProgram, UnreadableImageAndCameraOfAnotherSizeExitOne) {
   const std::string exe = std::string(OMNILOC_CLI_PATH) + " locate ";
   EXPECT_EQ(run(exe + junk.string() + " --camera " + cam.string() + " --json", dir_, out, err), 1);
   EXPECT_NE(err.find("cannot read image"), std::string::npos) << err;
-  EXPECT_EQ(run(exe + (dir_ / "missing.png").string() + " --camera " + cam.string(), dir_, out, err), 1);
+  EXPECT_EQ(
+      run(exe + (dir_ / "missing.png").string() + " --camera " + cam.string(), dir_, out, err), 1);
   EXPECT_NE(err.find("cannot read image"), std::string::npos) << err;
   const fs::path img = write_frame("size.png", renderer_->render({300, 200, 0}, sim::noise_free()));
   EXPECT_EQ(run(exe + img.string() + " --camera " + wide.string() + " --json", dir_, out, err), 1);
   EXPECT_NE(err.find("is 640 x 480 px but camera"), std::string::npos) << err;
   EXPECT_NE(err.find("800 x 480"), std::string::npos) << err;
   // Usage errors are 2: a heading that is not a number, no camera.
-  EXPECT_EQ(run(exe + img.string() + " --camera " + cam.string() + " --yaw-deg 12x", dir_, out, err), 2);
-  EXPECT_EQ(run(exe + img.string() + " --camera " + cam.string() + " --yaw-deg nan", dir_, out, err), 2);
+  EXPECT_EQ(
+      run(exe + img.string() + " --camera " + cam.string() + " --yaw-deg 12x", dir_, out, err), 2);
+  EXPECT_EQ(
+      run(exe + img.string() + " --camera " + cam.string() + " --yaw-deg nan", dir_, out, err), 2);
   EXPECT_EQ(run(exe + img.string(), dir_, out, err), 2);
   EXPECT_EQ(run(exe + "--help", dir_, out, err), 0);
   EXPECT_NE(out.find("Usage: omniloc locate [OPTIONS] IMAGE"), std::string::npos) << out;
-  for (const char* option : {"--camera", "--field", "--yaw-deg", "--db", "--config", "--overlay", "--json"})
+  for (const char* option :
+       {"--camera", "--field", "--yaw-deg", "--db", "--config", "--overlay", "--json"})
     EXPECT_NE(out.find(option), std::string::npos) << option << "\n" << out;
 }
 
@@ -288,8 +315,8 @@ TEST_F(LocateProgram, UnreadableImageAndCameraOfAnotherSizeExitOne) {
 // it relocalizes at the true pose where it refused the twin before.
 TEST_F(LocateProgram, LocalizerWithoutAHeadingRelocalizesByTheGoalColours) {
   const Pose2 truth{250, 200, 30};
-  const cv::Mat img = paint_goals(renderer_->render(truth, sim::RenderOptions{}), renderer_->camera(), *field_, truth,
-                                  GoalColour::kYellow);
+  const cv::Mat img = paint_goals(renderer_->render(truth, sim::RenderOptions{}),
+                                  renderer_->camera(), *field_, truth, GoalColour::kYellow);
   LocalizerConfig config;
   config.gyro_yaw_known = false;
   const RobotConfig robot = load_named_robot_config("default");
@@ -297,14 +324,16 @@ TEST_F(LocateProgram, LocalizerWithoutAHeadingRelocalizesByTheGoalColours) {
   w.t_end_ms = 10.0;
   Localizer blind(config, robot, *field_, renderer_->camera(), *db_);
   (void)blind.on_window(w);
-  EXPECT_EQ(blind.on_image(5.0, img).outcome, FrameOutcome::kAmbiguous) << "no colour models: refused";
+  EXPECT_EQ(blind.on_image(5.0, img).outcome, FrameOutcome::kAmbiguous)
+      << "no colour models: refused";
   Localizer seeing(config, robot, *field_, renderer_->camera(), *db_);
   seeing.set_goal_colours(models(GoalColour::kYellow));
   (void)seeing.on_window(w);
   const FrameReport r = seeing.on_image(5.0, img);
   EXPECT_EQ(r.outcome, FrameOutcome::kRelocalized);
   EXPECT_LT((r.position_cm - truth.position_cm()).norm(), 5.0) << r.position_cm.transpose();
-  // The heading of the search without one: estimate_yaw at the best grid point, within its 2 deg step.
+  // The heading of the search without one: estimate_yaw at the best grid point, within its 2 deg
+  // step.
   EXPECT_LT(std::abs(angle_diff_deg(r.yaw_deg, truth.yaw_deg)), 2.0) << r.yaw_deg;
 }
 
@@ -324,9 +353,11 @@ TEST_F(LocateProgram, LocalizerGlobalSearchIsLocateFrame) {
     (void)loc.on_window(w);
     const FrameReport r = loc.on_image(5.0, img);
     // The same line extraction the Localizer runs on its first frame.
-    const BearingScan bearings = LineExtractor(renderer_->camera()).extract(img, config.scan_rays_per_degree);
-    const SingleFrameResult s = locate_frame(config, *field_, renderer_->camera(), *db_, bearings,
-                                             yaw_known ? std::optional<double>(truth.yaw_deg) : std::nullopt, nullptr);
+    const BearingScan bearings =
+        LineExtractor(renderer_->camera()).extract(img, config.scan_rays_per_degree);
+    const SingleFrameResult s =
+        locate_frame(config, *field_, renderer_->camera(), *db_, bearings,
+                     yaw_known ? std::optional<double>(truth.yaw_deg) : std::nullopt, nullptr);
     EXPECT_TRUE(r.global);
     EXPECT_EQ(r.position_cm, s.match.position_cm);
     EXPECT_EQ(r.yaw_deg, s.pose.yaw_deg);
@@ -366,15 +397,21 @@ TEST(GoalColours, GoalHsvWrapsTheHueAndTheVisionBlockIsValidated) {
     }
     return std::string("no error");
   };
-  EXPECT_NE(error_of(R"({"goals": {"blue": {"hue": 200, "hue_half_width": 12, "sat_min": 90, "val_min": 40}}})")
-                .find("cam.json:goals.blue.hue: must be an OpenCV hue in [0, 180) (got 200)"),
-            std::string::npos) << error_of(R"({"goals": {"blue": {"hue": 200}}})");
+  EXPECT_NE(
+      error_of(
+          R"({"goals": {"blue": {"hue": 200, "hue_half_width": 12, "sat_min": 90, "val_min": 40}}})")
+          .find("cam.json:goals.blue.hue: must be an OpenCV hue in [0, 180) (got 200)"),
+      std::string::npos)
+      << error_of(R"({"goals": {"blue": {"hue": 200}}})");
   EXPECT_NE(error_of(R"({"goals": {"red": {}}})").find("cam.json:goals.red"), std::string::npos)
       << error_of(R"({"goals": {"red": {}}})");
-  EXPECT_NE(error_of(R"({"goal_colour_at_x_max": "green"})").find("cam.json:goal_colour_at_x_max"), std::string::npos)
+  EXPECT_NE(error_of(R"({"goal_colour_at_x_max": "green"})").find("cam.json:goal_colour_at_x_max"),
+            std::string::npos)
       << error_of(R"({"goal_colour_at_x_max": "green"})");
-  EXPECT_NE(error_of(R"({"goal_cue": {"min_margin": 0}})").find("cam.json:goal_cue.min_margin: must be in (0, 1]"),
-            std::string::npos) << error_of(R"({"goal_cue": {"min_margin": 0}})");
+  EXPECT_NE(error_of(R"({"goal_cue": {"min_margin": 0}})")
+                .find("cam.json:goal_cue.min_margin: must be in (0, 1]"),
+            std::string::npos)
+      << error_of(R"({"goal_cue": {"min_margin": 0}})");
 }
 
 TEST(GoalColours, FieldFileWinsOverTheCamerasLearntColour) {
@@ -393,11 +430,13 @@ TEST(GoalColours, FieldFileWinsOverTheCamerasLearntColour) {
 TEST(LocateRealFrame, TkuCentreSpotCalibratedThenLocated) {
   const fs::path frame = test_data("tku-robosot-centre-spot.png");
   ASSERT_FALSE(frame.empty()) << "tests/data/tku-robosot-centre-spot.png not found";
-  const fs::path dir = fs::temp_directory_path() / ("omniloc_test_locate_real_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("omniloc_test_locate_real_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const fs::path cam = dir / "tku-camera.json";
   std::string out, err;
-  ASSERT_EQ(run(std::string(OMNILOC_CLI_PATH) + " calibrate " + frame.string() + " --pose 375,275 --mirrored no --out " + cam.string(),
+  ASSERT_EQ(run(std::string(OMNILOC_CLI_PATH) + " calibrate " + frame.string() +
+                    " --pose 375,275 --mirrored no --out " + cam.string(),
                 dir, out, err),
             0)
       << out << err;
@@ -406,8 +445,8 @@ TEST(LocateRealFrame, TkuCentreSpotCalibratedThenLocated) {
   const double rms_px = std::stod(m[1]);
   std::printf("calibrate: residual rms %.2f px\n", rms_px);
   EXPECT_LT(rms_px, 2.0);
-  const int rc = run(std::string(OMNILOC_CLI_PATH) + " locate " + frame.string() + " --camera " + cam.string() +
-                         " --json --overlay " + (dir / "overlay.png").string(),
+  const int rc = run(std::string(OMNILOC_CLI_PATH) + " locate " + frame.string() + " --camera " +
+                         cam.string() + " --json --overlay " + (dir / "overlay.png").string(),
                      dir, out, err);
   std::printf("locate on the real frame -> rc %d: %s", rc, out.c_str());
   EXPECT_EQ(rc, 0) << err;

@@ -16,7 +16,8 @@ TEST(Log, LevelNamesReadBackAndABadOneIsNamed) {
     (void)parse_log_level("verbose", "cfg.json: log_level");
     FAIL() << "accepted";
   } catch (const std::invalid_argument& e) {
-    EXPECT_STREQ(e.what(), "cfg.json: log_level: must be one of error, warning, info, debug (got 'verbose')");
+    EXPECT_STREQ(e.what(),
+                 "cfg.json: log_level: must be one of error, warning, info, debug (got 'verbose')");
   }
   EXPECT_THROW((void)parse_log_level("INFO", "x"), std::invalid_argument);
   EXPECT_THROW((void)parse_log_level("", "x"), std::invalid_argument);

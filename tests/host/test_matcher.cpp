@@ -19,9 +19,10 @@ namespace {
 class Matcher : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    renderer_ = std::make_unique<sim::OmniRenderer>(load_field("fira-robosot"), load_camera("default"));
-    db_ = std::make_unique<FeatureDb>(
-        build_feature_db(renderer_->field(), renderer_->camera(), GridSpec::covering(renderer_->field(), 10.0)));
+    renderer_ =
+        std::make_unique<sim::OmniRenderer>(load_field("fira-robosot"), load_camera("default"));
+    db_ = std::make_unique<FeatureDb>(build_feature_db(
+        renderer_->field(), renderer_->camera(), GridSpec::covering(renderer_->field(), 10.0)));
   }
   static void TearDownTestSuite() {
     renderer_.reset();
@@ -42,13 +43,15 @@ class Matcher : public ::testing::Test {
       for (int i = parity_i; i < g.nx; i += 2) {
         const Eigen::Vector2d p = g.position(i, j);
         const double yaw = static_cast<double>((i * 37 + j * 101) % 360) - 180.0;
-        const Scan s = scan_image(renderer_->render({p.x(), p.y(), yaw}, sim::noise_free()), renderer_->camera(), yaw);
+        const Scan s = scan_image(renderer_->render({p.x(), p.y(), yaw}, sim::noise_free()),
+                                  renderer_->camera(), yaw);
         const MatchResult m = global_search(*db_, s);
         ++checked;
         if (m.cell != j * g.nx + i) {
           ++wrong;
-          ADD_FAILURE() << "grid point (" << p.x() << ", " << p.y() << ") yaw " << yaw << " matched ("
-                        << m.grid_position_cm.x() << ", " << m.grid_position_cm.y() << ")";
+          ADD_FAILURE() << "grid point (" << p.x() << ", " << p.y() << ") yaw " << yaw
+                        << " matched (" << m.grid_position_cm.x() << ", " << m.grid_position_cm.y()
+                        << ")";
         }
       }
     }
@@ -59,7 +62,8 @@ class Matcher : public ::testing::Test {
     sim::RenderOptions opt;
     opt.seed = seed;
     opt.obstacles = sim::random_obstacles(renderer_->field(), truth, robots, seed);
-    return make_field_scan(scan_image(renderer_->render(truth, opt), renderer_->camera(), truth.yaw_deg));
+    return make_field_scan(
+        scan_image(renderer_->render(truth, opt), renderer_->camera(), truth.yaw_deg));
   }
   static std::unique_ptr<sim::OmniRenderer> renderer_;
   static std::unique_ptr<FeatureDb> db_;
@@ -75,9 +79,12 @@ TEST_F(Matcher, FastSadEqualsScalarReference) {
   for (int trial = 0; trial < 500; ++trial) {
     Scan s;
     for (auto& v : s.radii_px) v = static_cast<std::uint8_t>(byte(rng));
-    for (auto& v : s.ray_end_px) v = coin(rng) == 0 ? kRayHidden : static_cast<std::uint8_t>(byte(rng));
+    for (auto& v : s.ray_end_px)
+      v = coin(rng) == 0 ? kRayHidden : static_cast<std::uint8_t>(byte(rng));
     const int c = cell(rng);
-    ASSERT_EQ(sad_fast(db_->cell_features(c), prepare_scan(s)), sad_reference(db_->cell_features(c), s)) << trial;
+    ASSERT_EQ(sad_fast(db_->cell_features(c), prepare_scan(s)),
+              sad_reference(db_->cell_features(c), s))
+        << trial;
   }
   // Worst case: every byte differs by 255.
   Scan zeros;
@@ -93,11 +100,14 @@ TEST_F(Matcher, BoundedCostKernelsEqualTheScalarReference) {
   const std::uint64_t seed = 4343;
   std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
   std::mt19937_64 rng(seed);
-  std::uniform_int_distribution<int> byte(0, 255), cell(0, db_->grid.cells() - 1), coin(0, 3), cap(1, 127);
+  std::uniform_int_distribution<int> byte(0, 255), cell(0, db_->grid.cells() - 1), coin(0, 3),
+      cap(1, 127);
   for (int trial = 0; trial < 500; ++trial) {
     Scan s;
-    for (auto& v : s.radii_px) v = coin(rng) == 0 ? kNoCrossing : static_cast<std::uint8_t>(byte(rng));
-    for (auto& v : s.ray_end_px) v = coin(rng) == 0 ? kRayHidden : static_cast<std::uint8_t>(byte(rng));
+    for (auto& v : s.radii_px)
+      v = coin(rng) == 0 ? kNoCrossing : static_cast<std::uint8_t>(byte(rng));
+    for (auto& v : s.ray_end_px)
+      v = coin(rng) == 0 ? kRayHidden : static_cast<std::uint8_t>(byte(rng));
     const std::uint8_t* entry = db_->cell_features(cell(rng));
     const int c = trial < 2 ? (trial == 0 ? 1 : 127) : cap(rng);
     const CostTerms ref = bounded_cost_reference(entry, s, c);
@@ -110,7 +120,8 @@ TEST_F(Matcher, BoundedCostKernelsEqualTheScalarReference) {
   none.radii_px.fill(kNoCrossing);
   none.ray_end_px.fill(kRayToViewEnd);
   const std::vector<std::uint8_t> all(kFeatureBytes, 100);
-  EXPECT_EQ(bounded_cost_fast(all.data(), prepare_scan(none), 127), (CostTerms{127u * 1440u, 1440u}));
+  EXPECT_EQ(bounded_cost_fast(all.data(), prepare_scan(none), 127),
+            (CostTerms{127u * 1440u, 1440u}));
   EXPECT_EQ(bounded_cost_reference(all.data(), none, 127), (CostTerms{127u * 1440u, 1440u}));
 }
 
@@ -179,7 +190,8 @@ TEST(MatcherRayEnd, DatabaseCrossingsBeyondTheRayEndAreNotCompared) {
 TEST_F(Matcher, PaperSadIsNormalisedByTheRaysUsed) {
   const int cell = 27 * 75 + 37;  // (375, 275)
   Scan s = db_scan(cell);
-  for (auto& v : s.radii_px) v = v == kNoCrossing ? 254 : static_cast<std::uint8_t>(v + 1);  // every slot off by 1
+  for (auto& v : s.radii_px)
+    v = v == kNoCrossing ? 254 : static_cast<std::uint8_t>(v + 1);  // every slot off by 1
   MatchOptions paper;
   paper.cost = MatchCost::kPaperSad;
   MatchResult m = local_search(*db_, s, {375, 275}, 0.0, paper);
@@ -240,7 +252,8 @@ TEST_F(Matcher, GlobalSearchEqualsReference) {
     EXPECT_EQ(a.second_error, b.second_error);
     EXPECT_EQ(a.ambiguous, b.ambiguous);
     EXPECT_EQ(a.cells_searched, 75 * 55);
-    EXPECT_LT((a.grid_position_cm - Eigen::Vector2d(pose.x_cm, pose.y_cm)).norm(), 7.1);  // the nearest grid point
+    EXPECT_LT((a.grid_position_cm - Eigen::Vector2d(pose.x_cm, pose.y_cm)).norm(),
+              7.1);  // the nearest grid point
   }
 }
 
@@ -248,7 +261,8 @@ TEST_F(Matcher, LocalSearchWindows) {
   const Scan s = db_scan(0);
   const int expected[] = {1, 9, 25, 49};
   for (int r = 0; r < 4; ++r) {
-    EXPECT_EQ(local_search(*db_, s, {376, 273}, 10.0 * r).cells_searched, expected[r]) << "range " << 10 * r;
+    EXPECT_EQ(local_search(*db_, s, {376, 273}, 10.0 * r).cells_searched, expected[r])
+        << "range " << 10 * r;
   }
   EXPECT_EQ(local_search(*db_, s, {5, 5}, 20.0).cells_searched, 9);  // clipped at the corner
   const MatchResult m = local_search(*db_, db_scan(27 * 75 + 40), {376, 273}, 30.0);
@@ -264,16 +278,19 @@ TEST_F(Matcher, SearchesAndRefinementAreBoundedOnHostileInput) {
   // A finite but huge centre used to convert 1e300 / 10 to int (undefined): clamped to the corner.
   const MatchResult far = local_search(*db_, s, {1e300, -1e300}, 10.0);
   EXPECT_EQ(far.cells_searched, 4);
-  EXPECT_EQ(local_search(*db_, s, {376, 273}, 1e300).cells_searched, db_->grid.cells()) << "range beyond the grid";
+  EXPECT_EQ(local_search(*db_, s, {376, 273}, 1e300).cells_searched, db_->grid.cells())
+      << "range beyond the grid";
   EXPECT_EQ(local_search(*db_, s, {376, 273}, INFINITY).cells_searched, db_->grid.cells());
   EXPECT_THROW((void)local_search(*db_, s, {NAN, 273}, 10.0), std::invalid_argument);
   // A grid that is not one: refused before any cell is indexed.
-  for (const auto& bad : {GridSpec{NAN, 5, 10, 75, 55}, GridSpec{5, INFINITY, 10, 75, 55}, GridSpec{5, 5, 0.0, 75, 55},
-                          GridSpec{5, 5, -10, 75, 55}, GridSpec{5, 5, 10, 0, 55}, GridSpec{5, 5, 10, 75, -1},
-                          GridSpec{5, 5, 10, 65536, 65536}}) {
+  for (const auto& bad :
+       {GridSpec{NAN, 5, 10, 75, 55}, GridSpec{5, INFINITY, 10, 75, 55},
+        GridSpec{5, 5, 0.0, 75, 55}, GridSpec{5, 5, -10, 75, 55}, GridSpec{5, 5, 10, 0, 55},
+        GridSpec{5, 5, 10, 75, -1}, GridSpec{5, 5, 10, 65536, 65536}}) {
     FeatureDb db = *db_;
     db.grid = bad;
-    EXPECT_THROW((void)global_search(db, s), std::invalid_argument) << bad.x0_cm << " " << bad.step_cm << " " << bad.nx;
+    EXPECT_THROW((void)global_search(db, s), std::invalid_argument)
+        << bad.x0_cm << " " << bad.step_cm << " " << bad.nx;
     EXPECT_THROW((void)local_search(db, s, {376, 273}, 10.0), std::invalid_argument);
   }
   // refine_match from a non-finite start (what a NaN grid origin gave) returns at once, unchanged.
@@ -285,27 +302,39 @@ TEST_F(Matcher, SearchesAndRefinementAreBoundedOnHostileInput) {
   EXPECT_EQ(m.refine_probes, 0);
   // Absurd options end too: a NaN step never starts, a minimum step of 1e-300 or below zero stops
   // at the move cap; the position stays within the reach of the grid point.
-  for (const auto& [start, min] : {std::pair{std::nan(""), 0.625}, std::pair{2.5, 1e-300}, std::pair{2.5, -1.0}}) {
+  for (const auto& [start, min] :
+       {std::pair{std::nan(""), 0.625}, std::pair{2.5, 1e-300}, std::pair{2.5, -1.0}}) {
     MatchOptions opt;
     opt.refine_start_step_cm = start;
     opt.refine_min_step_cm = min;
     MatchResult r = global_search(*db_, s);
     refine_match(renderer_->field(), renderer_->camera(), s, r, opt);
     EXPECT_TRUE(r.position_cm.allFinite());
-    EXPECT_LE((r.position_cm - r.grid_position_cm).cwiseAbs().maxCoeff(), opt.refine_reach_cm + 1e-9);
+    EXPECT_LE((r.position_cm - r.grid_position_cm).cwiseAbs().maxCoeff(),
+              opt.refine_reach_cm + 1e-9);
   }
 }
 
-TEST_F(Matcher, RightCellOnNoiseFreeImagesEverywhereEvenEven) { every_grid_point(0, 0); }
-TEST_F(Matcher, RightCellOnNoiseFreeImagesEverywhereOddEven) { every_grid_point(1, 0); }
-TEST_F(Matcher, RightCellOnNoiseFreeImagesEverywhereEvenOdd) { every_grid_point(0, 1); }
-TEST_F(Matcher, RightCellOnNoiseFreeImagesEverywhereOddOdd) { every_grid_point(1, 1); }
+TEST_F(Matcher, RightCellOnNoiseFreeImagesEverywhereEvenEven) {
+  every_grid_point(0, 0);
+}
+TEST_F(Matcher, RightCellOnNoiseFreeImagesEverywhereOddEven) {
+  every_grid_point(1, 0);
+}
+TEST_F(Matcher, RightCellOnNoiseFreeImagesEverywhereEvenOdd) {
+  every_grid_point(0, 1);
+}
+TEST_F(Matcher, RightCellOnNoiseFreeImagesEverywhereOddOdd) {
+  every_grid_point(1, 1);
+}
 
 TEST_F(Matcher, RefinementGoesBelowTheGrid) {
-  const Eigen::Vector2d points[] = {{228.7, 171.2}, {461.4, 333.3}, {102.5, 487.5}, {640.9, 96.1}, {371.0, 279.0}, {533.3, 216.6}};
+  const Eigen::Vector2d points[] = {{228.7, 171.2}, {461.4, 333.3}, {102.5, 487.5},
+                                    {640.9, 96.1},  {371.0, 279.0}, {533.3, 216.6}};
   double sum_grid = 0, sum_interp = 0, sum_ray = 0;
   for (const auto& p : points) {
-    const Scan s = scan_image(renderer_->render({p.x(), p.y(), 12.0}, sim::noise_free()), renderer_->camera(), 12.0);
+    const Scan s = scan_image(renderer_->render({p.x(), p.y(), 12.0}, sim::noise_free()),
+                              renderer_->camera(), 12.0);
     MatchResult m = global_search(*db_, s);
     const double grid_err = (m.grid_position_cm - p).norm();
     interpolate_match(*db_, s, m);
@@ -313,8 +342,10 @@ TEST_F(Matcher, RefinementGoesBelowTheGrid) {
     EXPECT_LE((m.position_cm - m.grid_position_cm).cwiseAbs().maxCoeff(), 5.0);
     refine_match(renderer_->field(), renderer_->camera(), s, m);
     const double ray_err = (m.position_cm - p).norm();
-    std::printf("(%.1f, %.1f): grid point %.1f cm away, interpolated %.2f cm, ray-cast %.2f cm (E %.2f -> %.2f)\n",
-                p.x(), p.y(), grid_err, interp_err, ray_err, m.error, m.refined_error);
+    std::printf(
+        "(%.1f, %.1f): grid point %.1f cm away, interpolated %.2f cm, ray-cast %.2f cm (E %.2f -> "
+        "%.2f)\n",
+        p.x(), p.y(), grid_err, interp_err, ray_err, m.error, m.refined_error);
     EXPECT_LT(ray_err, 1.5);
     EXPECT_LE(m.refined_error, m.error);
     sum_grid += grid_err;
@@ -332,11 +363,13 @@ TEST_F(Matcher, YawFromTheScan) {
   const cv::Mat image = renderer_->render(truth, opt);
   const BearingScan b = scan_image_bearings(image, renderer_->camera(), 4);
   // A gyro that drifted by 9 degrees; the scan brings it back to within the 0.25 deg step.
-  const YawEstimate y = estimate_yaw(renderer_->field(), renderer_->camera(), b, {300.0, 210.0}, 24.3, 15.0);
+  const YawEstimate y =
+      estimate_yaw(renderer_->field(), renderer_->camera(), b, {300.0, 210.0}, 24.3, 15.0);
   std::printf("yaw: truth %.2f, estimate %.2f (E %.2f)\n", truth.yaw_deg, y.yaw_deg, y.error);
   EXPECT_NEAR(y.yaw_deg, truth.yaw_deg, 0.5);
   // Without any gyro (hint 0, full circle) it still finds it.
-  const YawEstimate z = estimate_yaw(renderer_->field(), renderer_->camera(), b, {300.0, 210.0}, 0.0, 180.0);
+  const YawEstimate z =
+      estimate_yaw(renderer_->field(), renderer_->camera(), b, {300.0, 210.0}, 0.0, 180.0);
   EXPECT_NEAR(z.yaw_deg, truth.yaw_deg, 0.5);
 }
 
@@ -347,14 +380,16 @@ TEST_F(Matcher, YawFromTheScanOverRandomPoses) {
   const std::uint64_t seed = 19;
   std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
   std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> ux(100.0, 650.0), uy(100.0, 450.0), uyaw(-180.0, 180.0), u1(-1.0, 1.0);
+  std::uniform_real_distribution<double> ux(100.0, 650.0), uy(100.0, 450.0), uyaw(-180.0, 180.0),
+      u1(-1.0, 1.0);
   double sum = 0.0, worst = 0.0;
   const int n = 40;
   for (int i = 0; i < n; ++i) {
     const Pose2 truth{ux(rng), uy(rng), uyaw(rng)};
     sim::RenderOptions opt;
     opt.seed = seed + static_cast<std::uint64_t>(i);
-    const BearingScan b = scan_image_bearings(renderer_->render(truth, opt), renderer_->camera(), 4);
+    const BearingScan b =
+        scan_image_bearings(renderer_->render(truth, opt), renderer_->camera(), 4);
     const Eigen::Vector2d position(truth.x_cm + u1(rng), truth.y_cm + u1(rng));
     const YawEstimate y = estimate_yaw(renderer_->field(), renderer_->camera(), b, position,
                                        truth.yaw_deg + 2.0 * u1(rng), 3.0);
@@ -362,7 +397,8 @@ TEST_F(Matcher, YawFromTheScanOverRandomPoses) {
     sum += e;
     worst = std::max(worst, e);
   }
-  std::printf("yaw from the scan over %d poses: mean error %.3f deg, worst %.3f deg\n", n, sum / n, worst);
+  std::printf("yaw from the scan over %d poses: mean error %.3f deg, worst %.3f deg\n", n, sum / n,
+              worst);
   EXPECT_LT(sum / n, 0.25);
   EXPECT_LT(worst, 1.0);
 }
@@ -374,10 +410,12 @@ TEST_F(Matcher, WithoutHeadingTheFieldSymmetryIsReportedAsAmbiguous) {
   const BearingScan b = scan_image_bearings(renderer_->render(truth, opt), renderer_->camera(), 4);
   const PoseMatch pm = global_search_any_yaw(*db_, renderer_->field(), renderer_->camera(), b, 2.0);
   // The point-symmetric pose sees the same lines: both must come out, flagged ambiguous.
-  const Eigen::Vector2d p(truth.x_cm, truth.y_cm), mirror = 2.0 * renderer_->field().centre_cm() - p;
-  std::printf("best (%.1f, %.1f) yaw %.2f E %.2f; second (%.1f, %.1f) yaw %.2f E %.2f\n", pm.match.position_cm.x(),
-              pm.match.position_cm.y(), pm.yaw_deg, pm.match.error, pm.match.second_position_cm.x(),
-              pm.match.second_position_cm.y(), pm.second_yaw_deg, pm.match.second_error);
+  const Eigen::Vector2d p(truth.x_cm, truth.y_cm),
+      mirror = 2.0 * renderer_->field().centre_cm() - p;
+  std::printf("best (%.1f, %.1f) yaw %.2f E %.2f; second (%.1f, %.1f) yaw %.2f E %.2f\n",
+              pm.match.position_cm.x(), pm.match.position_cm.y(), pm.yaw_deg, pm.match.error,
+              pm.match.second_position_cm.x(), pm.match.second_position_cm.y(), pm.second_yaw_deg,
+              pm.match.second_error);
   EXPECT_TRUE(pm.match.ambiguous);
   const bool best_is_truth = (pm.match.position_cm - p).norm() < 10.0;
   const Eigen::Vector2d other = best_is_truth ? mirror : p;
@@ -390,13 +428,15 @@ TEST_F(Matcher, WithoutHeadingTheFieldSymmetryIsReportedAsAmbiguous) {
 
 TEST_F(Matcher, AmbiguityWhenLittleIsSeen) {
   const Pose2 truth{225.0, 175.0, 0.0};
-  Scan s = scan_image(renderer_->render(truth, sim::noise_free()), renderer_->camera(), truth.yaw_deg);
+  Scan s =
+      scan_image(renderer_->render(truth, sim::noise_free()), renderer_->camera(), truth.yaw_deg);
   MatchResult m = global_search(*db_, s);
   EXPECT_FALSE(m.ambiguous) << "E " << m.error << " second " << m.second_error;
   EXPECT_GT(m.second_error, 3.0 * m.error + 0.25 * MatchOptions{}.crossing_cap_px);
   // Only the rays looking straight at the bottom boundary (field directions 265..275) are left:
   // they see one line 100 cm away, as they would from anywhere along y = 175.
-  for (int k = 0; k < kScanRays; ++k) s.ray_end_px[static_cast<std::size_t>(k)] = (k >= 265 && k <= 275) ? kRayToViewEnd : kRayHidden;
+  for (int k = 0; k < kScanRays; ++k)
+    s.ray_end_px[static_cast<std::size_t>(k)] = (k >= 265 && k <= 275) ? kRayToViewEnd : kRayHidden;
   m = global_search(*db_, s);
   EXPECT_TRUE(m.ambiguous) << "E " << m.error << " second " << m.second_error;
   EXPECT_NEAR(m.second_position_cm.y(), 175.0, 10.0);
@@ -416,9 +456,13 @@ TEST_F(Matcher, FieldScanIsTheBearingsRotatedOnceWithTheSameResults) {
   for (int k = 0; k < kScanRays; ++k) {
     long j = std::lround((k - truth.yaw_deg) * 4.0) % 1440;
     if (j < 0) j += 1440;
-    ASSERT_EQ(f.scan.ray_end_px[static_cast<std::size_t>(k)], b.ray_end_px[static_cast<std::size_t>(j)]) << k;
+    ASSERT_EQ(f.scan.ray_end_px[static_cast<std::size_t>(k)],
+              b.ray_end_px[static_cast<std::size_t>(j)])
+        << k;
     for (int n = 0; n < kCrossingsPerRay; ++n)
-      ASSERT_EQ(f.scan.radii_px[static_cast<std::size_t>(4 * k + n)], b.radii_px[static_cast<std::size_t>(4 * j + n)]) << k;
+      ASSERT_EQ(f.scan.radii_px[static_cast<std::size_t>(4 * k + n)],
+                b.radii_px[static_cast<std::size_t>(4 * j + n)])
+          << k;
   }
   EXPECT_EQ(f.prepared.rays_used, f.scan.rays_valid());
   const Scan s = f.scan;
@@ -428,10 +472,12 @@ TEST_F(Matcher, FieldScanIsTheBearingsRotatedOnceWithTheSameResults) {
   EXPECT_EQ(g1.cell, g2.cell);
   EXPECT_EQ(g1.error, g2.error);
   EXPECT_EQ(g1.second_error, g2.second_error);
-  MatchResult l1 = local_search(*db_, f, {460.0, 330.0}, 20.0, mo), l2 = local_search(*db_, s, {460.0, 330.0}, 20.0, mo);
+  MatchResult l1 = local_search(*db_, f, {460.0, 330.0}, 20.0, mo),
+              l2 = local_search(*db_, s, {460.0, 330.0}, 20.0, mo);
   EXPECT_EQ(l1.cell, l2.cell);
   EXPECT_EQ(l1.error, l2.error);
-  // Robot ray j0 = round(71.6 * 4) = 286 became field ray 0: it points at 286 / 4 - 71.6 = -0.1 deg.
+  // Robot ray j0 = round(71.6 * 4) = 286 became field ray 0: it points at 286 / 4 - 71.6 = -0.1
+  // deg.
   EXPECT_NEAR(f.bearing_offset_deg, -0.1, 1e-9);
   FieldScan by_hand = make_field_scan(s);
   by_hand.bearing_offset_deg = -0.1;
@@ -448,13 +494,15 @@ TEST_F(Matcher, FieldScanIsTheBearingsRotatedOnceWithTheSameResults) {
 // degrees the refinement is pulled off by the 0.2 deg (up to ~1.5 cm at the boundary, where the
 // lines are far); cast where the rays point it is not. Noise-free frames, the paper's scan.
 TEST_F(Matcher, RefinementCastsWhereTheRotatedRaysPoint) {
-  const Eigen::Vector2d points[] = {{75.0, 75.0}, {380.0, 74.0}, {678.0, 71.0}, {90.0, 466.0}, {375.0, 475.0}, {662.0, 467.0}};
+  const Eigen::Vector2d points[] = {{75.0, 75.0},  {380.0, 74.0},  {678.0, 71.0},
+                                    {90.0, 466.0}, {375.0, 475.0}, {662.0, 467.0}};
   const double yaw = 10.3;
   MatchOptions mo;
   mo.refinement = Refinement::kRayCast;
   double sum_at = 0.0, sum_whole = 0.0;
   for (const auto& p : points) {
-    const BearingScan b = scan_image_bearings(renderer_->render({p.x(), p.y(), yaw}, sim::noise_free()), renderer_->camera(), 2);
+    const BearingScan b = scan_image_bearings(
+        renderer_->render({p.x(), p.y(), yaw}, sim::noise_free()), renderer_->camera(), 2);
     const FieldScan at = make_field_scan(b, yaw);
     ASSERT_NEAR(at.bearing_offset_deg, -0.2, 1e-9);
     FieldScan whole = at;
@@ -463,7 +511,8 @@ TEST_F(Matcher, RefinementCastsWhereTheRotatedRaysPoint) {
     apply_refinement(*db_, renderer_->field(), renderer_->camera(), at, m1, mo);
     apply_refinement(*db_, renderer_->field(), renderer_->camera(), whole, m2, mo);
     const double e1 = (m1.position_cm - p).norm(), e2 = (m2.position_cm - p).norm();
-    std::printf("(%.0f, %.0f): cast where the rays point %.2f cm, at whole degrees %.2f cm\n", p.x(), p.y(), e1, e2);
+    std::printf("(%.0f, %.0f): cast where the rays point %.2f cm, at whole degrees %.2f cm\n",
+                p.x(), p.y(), e1, e2);
     sum_at += e1;
     sum_whole += e2;
   }
@@ -509,8 +558,10 @@ TEST_F(Matcher, ShippedThresholdsSeparateRightFromWrongOnRenderedFrames) {
     record(sp, global_search(*db_, f, paper), truth);
   }
   for (const auto& [name, st] : {std::pair{"bounded", sb}, std::pair{"paper SAD", sp}}) {
-    std::printf("%-9s over %d frames: right cell's error <= %.2f, second minima >= %.2f, ratio >= %.2f, %d wrong cells\n",
-                name, n, st.worst_right, st.best_second, st.min_ratio, st.wrong);
+    std::printf(
+        "%-9s over %d frames: right cell's error <= %.2f, second minima >= %.2f, ratio >= %.2f, %d "
+        "wrong cells\n",
+        name, n, st.worst_right, st.best_second, st.min_ratio, st.wrong);
   }
   EXPECT_EQ(sb.wrong, 0);
   EXPECT_LT(sb.worst_right, shipped.e_th);
@@ -540,10 +591,14 @@ TEST_F(Matcher, RefinementMatchesThePatternSearchWithFewerRayCasts) {
     probes_fast += a.refine_casts;
     probes_ref += b.refine_casts;
     // The reported error is the exact ray-cast error at the reported position.
-    EXPECT_EQ(a.refined_error, error_at(renderer_->field(), renderer_->camera(), f.prepared, a.position_cm));
+    EXPECT_EQ(a.refined_error,
+              error_at(renderer_->field(), renderer_->camera(), f.prepared, a.position_cm));
   }
-  std::printf("refine_match: mean error %.2f cm, %.1f ray casts; reference pattern search %.2f cm, %.1f ray casts\n",
-              sum_fast / n, static_cast<double>(probes_fast) / n, sum_ref / n, static_cast<double>(probes_ref) / n);
+  std::printf(
+      "refine_match: mean error %.2f cm, %.1f ray casts; reference pattern search %.2f cm, %.1f "
+      "ray casts\n",
+      sum_fast / n, static_cast<double>(probes_fast) / n, sum_ref / n,
+      static_cast<double>(probes_ref) / n);
   EXPECT_LE(sum_fast / n, sum_ref / n + 0.1);
   EXPECT_LT(probes_fast, probes_ref);
 }

@@ -19,7 +19,8 @@ namespace omniloc {
 namespace {
 
 /// One window: seq, end time, counts, gyro yaw (the rest as a board without a gyro gives it).
-EncoderWindow win(std::uint32_t seq, double t_end_ms, const std::array<std::int32_t, 4>& counts, double gyro_yaw_deg) {
+EncoderWindow win(std::uint32_t seq, double t_end_ms, const std::array<std::int32_t, 4>& counts,
+                  double gyro_yaw_deg) {
   EncoderWindow w;
   w.seq = seq;
   w.t_end_ms = t_end_ms;
@@ -37,18 +38,21 @@ std::array<double, 4> rim_travel_cm(const RobotConfig& r, double dx, double dy, 
   std::array<double, 4> t{};
   for (int i = 0; i < 4; ++i) {
     const double a = alpha_deg[i] * kPi / 180.0;
-    t[static_cast<std::size_t>(i)] = dx * std::cos(a) + dy * std::sin(a) + r.center_to_wheel_cm * dth;
+    t[static_cast<std::size_t>(i)] =
+        dx * std::cos(a) + dy * std::sin(a) + r.center_to_wheel_cm * dth;
   }
   return t;
 }
 
 // Counts for a body-frame motion, rounded: cm per count = 2 pi r / (counts_per_rev x decoding x N).
 std::array<std::int32_t, 4> counts_for(const RobotConfig& r, double dx, double dy, double dth) {
-  const double cm_per_count_by_hand = 2.0 * kPi * r.wheel_radius_cm / (r.counts_per_rev * r.decoding * r.gear_ratio);
+  const double cm_per_count_by_hand =
+      2.0 * kPi * r.wheel_radius_cm / (r.counts_per_rev * r.decoding * r.gear_ratio);
   const std::array<double, 4> t = rim_travel_cm(r, dx, dy, dth);
   std::array<std::int32_t, 4> c{};
   for (int i = 0; i < 4; ++i)
-    c[static_cast<std::size_t>(i)] = static_cast<std::int32_t>(std::lround(t[static_cast<std::size_t>(i)] / cm_per_count_by_hand));
+    c[static_cast<std::size_t>(i)] = static_cast<std::int32_t>(
+        std::lround(t[static_cast<std::size_t>(i)] / cm_per_count_by_hand));
   return c;
 }
 
@@ -67,7 +71,8 @@ TEST(OdometryMath, WheelGeometryHandNumbersAt30Degrees) {
   const auto left = rim_travel_cm(r, 0.0, 1.0, 0.0);
   const auto turn = rim_travel_cm(r, 0.0, 0.0, 0.01);
   const double want_fwd[4] = {-0.75, -0.75, 0.75, 0.75};
-  const double want_left[4] = {-0.8660254037844386, 0.8660254037844386, -0.8660254037844386, 0.8660254037844386};
+  const double want_left[4] = {-0.8660254037844386, 0.8660254037844386, -0.8660254037844386,
+                               0.8660254037844386};
   for (std::size_t i = 0; i < 4; ++i) {
     EXPECT_NEAR(fwd[i], want_fwd[i], 1e-12) << i;
     EXPECT_NEAR(left[i], want_left[i], 1e-12) << i;
@@ -135,21 +140,22 @@ TEST(Odometry, DiagonalWindowAt30Degrees) {
 // Exact end point: p0 + R(yaw0) [sin(a)/w, -(1-cos a)/w; (1-cos a)/w, sin(a)/w] v with a = w T.
 TEST(Odometry, MidWindowHeadingGivesTheExactChord) {
   for (const double tm : {45.0, 30.0}) {
-  SCOPED_TRACE(tm);
-  const RobotConfig r = robot_at(tm);
-  const double w = deg_to_rad(120.0), t = 0.01, a = w * t;
-  const Eigen::Vector2d v(100.0, 40.0);
-  const Eigen::Vector2d chord_body(std::sin(a) / w * v.x() - (1 - std::cos(a)) / w * v.y(),
-                                   (1 - std::cos(a)) / w * v.x() + std::sin(a) / w * v.y());
-  const Eigen::Vector2d expect = robot_to_field(chord_body, 30.0);
-  Odometry odo(r);
-  odo.reset({0.0, 0.0, 30.0});
-  const auto& e = odo.update(win(0, 10.0, counts_for(r, v.x() * t, v.y() * t, a), 30.0 + rad_to_deg(a)));
-  EXPECT_NEAR(e.pose.x_cm, expect.x(), 2e-3);
-  EXPECT_NEAR(e.pose.y_cm, expect.y(), 2e-3);
-  EXPECT_NEAR(e.wheel_yaw_deg, 30.0 + 1.2, 2e-3);
-  // The start heading instead of the mid heading would be off by 0.6 deg * 1.08 cm = 0.011 cm.
-  EXPECT_GT((robot_to_field(v * t, 30.0) - expect).norm(), 0.01);
+    SCOPED_TRACE(tm);
+    const RobotConfig r = robot_at(tm);
+    const double w = deg_to_rad(120.0), t = 0.01, a = w * t;
+    const Eigen::Vector2d v(100.0, 40.0);
+    const Eigen::Vector2d chord_body(std::sin(a) / w * v.x() - (1 - std::cos(a)) / w * v.y(),
+                                     (1 - std::cos(a)) / w * v.x() + std::sin(a) / w * v.y());
+    const Eigen::Vector2d expect = robot_to_field(chord_body, 30.0);
+    Odometry odo(r);
+    odo.reset({0.0, 0.0, 30.0});
+    const auto& e =
+        odo.update(win(0, 10.0, counts_for(r, v.x() * t, v.y() * t, a), 30.0 + rad_to_deg(a)));
+    EXPECT_NEAR(e.pose.x_cm, expect.x(), 2e-3);
+    EXPECT_NEAR(e.pose.y_cm, expect.y(), 2e-3);
+    EXPECT_NEAR(e.wheel_yaw_deg, 30.0 + 1.2, 2e-3);
+    // The start heading instead of the mid heading would be off by 0.6 deg * 1.08 cm = 0.011 cm.
+    EXPECT_GT((robot_to_field(v * t, 30.0) - expect).norm(), 0.01);
   }
 }
 
@@ -218,7 +224,9 @@ TEST(Odometry, SlipIsIsolatedToTheRightWheelAndRejected) {
     for (std::uint32_t k = 0; k < 20; ++k) {
       auto c = counts_for(r, 0.8, 0.6, 0.0);
       const bool slip = k == 12;
-      if (slip) c[static_cast<std::size_t>(wheel - 1)] += static_cast<std::int32_t>(std::lround((wheel % 2 ? -0.4 : 0.4) / cm_per_count(r)));
+      if (slip)
+        c[static_cast<std::size_t>(wheel - 1)] +=
+            static_cast<std::int32_t>(std::lround((wheel % 2 ? -0.4 : 0.4) / cm_per_count(r)));
       const auto& e = odo.update(win(k, 10.0 * (k + 1), c, 0.0));
       EXPECT_EQ(e.slip.detected, slip);
       if (slip) {
@@ -258,7 +266,8 @@ TEST(PaperOdometry, RotationInPlaceMovesTheRobot) {
   EXPECT_NEAR(len, 20.0 * th, 1e-3);
 }
 
-// Eq. (10) assumes T = 0.01 s in "res x 0.01": with a nominal 8 ms window the distance scales by 0.8.
+// Eq. (10) assumes T = 0.01 s in "res x 0.01": with a nominal 8 ms window the distance scales by
+// 0.8.
 TEST(PaperOdometry, Equation10UsesTheNominalPeriod) {
   RobotConfig r;
   r.window_period_ms = 8.0;
@@ -267,7 +276,8 @@ TEST(PaperOdometry, Equation10UsesTheNominalPeriod) {
   const double th = deg_to_rad(1.0);
   (void)p.update(win(0, 8.0, counts_for(r, 0.0, 0.0, th), 1.0));
   const double d_i = counts_for(r, 0.0, 0.0, th)[0] * cm_per_count(r) * 0.8;
-  EXPECT_NEAR(std::hypot(p.estimate().pose.x_cm, p.estimate().pose.y_cm), 2.0 * (d_i - 20.0 * th / 2.0), 1e-9);
+  EXPECT_NEAR(std::hypot(p.estimate().pose.x_cm, p.estimate().pose.y_cm),
+              2.0 * (d_i - 20.0 * th / 2.0), 1e-9);
 }
 
 }  // namespace

@@ -43,13 +43,17 @@ RunResult run(const WorldConfig& cfg, const std::string& trajectory, std::uint64
     const auto& e = odo.update(sw.window);
     const auto& p = paper.update(sw.window);
     const auto& l = literal.update(sw.window);
-    const auto err = [&](const OdometryEstimate& x) { return std::hypot(x.pose.x_cm - sw.truth.x_cm, x.pose.y_cm - sw.truth.y_cm); };
+    const auto err = [&](const OdometryEstimate& x) {
+      return std::hypot(x.pose.x_cm - sw.truth.x_cm, x.pose.y_cm - sw.truth.y_cm);
+    };
     r.max_err_cm = std::max(r.max_err_cm, err(e));
     r.paper_max_err_cm = std::max(r.paper_max_err_cm, err(p));
     r.paper_literal_max_err_cm = std::max(r.paper_literal_max_err_cm, err(l));
     r.slip_flags += e.slip.detected ? 1 : 0;
   }
-  const auto err = [&](const OdometryEstimate& e) { return std::hypot(e.pose.x_cm - sw.truth.x_cm, e.pose.y_cm - sw.truth.y_cm); };
+  const auto err = [&](const OdometryEstimate& e) {
+    return std::hypot(e.pose.x_cm - sw.truth.x_cm, e.pose.y_cm - sw.truth.y_cm);
+  };
   r.distance_cm = sw.truth_distance_cm;
   r.final_err_cm = err(odo.estimate());
   r.final_yaw_err_deg = angle_diff_deg(odo.estimate().pose.yaw_deg, sw.truth.yaw_deg);
@@ -58,15 +62,18 @@ RunResult run(const WorldConfig& cfg, const std::string& trajectory, std::uint64
   return r;
 }
 
-double pct(double err, double dist) { return dist > 1.0 ? 100.0 * err / dist : 0.0; }
+double pct(double err, double dist) {
+  return dist > 1.0 ? 100.0 * err / dist : 0.0;
+}
 
 TEST(OdometryTrajectories, DriftTableNoiseFreeAndDefaultNoise) {
   const RobotConfig robot = load_named_robot_config("default");
   // final: error at the end / distance; max: largest error during the run / distance. Closed
   // trajectories (circle, figure eight, tours) come back to the start, where even a variant that
   // never moves has no final error: the max column is the honest one.
-  std::printf("\n%-16s %-8s %8s | %8s %8s %7s %8s | %9s %9s | %9s\n", "trajectory", "noise", "dist_cm", "final_%",
-              "max_%", "yaw_deg", "sigma_cm", "paper_fin%", "paper_max%", "literal_max%");
+  std::printf("\n%-16s %-8s %8s | %8s %8s %7s %8s | %9s %9s | %9s\n", "trajectory", "noise",
+              "dist_cm", "final_%", "max_%", "yaw_deg", "sigma_cm", "paper_fin%", "paper_max%",
+              "literal_max%");
   const int kNoisySeeds = 5;
   for (const std::string& name : standard_trajectory_names()) {
     for (int noisy = 0; noisy <= 1; ++noisy) {
@@ -74,19 +81,23 @@ TEST(OdometryTrajectories, DriftTableNoiseFreeAndDefaultNoise) {
       const int seeds = noisy ? kNoisySeeds : 1;
       for (int s = 1; s <= seeds; ++s) {
         const std::uint64_t seed = 1000 + static_cast<std::uint64_t>(s);
-        const WorldConfig cfg = noisy ? WorldConfig::default_noise(robot, seed) : WorldConfig::noise_free(robot, seed);
+        const WorldConfig cfg =
+            noisy ? WorldConfig::default_noise(robot, seed) : WorldConfig::noise_free(robot, seed);
         const RunResult r = run(cfg, name, 1);
-        std::printf("%-16s %-8s %8.1f | %8.3f %8.3f %7.3f %8.2f | %9.2f %9.2f | %9.2f   (seed %llu; max err %.3f cm, paper %.1f cm)\n",
-                    name.c_str(), noisy ? "default" : "none", r.distance_cm, pct(r.final_err_cm, r.distance_cm),
-                    pct(r.max_err_cm, r.distance_cm), r.final_yaw_err_deg, r.final_sigma_cm,
-                    pct(r.paper_final_err_cm, r.distance_cm), pct(r.paper_max_err_cm, r.distance_cm),
-                    pct(r.paper_literal_max_err_cm, r.distance_cm), static_cast<unsigned long long>(seed), r.max_err_cm,
-                    r.paper_max_err_cm);
+        std::printf(
+            "%-16s %-8s %8.1f | %8.3f %8.3f %7.3f %8.2f | %9.2f %9.2f | %9.2f   (seed %llu; max "
+            "err %.3f cm, paper %.1f cm)\n",
+            name.c_str(), noisy ? "default" : "none", r.distance_cm,
+            pct(r.final_err_cm, r.distance_cm), pct(r.max_err_cm, r.distance_cm),
+            r.final_yaw_err_deg, r.final_sigma_cm, pct(r.paper_final_err_cm, r.distance_cm),
+            pct(r.paper_max_err_cm, r.distance_cm), pct(r.paper_literal_max_err_cm, r.distance_cm),
+            static_cast<unsigned long long>(seed), r.max_err_cm, r.paper_max_err_cm);
         worst_pct = std::max(worst_pct, pct(r.max_err_cm, r.distance_cm));
         worst_err = std::max(worst_err, r.max_err_cm);
         sum_pct += pct(r.max_err_cm, r.distance_cm);
         sum_paper_pct += pct(r.paper_max_err_cm, r.distance_cm);
-        EXPECT_EQ(r.slip_flags, 0) << name << (noisy ? " noisy" : " noise-free") << " seed " << seed;
+        EXPECT_EQ(r.slip_flags, 0)
+            << name << (noisy ? " noisy" : " noise-free") << " seed " << seed;
         // The uncertainty must cover the error (3 sigma).
         EXPECT_LE(r.final_err_cm, 3.0 * r.final_sigma_cm + 0.05) << name;
       }
@@ -97,15 +108,17 @@ TEST(OdometryTrajectories, DriftTableNoiseFreeAndDefaultNoise) {
         EXPECT_LT(worst_pct, noisy ? 2.0 : 0.5) << name;
       }
       if (noisy)
-        std::printf("%-16s %-8s mean max-error drift %.3f %% over %d seeds; paper variant %.1f %%\n", name.c_str(),
-                    "default", sum_pct / seeds, seeds, sum_paper_pct / seeds);
+        std::printf(
+            "%-16s %-8s mean max-error drift %.3f %% over %d seeds; paper variant %.1f %%\n",
+            name.c_str(), "default", sum_pct / seeds, seeds, sum_paper_pct / seeds);
     }
   }
 }
 
 // Slip events on random wheels at random times during random walks and boundary tours with the
-// default noise. Detected = flagged on the slipping wheel within two windows of the first window the
-// slip touches. False alarm = a flag in a window no slip touched (nor the two windows after one).
+// default noise. Detected = flagged on the slipping wheel within two windows of the first window
+// the slip touches. False alarm = a flag in a window no slip touched (nor the two windows after
+// one).
 TEST(OdometryTrajectories, SlipDetectionAndFalseAlarmRates) {
   const RobotConfig robot = load_named_robot_config("default");
   const std::uint64_t seed = 20261122;
@@ -134,24 +147,28 @@ TEST(OdometryTrajectories, SlipDetectionAndFalseAlarmRates) {
       if (e.in_time() && right_wheel) ++detected;
       if (right_wheel) ++right_wheel_first;
       if (!(e.in_time() && right_wheel))
-        std::printf("  missed: run %d %s wheel %d at %.2f s for %.2f s, %.1f cm/s: first flag window %+d wheel %d\n", run_i,
-                    traj.c_str(), cfg.slips[k].wheel, cfg.slips[k].start_s, cfg.slips[k].duration_s,
-                    cfg.slips[k].extra_speed_cm_per_s, e.detect_window - e.first_window, e.detected_wheel);
+        std::printf(
+            "  missed: run %d %s wheel %d at %.2f s for %.2f s, %.1f cm/s: first flag window %+d "
+            "wheel %d\n",
+            run_i, traj.c_str(), cfg.slips[k].wheel, cfg.slips[k].start_s, cfg.slips[k].duration_s,
+            cfg.slips[k].extra_speed_cm_per_s, e.detect_window - e.first_window, e.detected_wheel);
     }
     worst_pct_with_slip = std::max(worst_pct_with_slip, pct(r.final_err_cm, r.distance_cm));
     worst_pct_blind = std::max(worst_pct_blind, pct(r.blind_final_err_cm, r.distance_cm));
   }
   const double det_rate = static_cast<double>(detected) / events;
   const double fa_rate = static_cast<double>(false_alarms) / clean_windows;
-  std::printf("slip events %d: detected on the right wheel within two windows %d (%.1f %%); first flag on the right wheel %d\n",
-              events, detected, 100.0 * det_rate, right_wheel_first);
-  std::printf("slip windows %d, flagged on the right wheel %d (%.1f %%)\n", slip_windows, slip_windows_flagged_right,
-              100.0 * slip_windows_flagged_right / slip_windows);
-  std::printf("false alarms: %d of %d clean windows (%.3f %%); of which on bump windows %d of %d\n", false_alarms,
-              clean_windows, 100.0 * fa_rate, bump_flags, bump_windows);
+  std::printf(
+      "slip events %d: detected on the right wheel within two windows %d (%.1f %%); first flag on "
+      "the right wheel %d\n",
+      events, detected, 100.0 * det_rate, right_wheel_first);
+  std::printf("slip windows %d, flagged on the right wheel %d (%.1f %%)\n", slip_windows,
+              slip_windows_flagged_right, 100.0 * slip_windows_flagged_right / slip_windows);
+  std::printf("false alarms: %d of %d clean windows (%.3f %%); of which on bump windows %d of %d\n",
+              false_alarms, clean_windows, 100.0 * fa_rate, bump_flags, bump_windows);
   std::printf("largest LS residual / threshold in a clean window: %.3f\n", max_clean_residual);
-  std::printf("worst final drift with slip events: %.3f %% with rejection, %.3f %% without\n", worst_pct_with_slip,
-              worst_pct_blind);
+  std::printf("worst final drift with slip events: %.3f %% with rejection, %.3f %% without\n",
+              worst_pct_with_slip, worst_pct_blind);
   EXPECT_GE(events, 60);
   EXPECT_GE(det_rate, 0.95);
   EXPECT_LE(fa_rate, 0.001);
@@ -188,8 +205,10 @@ TEST(OdometryTrajectories, OriginResetEvery125ms) {
       EXPECT_DOUBLE_EQ(odo.estimate().sigma_xy_cm, 1.0);
     }
   }
-  std::printf("%d resets every 125 ms: worst error %.3f cm, worst yaw error %.3f deg (raw gyro off by %.2f deg at the end)\n",
-              resets, worst, worst_yaw, free_yaw_err);
+  std::printf(
+      "%d resets every 125 ms: worst error %.3f cm, worst yaw error %.3f deg (raw gyro off by %.2f "
+      "deg at the end)\n",
+      resets, worst, worst_yaw, free_yaw_err);
   EXPECT_GT(resets, 190);
   EXPECT_GT(free_yaw_err, 1.0);
   EXPECT_LT(worst, 0.5);
@@ -219,8 +238,10 @@ TEST(OdometryTrajectories, WheelYawCrossChecksTheGyro) {
     }
     const double wheel_err = angle_diff_deg(odo.estimate().wheel_yaw_deg, sw.truth.yaw_deg);
     const double gyro_err = angle_diff_deg(odo.estimate().pose.yaw_deg, sw.truth.yaw_deg);
-    std::printf("gyro scale error %.2f: after 720 deg the gyro heading is off by %.3f deg, the wheel heading by %.3f deg\n",
-                scale, gyro_err, wheel_err);
+    std::printf(
+        "gyro scale error %.2f: after 720 deg the gyro heading is off by %.3f deg, the wheel "
+        "heading by %.3f deg\n",
+        scale, gyro_err, wheel_err);
     EXPECT_NEAR(wheel_err, 0.0, 0.02);
     EXPECT_NEAR(gyro_err, 720.0 * scale, 0.02);
   }
@@ -246,11 +267,13 @@ TEST(OdometryTrajectories, OtherWindowPeriodAndClock) {
     const auto& e = odo.update(sw.window);
     const auto& p = paper.update(sw.window);
     worst = std::max(worst, std::hypot(e.pose.x_cm - sw.truth.x_cm, e.pose.y_cm - sw.truth.y_cm));
-    paper_worst = std::max(paper_worst, std::hypot(p.pose.x_cm - sw.truth.x_cm, p.pose.y_cm - sw.truth.y_cm));
+    paper_worst =
+        std::max(paper_worst, std::hypot(p.pose.x_cm - sw.truth.x_cm, p.pose.y_cm - sw.truth.y_cm));
     ASSERT_NEAR(sw.window.t_end_ms, 8.0 * (sw.window.seq + 1), 1e-9);
   }
-  std::printf("8 ms windows at 39.75 MHz over %.0f cm: worst error %.3f cm (paper variant %.1f cm)\n",
-              sw.truth_distance_cm, worst, paper_worst);
+  std::printf(
+      "8 ms windows at 39.75 MHz over %.0f cm: worst error %.3f cm (paper variant %.1f cm)\n",
+      sw.truth_distance_cm, worst, paper_worst);
   EXPECT_LT(worst, 0.005 * sw.truth_distance_cm);
   EXPECT_NEAR(odo.estimate().speed_cm_per_s, 0.0, 1e-9);
 }
@@ -280,7 +303,8 @@ TEST(OdometryTrajectories, CoarserDecodingModes) {
       flags += e.slip.detected;
       worst = std::max(worst, std::hypot(e.pose.x_cm - sw.truth.x_cm, e.pose.y_cm - sw.truth.y_cm));
     }
-    std::printf("decoding X%d: worst error %.3f cm over %.0f cm\n", decoding, worst, sw.truth_distance_cm);
+    std::printf("decoding X%d: worst error %.3f cm over %.0f cm\n", decoding, worst,
+                sw.truth_distance_cm);
     EXPECT_LT(worst, 0.005 * sw.truth_distance_cm);
     EXPECT_EQ(flags, 0);
   }
@@ -320,14 +344,16 @@ TEST(OdometryTrajectories, SlipDetectionVersusMagnitude) {
         if (sw.slip_wheels && first < 0) {
           first = index;
         }
-        if (first >= 0 && index - first <= 1 && e.slip.detected && e.slip.wheel == ev.wheel) ok = true;
+        if (first >= 0 && index - first <= 1 && e.slip.detected && e.slip.wheel == ev.wheel)
+          ok = true;
         ++index;
       }
       if (first < 0) continue;
       ++events;
       caught += ok;
     }
-    std::printf("extra wheel speed %5.1f cm/s: caught %2d of %2d within two windows\n", speed, caught, events);
+    std::printf("extra wheel speed %5.1f cm/s: caught %2d of %2d within two windows\n", speed,
+                caught, events);
     if (speed >= 15.0) {
       EXPECT_EQ(caught, events);
     }

@@ -44,7 +44,8 @@ Drive drive(const WorldConfig& cfg, const std::string& trajectory) {
   while (!world.finished()) {
     sw = world.next_window();
     const OdometryEstimate& e = odo.update(sw.window);
-    d.max_err_cm = std::max(d.max_err_cm, std::hypot(e.pose.x_cm - sw.truth.x_cm, e.pose.y_cm - sw.truth.y_cm));
+    d.max_err_cm = std::max(d.max_err_cm,
+                            std::hypot(e.pose.x_cm - sw.truth.x_cm, e.pose.y_cm - sw.truth.y_cm));
     d.slip_flags += e.slip.detected ? 1 : 0;
     ++d.windows;
   }
@@ -56,14 +57,16 @@ Drive drive(const WorldConfig& cfg, const std::string& trajectory) {
   return d;
 }
 
-double pct(double err, double dist) { return dist > 1.0 ? 100.0 * err / dist : 0.0; }
+double pct(double err, double dist) {
+  return dist > 1.0 ? 100.0 * err / dist : 0.0;
+}
 
-// Bounds, the same for every layout and the same as the four-wheel ones of docs/ODOMETRY.md: without
-// noise only the count quantisation (1e-3 cm a count for these wheels) and the gyro's 0.01 degree
-// steps remain, far below 0.5 % of the path; with the default noise (0.2 % radius error a wheel,
-// rolling noise, carpet bumps, gyro drift and scale error) the four-wheel robot reaches 0.9 % at
-// worst, and a layout that is still correct must stay within 2 %. A wrong row, sign or gain in a
-// Jacobian moves the robot by a fraction of the path every window and fails these by far (a
+// Bounds, the same for every layout and the same as the four-wheel ones of docs/ODOMETRY.md:
+// without noise only the count quantisation (1e-3 cm a count for these wheels) and the gyro's 0.01
+// degree steps remain, far below 0.5 % of the path; with the default noise (0.2 % radius error a
+// wheel, rolling noise, carpet bumps, gyro drift and scale error) the four-wheel robot reaches 0.9
+// % at worst, and a layout that is still correct must stay within 2 %. A wrong row, sign or gain in
+// a Jacobian moves the robot by a fraction of the path every window and fails these by far (a
 // reversed wheel 3 on the asymmetric robot: see WrongLayoutFailsTheBounds).
 constexpr double kNoiseFreeMaxPct = 0.5;
 constexpr double kNoisyMaxPct = 2.0;
@@ -71,8 +74,8 @@ constexpr double kSpinNoiseFreeCm = 0.05;  // rotate_in_place: the centre must s
 constexpr double kSpinNoisyCm = 1.0;
 
 TEST(OdometryWheels, EveryRobotEveryTrajectoryAgainstGroundTruth) {
-  std::printf("\n%-22s %-16s %-8s %8s | %8s %8s %8s %8s\n", "robot", "trajectory", "noise", "dist_cm", "final_%",
-              "max_%", "yaw_deg", "sigma_cm");
+  std::printf("\n%-22s %-16s %-8s %8s | %8s %8s %8s %8s\n", "robot", "trajectory", "noise",
+              "dist_cm", "final_%", "max_%", "yaw_deg", "sigma_cm");
   const int kNoisySeeds = 3;
   for (const std::string& name : kRobots) {
     const RobotConfig robot = load_named_robot_config(name);
@@ -82,25 +85,31 @@ TEST(OdometryWheels, EveryRobotEveryTrajectoryAgainstGroundTruth) {
         const int seeds = noisy ? kNoisySeeds : 1;
         for (int s = 1; s <= seeds; ++s) {
           const std::uint64_t seed = 2000 + static_cast<std::uint64_t>(s);
-          const WorldConfig cfg = noisy ? WorldConfig::default_noise(robot, seed) : WorldConfig::noise_free(robot, seed);
+          const WorldConfig cfg = noisy ? WorldConfig::default_noise(robot, seed)
+                                        : WorldConfig::noise_free(robot, seed);
           const Drive d = drive(cfg, traj);
-          std::printf("%-22s %-16s %-8s %8.1f | %8.3f %8.3f %8.3f %8.2f   (seed %llu, max err %.3f cm)\n", name.c_str(),
-                      traj.c_str(), noisy ? "default" : "none", d.distance_cm, pct(d.final_err_cm, d.distance_cm),
-                      pct(d.max_err_cm, d.distance_cm), d.final_yaw_err_deg, d.final_sigma_cm,
-                      static_cast<unsigned long long>(seed), d.max_err_cm);
+          std::printf(
+              "%-22s %-16s %-8s %8.1f | %8.3f %8.3f %8.3f %8.2f   (seed %llu, max err %.3f cm)\n",
+              name.c_str(), traj.c_str(), noisy ? "default" : "none", d.distance_cm,
+              pct(d.final_err_cm, d.distance_cm), pct(d.max_err_cm, d.distance_cm),
+              d.final_yaw_err_deg, d.final_sigma_cm, static_cast<unsigned long long>(seed),
+              d.max_err_cm);
           worst_pct = std::max(worst_pct, pct(d.max_err_cm, d.distance_cm));
           worst_err = std::max(worst_err, d.max_err_cm);
           sum_pct += pct(d.max_err_cm, d.distance_cm);
-          EXPECT_EQ(d.slip_flags, 0) << name << " " << traj << " seed " << seed << " (no slip was simulated)";
-          EXPECT_LE(d.final_err_cm, 3.0 * d.final_sigma_cm + 0.05) << name << " " << traj << " seed " << seed;
+          EXPECT_EQ(d.slip_flags, 0)
+              << name << " " << traj << " seed " << seed << " (no slip was simulated)";
+          EXPECT_LE(d.final_err_cm, 3.0 * d.final_sigma_cm + 0.05)
+              << name << " " << traj << " seed " << seed;
         }
         if (traj == "rotate_in_place")
           EXPECT_LT(worst_err, noisy ? kSpinNoisyCm : kSpinNoiseFreeCm) << name << " " << traj;
         else
           EXPECT_LT(worst_pct, noisy ? kNoisyMaxPct : kNoiseFreeMaxPct) << name << " " << traj;
         if (noisy)
-          std::printf("%-22s %-16s %-8s mean max-error drift %.3f %% over %d seeds, worst %.3f %%\n", name.c_str(),
-                      traj.c_str(), "default", sum_pct / seeds, seeds, worst_pct);
+          std::printf(
+              "%-22s %-16s %-8s mean max-error drift %.3f %% over %d seeds, worst %.3f %%\n",
+              name.c_str(), traj.c_str(), "default", sum_pct / seeds, seeds, worst_pct);
       }
     }
   }
@@ -128,40 +137,47 @@ TEST(OdometryWheels, WrongLayoutFailsTheBounds) {
     sw = world.next_window();
     const auto& e = odo.update(sw.window);
     const auto& b = blind.update(sw.window);
-    max_err = std::max(max_err, std::hypot(e.pose.x_cm - sw.truth.x_cm, e.pose.y_cm - sw.truth.y_cm));
-    blind_max_err = std::max(blind_max_err, std::hypot(b.pose.x_cm - sw.truth.x_cm, b.pose.y_cm - sw.truth.y_cm));
+    max_err =
+        std::max(max_err, std::hypot(e.pose.x_cm - sw.truth.x_cm, e.pose.y_cm - sw.truth.y_cm));
+    blind_max_err = std::max(blind_max_err,
+                             std::hypot(b.pose.x_cm - sw.truth.x_cm, b.pose.y_cm - sw.truth.y_cm));
     if (std::abs(sw.window.counts[2]) * cm_per_count(robot, 2) > 0.1) {  // wheel 3 moves > 10 cm/s
       ++moving;
       flagged_wheel3 += e.slip.detected && e.slip.wheel == 3 ? 1 : 0;
     }
   }
-  std::printf("wheel 3 believed reversed: max error %.1f cm over %.0f cm (%.1f %%) without slip handling; with it "
-              "%.2f cm, wheel 3 flagged in %d of %d windows where it moves > 10 cm/s\n",
-              blind_max_err, sw.truth_distance_cm, pct(blind_max_err, sw.truth_distance_cm), max_err, flagged_wheel3, moving);
+  std::printf(
+      "wheel 3 believed reversed: max error %.1f cm over %.0f cm (%.1f %%) without slip handling; "
+      "with it "
+      "%.2f cm, wheel 3 flagged in %d of %d windows where it moves > 10 cm/s\n",
+      blind_max_err, sw.truth_distance_cm, pct(blind_max_err, sw.truth_distance_cm), max_err,
+      flagged_wheel3, moving);
   EXPECT_GT(pct(blind_max_err, sw.truth_distance_cm), 10.0 * kNoisyMaxPct);
   EXPECT_GT(flagged_wheel3, 0.9 * moving);
 }
 
 // Three wheels: no redundancy among the wheels, the gyro is the check. By hand for
-// common/robots/three-wheel.json: the translation columns (-h, 0, h) and (1/2, -1, 1/2) (h = sqrt 3 / 2)
-// are both orthogonal to n = (1, 1, 1) / sqrt 3, and n . (9, 9, 9) = 27 / sqrt 3 = 9 sqrt 3: wheels
-// that turn the robot by theta_w while the gyro says theta_g leave a residual of 9 sqrt 3 |theta_w -
-// theta_g| cm, whatever the translation.
+// common/robots/three-wheel.json: the translation columns (-h, 0, h) and (1/2, -1, 1/2) (h = sqrt 3
+// / 2) are both orthogonal to n = (1, 1, 1) / sqrt 3, and n . (9, 9, 9) = 27 / sqrt 3 = 9 sqrt 3:
+// wheels that turn the robot by theta_w while the gyro says theta_g leave a residual of 9 sqrt 3
+// |theta_w - theta_g| cm, whatever the translation.
 TEST(OdometryWheels, ThreeWheelSlipCheckIsTheGyroAgainstTheWheels) {
   const RobotConfig robot = load_named_robot_config("three-wheel");
   const SlipDetector det(robot);
   ASSERT_EQ(det.wheels(), 3);
   const double h = std::sqrt(3.0) / 2.0;
   const double dt = 0.01;
-  // Body motion over 10 ms: 0.6 cm forward, 0.2 cm left, turning 40 deg/s (by hand through the rows).
+  // Body motion over 10 ms: 0.6 cm forward, 0.2 cm left, turning 40 deg/s (by hand through the
+  // rows).
   const double dx = 0.6, dy = 0.2, th = deg_to_rad(40.0) * dt;
-  const Eigen::Vector4d travel(-h * dx + 0.5 * dy + 9.0 * th, -dy + 9.0 * th, h * dx + 0.5 * dy + 9.0 * th, 0.0);
+  const Eigen::Vector4d travel(-h * dx + 0.5 * dy + 9.0 * th, -dy + 9.0 * th,
+                               h * dx + 0.5 * dy + 9.0 * th, 0.0);
   const SlipCheck agree = det.check(travel, 40.0, dt, {dx, dy});
   EXPECT_FALSE(agree.report.detected);
   EXPECT_NEAR(agree.report.residual_cm_per_s, 0.0, 1e-9);
   EXPECT_NEAR(agree.report.wheel_minus_gyro_deg_per_s, 0.0, 1e-9);
-  // The gyro 30 deg/s slower than the wheels: residual 9 sqrt 3 x 30 deg/s in rad = 8.162 cm/s, above
-  // the 5 cm/s threshold.
+  // The gyro 30 deg/s slower than the wheels: residual 9 sqrt 3 x 30 deg/s in rad = 8.162 cm/s,
+  // above the 5 cm/s threshold.
   const SlipCheck off = det.check(travel, 10.0, dt, {dx, dy});
   EXPECT_NEAR(off.report.residual_cm_per_s, 9.0 * std::sqrt(3.0) * deg_to_rad(30.0), 1e-9);
   EXPECT_NEAR(off.report.wheel_minus_gyro_deg_per_s, 30.0, 1e-9);
@@ -182,8 +198,8 @@ TEST(OdometryWheels, ThreeWheelSlipCheckIsTheGyroAgainstTheWheels) {
 }
 
 // Slip events on random wheels during random walks and boundary tours with the default noise, for
-// each robot: flagged within two windows (on any wheel, and on the right one), false alarms in clean
-// windows, and the drift with and without the slip handling. Seeded; the seed is printed.
+// each robot: flagged within two windows (on any wheel, and on the right one), false alarms in
+// clean windows, and the drift with and without the slip handling. Seeded; the seed is printed.
 TEST(OdometryWheels, SlipDetectionPerRobot) {
   const std::uint64_t seed = 20261202;
   std::printf("slip test seed %llu\n", static_cast<unsigned long long>(seed));
@@ -210,10 +226,13 @@ TEST(OdometryWheels, SlipDetectionPerRobot) {
       worst_pct = std::max(worst_pct, pct(r.final_err_cm, r.distance_cm));
       worst_blind_pct = std::max(worst_blind_pct, pct(r.blind_final_err_cm, r.distance_cm));
     }
-    std::printf("%-22s slip events %d: flagged within two windows %d (%.1f %%), on the right wheel %d (%.1f %%); "
-                "false alarms %d of %d clean windows; worst final drift %.3f %% with slip handling, %.3f %% without\n",
-                name.c_str(), events, flagged, 100.0 * flagged / events, right, 100.0 * right / events, false_alarms, clean,
-                worst_pct, worst_blind_pct);
+    std::printf(
+        "%-22s slip events %d: flagged within two windows %d (%.1f %%), on the right wheel %d "
+        "(%.1f %%); "
+        "false alarms %d of %d clean windows; worst final drift %.3f %% with slip handling, %.3f "
+        "%% without\n",
+        name.c_str(), events, flagged, 100.0 * flagged / events, right, 100.0 * right / events,
+        false_alarms, clean, worst_pct, worst_blind_pct);
     EXPECT_GE(events, 30) << name;
     EXPECT_GE(static_cast<double>(flagged) / events, 0.95) << name;
     EXPECT_LE(static_cast<double>(false_alarms) / clean, 0.001) << name;
@@ -244,15 +263,17 @@ TEST(OdometryWheels, ThreeWheelWithoutAGyroSeesNoSlip) {
     flags_wheels += e.slip.detected ? 1 : 0;
     max_disagreement = std::max(max_disagreement, std::abs(e.slip.wheel_minus_gyro_deg_per_s));
   }
-  std::printf("three wheels, 0.5 s slip of 40 cm/s on wheel 2: %d windows flagged with the gyro, %d with the "
-              "wheels' own heading (largest wheel-minus-heading rate %.2g deg/s)\n",
-              flags_gyro, flags_wheels, max_disagreement);
+  std::printf(
+      "three wheels, 0.5 s slip of 40 cm/s on wheel 2: %d windows flagged with the gyro, %d with "
+      "the "
+      "wheels' own heading (largest wheel-minus-heading rate %.2g deg/s)\n",
+      flags_gyro, flags_wheels, max_disagreement);
   EXPECT_GE(flags_gyro, 40);
   EXPECT_EQ(flags_wheels, 0);
 }
 
-// The simulator's fourth encoder slot of a three-wheel robot never counts (no edges, no counts), and
-// a slip event on a wheel the robot does not have is refused.
+// The simulator's fourth encoder slot of a three-wheel robot never counts (no edges, no counts),
+// and a slip event on a wheel the robot does not have is refused.
 TEST(OdometryWheels, ThreeWheelWorldLeavesTheFourthSlotStill) {
   const RobotConfig robot = load_named_robot_config("three-wheel");
   World world(WorldConfig::default_noise(robot, 3), make_trajectory("random_walk", 3));

@@ -30,7 +30,8 @@ std::vector<Frame> decode_all(FrameDecoder& d) {
 std::uint64_t seed_from_env() {
   const char* s = std::getenv("OMNILOC_SEED");
   const std::uint64_t seed = s ? std::strtoull(s, nullptr, 0) : 20261122u;
-  std::printf("seed %llu (set OMNILOC_SEED to repeat another)\n", static_cast<unsigned long long>(seed));
+  std::printf("seed %llu (set OMNILOC_SEED to repeat another)\n",
+              static_cast<unsigned long long>(seed));
   return seed;
 }
 
@@ -46,15 +47,16 @@ TEST(Encode, MatchesHandBuiltFrames) {
   EXPECT_EQ(encode(WriteReq{0x02, 0x0000000B}), hex("a50602020b0000008137"));
   EXPECT_EQ(encode(SnapshotReq{}), hex("a501031e5d"));
   EXPECT_EQ(encode(ErrorResp{2, 7}), hex("a503e00207a9a8"));
-  // v0.2: the gyro's sum (-1234567 = 0xFFED2979), sample count and flags (ABSENT | WRONG_ID) follow.
+  // v0.2: the gyro's sum (-1234567 = 0xFFED2979), sample count and flags (ABSENT | WRONG_ID)
+  // follow.
   Window w{7, 0x12345678, {100, -100, 0, INT32_MIN}, 0x0A, 0x10, -1234567, 10, 0x41};
   EXPECT_EQ(encode(Telemetry{w}),
             hex("a521900700000078563412640000009cffffff00000000000000800a107929edff0a418ea4"));
 }
 
 TEST(Encode, EveryTypeHasItsRegmapBodySize) {
-  const std::vector<Frame> frames{ReadReq{}, WriteReq{}, SnapshotReq{}, ReadResp{},
-                                  WriteAck{}, SnapshotResp{}, Telemetry{}, ErrorResp{}};
+  const std::vector<Frame> frames{ReadReq{},  WriteReq{},     SnapshotReq{}, ReadResp{},
+                                  WriteAck{}, SnapshotResp{}, Telemetry{},   ErrorResp{}};
   const std::vector<std::size_t> body{1, 5, 0, 5, 1, 32, 32, 2};
   for (std::size_t i = 0; i < frames.size(); ++i) {
     const auto bytes = encode(frames[i]);
@@ -70,10 +72,16 @@ TEST(Encode, EveryTypeHasItsRegmapBodySize) {
 }
 
 TEST(Decoder, RoundTripsEveryTypeFedOneByteAtATime) {
-  const std::vector<Frame> frames{ReadReq{0x14}, WriteReq{0x04, 400000}, SnapshotReq{}, ReadResp{0x00, 0x4F4D4E4C},
-                                  WriteAck{0x02}, SnapshotResp{Window{1, 2, {3, -4, 5, -6}, 0x0A, 0x21, -8388608, 10, 0x60}},
-                                  Telemetry{Window{9, 0xFFFFFFFF, {INT32_MAX, INT32_MIN, -1, 1}, 0x05, 0x10, 8388607, 255, 0x01}},
-                                  ErrorResp{3, 0x90}};
+  const std::vector<Frame> frames{
+      ReadReq{0x14},
+      WriteReq{0x04, 400000},
+      SnapshotReq{},
+      ReadResp{0x00, 0x4F4D4E4C},
+      WriteAck{0x02},
+      SnapshotResp{Window{1, 2, {3, -4, 5, -6}, 0x0A, 0x21, -8388608, 10, 0x60}},
+      Telemetry{
+          Window{9, 0xFFFFFFFF, {INT32_MAX, INT32_MIN, -1, 1}, 0x05, 0x10, 8388607, 255, 0x01}},
+      ErrorResp{3, 0x90}};
   FrameDecoder d;
   std::vector<Frame> got;
   for (const auto& f : frames) {
@@ -239,7 +247,8 @@ TEST(TimestampUnwrapper, ExtendsPastTheWrapAndConvertsToMs) {
   EXPECT_EQ(t.update(0xFFFF0000u), 0xFFFF0000ull);
   EXPECT_EQ(t.update(0x00010000u), 0x100010000ull);
   EXPECT_DOUBLE_EQ(t.elapsed_ms(), 0x20000 * 1000.0 / 12'000'000.0);
-  for (int i = 0; i < 3; ++i) t.update(0x00010000u + static_cast<std::uint32_t>(i + 1) * 0x80000000u);
+  for (int i = 0; i < 3; ++i)
+    t.update(0x00010000u + static_cast<std::uint32_t>(i + 1) * 0x80000000u);
   EXPECT_EQ(t.update(0x00010000u), 0x300010000ull);  // 4 half-turns + first wrap
   EXPECT_THROW(TimestampUnwrapper(0.0), std::invalid_argument);
 }

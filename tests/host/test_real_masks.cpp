@@ -21,8 +21,8 @@
 namespace omniloc {
 namespace {
 
-using test::test_data;
 using nlohmann::json;
+using test::test_data;
 
 // A detected line pixel and a hand line match when they are this close (px): the hand polylines
 // are read to a pixel or two, JPEG blurs a line's edges by about as much.
@@ -48,7 +48,8 @@ cv::Mat draw_polylines(const json& lines, const cv::Size& size, bool centre_only
   cv::Mat m = cv::Mat::zeros(size, CV_8U);
   for (const auto& l : lines) {
     const std::vector<std::vector<cv::Point>> one{points_of(l.at("points"))};
-    cv::polylines(m, one, false, cv::Scalar(255), centre_only ? 1 : l.at("width_px").get<int>(), cv::LINE_8);
+    cv::polylines(m, one, false, cv::Scalar(255), centre_only ? 1 : l.at("width_px").get<int>(),
+                  cv::LINE_8);
   }
   return m;
 }
@@ -89,7 +90,9 @@ cv::Mat distance_to(const cv::Mat& mask) {
   return dist;
 }
 
-double ratio(int num, int den) { return den > 0 ? static_cast<double>(num) / den : 0.0; }
+double ratio(int num, int den) {
+  return den > 0 ? static_cast<double>(num) / den : 0.0;
+}
 
 struct Figures {
   double carpet_precision, carpet_recall, line_precision, line_recall;
@@ -107,7 +110,9 @@ struct Case {
 };
 
 // The case's name for GoogleTest's and CTest's listings (instead of its bytes).
-void PrintTo(const Case& c, std::ostream* os) { *os << c.label; }
+void PrintTo(const Case& c, std::ostream* os) {
+  *os << c.label;
+}
 
 class RcjHandMasks : public ::testing::TestWithParam<Case> {};
 
@@ -132,14 +137,17 @@ TEST_P(RcjHandMasks, AnalysisAgreesWithHandDrawnMasks) {
   f.carpet_recall = ratio(carpet_both, cv::countNonZero(h.carpet));
 
   // Lines: recall over the hand centre lines on the carpet (a detected line pixel within
-  // kLineTolerancePx), precision over the detected line pixels inside the hand carpet region (a hand
-  // line band within kLineTolerancePx).
+  // kLineTolerancePx), precision over the detected line pixels inside the hand carpet region (a
+  // hand line band within kLineTolerancePx).
   const cv::Mat to_detected = distance_to(a.line_mask), to_hand = distance_to(h.line_band);
   const cv::Mat centre_on_carpet = h.line_centre & h.carpet_region;
   const cv::Mat detected_on_carpet = a.line_mask & h.carpet_region;
-  const cv::Mat near_detected = to_detected <= kLineTolerancePx, near_hand = to_hand <= kLineTolerancePx;
-  f.line_recall = ratio(cv::countNonZero(centre_on_carpet & near_detected), cv::countNonZero(centre_on_carpet));
-  f.line_precision = ratio(cv::countNonZero(detected_on_carpet & near_hand), cv::countNonZero(detected_on_carpet));
+  const cv::Mat near_detected = to_detected <= kLineTolerancePx,
+                near_hand = to_hand <= kLineTolerancePx;
+  f.line_recall =
+      ratio(cv::countNonZero(centre_on_carpet & near_detected), cv::countNonZero(centre_on_carpet));
+  f.line_precision =
+      ratio(cv::countNonZero(detected_on_carpet & near_hand), cv::countNonZero(detected_on_carpet));
 
   // Goals: the measured region's pixels against the hand polygon.
   const auto goal = [&](const std::optional<GoalRegion>& r, const cv::Mat& hand, const char* name) {
@@ -149,9 +157,11 @@ TEST_P(RcjHandMasks, AnalysisAgreesWithHandDrawnMasks) {
     }
     const int both = cv::countNonZero(r->mask & hand);
     const int either = cv::countNonZero(r->mask | hand);
-    const double precision = ratio(both, cv::countNonZero(r->mask)), recall = ratio(both, cv::countNonZero(hand));
-    std::printf("rcj %s %s goal precision %.3f recall %.3f iou %.3f (%d px measured, %d px drawn)\n", k.label, name,
-                precision, recall, ratio(both, either), r->pixels, cv::countNonZero(hand));
+    const double precision = ratio(both, cv::countNonZero(r->mask)),
+                 recall = ratio(both, cv::countNonZero(hand));
+    std::printf(
+        "rcj %s %s goal precision %.3f recall %.3f iou %.3f (%d px measured, %d px drawn)\n",
+        k.label, name, precision, recall, ratio(both, either), r->pixels, cv::countNonZero(hand));
     RecordProperty(std::string(name) + "_goal_precision", std::to_string(precision));
     RecordProperty(std::string(name) + "_goal_recall", std::to_string(recall));
     return ratio(both, either);
@@ -159,11 +169,14 @@ TEST_P(RcjHandMasks, AnalysisAgreesWithHandDrawnMasks) {
   f.blue_iou = goal(g.blue, h.blue, "blue");
   f.yellow_iou = goal(g.yellow, h.yellow, "yellow");
 
-  std::printf("rcj %s carpet precision %.3f recall %.3f (%d px detected, %d px drawn)\n", k.label, f.carpet_precision,
-              f.carpet_recall, cv::countNonZero(detected_carpet), cv::countNonZero(h.carpet));
-  std::printf("rcj %s lines precision %.3f recall %.3f (within %.0f px; %d detected line px on the carpet, %d hand centre-line px)\n",
-              k.label, f.line_precision, f.line_recall, kLineTolerancePx, cv::countNonZero(detected_on_carpet),
-              cv::countNonZero(centre_on_carpet));
+  std::printf("rcj %s carpet precision %.3f recall %.3f (%d px detected, %d px drawn)\n", k.label,
+              f.carpet_precision, f.carpet_recall, cv::countNonZero(detected_carpet),
+              cv::countNonZero(h.carpet));
+  std::printf(
+      "rcj %s lines precision %.3f recall %.3f (within %.0f px; %d detected line px on the carpet, "
+      "%d hand centre-line px)\n",
+      k.label, f.line_precision, f.line_recall, kLineTolerancePx,
+      cv::countNonZero(detected_on_carpet), cv::countNonZero(centre_on_carpet));
   RecordProperty("carpet_precision", std::to_string(f.carpet_precision));
   RecordProperty("carpet_recall", std::to_string(f.carpet_recall));
   RecordProperty("line_precision", std::to_string(f.line_precision));
@@ -179,18 +192,21 @@ TEST_P(RcjHandMasks, AnalysisAgreesWithHandDrawnMasks) {
   EXPECT_GE(f.yellow_iou, k.floor.yellow_iou);
 }
 
-// Floors: {carpet precision, carpet recall, line precision, line recall, blue IoU, yellow IoU}, each
-// the measured figure (the comment above it) less 0.05, rounded down. What the figures say today:
-// the carpet recall misses the pale haze of carpet beyond the boundary line near the mirror's edge
-// (drawn as carpet: it is); the line recall misses the faint, blurred stretches of line there; the
-// blue goal of goals_frame9 is cut in pieces by the other robot's parts in front of it, and the
-// analysis keeps the largest piece only (a third of what is drawn). The floors hold what is, so
-// a change that improves a figure should raise its floor.
+// Floors: {carpet precision, carpet recall, line precision, line recall, blue IoU, yellow IoU},
+// each the measured figure (the comment above it) less 0.05, rounded down. What the figures say
+// today: the carpet recall misses the pale haze of carpet beyond the boundary line near the
+// mirror's edge (drawn as carpet: it is); the line recall misses the faint, blurred stretches of
+// line there; the blue goal of goals_frame9 is cut in pieces by the other robot's parts in front of
+// it, and the analysis keeps the largest piece only (a third of what is drawn). The floors hold
+// what is, so a change that improves a figure should raise its floor.
 INSTANTIATE_TEST_SUITE_P(Rcj, RcjHandMasks,
-                         ::testing::Values(Case{"frame6", "rcj-omicam-frame6.jpg", "rcj-omicam-frame6.masks.json",
+                         ::testing::Values(Case{"frame6",
+                                                "rcj-omicam-frame6.jpg",
+                                                "rcj-omicam-frame6.masks.json",
                                                 // measured 0.991 0.800 0.839 0.667 0.657 0.770
                                                 {0.94, 0.75, 0.78, 0.61, 0.60, 0.72}},
-                                           Case{"goals_frame9", "rcj-omicam-goals-frame9.jpg",
+                                           Case{"goals_frame9",
+                                                "rcj-omicam-goals-frame9.jpg",
                                                 "rcj-omicam-goals-frame9.masks.json",
                                                 // measured 0.941 0.766 0.815 0.654 0.286 0.756
                                                 {0.89, 0.71, 0.76, 0.60, 0.23, 0.70}}),

@@ -2,14 +2,14 @@
 // file and line for malformed or missing files. Also the error summary used by replay.
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+#include <unistd.h>
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
-#include <string>
-#include <unistd.h>
-#include <csignal>
 #include <iterator>
-#include <sys/resource.h>
+#include <string>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -47,7 +47,8 @@ class RecordingFiles : public ::testing::Test {
       w.add_truth(e.t_end_ms, Pose2{123.5 + i, 234.25, -45.5 + 0.25 * i});
     }
     for (int i = 0; i < 2; ++i) {
-      cv::Mat img(meta_.camera.height_px, meta_.camera.width_px, CV_8UC3, cv::Scalar(10 * i, 100, 50));
+      cv::Mat img(meta_.camera.height_px, meta_.camera.width_px, CV_8UC3,
+                  cv::Scalar(10 * i, 100, 50));
       w.add_frame(5.0 + 16.5 * i, img);
     }
     w.close();
@@ -68,7 +69,8 @@ class RecordingFiles : public ::testing::Test {
   }
   void expect_error(const std::string& file, int line, const std::string& needle) {
     const std::string e = load_error();
-    const std::string where = (dir_ / file).string() + (line > 0 ? ":" + std::to_string(line) + ":" : "");
+    const std::string where =
+        (dir_ / file).string() + (line > 0 ? ":" + std::to_string(line) + ":" : "");
     EXPECT_NE(e.find(where), std::string::npos) << "want '" << where << "' in: " << e;
     EXPECT_NE(e.find(needle), std::string::npos) << "want '" << needle << "' in: " << e;
   }
@@ -126,10 +128,13 @@ TEST_F(RecordingFiles, WithoutOptionalParts) {
 
 TEST_F(RecordingFiles, CsvErrorsNameFileAndLine) {
   write("encoders.csv", "t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n10,0,1,2,3,4,0.5\n20,1,1,2,x3,4,0.5\n");
-  expect_error("encoders.csv", 3, "column 'c3': must be an integer in [-2147483648, 2147483647] (got 'x3')");
+  expect_error("encoders.csv", 3,
+               "column 'c3': must be an integer in [-2147483648, 2147483647] (got 'x3')");
   // Through the shared strict parser: a count beyond int32, 1.0 for a count, "-1" for seq.
-  write("encoders.csv", "t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n10,0,1,2,3,4,0.5\n20,1,1,2,3000000000,4,0.5\n");
-  expect_error("encoders.csv", 3, "column 'c3': must be an integer in [-2147483648, 2147483647] (got '3000000000')");
+  write("encoders.csv",
+        "t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n10,0,1,2,3,4,0.5\n20,1,1,2,3000000000,4,0.5\n");
+  expect_error("encoders.csv", 3,
+               "column 'c3': must be an integer in [-2147483648, 2147483647] (got '3000000000')");
   write("encoders.csv", "t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n10,0,1.0,2,3,4,0.5\n");
   expect_error("encoders.csv", 2, "column 'c1': must be an integer");
   write("encoders.csv", "t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n10,-1,1,2,3,4,0.5\n");
@@ -179,7 +184,8 @@ TEST_F(RecordingFiles, MetaErrorsNameTheFileAndFieldPath) {
   const std::string camera =
       R"("camera": {"width": 640, "height": 480, "center_px": [320, 240], "radius_lut": [[0, 0], [238, 500]], "yaw_offset_deg": 0, "mirrored": false})";
   const std::string pose = R"("initial_pose": {"x_cm": 1, "y_cm": 2, "yaw_deg": 0})";
-  const std::string good = "{\"field\": \"fira-robosot\", " + camera + ", " + robot + ", " + pose + "}";
+  const std::string good =
+      "{\"field\": \"fira-robosot\", " + camera + ", " + robot + ", " + pose + "}";
   write("meta.json", good);
   EXPECT_EQ(load_error(), "");
   struct Case {
@@ -190,19 +196,28 @@ TEST_F(RecordingFiles, MetaErrorsNameTheFileAndFieldPath) {
   using test::replaced;
   const Case cases[] = {
       {"{\"field\": \"fira-robosot\", " + camera + "}", "robot", "missing (required)"},
-      {replaced(good, "\"decoding\": 4", "\"decoding\": 3"), "robot.decoding", "must be 1, 2 or 4 (got 3)"},
-      {replaced(good, "\"y_cm\": 2", "\"y_cm\": \"a\""), "initial_pose.y_cm", "must be a number, not a string"},
-      {replaced(good, "\"y_cm\": 2", "\"y_cm\": 2, \"z_cm\": 0"), "initial_pose.z_cm", "unknown key"},
+      {replaced(good, "\"decoding\": 4", "\"decoding\": 3"), "robot.decoding",
+       "must be 1, 2 or 4 (got 3)"},
+      {replaced(good, "\"y_cm\": 2", "\"y_cm\": \"a\""), "initial_pose.y_cm",
+       "must be a number, not a string"},
+      {replaced(good, "\"y_cm\": 2", "\"y_cm\": 2, \"z_cm\": 0"), "initial_pose.z_cm",
+       "unknown key"},
       {replaced(good, "\"y_cm\": 2", "\"y_cm\": NaN"), "initial_pose.y_cm", "not valid JSON"},
-      {replaced(good, "\"y_cm\": 2", "\"y_cm\": 1e400"), "initial_pose.y_cm", "number out of range"},
-      {replaced(good, "[238, 500]", "[238, 500], [230, 600]"), "camera.radius_lut[2]", "strictly increasing"},
+      {replaced(good, "\"y_cm\": 2", "\"y_cm\": 1e400"), "initial_pose.y_cm",
+       "number out of range"},
+      {replaced(good, "[238, 500]", "[238, 500], [230, 600]"), "camera.radius_lut[2]",
+       "strictly increasing"},
       {replaced(good, "\"width\": 640", "\"width\": 640.5"), "camera.width", "must be an integer"},
-      {replaced(good, "\"mirrored\": false", "\"mirrored\": 0"), "camera.mirrored", "must be true or false"},
-      {replaced(good, "\"counts_per_rev\": 500", "\"counts_per_rev\": -500"), "robot.counts_per_rev", "(got -500)"},
+      {replaced(good, "\"mirrored\": false", "\"mirrored\": 0"), "camera.mirrored",
+       "must be true or false"},
+      {replaced(good, "\"counts_per_rev\": 500", "\"counts_per_rev\": -500"),
+       "robot.counts_per_rev", "(got -500)"},
       {"{\"field\": \"fira-robosot\", " + robot + "}", "camera", "missing (required)"},
-      {replaced(good, "\"field\": \"fira-robosot\"", "\"field\": \"\""), "field", "must name a geometry"},
+      {replaced(good, "\"field\": \"fira-robosot\"", "\"field\": \"\""), "field",
+       "must name a geometry"},
       {replaced(good, "\"field\": \"fira-robosot\"", "\"field\": 3"), "field", "must be a string"},
-      {replaced(good, "\"field\": \"fira-robosot\"", "\"field\": \"a\", \"field\": \"b\""), "field", "duplicate key"},
+      {replaced(good, "\"field\": \"fira-robosot\"", "\"field\": \"a\", \"field\": \"b\""), "field",
+       "duplicate key"},
       {good.substr(0, good.size() - 1) + ", \"extra\": 1}", "extra", "unknown key"},
       {"{\"field\": ", "field", "not valid JSON"},
   };
@@ -210,7 +225,8 @@ TEST_F(RecordingFiles, MetaErrorsNameTheFileAndFieldPath) {
     write("meta.json", c.json);
     const std::string e = load_error();
     EXPECT_EQ(e.rfind(meta + ":" + c.path + ": ", 0), 0u) << "json: " << c.json << "\n got: " << e;
-    EXPECT_NE(e.find(c.why), std::string::npos) << "want '" << c.why << "'\n json: " << c.json << "\n got: " << e;
+    EXPECT_NE(e.find(c.why), std::string::npos)
+        << "want '" << c.why << "'\n json: " << c.json << "\n got: " << e;
   }
   fs::remove(dir_ / "meta.json");
   EXPECT_EQ(load_error(), meta + ": no such file");
@@ -223,7 +239,8 @@ TEST_F(RecordingFiles, MetaWriteReadsBackEveryKeyAndEscapesStrings) {
   m.field = "C:\\fields\\my \"special\" field.json";  // a path with '\' and '"'
   m.camera.width_px = 800;
   m.camera.height_px = 600;
-  m.camera.center_px = {401.5, 298.1};  // 298.1 has no exact binary value: written with enough digits
+  m.camera.center_px = {401.5,
+                        298.1};  // 298.1 has no exact binary value: written with enough digits
   m.camera.radius_lut = {{0.0, 0.0}, {100.0 / 3.0, 90.0}, {250.0, 450.0}};
   m.camera.yaw_offset_deg = -2.5;
   m.camera.mirrored = true;
@@ -241,11 +258,12 @@ TEST_F(RecordingFiles, MetaWriteReadsBackEveryKeyAndEscapesStrings) {
   // The text is valid JSON whose field string is the path itself (read with nlohmann directly).
   const auto json = test::read_json(p);
   EXPECT_EQ(json["field"].get<std::string>(), m.field);
-  EXPECT_EQ(test::keys_of(json), (std::vector<std::string>{"field", "camera", "robot", "initial_pose"}));
+  EXPECT_EQ(test::keys_of(json),
+            (std::vector<std::string>{"field", "camera", "robot", "initial_pose"}));
   // The robot block holds the recording contract's six keys, as it always did.
-  EXPECT_EQ(test::keys_of(json["robot"]), (std::vector<std::string>{"wheel_radius_cm", "center_to_wheel_cm",
-                                                                     "motor_angle_deg", "gear_ratio", "counts_per_rev",
-                                                                     "decoding"}));
+  EXPECT_EQ(test::keys_of(json["robot"]),
+            (std::vector<std::string>{"wheel_radius_cm", "center_to_wheel_cm", "motor_angle_deg",
+                                      "gear_ratio", "counts_per_rev", "decoding"}));
   const RecordingMeta r = read_meta(p);
   EXPECT_EQ(r.field, m.field);
   EXPECT_TRUE(r.camera == m.camera);
@@ -303,7 +321,9 @@ TEST_F(RecordingFiles, AnExistingRecordingIsRefusedUnlessToldAndThenCleanedOut) 
   std::ofstream(other / "notes.txt") << "mine";
   RecordingOptions over;
   over.overwrite = true;
-  EXPECT_NE(test::error_of([&] { RecordingWriter w(other, meta_, false, over); }).find("holds no recording"),
+  EXPECT_NE(test::error_of([&] {
+              RecordingWriter w(other, meta_, false, over);
+            }).find("holds no recording"),
             std::string::npos);
   EXPECT_TRUE(fs::exists(other / "notes.txt"));
   fs::remove_all(other);
@@ -323,7 +343,10 @@ TEST_F(RecordingFiles, AnExistingRecordingIsRefusedUnlessToldAndThenCleanedOut) 
   // An empty directory is a new one.
   const fs::path empty = dir_.string() + "_empty";
   fs::create_directories(empty);
-  EXPECT_NO_THROW({ RecordingWriter w(empty, meta_, false); w.close(); });
+  EXPECT_NO_THROW({
+    RecordingWriter w(empty, meta_, false);
+    w.close();
+  });
   fs::remove_all(empty);
 }
 
@@ -354,7 +377,8 @@ TEST_F(RecordingFiles, AFailingWriteStopsTheRecordingWithWholeRowsOnly) {
     }
   }
   std::string frame_error = test::error_of([&] {
-    w.add_frame(1.0, cv::Mat(meta_.camera.height_px, meta_.camera.width_px, CV_8UC3, cv::Scalar(1, 2, 3)));
+    w.add_frame(
+        1.0, cv::Mat(meta_.camera.height_px, meta_.camera.width_px, CV_8UC3, cv::Scalar(1, 2, 3)));
   });
   ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &old), 0);
   std::signal(SIGXFSZ, previous);
@@ -378,7 +402,10 @@ TEST_F(RecordingFiles, MetaEmbedsTheFieldAndReplaysWithoutItsFile) {
   RecordingMeta m = meta_;
   m.field = "fields/does-not-exist.json";
   m.field_geometry = load_field("fira-robosot").spec;
-  { RecordingWriter w(dir_, m, false); w.close(); }
+  {
+    RecordingWriter w(dir_, m, false);
+    w.close();
+  }
   const Recording r = load_recording(dir_);
   ASSERT_TRUE(r.meta.field_geometry.has_value());
   EXPECT_TRUE(*r.meta.field_geometry == *m.field_geometry);
@@ -388,16 +415,24 @@ TEST_F(RecordingFiles, MetaEmbedsTheFieldAndReplaysWithoutItsFile) {
   fs::remove_all(dir_);
   RecordingMeta old = meta_;
   old.field = "my-field.json";
-  { RecordingWriter w(dir_, old, false); w.close(); }
+  {
+    RecordingWriter w(dir_, old, false);
+    w.close();
+  }
   fs::copy_file(resolve_data_file("fields", "fira-robosot"), dir_ / "my-field.json");
   EXPECT_EQ(recording_field(load_recording(dir_)).fingerprint(), f.fingerprint());
   // The initial pose must be on the carpet (100 cm margin).
   fs::remove_all(dir_);
   RecordingMeta far = m;
   far.initial_pose = Pose2{1e9, 100.0, 0.0};
-  { RecordingWriter w(dir_, far, false); w.close(); }
+  {
+    RecordingWriter w(dir_, far, false);
+    w.close();
+  }
   const std::string e = test::error_of([&] { (void)load_recording(dir_); });
-  EXPECT_NE(e.find("meta.json:initial_pose.x_cm: must lie on the carpet of field 'fira-robosot'"), std::string::npos) << e;
+  EXPECT_NE(e.find("meta.json:initial_pose.x_cm: must lie on the carpet of field 'fira-robosot'"),
+            std::string::npos)
+      << e;
 }
 
 TEST(ErrorSummary, HandComputed) {

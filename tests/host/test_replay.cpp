@@ -25,7 +25,9 @@ namespace fs = std::filesystem;
 TEST(Replay, RecordedSimulationReplaysLikeTheLiveRun) {
   const std::uint64_t seed = 21;
   std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
-  const fs::path dir = fs::temp_directory_path() / ("omniloc_test_replay_" + std::to_string(::getpid()) + "_" + std::to_string(seed));
+  const fs::path dir =
+      fs::temp_directory_path() /
+      ("omniloc_test_replay_" + std::to_string(::getpid()) + "_" + std::to_string(seed));
   fs::remove_all(dir);
   const FieldGeometry field = load_field("fira-robosot");
   const CameraModel camera = load_camera("default");
@@ -51,8 +53,10 @@ TEST(Replay, RecordedSimulationReplaysLikeTheLiveRun) {
   // The database through the cache helper: built and saved once, then loaded.
   const fs::path cache = dir / "cache" / feature_db_cache_name(field, camera);
   std::string log1, log2;
-  const FeatureDb built = load_or_build_feature_db(field, camera, cache, [&](const std::string& s) { log1 = s; });
-  const FeatureDb db = load_or_build_feature_db(field, camera, cache, [&](const std::string& s) { log2 = s; });
+  const FeatureDb built =
+      load_or_build_feature_db(field, camera, cache, [&](const std::string& s) { log1 = s; });
+  const FeatureDb db =
+      load_or_build_feature_db(field, camera, cache, [&](const std::string& s) { log2 = s; });
   EXPECT_NE(log1.find("built and saved"), std::string::npos) << log1;
   EXPECT_NE(log2.find("loaded from"), std::string::npos) << log2;
   EXPECT_EQ(built.features, db.features);
@@ -62,7 +66,8 @@ TEST(Replay, RecordedSimulationReplaysLikeTheLiveRun) {
   std::ofstream(notes) << "my notes\n";
   EXPECT_THROW((void)load_or_build_feature_db(field, camera, notes, {}), std::runtime_error);
   EXPECT_EQ(fs::file_size(notes), 9u) << "the file was overwritten";
-  EXPECT_THROW((void)load_or_build_feature_db(field, camera, dir, {}), std::runtime_error) << "a directory";
+  EXPECT_THROW((void)load_or_build_feature_db(field, camera, dir, {}), std::runtime_error)
+      << "a directory";
   {
     std::fstream damage(cache, std::ios::binary | std::ios::in | std::ios::out);
     damage.seekp(1000);
@@ -95,18 +100,22 @@ TEST(Replay, RecordedSimulationReplaysLikeTheLiveRun) {
   for (std::size_t k = 0; k < r.poses.size(); ++k) {
     if (r.poses[k].source == PoseSource::kNone) continue;
     ASSERT_EQ(rec.truth[k].t_ms, r.poses[k].t_ms);
-    e.push_back(std::hypot(r.poses[k].pose.x_cm - rec.truth[k].pose.x_cm, r.poses[k].pose.y_cm - rec.truth[k].pose.y_cm));
+    e.push_back(std::hypot(r.poses[k].pose.x_cm - rec.truth[k].pose.x_cm,
+                           r.poses[k].pose.y_cm - rec.truth[k].pose.y_cm));
   }
   std::sort(e.begin(), e.end());
   EXPECT_EQ(r.position_error_cm->count, e.size());
   EXPECT_NEAR(r.position_error_cm->max, e.back(), 1e-9);
-  std::printf("replay: %zu poses, position error mean %.2f median %.2f p95 %.2f max %.2f cm; yaw max %.2f deg\n",
-              r.poses.size(), r.position_error_cm->mean, r.position_error_cm->median, r.position_error_cm->p95,
-              r.position_error_cm->max, r.yaw_error_deg->max);
+  std::printf(
+      "replay: %zu poses, position error mean %.2f median %.2f p95 %.2f max %.2f cm; yaw max %.2f "
+      "deg\n",
+      r.poses.size(), r.position_error_cm->mean, r.position_error_cm->median,
+      r.position_error_cm->p95, r.position_error_cm->max, r.yaw_error_deg->max);
   EXPECT_LT(r.position_error_cm->mean, 3.0);
   EXPECT_LT(r.position_error_cm->max, 15.0);
   EXPECT_LT(r.yaw_error_deg->max, 1.0);
-  EXPECT_LE(r.poses_without_fix, 3u);  // the first frame (t = 5 ms) gives the fix at the first window
+  EXPECT_LE(r.poses_without_fix,
+            3u);  // the first frame (t = 5 ms) gives the fix at the first window
 
   // poses.csv written and read back.
   {
@@ -127,9 +136,11 @@ std::string read_text(const fs::path& p) {
   return os.str();
 }
 
-/// Runs `omniloc replay ARGS` as a child process (the program users run), stdout and stderr to files.
+/// Runs `omniloc replay ARGS` as a child process (the program users run), stdout and stderr to
+/// files.
 int run_replay_command(const std::string& args, const fs::path& out, const fs::path& err) {
-  const std::string cmd = std::string(OMNILOC_CLI_PATH) + " replay " + args + " >" + out.string() + " 2>" + err.string();
+  const std::string cmd = std::string(OMNILOC_CLI_PATH) + " replay " + args + " >" + out.string() +
+                          " 2>" + err.string();
   const int status = std::system(cmd.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
@@ -140,7 +151,8 @@ int run_replay_command(const std::string& args, const fs::path& out, const fs::p
 TEST(ReplayCommand, WritesTheLibrarysPosesAndNamesABadLine) {
   const std::uint64_t seed = 22;
   std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
-  const fs::path dir = fs::temp_directory_path() / ("omniloc_test_replay_cmd_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("omniloc_test_replay_cmd_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   const FieldGeometry field = load_field("fira-robosot");
   const CameraModel camera = load_camera("default");
@@ -161,9 +173,10 @@ TEST(ReplayCommand, WritesTheLibrarysPosesAndNamesABadLine) {
   ASSERT_TRUE(lib.position_error_cm.has_value());
 
   const std::string common = " --db " + db_file.string();
-  ASSERT_EQ(run_replay_command((dir / "rec").string() + " --out " + (dir / "poses.csv").string() + common,
-                               dir / "stdout.txt", dir / "stderr.txt"),
-            0)
+  ASSERT_EQ(
+      run_replay_command((dir / "rec").string() + " --out " + (dir / "poses.csv").string() + common,
+                         dir / "stdout.txt", dir / "stderr.txt"),
+      0)
       << read_text(dir / "stderr.txt");
   const auto poses = read_poses_csv(dir / "poses.csv");
   test::expect_same_poses(poses, lib.poses);
@@ -173,7 +186,8 @@ TEST(ReplayCommand, WritesTheLibrarysPosesAndNamesABadLine) {
   std::snprintf(expected, sizeof expected, "mean %7.2f  median %7.2f", lib.position_error_cm->mean,
                 lib.position_error_cm->median);
   EXPECT_NE(out.find(std::string("position error   ") + expected), std::string::npos) << out;
-  std::printf("omniloc replay: %zu poses equal the library's; summary: %s\n", poses.size(), expected);
+  std::printf("omniloc replay: %zu poses equal the library's; summary: %s\n", poses.size(),
+              expected);
 
   // Line 5 of encoders.csv (the header is line 1) made unreadable.
   const fs::path enc = dir / "rec" / "encoders.csv";
@@ -187,7 +201,9 @@ TEST(ReplayCommand, WritesTheLibrarysPosesAndNamesABadLine) {
     std::ofstream o(enc);
     for (const auto& l : lines) o << l << "\n";
   }
-  EXPECT_EQ(run_replay_command((dir / "rec").string() + common, dir / "stdout.txt", dir / "stderr.txt"), 1);
+  EXPECT_EQ(
+      run_replay_command((dir / "rec").string() + common, dir / "stdout.txt", dir / "stderr.txt"),
+      1);
   const std::string err = read_text(dir / "stderr.txt");
   EXPECT_NE(err.find(enc.string() + ":5:"), std::string::npos) << err;
   std::printf("malformed line refused: %s", err.c_str());
@@ -201,14 +217,15 @@ std::uintmax_t directory_bytes(const fs::path& dir) {
   return n;
 }
 
-// Issue 16 item 8: a PNG recording costs ~12-22 MB/s. The JPEG frame store (the default, quality 95)
-// must cost at most 3 MB/s at 30 Hz, 640 x 480, with the replayed poses within 0.5 cm of the PNG
-// recording's. The same simulated run (same seed, same rendered frames) is recorded both ways and
-// replayed; sizes are of the whole directory (frames, CSVs, meta.json) per second of recording.
+// Issue 16 item 8: a PNG recording costs ~12-22 MB/s. The JPEG frame store (the default, quality
+// 95) must cost at most 3 MB/s at 30 Hz, 640 x 480, with the replayed poses within 0.5 cm of the
+// PNG recording's. The same simulated run (same seed, same rendered frames) is recorded both ways
+// and replayed; sizes are of the whole directory (frames, CSVs, meta.json) per second of recording.
 TEST(FrameStore, JpegCostsAtMost3MBPerSecondAndReplaysWithinHalfACentimetreOfPng) {
   const std::uint64_t seed = 8;
   std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
-  const fs::path dir = fs::temp_directory_path() / ("omniloc_test_framestore_" + std::to_string(::getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("omniloc_test_framestore_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   const FieldGeometry field = load_field("fira-robosot");
   const CameraModel camera = load_camera("default");
@@ -233,7 +250,8 @@ TEST(FrameStore, JpegCostsAtMost3MBPerSecondAndReplaysWithinHalfACentimetreOfPng
   const Recording jpeg = load_recording(dir / "jpeg");
   ASSERT_EQ(png.windows.size(), jpeg.windows.size());
   ASSERT_EQ(png.frames.size(), jpeg.frames.size());
-  const double seconds = (png.windows.back().t_end_ms - png.windows.front().t_end_ms + 10.0) / 1000.0;
+  const double seconds =
+      (png.windows.back().t_end_ms - png.windows.front().t_end_ms + 10.0) / 1000.0;
   const double png_mb_s = static_cast<double>(directory_bytes(dir / "png")) / 1e6 / seconds;
   const double jpeg_mb_s = static_cast<double>(directory_bytes(dir / "jpeg")) / 1e6 / seconds;
   const FeatureDb db = build_feature_db(field, camera, GridSpec::covering(field, 10.0));
@@ -242,15 +260,20 @@ TEST(FrameStore, JpegCostsAtMost3MBPerSecondAndReplaysWithinHalfACentimetreOfPng
   ASSERT_EQ(a.poses.size(), b.poses.size());
   double worst_cm = 0.0, worst_yaw = 0.0;
   for (std::size_t i = 0; i < a.poses.size(); ++i) {
-    worst_cm = std::max(worst_cm, std::hypot(a.poses[i].pose.x_cm - b.poses[i].pose.x_cm, a.poses[i].pose.y_cm - b.poses[i].pose.y_cm));
-    worst_yaw = std::max(worst_yaw, std::abs(wrap_deg(a.poses[i].pose.yaw_deg - b.poses[i].pose.yaw_deg)));
+    worst_cm = std::max(worst_cm, std::hypot(a.poses[i].pose.x_cm - b.poses[i].pose.x_cm,
+                                             a.poses[i].pose.y_cm - b.poses[i].pose.y_cm));
+    worst_yaw =
+        std::max(worst_yaw, std::abs(wrap_deg(a.poses[i].pose.yaw_deg - b.poses[i].pose.yaw_deg)));
   }
-  std::printf("%.2f s at 30 Hz 640 x 480 (%zu frames): PNG %.2f MB/s, JPEG q95 %.2f MB/s (%.1fx smaller); "
-              "replayed poses JPEG vs PNG: max %.3f cm, %.3f deg over %zu poses\n",
-              seconds, png.frames.size(), png_mb_s, jpeg_mb_s, png_mb_s / jpeg_mb_s, worst_cm, worst_yaw, a.poses.size());
+  std::printf(
+      "%.2f s at 30 Hz 640 x 480 (%zu frames): PNG %.2f MB/s, JPEG q95 %.2f MB/s (%.1fx smaller); "
+      "replayed poses JPEG vs PNG: max %.3f cm, %.3f deg over %zu poses\n",
+      seconds, png.frames.size(), png_mb_s, jpeg_mb_s, png_mb_s / jpeg_mb_s, worst_cm, worst_yaw,
+      a.poses.size());
   ASSERT_TRUE(a.position_error_cm && b.position_error_cm);
-  std::printf("error vs truth: PNG mean %.2f max %.2f cm, JPEG mean %.2f max %.2f cm\n", a.position_error_cm->mean,
-              a.position_error_cm->max, b.position_error_cm->mean, b.position_error_cm->max);
+  std::printf("error vs truth: PNG mean %.2f max %.2f cm, JPEG mean %.2f max %.2f cm\n",
+              a.position_error_cm->mean, a.position_error_cm->max, b.position_error_cm->mean,
+              b.position_error_cm->max);
   EXPECT_LE(jpeg_mb_s, 3.0);
   EXPECT_LE(worst_cm, 0.5);
   EXPECT_GT(png_mb_s, 3.0) << "the PNG store is the one that was too large";

@@ -20,8 +20,8 @@
 #include "omniloc/config_reader.hpp"
 #include "omniloc/feature_db.hpp"
 #include "omniloc/goals.hpp"
-#include "omniloc/locate.hpp"
 #include "omniloc/localizer.hpp"
+#include "omniloc/locate.hpp"
 #include "omniloc/vision.hpp"
 #include "omniloc_sim/renderer.hpp"
 
@@ -47,15 +47,21 @@ TEST(RealisticRoundTrip, CalibratedOnTheCentreSpotThenLocatedElsewhere) {
   std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
 
   // Calibrate from one frame: the robot near a penalty mark, heading 30 deg known.
-  const CalibrationFrame kickoff{renderer.render({150.0, 375.0, 30.0}, sim::realistic(seed)), "penalty", {150.0, 375.0}, 30.0};
+  const CalibrationFrame kickoff{
+      renderer.render({150.0, 375.0, 30.0}, sim::realistic(seed)), "penalty", {150.0, 375.0}, 30.0};
   const CalibrationResult cal = calibrate_camera({kickoff}, field);
-  const config::Document doc = config::parse_json_text(calibrated_camera_json(cal, {kickoff}), "calibrated.json");
+  const config::Document doc =
+      config::parse_json_text(calibrated_camera_json(cal, {kickoff}), "calibrated.json");
   const CameraModel camera = camera_from_json(doc.root());
-  std::printf("calibrated: centre (%.2f, %.2f) px (true (%.2f, %.2f)), rms %.2f px, view %.0f px, goal at x max '%s'\n",
-              camera.center_px.x(), camera.center_px.y(), truth.centre_px.x(), truth.centre_px.y(), cal.rms_px,
-              camera.view_radius_px(), camera.vision.goal_colour_at_x_max.c_str());
+  std::printf(
+      "calibrated: centre (%.2f, %.2f) px (true (%.2f, %.2f)), rms %.2f px, view %.0f px, goal at "
+      "x max '%s'\n",
+      camera.center_px.x(), camera.center_px.y(), truth.centre_px.x(), truth.centre_px.y(),
+      cal.rms_px, camera.view_radius_px(), camera.vision.goal_colour_at_x_max.c_str());
   ASSERT_EQ(camera.vision.goal_colour_at_x_max, "blue");  // the renderer's preset: blue at x = max
-  std::printf("calibrated colours: %s\n", nlohmann::json::parse(calibrated_camera_json(cal, {kickoff})).at("vision").dump().c_str());
+  std::printf(
+      "calibrated colours: %s\n",
+      nlohmann::json::parse(calibrated_camera_json(cal, {kickoff})).at("vision").dump().c_str());
 
   const FeatureDb db = build_feature_db(field, camera, GridSpec::covering(field, 10.0));
   const LocalizerConfig config;
@@ -65,26 +71,34 @@ TEST(RealisticRoundTrip, CalibratedOnTheCentreSpotThenLocatedElsewhere) {
   std::vector<Outcome> known, unknown;
   for (int i = 0; i < 12; ++i) {
     const Pose2 pose{ux(rng), uy(rng), uyaw(rng)};
-    const cv::Mat img = renderer.render(pose, sim::realistic(seed + 1 + static_cast<std::uint64_t>(i)));
+    const cv::Mat img =
+        renderer.render(pose, sim::realistic(seed + 1 + static_cast<std::uint64_t>(i)));
     ExtractionReport er;
-    const BearingScan bearings = LineExtractor(camera).extract(img, config.scan_rays_per_degree, &er);
+    const BearingScan bearings =
+        LineExtractor(camera).extract(img, config.scan_rays_per_degree, &er);
     ASSERT_TRUE(er.usable) << er.reason;
     // The frame as Localizer::on_image sees it: the scan and the goal observation.
     const GoalObservation seen = observe_goals(img, camera, field, goals);
     // Heading known (the gyro): the position.
-    const SingleFrameResult k = locate_frame(config, field, camera, db, bearings, pose.yaw_deg, &seen);
-    known.push_back({std::hypot(k.pose.x_cm - pose.x_cm, k.pose.y_cm - pose.y_cm), k.accepted, true});
+    const SingleFrameResult k =
+        locate_frame(config, field, camera, db, bearings, pose.yaw_deg, &seen);
+    known.push_back(
+        {std::hypot(k.pose.x_cm - pose.x_cm, k.pose.y_cm - pose.y_cm), k.accepted, true});
     // Heading unknown: the goals must pick the pose over its twin.
-    const SingleFrameResult u = locate_frame(config, field, camera, db, bearings, std::nullopt, &seen);
+    const SingleFrameResult u =
+        locate_frame(config, field, camera, db, bearings, std::nullopt, &seen);
     const double err = std::hypot(u.pose.x_cm - pose.x_cm, u.pose.y_cm - pose.y_cm);
     const double twin_err = std::hypot(2 * field.centre_cm().x() - u.pose.x_cm - pose.x_cm,
                                        2 * field.centre_cm().y() - u.pose.y_cm - pose.y_cm);
     unknown.push_back({err, u.accepted, err <= twin_err});
-    std::printf("(%5.1f, %5.1f, %6.1f): rays %4d, crossings %4d | yaw known: error %5.1f cm, E %.2f %s | yaw unknown: "
-                "error %6.1f cm, yaw %6.1f, E %.2f %s%s (%s)\n",
-                pose.x_cm, pose.y_cm, pose.yaw_deg, er.rays_seen, er.crossings, known.back().error_cm, k.match.error,
-                k.accepted ? "accepted" : "refused", err, u.pose.yaw_deg, u.match.error, u.accepted ? "accepted" : "refused",
-                u.ambiguous ? ", ambiguous" : "", u.goal_choice.reason.c_str());
+    std::printf(
+        "(%5.1f, %5.1f, %6.1f): rays %4d, crossings %4d | yaw known: error %5.1f cm, E %.2f %s | "
+        "yaw unknown: "
+        "error %6.1f cm, yaw %6.1f, E %.2f %s%s (%s)\n",
+        pose.x_cm, pose.y_cm, pose.yaw_deg, er.rays_seen, er.crossings, known.back().error_cm,
+        k.match.error, k.accepted ? "accepted" : "refused", err, u.pose.yaw_deg, u.match.error,
+        u.accepted ? "accepted" : "refused", u.ambiguous ? ", ambiguous" : "",
+        u.goal_choice.reason.c_str());
   }
   auto summary = [](const char* what, const std::vector<Outcome>& v) {
     std::vector<double> accepted_err;
@@ -97,8 +111,10 @@ TEST(RealisticRoundTrip, CalibratedOnTheCentreSpotThenLocatedElsewhere) {
       accepted_err.push_back(o.error_cm);
       if (o.right_twin) worst = std::max(worst, o.error_cm);  // a wrong twin is counted apart
     }
-    std::printf("%s: %d of %zu accepted, median error %.1f cm, worst accepted on the right side %.1f cm, %d wrong twin\n", what, accepted,
-                v.size(), median(accepted_err), worst, wrong_twin);
+    std::printf(
+        "%s: %d of %zu accepted, median error %.1f cm, worst accepted on the right side %.1f cm, "
+        "%d wrong twin\n",
+        what, accepted, v.size(), median(accepted_err), worst, wrong_twin);
     return std::tuple{accepted, median(accepted_err), worst, wrong_twin};
   };
   const auto [k_acc, k_med, k_worst, k_twin] = summary("heading known", known);
@@ -106,7 +122,7 @@ TEST(RealisticRoundTrip, CalibratedOnTheCentreSpotThenLocatedElsewhere) {
   // Heading unknown (no gyro, the symmetric field): the lines and the goal colours place the robot.
   EXPECT_GE(u_acc, 10);
   EXPECT_LT(u_med, 8.0);
-  EXPECT_LT(u_worst, 15.0);   // an accepted frame on the right side is never far off ...
+  EXPECT_LT(u_worst, 15.0);  // an accepted frame on the right side is never far off ...
   // ... and never the twin, but for one known failure (2026-12-06, issue [1/4]'s note): the frame
   // at (270, 215, -175) is accepted 225 cm off by the heading-unknown search, at E 7.20 below
   // E_TH 8, while the true pose scores E 6.7: the search misses the better minimum. The frame is

@@ -1,17 +1,17 @@
 // The simulator's programs run as a user runs them (child processes): `omnilocd-sim` (the robot's
 // daemon on the simulated robot: Verilated board, rendered camera) publishes poses that match the
-// simulator's truth and records a run that `omniloc replay` (the robot's tool) replays; `omniloc-sim
-// demo` writes errors.csv and exits 0 when it fixed, 1 when it cannot (no camera). Truth comes from
-// the simulator's truth.csv, not from the daemon.
+// simulator's truth and records a run that `omniloc replay` (the robot's tool) replays;
+// `omniloc-sim demo` writes errors.csv and exits 0 when it fixed, 1 when it cannot (no camera).
+// Truth comes from the simulator's truth.csv, not from the daemon.
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
-#include <csignal>
+#include <sys/wait.h>
 #include <unistd.h>
+#include <csignal>
 
 #include <algorithm>
 #include <cmath>
@@ -19,8 +19,8 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
-#include <sstream>
 #include <regex>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -74,10 +74,11 @@ TEST(OmnilocdSim, PublishesPosesThatMatchTruthAndRecordsARunThatReplays) {
   ASSERT_GT(rx.port(), 0);
   const fs::path rec = dir.path / "rec";
   std::string out;
-  const int rc = run(std::string(OMNILOCD_SIM_PATH) + " --trajectory circle --seed=" + std::to_string(seed) +
-                         " --duration-s 2 --status-period-s 0 --udp-port " + std::to_string(rx.port()) +
-                         " --record-dir " + rec.string(),
-                     dir.path / "daemon.log", out);
+  const int rc =
+      run(std::string(OMNILOCD_SIM_PATH) + " --trajectory circle --seed=" + std::to_string(seed) +
+              " --duration-s 2 --status-period-s 0 --udp-port " + std::to_string(rx.port()) +
+              " --record-dir " + rec.string(),
+          dir.path / "daemon.log", out);
   ASSERT_EQ(rc, 0) << out;
   EXPECT_NE(out.find("stopped (duration)"), std::string::npos) << out;
 
@@ -86,7 +87,8 @@ TEST(OmnilocdSim, PublishesPosesThatMatchTruthAndRecordsARunThatReplays) {
   ASSERT_LE(grams.size(), 201u);
   const Recording recording = load_recording(rec);
   EXPECT_EQ(recording.windows.size(), grams.size()) << "one datagram per window, all recorded";
-  EXPECT_EQ(recording.truth.size(), recording.windows.size()) << "truth.csv from the simulator, a row a window";
+  EXPECT_EQ(recording.truth.size(), recording.windows.size())
+      << "truth.csv from the simulator, a row a window";
   EXPECT_GE(recording.frames.size(), 100u) << "60 Hz rendered camera";
   int fixed = 0;
   double max_err_cm = 0.0;
@@ -95,18 +97,20 @@ TEST(OmnilocdSim, PublishesPosesThatMatchTruthAndRecordsARunThatReplays) {
     const std::string status = grams[i]["status"];
     if (status != "ok") continue;
     // A datagram's t_ms has 3 decimals, truth.csv's 6: the last window's may round past its row.
-    const double t_ms = std::clamp(grams[i]["t_ms"].get<double>(), recording.truth.front().t_ms - 1e-3,
-                                   recording.truth.back().t_ms);
+    const double t_ms =
+        std::clamp(grams[i]["t_ms"].get<double>(), recording.truth.front().t_ms - 1e-3,
+                   recording.truth.back().t_ms);
     const auto truth = truth_at(recording.truth, std::max(t_ms, recording.truth.front().t_ms));
-    ASSERT_TRUE(truth.has_value()) << std::fixed << "datagram " << i << " t_ms " << grams[i]["t_ms"].get<double>()
-                                   << " outside truth " << recording.truth.front().t_ms << " .. "
-                                   << recording.truth.back().t_ms;
+    ASSERT_TRUE(truth.has_value())
+        << std::fixed << "datagram " << i << " t_ms " << grams[i]["t_ms"].get<double>()
+        << " outside truth " << recording.truth.front().t_ms << " .. "
+        << recording.truth.back().t_ms;
     max_err_cm = std::max(max_err_cm, std::hypot(grams[i]["x_cm"].get<double>() - truth->x_cm,
                                                  grams[i]["y_cm"].get<double>() - truth->y_cm));
     ++fixed;
   }
-  std::printf("%zu datagrams, %d with status ok, max error %.2f cm against the simulator's truth\n", grams.size(),
-              fixed, max_err_cm);
+  std::printf("%zu datagrams, %d with status ok, max error %.2f cm against the simulator's truth\n",
+              grams.size(), fixed, max_err_cm);
   EXPECT_GE(fixed, 150) << "a fix within the first half second";
   EXPECT_LT(max_err_cm, 10.0);
 
@@ -121,18 +125,24 @@ TEST(OmnilocdSim, PublishesPosesThatMatchTruthAndRecordsARunThatReplays) {
     for (std::size_t k = i > 2 ? i - 2 : 0; k < std::min(grams.size(), i + 3); ++k)
       if (std::fabs(grams[k]["t_ms"].get<double>() - b.t_ms) < 1e-3) g = &grams[k];
     if (g == nullptr || dt_s <= 0) continue;
-    const double yaw = (a.pose.yaw_deg + angle_diff_deg(b.pose.yaw_deg, a.pose.yaw_deg) / 2.0) * kPi / 180.0;
+    const double yaw =
+        (a.pose.yaw_deg + angle_diff_deg(b.pose.yaw_deg, a.pose.yaw_deg) / 2.0) * kPi / 180.0;
     const double vxf = (b.pose.x_cm - a.pose.x_cm) / dt_s, vyf = (b.pose.y_cm - a.pose.y_cm) / dt_s;
-    const double vx = std::cos(yaw) * vxf + std::sin(yaw) * vyf, vy = -std::sin(yaw) * vxf + std::cos(yaw) * vyf;
-    v_err.push_back(std::hypot((*g)["vx_cm_s"].get<double>() - vx, (*g)["vy_cm_s"].get<double>() - vy));
-    w_err.push_back(std::fabs((*g)["omega_deg_s"].get<double>() - angle_diff_deg(b.pose.yaw_deg, a.pose.yaw_deg) / dt_s));
+    const double vx = std::cos(yaw) * vxf + std::sin(yaw) * vyf,
+                 vy = -std::sin(yaw) * vxf + std::cos(yaw) * vyf;
+    v_err.push_back(
+        std::hypot((*g)["vx_cm_s"].get<double>() - vx, (*g)["vy_cm_s"].get<double>() - vy));
+    w_err.push_back(std::fabs((*g)["omega_deg_s"].get<double>() -
+                              angle_diff_deg(b.pose.yaw_deg, a.pose.yaw_deg) / dt_s));
   }
   ASSERT_GE(v_err.size(), 150u);
   std::sort(v_err.begin(), v_err.end());
   std::sort(w_err.begin(), w_err.end());
-  std::printf("velocity vs truth over %zu windows: median %.2f cm/s, p95 %.2f cm/s; yaw rate median %.2f deg/s, p95 %.2f\n",
-              v_err.size(), v_err[v_err.size() / 2], v_err[v_err.size() * 95 / 100], w_err[w_err.size() / 2],
-              w_err[w_err.size() * 95 / 100]);
+  std::printf(
+      "velocity vs truth over %zu windows: median %.2f cm/s, p95 %.2f cm/s; yaw rate median %.2f "
+      "deg/s, p95 %.2f\n",
+      v_err.size(), v_err[v_err.size() / 2], v_err[v_err.size() * 95 / 100],
+      w_err[w_err.size() / 2], w_err[w_err.size() * 95 / 100]);
   EXPECT_LT(v_err[v_err.size() / 2], 5.0);
   EXPECT_LT(w_err[w_err.size() / 2], 2.0);
   // The host clocks: monotonic and wall time go forward with the datagrams.
@@ -142,9 +152,10 @@ TEST(OmnilocdSim, PublishesPosesThatMatchTruthAndRecordsARunThatReplays) {
   }
 
   // The robot's own replay tool reads what the simulated daemon recorded, and scores it on truth.
-  const int replay_rc = run(std::string(OMNILOC_CLI_PATH) + " replay " + rec.string() + " --out " +
-                                (dir.path / "poses.csv").string() + " --db " + (dir.path / "features.db").string(),
-                            dir.path / "replay.log", out);
+  const int replay_rc =
+      run(std::string(OMNILOC_CLI_PATH) + " replay " + rec.string() + " --out " +
+              (dir.path / "poses.csv").string() + " --db " + (dir.path / "features.db").string(),
+          dir.path / "replay.log", out);
   ASSERT_EQ(replay_rc, 0) << out;
   EXPECT_EQ(read_csv(dir.path / "poses.csv").size(), recording.windows.size());
 }
@@ -159,20 +170,25 @@ TEST(OmnilocdSim, RealisticClocksAreFollowedAndRecorded) {
   const fs::path rec = dir.path / "rec";
   std::string out;
   const double ppm = 200.0;
-  const int rc = run(std::string(OMNILOCD_SIM_PATH) + " --trajectory circle --seed=4 --duration-s 7 --board-drift-ppm " +
-                         "200 --udp-port " + std::to_string(rx.port()) + " --record-dir " + rec.string(),
-                     dir.path / "daemon.log", out);
+  const int rc =
+      run(std::string(OMNILOCD_SIM_PATH) +
+              " --trajectory circle --seed=4 --duration-s 7 --board-drift-ppm " +
+              "200 --udp-port " + std::to_string(rx.port()) + " --record-dir " + rec.string(),
+          dir.path / "daemon.log", out);
   ASSERT_EQ(rc, 0) << out;
   EXPECT_NE(out.find("board crystal +200 ppm"), std::string::npos) << out;
-  EXPECT_NE(out.find(" clk_drift=-200."), std::string::npos) << out;  // host rate against the board's
+  EXPECT_NE(out.find(" clk_drift=-200."), std::string::npos)
+      << out;  // host rate against the board's
   const auto rows = read_csv(rec / "clock.csv");
   ASSERT_GE(rows.size(), 650u);  // read_csv skips the header
   // Window seq s ends at board cycle s x 120000 (10 ms), host time 10 s / (1 + ppm 1e-6).
   std::vector<double> err;
   double anchor_err = 0.0;
-  const double anchor = std::stod(rows[0][2]) - std::stod(rows[0][1]);  // the first-window anchor of before
+  const double anchor =
+      std::stod(rows[0][2]) - std::stod(rows[0][1]);  // the first-window anchor of before
   for (std::size_t i = 0; i < rows.size(); ++i) {
-    const double seq = std::stod(rows[i][0]), board_ms = std::stod(rows[i][1]), t_ms = std::stod(rows[i][3]);
+    const double seq = std::stod(rows[i][0]), board_ms = std::stod(rows[i][1]),
+                 t_ms = std::stod(rows[i][3]);
     const double truth = 10.0 * seq / (1.0 + ppm * 1e-6);
     EXPECT_EQ(rows[i][7], "1") << "no reset";
     if (truth < 5000.0) continue;
@@ -180,8 +196,11 @@ TEST(OmnilocdSim, RealisticClocksAreFollowedAndRecorded) {
     anchor_err = std::max(anchor_err, std::fabs(board_ms + anchor - truth));
   }
   std::sort(err.begin(), err.end());
-  std::printf("window time vs host truth after 5 s: p50 %.3f ms, max %.3f ms (first-window anchor: max %.3f ms); "
-              "model drift %s ppm\n", err[err.size() / 2], err.back(), anchor_err, rows.back()[5].c_str());
+  std::printf(
+      "window time vs host truth after 5 s: p50 %.3f ms, max %.3f ms (first-window anchor: max "
+      "%.3f ms); "
+      "model drift %s ppm\n",
+      err[err.size() / 2], err.back(), anchor_err, rows.back()[5].c_str());
   EXPECT_NEAR(std::stod(rows.back()[5]), -ppm, 5.0);
   // The UART's transfer of a window (~0.3 ms) and the board's 100 us read slices are latency the
   // lower envelope cannot see: a bias under a millisecond.
@@ -191,7 +210,8 @@ TEST(OmnilocdSim, RealisticClocksAreFollowedAndRecorded) {
   ASSERT_GE(frames.size(), 100u);
   for (std::size_t i = 0; i < frames.size(); ++i) {
     EXPECT_EQ(frames[i][1], "latency");
-    EXPECT_NEAR(std::stod(frames[i][2]) - std::stod(frames[i][0]), 33.0, 1e-3) << "camera_latency_ms subtracted";
+    EXPECT_NEAR(std::stod(frames[i][2]) - std::stod(frames[i][0]), 33.0, 1e-3)
+        << "camera_latency_ms subtracted";
   }
 }
 
@@ -210,9 +230,11 @@ TEST(OmnilocdSim, SigkillLeavesAReplayableRecording) {
   omniloc::test::UdpReceiver rx;
   const fs::path rec = dir.path / "rec";
   const fs::path pid_file = dir.path / "pid";
-  const std::string cmd = std::string(OMNILOCD_SIM_PATH) + " --trajectory circle --seed=5 --status-period-s 0 --udp-port " +
+  const std::string cmd = std::string(OMNILOCD_SIM_PATH) +
+                          " --trajectory circle --seed=5 --status-period-s 0 --udp-port " +
                           std::to_string(rx.port()) + " --record-dir " + rec.string() + " >" +
-                          (dir.path / "daemon.log").string() + " 2>&1 & echo $! >" + pid_file.string();
+                          (dir.path / "daemon.log").string() + " 2>&1 & echo $! >" +
+                          pid_file.string();
   ASSERT_EQ(std::system(cmd.c_str()), 0);
   pid_t pid = 0;
   std::ifstream(pid_file) >> pid;
@@ -229,8 +251,8 @@ TEST(OmnilocdSim, SigkillLeavesAReplayableRecording) {
   ::usleep(100'000);
   ASSERT_GE(rows_before, 101u) << "the daemon did not record";
   const Recording r = load_recording(rec);
-  std::printf("killed with %zu encoder rows seen; left: %zu windows, %zu frames, %zu truth rows\n", rows_before - 1,
-              r.windows.size(), r.frames.size(), r.truth.size());
+  std::printf("killed with %zu encoder rows seen; left: %zu windows, %zu frames, %zu truth rows\n",
+              rows_before - 1, r.windows.size(), r.frames.size(), r.truth.size());
   EXPECT_GE(r.windows.size(), rows_before - 1) << "rows seen before the kill are gone";
   EXPECT_GE(r.frames.size(), 19u);
   for (std::size_t i = 0; i < r.frames.size(); ++i) EXPECT_FALSE(load_frame(r, i).empty());
@@ -238,16 +260,19 @@ TEST(OmnilocdSim, SigkillLeavesAReplayableRecording) {
   // nowhere near the build tree.
   std::string out;
   const fs::path xdg = dir.path / "xdg-cache";
-  const int replay_rc = run("XDG_CACHE_HOME=" + xdg.string() + " " + std::string(OMNILOC_CLI_PATH) + " replay " +
-                                rec.string() + " --out " + (dir.path / "poses.csv").string(),
-                            dir.path / "replay.log", out);
+  const int replay_rc =
+      run("XDG_CACHE_HOME=" + xdg.string() + " " + std::string(OMNILOC_CLI_PATH) + " replay " +
+              rec.string() + " --out " + (dir.path / "poses.csv").string(),
+          dir.path / "replay.log", out);
   ASSERT_EQ(replay_rc, 0) << out;
   EXPECT_EQ(read_csv(dir.path / "poses.csv").size(), r.windows.size());
   std::size_t cached = 0;
   for (const auto& e : fs::directory_iterator(xdg / "omniloc"))
-    cached += e.path().filename().string().starts_with("featuredb-") && e.path().extension() == ".bin";
+    cached +=
+        e.path().filename().string().starts_with("featuredb-") && e.path().extension() == ".bin";
   EXPECT_EQ(cached, 1u) << "the database cache under $XDG_CACHE_HOME/omniloc";
-  EXPECT_NE(out.find((xdg / "omniloc").string()), std::string::npos) << "the log names where it was saved: " << out;
+  EXPECT_NE(out.find((xdg / "omniloc").string()), std::string::npos)
+      << "the log names where it was saved: " << out;
 }
 
 // Issue 15.3: the control channel, driven by `omniloc ctl` and by raw datagrams while the daemon
@@ -281,9 +306,10 @@ TEST(OmnilocdSim, ControlChannelServesCommandsWhileThePosesFlow) {
   const int ctl_port = free_udp_port();
   ASSERT_GT(rx.port(), 0);
   ASSERT_GT(ctl_port, 0);
-  const std::string daemon = std::string(OMNILOCD_SIM_PATH) + " --duration-s 8 --status-period-s 0 --udp-port " +
-                             std::to_string(rx.port()) + " --control-port " + std::to_string(ctl_port) + " >" +
-                             (dir.path / "daemon.log").string() + " 2>&1 &";
+  const std::string daemon =
+      std::string(OMNILOCD_SIM_PATH) + " --duration-s 8 --status-period-s 0 --udp-port " +
+      std::to_string(rx.port()) + " --control-port " + std::to_string(ctl_port) + " >" +
+      (dir.path / "daemon.log").string() + " 2>&1 &";
   ASSERT_EQ(std::system(daemon.c_str()), 0);
   std::vector<nlohmann::json> grams;
   const auto pump = [&] {
@@ -297,11 +323,14 @@ TEST(OmnilocdSim, ControlChannelServesCommandsWhileThePosesFlow) {
     }
     return done();
   };
-  const auto last_status = [&] { return grams.empty() ? std::string() : grams.back()["status"].get<std::string>(); };
+  const auto last_status = [&] {
+    return grams.empty() ? std::string() : grams.back()["status"].get<std::string>();
+  };
   ASSERT_TRUE(wait_for([&] { return last_status() == "ok"; })) << "no fix";
   std::string out;
   const auto ctl = [&](const std::string& args) {
-    return run(std::string(OMNILOC_CLI_PATH) + " ctl --port " + std::to_string(ctl_port) + " --timeout-ms 5000 " + args,
+    return run(std::string(OMNILOC_CLI_PATH) + " ctl --port " + std::to_string(ctl_port) +
+                   " --timeout-ms 5000 " + args,
                dir.path / "ctl.log", out);
   };
   const auto reply = [&] { return nlohmann::json::parse(out.substr(0, out.find('\n'))); };
@@ -315,17 +344,20 @@ TEST(OmnilocdSim, ControlChannelServesCommandsWhileThePosesFlow) {
   const double yaw = grams.back()["yaw_deg"].get<double>();
   ASSERT_EQ(ctl("set_pose 200 150 " + std::to_string(yaw)), 0) << out;
   const auto set_seq = reply()["last_seq"].get<std::uint64_t>();
-  ASSERT_TRUE(wait_for([&] { return !grams.empty() && grams.back()["seq"].get<std::uint64_t>() > set_seq; }));
+  ASSERT_TRUE(wait_for(
+      [&] { return !grams.empty() && grams.back()["seq"].get<std::uint64_t>() > set_seq; }));
   for (const auto& g : grams)
     if (g["seq"].get<std::uint64_t>() == set_seq + 1) {
       std::printf("after set_pose: %s\n", g.dump().c_str());
-      EXPECT_LT(std::hypot(g["x_cm"].get<double>() - 200.0, g["y_cm"].get<double>() - 150.0), 3.0) << g.dump();
+      EXPECT_LT(std::hypot(g["x_cm"].get<double>() - 200.0, g["y_cm"].get<double>() - 150.0), 3.0)
+          << g.dump();
     }
 
   // relocalize: lost at once, then the global search finds the robot again.
   ASSERT_EQ(ctl("relocalize"), 0) << out;
   const auto reloc_seq = reply()["last_seq"].get<std::uint64_t>();
-  ASSERT_TRUE(wait_for([&] { return !grams.empty() && grams.back()["seq"].get<std::uint64_t>() > reloc_seq + 1; }));
+  ASSERT_TRUE(wait_for(
+      [&] { return !grams.empty() && grams.back()["seq"].get<std::uint64_t>() > reloc_seq + 1; }));
   for (const auto& g : grams)
     if (g["seq"].get<std::uint64_t>() == reloc_seq + 1) EXPECT_EQ(g["status"], "lost") << g.dump();
   EXPECT_TRUE(wait_for([&] { return last_status() == "ok"; })) << "no fix after relocalize";
@@ -347,7 +379,9 @@ TEST(OmnilocdSim, ControlChannelServesCommandsWhileThePosesFlow) {
   EXPECT_NE(out.find("X_CM"), std::string::npos) << out;
   // set_side needs to know which goal is which colour: the shipped field and camera do not say.
   EXPECT_EQ(ctl("set_side blue"), 1) << out;
-  EXPECT_NE(out.find("set_side: side: field 'fira-robosot' does not say which goal is which colour"), std::string::npos)
+  EXPECT_NE(
+      out.find("set_side: side: field 'fira-robosot' does not say which goal is which colour"),
+      std::string::npos)
       << out;
 
   // Raw requests the client would never send.
@@ -373,14 +407,18 @@ TEST(OmnilocdSim, ControlChannelServesCommandsWhileThePosesFlow) {
   }));
   pump();
   for (std::size_t i = 1; i < grams.size(); ++i) {
-    EXPECT_EQ(grams[i]["seq"].get<std::uint64_t>(), grams[i - 1]["seq"].get<std::uint64_t>() + 1) << "datagram lost";
-    EXPECT_LE(grams[i]["t_ms"].get<double>() - grams[i - 1]["t_ms"].get<double>(), 10.5) << "a window not published";
+    EXPECT_EQ(grams[i]["seq"].get<std::uint64_t>(), grams[i - 1]["seq"].get<std::uint64_t>() + 1)
+        << "datagram lost";
+    EXPECT_LE(grams[i]["t_ms"].get<double>() - grams[i - 1]["t_ms"].get<double>(), 10.5)
+        << "a window not published";
   }
-  std::printf("%zu datagrams, none missing, while 14 requests were served (%.1f s of daemon time)\n", grams.size(),
-              grams.empty() ? 0.0 : grams.back()["t_ms"].get<double>() / 1000.0);
+  std::printf(
+      "%zu datagrams, none missing, while 14 requests were served (%.1f s of daemon time)\n",
+      grams.size(), grams.empty() ? 0.0 : grams.back()["t_ms"].get<double>() / 1000.0);
   const Recording r = load_recording(rec);
   EXPECT_GE(r.windows.size(), 100u);
-  EXPECT_EQ(run(std::string(OMNILOC_CLI_PATH) + " replay " + rec.string() + " --out " + (dir.path / "poses.csv").string(),
+  EXPECT_EQ(run(std::string(OMNILOC_CLI_PATH) + " replay " + rec.string() + " --out " +
+                    (dir.path / "poses.csv").string(),
                 dir.path / "replay.log", out),
             0)
       << out;
@@ -395,13 +433,15 @@ TEST(OmnilocdSim, FullDiskStopsTheRecordingNotThePoses) {
   const fs::path rec = dir.path / "rec";
   std::string out;
   // ulimit -f counts 512-byte blocks: 40 = 20 KB per file, less than one rendered JPEG frame.
-  const int rc = run("sh -c \"trap '' XFSZ; ulimit -f 40; exec " + std::string(OMNILOCD_SIM_PATH) +
-                         " --trajectory circle --seed=6 --duration-s 2 --status-period-s 1 --udp-port " +
-                         std::to_string(rx.port()) + " --record-dir " + rec.string() + "\"",
-                     dir.path / "daemon.log", out);
+  const int rc =
+      run("sh -c \"trap '' XFSZ; ulimit -f 40; exec " + std::string(OMNILOCD_SIM_PATH) +
+              " --trajectory circle --seed=6 --duration-s 2 --status-period-s 1 --udp-port " +
+              std::to_string(rx.port()) + " --record-dir " + rec.string() + "\"",
+          dir.path / "daemon.log", out);
   ASSERT_EQ(rc, 0) << out;
   EXPECT_NE(out.find("omnilocd-sim: error: recording stopped: "), std::string::npos) << out;
-  EXPECT_NE(out.find("write failed (File too large); poses are still sent"), std::string::npos) << out;
+  EXPECT_NE(out.find("write failed (File too large); poses are still sent"), std::string::npos)
+      << out;
   EXPECT_NE(out.find("rec=stopped rec_failures=1"), std::string::npos) << out;
   EXPECT_NE(out.find("stopped (duration)"), std::string::npos) << out;
   EXPECT_NE(out.find("recording stopped on a write error"), std::string::npos) << out;
@@ -409,8 +449,8 @@ TEST(OmnilocdSim, FullDiskStopsTheRecordingNotThePoses) {
   EXPECT_GE(grams.size(), 190u) << "the pose stream went on for the whole 2 s";
   // What was recorded before the stop still reads (whole rows only).
   const Recording r = load_recording(rec);
-  std::printf("%zu datagrams; recording stopped with %zu windows, %zu frames\n", grams.size(), r.windows.size(),
-              r.frames.size());
+  std::printf("%zu datagrams; recording stopped with %zu windows, %zu frames\n", grams.size(),
+              r.windows.size(), r.frames.size());
   EXPECT_LT(r.windows.size(), grams.size());
 }
 
@@ -419,16 +459,23 @@ TEST(OmnilocdSim, RefusesABadSeedAndAnUnknownOption) {
   std::string out;
   EXPECT_EQ(run(std::string(OMNILOCD_SIM_PATH) + " --seed 1.5", dir.path / "a.log", out), 2) << out;
   EXPECT_NE(out.find("--seed: must be an integer"), std::string::npos) << out;
-  EXPECT_EQ(run(std::string(OMNILOCD_SIM_PATH) + " --seed 18446744073709551616", dir.path / "b.log", out), 2) << out;
-  EXPECT_NE(run(std::string(OMNILOCD_SIM_PATH) + " --no-such-key 1", dir.path / "c.log", out), 0) << out;
-  EXPECT_TRUE(out.find("no-such-key") != std::string::npos || out.find("no_such_key") != std::string::npos) << out;
+  EXPECT_EQ(
+      run(std::string(OMNILOCD_SIM_PATH) + " --seed 18446744073709551616", dir.path / "b.log", out),
+      2)
+      << out;
+  EXPECT_NE(run(std::string(OMNILOCD_SIM_PATH) + " --no-such-key 1", dir.path / "c.log", out), 0)
+      << out;
+  EXPECT_TRUE(out.find("no-such-key") != std::string::npos ||
+              out.find("no_such_key") != std::string::npos)
+      << out;
 }
 
 TEST(OmnilocSimDemo, ShortRunFixesAndWritesErrorsCsvNoCameraFails) {
   TempDir dir("demo");
   std::string out;
-  const int rc = run(std::string(OMNILOC_SIM_PATH) + " demo --duration 3 --out " + (dir.path / "ok").string(),
-                     dir.path / "demo.log", out);
+  const int rc =
+      run(std::string(OMNILOC_SIM_PATH) + " demo --duration 3 --out " + (dir.path / "ok").string(),
+          dir.path / "demo.log", out);
   ASSERT_EQ(rc, 0) << out;
   const auto rows = read_csv(dir.path / "ok" / "errors.csv");
   ASSERT_GE(rows.size(), 290u) << "3 s of 10 ms windows";
@@ -441,20 +488,26 @@ TEST(OmnilocSimDemo, ShortRunFixesAndWritesErrorsCsvNoCameraFails) {
     if (t_ms < 1000.0) continue;
     ASSERT_TRUE(std::isfinite(err_cm)) << "no fix at t = " << t_ms;
     // The error column is the distance between the pose and truth columns, recomputed here.
-    EXPECT_NEAR(err_cm, std::hypot(std::stod(r[4]) - std::stod(r[1]), std::stod(r[5]) - std::stod(r[2])), 2e-3);
+    EXPECT_NEAR(err_cm,
+                std::hypot(std::stod(r[4]) - std::stod(r[1]), std::stod(r[5]) - std::stod(r[2])),
+                2e-3);
     EXPECT_LT(err_cm, 10.0) << "t = " << t_ms;
     ++checked;
   }
   EXPECT_GE(checked, 190);
   EXPECT_TRUE(fs::exists(dir.path / "ok" / "paths.png"));
-  EXPECT_NE(out.find("after the end of this run"), std::string::npos) << "the kidnapping is at 22.6 s\n" << out;
+  EXPECT_NE(out.find("after the end of this run"), std::string::npos)
+      << "the kidnapping is at 22.6 s\n"
+      << out;
 
-  const int rc_none = run(std::string(OMNILOC_SIM_PATH) + " demo --camera none --duration 1 --out " +
-                              (dir.path / "none").string(),
-                          dir.path / "none.log", out);
+  const int rc_none =
+      run(std::string(OMNILOC_SIM_PATH) + " demo --camera none --duration 1 --out " +
+              (dir.path / "none").string(),
+          dir.path / "none.log", out);
   EXPECT_EQ(rc_none, 1) << out;
   EXPECT_NE(out.find("FAILED: the daemon never had a fix"), std::string::npos) << out;
-  EXPECT_EQ(run(std::string(OMNILOC_SIM_PATH) + " demo --seed -1", dir.path / "bad.log", out), 2) << out;
+  EXPECT_EQ(run(std::string(OMNILOC_SIM_PATH) + " demo --seed -1", dir.path / "bad.log", out), 2)
+      << out;
 }
 
 // Every program answers --version with its name, the project version CMake was given, the
@@ -466,11 +519,15 @@ TEST(Programs, VersionAndKeyEqualsValue) {
   const std::string regmap_version = std::to_string(regmap::kVersionMajor.get(v)) + "." +
                                      std::to_string(regmap::kVersionMinor.get(v)) + "." +
                                      std::to_string(regmap::kVersionPatch.get(v));
-  const std::regex line("^(omniloc|omniloc-sim|omnilocd-sim|omnilocd) " + std::regex_replace(std::string(OMNILOC_PROJECT_VERSION), std::regex("\\."), "\\.") +
-                        " \\(register map " + std::regex_replace(regmap_version, std::regex("\\."), "\\.") +
-                        ", board ID 0x4F4D4E4C, git ([0-9a-f]{7,40}(-dirty)?|unknown)\\)\n$");
-  for (const auto& [path, name] : std::vector<std::pair<std::string, std::string>>{
-           {OMNILOC_CLI_PATH, "omniloc"}, {OMNILOC_SIM_PATH, "omniloc-sim"}, {OMNILOCD_SIM_PATH, "omnilocd-sim"}}) {
+  const std::regex line(
+      "^(omniloc|omniloc-sim|omnilocd-sim|omnilocd) " +
+      std::regex_replace(std::string(OMNILOC_PROJECT_VERSION), std::regex("\\."), "\\.") +
+      " \\(register map " + std::regex_replace(regmap_version, std::regex("\\."), "\\.") +
+      ", board ID 0x4F4D4E4C, git ([0-9a-f]{7,40}(-dirty)?|unknown)\\)\n$");
+  for (const auto& [path, name] :
+       std::vector<std::pair<std::string, std::string>>{{OMNILOC_CLI_PATH, "omniloc"},
+                                                        {OMNILOC_SIM_PATH, "omniloc-sim"},
+                                                        {OMNILOCD_SIM_PATH, "omnilocd-sim"}}) {
     std::string out;
     ASSERT_EQ(run(path + " --version", dir.path / "v.log", out), 0) << out;
     EXPECT_TRUE(std::regex_match(out, line)) << out;
@@ -479,11 +536,14 @@ TEST(Programs, VersionAndKeyEqualsValue) {
   std::string out;
   EXPECT_EQ(run(std::string(OMNILOCD_SIM_PATH) + " --seed=abc", dir.path / "v.log", out), 2) << out;
   EXPECT_NE(out.find("--seed: must be an integer"), std::string::npos) << out;
-  EXPECT_EQ(run(std::string(OMNILOCD_SIM_PATH) + " --udp-port=0", dir.path / "v.log", out), 2) << out;
-  EXPECT_NE(out.find("udp_port: out of range: must be in [1, 65535] (got 0)"), std::string::npos) << out;
+  EXPECT_EQ(run(std::string(OMNILOCD_SIM_PATH) + " --udp-port=0", dir.path / "v.log", out), 2)
+      << out;
+  EXPECT_NE(out.find("udp_port: out of range: must be in [1, 65535] (got 0)"), std::string::npos)
+      << out;
 }
 
-// Issue 16.7 / 17.3: every number on the command lines of omniloc and omniloc-sim (and omnilocd-sim's
+// Issue 16.7 / 17.3: every number on the command lines of omniloc and omniloc-sim (and
+// omnilocd-sim's
 // --seed) goes through the one strict parser; each bad text is exit 2 with the flag and the text
 // on stderr, before any work is done.
 struct BadCase {
@@ -495,14 +555,16 @@ struct BadCase {
 std::vector<BadCase> bad_numbers() {
   const std::string sim = OMNILOC_SIM_PATH, cli = OMNILOC_CLI_PATH, dsim = OMNILOCD_SIM_PATH;
   std::vector<BadCase> cases;
-  for (const std::string v : {"abc", "-1", "inf", "1e30", "1.7", "18446744073709551616", "", " 1", "0x10"}) {
+  for (const std::string v :
+       {"abc", "-1", "inf", "1e30", "1.7", "18446744073709551616", "", " 1", "0x10"}) {
     cases.push_back({sim + " bench paper --seed '" + v + "'", "--seed", v});
     cases.push_back({sim + " demo --seed '" + v + "'", "--seed", v});
     cases.push_back({dsim + " --seed '" + v + "'", "--seed", v});
   }
   for (const std::string v : {"0", "120.5", "nan", "inf", "60x"})
     cases.push_back({sim + " demo --camera-hz " + v, "--camera-hz", v});
-  for (const std::string v : {"0", "30.5", "-inf", "3s"}) cases.push_back({sim + " demo --duration=" + v, "--duration", v});
+  for (const std::string v : {"0", "30.5", "-inf", "3s"})
+    cases.push_back({sim + " demo --duration=" + v, "--duration", v});
   for (const std::string v : {"0", "100.5", "ten", "nan"})
     cases.push_back({cli + " builddb --out /nonexistent/x.db --step " + v, "--step", v});
   for (const std::string v : {"1.5", "-1", "257", "1e2"})
@@ -513,13 +575,19 @@ std::vector<BadCase> bad_numbers() {
     cases.push_back({cli + " ctl --timeout-ms=" + v + " status", "--timeout-ms", v});
   cases.push_back({cli + " ctl --timeout-ms 50 set_pose 1 x 3", "set_pose Y_CM", "x"});
   cases.push_back({cli + " ctl --timeout-ms 50 set_pose 1 2 nan", "set_pose YAW_DEG", "nan"});
-  for (const std::string v : {"-1", "0", "12000001", "9600.5"}) cases.push_back({cli + " probe --baud " + v, "--baud", v});
-  for (const std::string v : {"-1", "1e3", "2.5"}) cases.push_back({cli + " probe --once --seconds=" + v, "--seconds", v});
+  for (const std::string v : {"-1", "0", "12000001", "9600.5"})
+    cases.push_back({cli + " probe --baud " + v, "--baud", v});
+  for (const std::string v : {"-1", "1e3", "2.5"})
+    cases.push_back({cli + " probe --once --seconds=" + v, "--seconds", v});
   for (const std::string v : {"inf", "12x", "361", "nan"})
-    cases.push_back({cli + " locate /nonexistent.png --camera default --yaw-deg " + v, "--yaw-deg", v});
-  cases.push_back({cli + " calibrate /nonexistent.png --out /nonexistent/c.json --pose 1,x", "--pose", "x"});
-  cases.push_back({cli + " calibrate /nonexistent.png --out /nonexistent/c.json --pose=1,2,400", "--pose", "400"});
-  cases.push_back({cli + " calibrate /nonexistent.png --out /nonexistent/c.json --pose inf,2", "--pose", "inf"});
+    cases.push_back(
+        {cli + " locate /nonexistent.png --camera default --yaw-deg " + v, "--yaw-deg", v});
+  cases.push_back(
+      {cli + " calibrate /nonexistent.png --out /nonexistent/c.json --pose 1,x", "--pose", "x"});
+  cases.push_back({cli + " calibrate /nonexistent.png --out /nonexistent/c.json --pose=1,2,400",
+                   "--pose", "400"});
+  cases.push_back({cli + " calibrate /nonexistent.png --out /nonexistent/c.json --pose inf,2",
+                   "--pose", "inf"});
   return cases;
 }
 
@@ -579,28 +647,38 @@ TEST(Programs, HelpListsEveryOptionAndItsDefault) {
   const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
       {sim + " --help", {"demo", "bench", "venues", "--version"}},
       {sim + " help", {"demo", "bench", "venues"}},
-      {sim + " venues --help", {"--count INT in [1, 100000]=10", "--seed UINT=1", "--out TEXT REQUIRED"}},
-      {sim + " demo --help", {"--out TEXT=build/demo", "--camera-hz NUMBER in [1, 120]=60", "--camera", "=rendered",
-                              "--seed UINT=1", "--duration NUMBER in [0.01, 30]=30"}},
+      {sim + " venues --help",
+       {"--count INT in [1, 100000]=10", "--seed UINT=1", "--out TEXT REQUIRED"}},
+      {sim + " demo --help",
+       {"--out TEXT=build/demo", "--camera-hz NUMBER in [1, 120]=60", "--camera", "=rendered",
+        "--seed UINT=1", "--duration NUMBER in [0.01, 30]=30"}},
       {sim + " bench paper --help", {"--seed UINT=1", "--no-paper-mode"}},
       {sim + " bench --help", {"paper"}},
-      {cli + " --help", {"version", "regmap", "probe", "builddb", "replay", "locate", "ctl", "calibrate"}},
-      {cli + " builddb --help", {"--out TEXT REQUIRED", "--field TEXT=fira-robosot", "--camera TEXT=default",
-                                 "--step NUMBER in [1, 100]=10", "--threads UINT in [0, 256]=0"}},
-      {cli + " replay --help", {"REC_DIR", "--out TEXT=REC_DIR/poses.csv", "--db", "--config TEXT=default", "--paper"}},
-      {cli + " locate --help", {"IMAGE", "--camera TEXT REQUIRED", "--field TEXT=fira-robosot", "--yaw-deg", "--db",
-                                "--config TEXT=default", "--overlay", "--json"}},
-      {cli + " ctl --help", {"COMMAND", "--port INT in [1, 65535]=5601", "--timeout-ms INT in [1, 600000]=1000",
-                             "set_pose X_CM Y_CM YAW_DEG", "record start DIR"}},
-      {cli + " probe --help", {"--once", "--serial", "--baud UINT in [1, 12000000]=" + std::to_string(regmap::kUartBaud),
-                               "--enable", "--seconds UINT in [0, 31536000]=0"}},
-      {cli + " calibrate --help", {"IMAGE", "--out TEXT REQUIRED", "--pose X,Y[,YAW]", "--field TEXT=fira-robosot",
-                                   "--overlay"}},
+      {cli + " --help",
+       {"version", "regmap", "probe", "builddb", "replay", "locate", "ctl", "calibrate"}},
+      {cli + " builddb --help",
+       {"--out TEXT REQUIRED", "--field TEXT=fira-robosot", "--camera TEXT=default",
+        "--step NUMBER in [1, 100]=10", "--threads UINT in [0, 256]=0"}},
+      {cli + " replay --help",
+       {"REC_DIR", "--out TEXT=REC_DIR/poses.csv", "--db", "--config TEXT=default", "--paper"}},
+      {cli + " locate --help",
+       {"IMAGE", "--camera TEXT REQUIRED", "--field TEXT=fira-robosot", "--yaw-deg", "--db",
+        "--config TEXT=default", "--overlay", "--json"}},
+      {cli + " ctl --help",
+       {"COMMAND", "--port INT in [1, 65535]=5601", "--timeout-ms INT in [1, 600000]=1000",
+        "set_pose X_CM Y_CM YAW_DEG", "record start DIR"}},
+      {cli + " probe --help",
+       {"--once", "--serial", "--baud UINT in [1, 12000000]=" + std::to_string(regmap::kUartBaud),
+        "--enable", "--seconds UINT in [0, 31536000]=0"}},
+      {cli + " calibrate --help",
+       {"IMAGE", "--out TEXT REQUIRED", "--pose X,Y[,YAW]", "--field TEXT=fira-robosot",
+        "--overlay"}},
   };
   for (const auto& [command, listed] : cases) {
     std::string out;
     EXPECT_EQ(run(command, dir.path / "help.log", out), 0) << command << "\n" << out;
-    for (const auto& item : listed) EXPECT_NE(out.find(item), std::string::npos) << command << ": " << item << "\n" << out;
+    for (const auto& item : listed)
+      EXPECT_NE(out.find(item), std::string::npos) << command << ": " << item << "\n" << out;
   }
 }
 
@@ -616,7 +694,9 @@ TEST(Programs, KeyEqualsValueReachesTheCommand) {
                 dir.path / "ctl.log", out),
             1)
       << out;
-  EXPECT_NE(out.find("no reply from 127.0.0.1:" + std::to_string(rx.port()) + " within 200 ms"), std::string::npos) << out;
+  EXPECT_NE(out.find("no reply from 127.0.0.1:" + std::to_string(rx.port()) + " within 200 ms"),
+            std::string::npos)
+      << out;
   const auto grams = rx.drain();
   ASSERT_EQ(grams.size(), 1u) << out;
   const nlohmann::json req = nlohmann::json::parse(grams[0]);
@@ -626,23 +706,28 @@ TEST(Programs, KeyEqualsValueReachesTheCommand) {
   EXPECT_EQ(req["yaw_deg"], -3.5);
   // builddb: --step=50 gives the 15 x 11 grid of the 750 x 550 cm FIRA field.
   const fs::path db = dir.path / "fira50.db";
-  ASSERT_EQ(run(std::string(OMNILOC_CLI_PATH) + " builddb --out=" + db.string() + " --step=50 --threads=1",
+  ASSERT_EQ(run(std::string(OMNILOC_CLI_PATH) + " builddb --out=" + db.string() +
+                    " --step=50 --threads=1",
                 dir.path / "db.log", out),
             0)
       << out;
   EXPECT_NE(out.find("grid 15 x 11 at 50.0 cm"), std::string::npos) << out;
   EXPECT_TRUE(fs::exists(db));
-  // demo: --duration=0.5 simulates 50 windows, --camera=none has no fix (exit 1), --seed=7 is the seed.
-  EXPECT_EQ(run(std::string(OMNILOC_SIM_PATH) + " demo --duration=0.5 --camera=none --seed=7 --out=" +
-                    (dir.path / "demo").string(),
-                dir.path / "demo.log", out),
-            1)
+  // demo: --duration=0.5 simulates 50 windows, --camera=none has no fix (exit 1), --seed=7 is the
+  // seed.
+  EXPECT_EQ(
+      run(std::string(OMNILOC_SIM_PATH) +
+              " demo --duration=0.5 --camera=none --seed=7 --out=" + (dir.path / "demo").string(),
+          dir.path / "demo.log", out),
+      1)
       << out;
   EXPECT_NE(out.find("seed 7\n"), std::string::npos) << out;
   EXPECT_EQ(read_csv(dir.path / "demo" / "errors.csv").size(), 50u) << out;
   // omnilocd-sim: a seed above 2^53 is taken exactly (no double in between).
-  EXPECT_EQ(run(std::string(OMNILOCD_SIM_PATH) + " --seed=9007199254740993 --camera none --duration-s 0.05 "
-                    "--status-period-s 0 --udp-port " + std::to_string(rx.port()),
+  EXPECT_EQ(run(std::string(OMNILOCD_SIM_PATH) +
+                    " --seed=9007199254740993 --camera none --duration-s 0.05 "
+                    "--status-period-s 0 --udp-port " +
+                    std::to_string(rx.port()),
                 dir.path / "dsim.log", out),
             0)
       << out;

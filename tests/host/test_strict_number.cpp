@@ -39,7 +39,8 @@ TEST(StrictNumber, AnOverflowingPortNamesTheTextNotAWrappedValue) {
 }
 
 TEST(StrictNumber, UnsignedValuesCoverTheWholeRangeAndNeverWrap) {
-  EXPECT_EQ(parse_uint("18446744073709551615", "--seed"), std::numeric_limits<std::uint64_t>::max());
+  EXPECT_EQ(parse_uint("18446744073709551615", "--seed"),
+            std::numeric_limits<std::uint64_t>::max());
   EXPECT_EQ(parse_uint("9007199254740993", "--sim-seed"), 9007199254740993ULL);  // above 2^53
   EXPECT_EQ(refusal([] { (void)parse_uint("-1", "--seed"); }),
             "--seed: must be an integer in [0, 18446744073709551615] (got '-1')");

@@ -30,19 +30,22 @@ constexpr int kMaxWild = 1;
 
 TEST(VenueGenerality, ThirtySampledVenuesCalibrateAndLocate) {
   std::printf("venues %d of seed %llu (bench_venues: VENUES_COUNT=%d VENUES_SEED=%llu)\n", kVenues,
-              static_cast<unsigned long long>(kSeed), kVenues, static_cast<unsigned long long>(kSeed));
+              static_cast<unsigned long long>(kSeed), kVenues,
+              static_cast<unsigned long long>(kSeed));
   int calib_good = 0, located = 0, wild = 0, reference = 0;
   for (int i = 0; i < kVenues; ++i) {
-    const test::VenueOutcome o = test::run_venue(sim::venue_seed(kSeed, static_cast<std::uint64_t>(i)));
+    const test::VenueOutcome o =
+        test::run_venue(sim::venue_seed(kSeed, static_cast<std::uint64_t>(i)));
     test::print_outcome(o);
     calib_good += o.calib_good;
     located += o.located_good();
     wild += o.wild();
     reference += o.reference_good();
   }
-  std::printf("calibrated within the goal %d of %d, located %d of %d, accepted more than 20 cm off %d; "
-              "with the true cameras located %d\n",
-              calib_good, kVenues, located, kVenues, wild, reference);
+  std::printf(
+      "calibrated within the goal %d of %d, located %d of %d, accepted more than 20 cm off %d; "
+      "with the true cameras located %d\n",
+      calib_good, kVenues, located, kVenues, wild, reference);
   EXPECT_GE(calib_good, kMinCalibrated);
   EXPECT_GE(located, kMinLocated);
   EXPECT_LE(wild, kMaxWild);

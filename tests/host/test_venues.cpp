@@ -1,7 +1,7 @@
 // The venue sampler (omniloc_sim/venue.hpp) and `omniloc-sim venues`: a seed is a venue (same
-// frames and truth byte for byte), the sampled parameters cover their ranges and stay in them, every
-// mirror profile's mapping inverts and puts the field's lines where the rendered frame is bright,
-// and the default look is today's realistic frame. Randomised tests print their seeds.
+// frames and truth byte for byte), the sampled parameters cover their ranges and stay in them,
+// every mirror profile's mapping inverts and puts the field's lines where the rendered frame is
+// bright, and the default look is today's realistic frame. Randomised tests print their seeds.
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
@@ -34,16 +34,17 @@ namespace {
 namespace fs = std::filesystem;
 using sim::MirrorProfile;
 
-constexpr MirrorProfile kProfiles[] = {MirrorProfile::kHyperbolic, MirrorProfile::kTangent, MirrorProfile::kSpherical,
-                                       MirrorProfile::kConical};
+constexpr MirrorProfile kProfiles[] = {MirrorProfile::kHyperbolic, MirrorProfile::kTangent,
+                                       MirrorProfile::kSpherical, MirrorProfile::kConical};
 
 // The first venue (seeds after `after`) with the profile: printed, so a failure can be rerun.
 sim::Venue first_venue_with(MirrorProfile p, std::uint64_t after = 0) {
   for (std::uint64_t seed = after + 1;; ++seed) {
     sim::Venue v = sim::sample_venue(seed);
     if (v.optics.profile != p) continue;
-    std::printf("%s: venue seed %llu (%dx%d, %s)\n", sim::mirror_profile_name(p), static_cast<unsigned long long>(seed),
-                v.optics.width_px, v.optics.height_px, v.field_name.c_str());
+    std::printf("%s: venue seed %llu (%dx%d, %s)\n", sim::mirror_profile_name(p),
+                static_cast<unsigned long long>(seed), v.optics.width_px, v.optics.height_px,
+                v.field_name.c_str());
     return v;
   }
 }
@@ -126,7 +127,8 @@ void expect_in_ranges(const sim::Venue& v) {
   EXPECT_LE(o.tilt_deg, 3.0);
   EXPECT_GE(v.body_fraction, 0.05);
   EXPECT_LE(v.body_fraction, 0.35);
-  EXPECT_NEAR(o.radius_px_at_ground(o.body_radius_cm), v.body_fraction * o.mirror_radius_px, 1e-6 * o.mirror_radius_px);
+  EXPECT_NEAR(o.radius_px_at_ground(o.body_radius_cm), v.body_fraction * o.mirror_radius_px,
+              1e-6 * o.mirror_radius_px);
   EXPECT_LE(o.rods.size(), 4u);
   for (const auto& r : o.rods) {
     EXPECT_GE(r.width_px, 2.0);
@@ -153,7 +155,8 @@ TEST(Venues, ThreeHundredSeedsCoverTheRangesAndStayInThem) {
   std::set<sim::VenueField> fields;
   std::set<std::size_t> rods;
   std::set<std::string> spots;
-  double body_min = 1.0, body_max = 0.0, w_min = 1e9, w_max = 0.0, line_min = 1e9, line_max = 0.0, hue_min = 360, hue_max = 0;
+  double body_min = 1.0, body_max = 0.0, w_min = 1e9, w_max = 0.0, line_min = 1e9, line_max = 0.0,
+         hue_min = 360, hue_max = 0;
   std::set<bool> square;
   for (std::uint64_t i = 0; i < 300; ++i) {
     const sim::Venue v = sim::sample_venue(sim::venue_seed(2026, i));
@@ -172,8 +175,10 @@ TEST(Venues, ThreeHundredSeedsCoverTheRangesAndStayInThem) {
     light_floor.insert(lk.floor_beyond[1] > 100.0f);
     jpeg.insert(v.render.realism.jpeg_quality > 0);
     square.insert(o.width_px == o.height_px);
-    rim_out.insert(o.centre_px.x() - o.mirror_radius_px < 0 || o.centre_px.x() + o.mirror_radius_px > o.width_px ||
-                   o.centre_px.y() - o.mirror_radius_px < 0 || o.centre_px.y() + o.mirror_radius_px > o.height_px);
+    rim_out.insert(o.centre_px.x() - o.mirror_radius_px < 0 ||
+                   o.centre_px.x() + o.mirror_radius_px > o.width_px ||
+                   o.centre_px.y() - o.mirror_radius_px < 0 ||
+                   o.centre_px.y() + o.mirror_radius_px > o.height_px);
     spots.insert(sim::venue_poses(v).spot.name);
     body_min = std::min(body_min, v.body_fraction);
     body_max = std::max(body_max, v.body_fraction);
@@ -184,12 +189,16 @@ TEST(Venues, ThreeHundredSeedsCoverTheRangesAndStayInThem) {
     hue_min = std::min(hue_min, hue_deg(lk.carpet));
     hue_max = std::max(hue_max, hue_deg(lk.carpet));
   }
-  std::printf("body %.3f..%.3f, width %.0f..%.0f px, lines %.1f..%.1f cm, carpet hue %.0f..%.0f deg, spots %zu\n", body_min,
-              body_max, w_min, w_max, line_min, line_max, hue_min, hue_max, spots.size());
+  std::printf(
+      "body %.3f..%.3f, width %.0f..%.0f px, lines %.1f..%.1f cm, carpet hue %.0f..%.0f deg, spots "
+      "%zu\n",
+      body_min, body_max, w_min, w_max, line_min, line_max, hue_min, hue_max, spots.size());
   EXPECT_EQ(profiles.size(), 4u);
   EXPECT_EQ(fields.size(), 3u);
   EXPECT_EQ(rods.size(), 5u);  // 0, 1, 2, 3, 4
-  for (const auto* s : {&mirrored, &lab, &goals, &textured, &worn, &light_floor, &rim_out, &jpeg, &square}) EXPECT_EQ(s->size(), 2u);
+  for (const auto* s :
+       {&mirrored, &lab, &goals, &textured, &worn, &light_floor, &rim_out, &jpeg, &square})
+    EXPECT_EQ(s->size(), 2u);
   EXPECT_EQ(spots.size(), 3u);  // the centre spot and both penalty marks
   EXPECT_LT(body_min, 0.08);
   EXPECT_GT(body_max, 0.32);
@@ -218,20 +227,26 @@ TEST(Venues, EveryProfileInvertsAndProjectsConsistently) {
     // The tilted mapping: pixel_of_robot_point and ray_of_pixel are each other's inverse, on the
     // floor and up the walls.
     for (int b = 0; b < 360; b += 30) {
-      for (const Eigen::Vector3d& q : {Eigen::Vector3d(150, 0, 0), Eigen::Vector3d(400, 0, 0), Eigen::Vector3d(300, 0, 120)}) {
+      for (const Eigen::Vector3d& q :
+           {Eigen::Vector3d(150, 0, 0), Eigen::Vector3d(400, 0, 0), Eigen::Vector3d(300, 0, 120)}) {
         const double c = std::cos(deg_to_rad(b)), s = std::sin(deg_to_rad(b));
         const Eigen::Vector3d pt(c * q.x(), s * q.x(), q.z());
         const auto px = o.pixel_of_robot_point(pt);
         ASSERT_TRUE(px.has_value());
-        EXPECT_NEAR((o.ray_of_pixel(*px) - Eigen::Vector3d(pt.x(), pt.y(), o.viewpoint_height_cm - pt.z()).normalized()).norm(), 0.0, 1e-9);
+        EXPECT_NEAR((o.ray_of_pixel(*px) -
+                     Eigen::Vector3d(pt.x(), pt.y(), o.viewpoint_height_cm - pt.z()).normalized())
+                        .norm(),
+                    0.0, 1e-9);
       }
     }
     // Untilted, a floor point lies at the radial mapping's radius.
     sim::TrueOptics flat = o;
     flat.tilt_deg = 0.0;
-    EXPECT_NEAR((*flat.pixel_of_robot_point({0.0, 250.0, 0.0}) - flat.centre_px).norm(), flat.radius_px_at_ground(250.0), 1e-7);
+    EXPECT_NEAR((*flat.pixel_of_robot_point({0.0, 250.0, 0.0}) - flat.centre_px).norm(),
+                flat.radius_px_at_ground(250.0), 1e-7);
   }
-  // The tangent model's own formula, by hand: a = 80 cm, b = 0.004 / px: d(200 px) = 80 tan(0.8) = 80 x 1.029639 = 82.371 cm.
+  // The tangent model's own formula, by hand: a = 80 cm, b = 0.004 / px: d(200 px) = 80 tan(0.8) =
+  // 80 x 1.029639 = 82.371 cm.
   sim::TrueOptics t;
   t.profile = MirrorProfile::kTangent;
   t.tan_a_cm = 80.0;
@@ -261,23 +276,32 @@ std::pair<int, int> line_points_bright(sim::Venue v) {
       const Eigen::Vector2d rel(q.x() - pose.x_cm, q.y() - pose.y_cm);
       const double c = std::cos(deg_to_rad(-pose.yaw_deg)), s = std::sin(deg_to_rad(-pose.yaw_deg));
       const double d = rel.norm();
-      if (d < o.body_radius_cm + 30.0 || !sim::on_look_carpet(v.field, r.realism.look, q)) return std::nullopt;
-      const auto px = o.pixel_of_robot_point({c * rel.x() - s * rel.y(), s * rel.x() + c * rel.y(), 0.0});
-      if (!px || px->x() < 3 || px->y() < 3 || px->x() > o.width_px - 4 || px->y() > o.height_px - 4) return std::nullopt;
+      if (d < o.body_radius_cm + 30.0 || !sim::on_look_carpet(v.field, r.realism.look, q))
+        return std::nullopt;
+      const auto px =
+          o.pixel_of_robot_point({c * rel.x() - s * rel.y(), s * rel.x() + c * rel.y(), 0.0});
+      if (!px || px->x() < 3 || px->y() < 3 || px->x() > o.width_px - 4 ||
+          px->y() > o.height_px - 4)
+        return std::nullopt;
       const Eigen::Vector2d rc = *px - o.centre_px;
       if (rc.norm() > 0.9 * o.mirror_radius_px) return std::nullopt;
       for (const auto& rod : o.rods) {
-        const Eigen::Vector2d e(std::cos(deg_to_rad(rod.image_angle_deg)), -std::sin(deg_to_rad(rod.image_angle_deg)));
-        if (rc.dot(e) > 0.0 && std::abs(e.x() * rc.y() - e.y() * rc.x()) < rod.width_px / 2.0 + 4.0) return std::nullopt;
+        const Eigen::Vector2d e(std::cos(deg_to_rad(rod.image_angle_deg)),
+                                -std::sin(deg_to_rad(rod.image_angle_deg)));
+        if (rc.dot(e) > 0.0 && std::abs(e.x() * rc.y() - e.y() * rc.x()) < rod.width_px / 2.0 + 4.0)
+          return std::nullopt;
       }
-      // The line must cover three pixels radially, so blur and lateral colour leave its middle white.
+      // The line must cover three pixels radially, so blur and lateral colour leave its middle
+      // white.
       const double rr_px = rc.norm();
-      const double cm_per_px = o.ground_cm_at_radius(rr_px + 0.5) - o.ground_cm_at_radius(rr_px - 0.5);
+      const double cm_per_px =
+          o.ground_cm_at_radius(rr_px + 0.5) - o.ground_cm_at_radius(rr_px - 0.5);
       if (!(cm_per_px * 3.0 < v.field.line_width_cm * 0.7)) return std::nullopt;
       return px;
     };
     const auto level = [&](const Eigen::Vector2d& px) {
-      return static_cast<int>(gray.at<std::uint8_t>(static_cast<int>(std::lround(px.y())), static_cast<int>(std::lround(px.x()))));
+      return static_cast<int>(gray.at<std::uint8_t>(static_cast<int>(std::lround(px.y())),
+                                                    static_cast<int>(std::lround(px.x()))));
     };
     for (const auto& seg : v.field.segments) {
       const Eigen::Vector2d ab = seg.b_cm - seg.a_cm, e = ab.normalized(), n(-e.y(), e.x());
@@ -308,7 +332,8 @@ TEST(Venues, FieldLinesLandWhereEveryProfileProjectsThem) {
       checked += c;
       bright += b;
     }
-    std::printf("%s: %d of %d line points brighter than the carpet beside them\n", sim::mirror_profile_name(p), bright, checked);
+    std::printf("%s: %d of %d line points brighter than the carpet beside them\n",
+                sim::mirror_profile_name(p), bright, checked);
     EXPECT_GE(checked, 30) << sim::mirror_profile_name(p);
     EXPECT_GE(bright, checked * 9 / 10) << sim::mirror_profile_name(p);
   }
@@ -322,11 +347,15 @@ TEST(VenuesCommand, WritesEachVenuesFramesAndTruth) {
   const test::TempDir tmp("venues_cmd");
   const fs::path out = tmp.path / "out";
   std::string text;
-  ASSERT_EQ(run(std::string(OMNILOC_SIM_PATH) + " venues --count 3 --seed 5 --out " + out.string(), tmp.path / "log", text), 0) << text;
+  ASSERT_EQ(run(std::string(OMNILOC_SIM_PATH) + " venues --count 3 --seed 5 --out " + out.string(),
+                tmp.path / "log", text),
+            0)
+      << text;
   std::printf("%s", text.c_str());
   for (std::uint64_t i = 0; i < 3; ++i) {
     const std::uint64_t seed = sim::venue_seed(5, i);
-    EXPECT_NE(text.find("venue " + std::to_string(i + 1) + "/3 seed " + std::to_string(seed)), std::string::npos);
+    EXPECT_NE(text.find("venue " + std::to_string(i + 1) + "/3 seed " + std::to_string(seed)),
+              std::string::npos);
     const fs::path dir = out / ("venue-" + std::to_string(seed));
     std::ifstream in(dir / "truth.json");
     ASSERT_TRUE(in.good()) << dir;
@@ -352,10 +381,16 @@ TEST(VenuesCommand, WritesEachVenuesFramesAndTruth) {
 TEST(VenuesCommand, RefusesNoVenuesAndAnOutThatIsAFile) {
   const test::TempDir tmp("venues_bad");
   std::string text;
-  EXPECT_EQ(run(std::string(OMNILOC_SIM_PATH) + " venues --count 0 --out " + (tmp.path / "o").string(), tmp.path / "log", text), 2);
+  EXPECT_EQ(
+      run(std::string(OMNILOC_SIM_PATH) + " venues --count 0 --out " + (tmp.path / "o").string(),
+          tmp.path / "log", text),
+      2);
   EXPECT_NE(text.find("--count"), std::string::npos) << text;
   std::ofstream(tmp.path / "file") << "x";
-  EXPECT_EQ(run(std::string(OMNILOC_SIM_PATH) + " venues --count 1 --out " + (tmp.path / "file").string(), tmp.path / "log", text), 1);
+  EXPECT_EQ(
+      run(std::string(OMNILOC_SIM_PATH) + " venues --count 1 --out " + (tmp.path / "file").string(),
+          tmp.path / "log", text),
+      1);
   EXPECT_NE(text.find("not a directory"), std::string::npos) << text;
   EXPECT_EQ(run(std::string(OMNILOC_SIM_PATH) + " venues --count 1", tmp.path / "log", text), 2);
   EXPECT_NE(text.find("--out"), std::string::npos) << text;

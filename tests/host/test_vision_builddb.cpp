@@ -23,7 +23,9 @@ int run(const std::string& args) {
 
 TEST(BuildDbCommand, WritesTheSameDatabaseAsTheLibrary) {
   if (!fs::exists("bin/omniloc")) GTEST_SKIP() << "bin/omniloc not built in " << fs::current_path();
-  const std::string out = (fs::temp_directory_path() / ("omniloc_builddb_" + std::to_string(::getpid()) + ".db")).string();
+  const std::string out =
+      (fs::temp_directory_path() / ("omniloc_builddb_" + std::to_string(::getpid()) + ".db"))
+          .string();
   ASSERT_EQ(run("--field fira-robosot --camera default --step 25 --threads 1 --out " + out), 0);
   const FieldGeometry field = load_field("fira-robosot");
   const CameraModel camera = load_camera("default");
@@ -33,9 +35,9 @@ TEST(BuildDbCommand, WritesTheSameDatabaseAsTheLibrary) {
   EXPECT_EQ(loaded.grid.ny, 22);
   EXPECT_EQ(loaded.features, built.features);
   fs::remove(out);
-  EXPECT_EQ(run("--step 25"), 2);                        // no --out
-  EXPECT_EQ(run("--step ten --out " + out), 2);          // not a number
-  EXPECT_EQ(run("--bogus 1 --out " + out), 2);           // unknown option
+  EXPECT_EQ(run("--step 25"), 2);                // no --out
+  EXPECT_EQ(run("--step ten --out " + out), 2);  // not a number
+  EXPECT_EQ(run("--bogus 1 --out " + out), 2);   // unknown option
   EXPECT_EQ(run("--field no-such-field --out " + out), 1);
   EXPECT_FALSE(fs::exists(out));
 }

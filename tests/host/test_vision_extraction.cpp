@@ -10,9 +10,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <cstdlib>
 #include <random>
 
 #include <nlohmann/json.hpp>
@@ -20,18 +20,17 @@
 #include <opencv2/imgproc.hpp>
 
 #include "omniloc/camera.hpp"
-#include "test_data_path.hpp"
 #include "omniloc/config_reader.hpp"
 #include "omniloc/line_scan.hpp"
 #include "omniloc/recording.hpp"
 #include "omniloc/vision.hpp"
 #include "omniloc_sim/renderer.hpp"
+#include "test_data_path.hpp"
 
 namespace omniloc {
 namespace {
 
 using test::test_data;
-
 
 // Crossing agreement of a field-frame scan with the geometric truth, on the rays it saw, below
 // each ray's end: recall (truth crossings found within tol) and precision (found crossings that
@@ -39,8 +38,12 @@ using test::test_data;
 struct Agreement {
   int truth = 0, truth_found = 0, found = 0, found_true = 0;
   double abs_err_sum = 0.0, err_sum = 0.0;
-  [[nodiscard]] double recall() const { return truth ? static_cast<double>(truth_found) / truth : 0.0; }
-  [[nodiscard]] double precision() const { return found ? static_cast<double>(found_true) / found : 0.0; }
+  [[nodiscard]] double recall() const {
+    return truth ? static_cast<double>(truth_found) / truth : 0.0;
+  }
+  [[nodiscard]] double precision() const {
+    return found ? static_cast<double>(found_true) / found : 0.0;
+  }
   [[nodiscard]] double mean_err() const { return truth_found ? abs_err_sum / truth_found : 0.0; }
   void add(const Agreement& o) {
     truth += o.truth;
@@ -62,7 +65,8 @@ Agreement compare(const Scan& s, const Scan& truth, double tol) {
     auto nearest = [](const std::uint8_t* v, int r, int below) {
       int best = 1000;
       for (int n = 0; n < kCrossingsPerRay; ++n)
-        if (v[n] != kNoCrossing && v[n] < below && std::abs(v[n] - r) < std::abs(best - r)) best = v[n];
+        if (v[n] != kNoCrossing && v[n] < below && std::abs(v[n] - r) < std::abs(best - r))
+          best = v[n];
       return best;
     };
     // Truth crossings: the first four of the model, below the ray's end (a fifth one is cut off by
@@ -80,7 +84,8 @@ Agreement compare(const Scan& s, const Scan& truth, double tol) {
     const int last_truth = y[kCrossingsPerRay - 1];
     for (int n = 0; n < kCrossingsPerRay; ++n) {
       if (x[n] == kNoCrossing) continue;
-      if (last_truth != kNoCrossing && x[n] > last_truth + tol) continue;  // beyond the model's fourth
+      if (last_truth != kNoCrossing && x[n] > last_truth + tol)
+        continue;  // beyond the model's fourth
       ++a.found;
       a.found_true += std::abs(nearest(y, x[n], 255) - x[n]) <= tol;
     }
@@ -89,8 +94,11 @@ Agreement compare(const Scan& s, const Scan& truth, double tol) {
 }
 
 void print(const char* what, const Agreement& a) {
-  std::printf("%-34s truth %5d recall %5.1f %%  found %5d precision %5.1f %%  mean |err| %.2f px (signed %+.2f)\n", what, a.truth,
-              100 * a.recall(), a.found, 100 * a.precision(), a.mean_err(), a.truth_found ? a.err_sum / a.truth_found : 0.0);
+  std::printf(
+      "%-34s truth %5d recall %5.1f %%  found %5d precision %5.1f %%  mean |err| %.2f px (signed "
+      "%+.2f)\n",
+      what, a.truth, 100 * a.recall(), a.found, 100 * a.precision(), a.mean_err(),
+      a.truth_found ? a.err_sum / a.truth_found : 0.0);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -121,7 +129,10 @@ CameraModel extended_to_rim(const RealFrame& f) {
   CameraModel c = f.camera;
   const auto a = f.calibration["radial_model"]["a"];
   const double rim = f.calibration["rim"]["radius_px"].get<double>() - 2.0;
-  auto d = [&](double r) { return r * (a[0].get<double>() + r * (a[1].get<double>() + r * (a[2].get<double>() + r * a[3].get<double>()))); };
+  auto d = [&](double r) {
+    return r * (a[0].get<double>() +
+                r * (a[1].get<double>() + r * (a[2].get<double>() + r * a[3].get<double>())));
+  };
   c.radius_lut.clear();
   for (double r = 0.0; r < rim; r += 4.0) c.radius_lut.push_back({r, d(r)});
   c.radius_lut.push_back({rim, d(rim)});
@@ -131,8 +142,8 @@ CameraModel extended_to_rim(const RealFrame& f) {
 
 // OMNILOC_VISION_OVERLAY=dir: the frame with the model (green), the crossings (red), the ray ends
 // at the carpet edge (cyan) and at obstacles (yellow), for looking at what the test measures.
-void overlay(const std::string& name, const cv::Mat& img, const CameraModel& cam, const BearingScan& b,
-             const ExtractionReport& rep, double yaw) {
+void overlay(const std::string& name, const cv::Mat& img, const CameraModel& cam,
+             const BearingScan& b, const ExtractionReport& rep, double yaw) {
   const char* dir = std::getenv("OMNILOC_VISION_OVERLAY");
   if (dir == nullptr) return;
   cv::Mat o = img.clone();
@@ -140,14 +151,18 @@ void overlay(const std::string& name, const cv::Mat& img, const CameraModel& cam
   const int n = static_cast<int>(b.ray_end_px.size());
   auto px = [&](double bearing, double r) {
     const double phi = deg_to_rad(cam.image_angle_deg(bearing));
-    return cv::Point(static_cast<int>(std::lround(cam.center_px.x() + (cam.mirrored ? -1 : 1) * r * std::cos(phi))),
+    return cv::Point(static_cast<int>(std::lround(cam.center_px.x() +
+                                                  (cam.mirrored ? -1 : 1) * r * std::cos(phi))),
                      static_cast<int>(std::lround(cam.center_px.y() - r * std::sin(phi))));
   };
   for (int j = 0; j < n; ++j) {
     const double bearing = static_cast<double>(j) / b.rays_per_degree;
     const int e = b.ray_end_px[static_cast<std::size_t>(j)];
     if (e != kRayHidden && e != kRayToViewEnd)
-      cv::circle(o, px(bearing, e), 0, rep.carpet_end_px[static_cast<std::size_t>(j)] == 255 ? cv::Scalar(0, 255, 255) : cv::Scalar(255, 255, 0), -1);
+      cv::circle(o, px(bearing, e), 0,
+                 rep.carpet_end_px[static_cast<std::size_t>(j)] == 255 ? cv::Scalar(0, 255, 255)
+                                                                       : cv::Scalar(255, 255, 0),
+                 -1);
     for (int k = 0; k < 4; ++k) {
       const int r = b.radii_px[static_cast<std::size_t>(j) * 4 + k];
       if (r != kNoCrossing) cv::circle(o, px(bearing, r), 0, {0, 0, 255}, -1);
@@ -162,7 +177,8 @@ void overlay(const std::string& name, const cv::Mat& img, const CameraModel& cam
 }
 
 // Best of the two headings the symmetric field allows (calibrate found 0, its twin is 180).
-Agreement real_agreement(const BearingScan& b, const CameraModel& cam, double tol, double* yaw_out) {
+Agreement real_agreement(const BearingScan& b, const CameraModel& cam, double tol,
+                         double* yaw_out) {
   const Scan truth = expected_scan(load_field("fira-robosot"), cam, {375.0, 275.0});
   Agreement best;
   for (double yaw : {0.0, 180.0}) {
@@ -177,21 +193,27 @@ Agreement real_agreement(const BearingScan& b, const CameraModel& cam, double to
 
 TEST(VisionRealFrame, CrossingsAgreeWithTheCalibratedProjection) {
   const RealFrame f = real_frame();
-  ASSERT_FALSE(f.image.empty()) << "tests/data/tku-robosot-centre-spot.png / .camera.json not found";
+  ASSERT_FALSE(f.image.empty())
+      << "tests/data/tku-robosot-centre-spot.png / .camera.json not found";
   ASSERT_FALSE(f.camera.vision.carpet_hsv.has_value());  // the carpet is estimated from the frame
   LineExtractor ex(f.camera);
   ExtractionReport rep;
   const BearingScan b = ex.extract(f.image, 4, &rep);
   double yaw = 0;
   const Agreement a = real_agreement(b, f.camera, 2.0, &yaw);
-  std::printf("real frame (calibrated view %.0f px): %d rays, %d seen, %d crossings, carpet %.0f %% (hue %.0f +- %.0f, S >= %.0f, "
-              "V %.0f..%.0f), steps V %.1f S %.1f, %d ends at the carpet edge, %d at obstacles, %zu blobs, heading %.0f\n",
-              f.camera.view_radius_px(), rep.rays, rep.rays_seen, rep.crossings, 100 * rep.carpet_fraction, rep.carpet.hue,
-              rep.carpet.hue_half_width, rep.carpet.sat_min, rep.carpet.val_min, rep.carpet.val_max, rep.contrast.val_step,
-              rep.contrast.sat_step, rep.rays_ended_at_carpet_edge, rep.rays_ended_at_obstacle, rep.obstacles.size(), yaw);
+  std::printf(
+      "real frame (calibrated view %.0f px): %d rays, %d seen, %d crossings, carpet %.0f %% (hue "
+      "%.0f +- %.0f, S >= %.0f, "
+      "V %.0f..%.0f), steps V %.1f S %.1f, %d ends at the carpet edge, %d at obstacles, %zu blobs, "
+      "heading %.0f\n",
+      f.camera.view_radius_px(), rep.rays, rep.rays_seen, rep.crossings, 100 * rep.carpet_fraction,
+      rep.carpet.hue, rep.carpet.hue_half_width, rep.carpet.sat_min, rep.carpet.val_min,
+      rep.carpet.val_max, rep.contrast.val_step, rep.contrast.sat_step,
+      rep.rays_ended_at_carpet_edge, rep.rays_ended_at_obstacle, rep.obstacles.size(), yaw);
   print("real frame vs calibrated model", a);
   overlay("real", f.image, f.camera, b, rep, yaw);
-  const Agreement old = real_agreement(scan_image_bearings(f.image, f.camera, 4), f.camera, 2.0, nullptr);
+  const Agreement old =
+      real_agreement(scan_image_bearings(f.image, f.camera, 4), f.camera, 2.0, nullptr);
   print("real frame, fixed thresholds", old);
   EXPECT_TRUE(rep.usable) << rep.reason;
   EXPECT_GT(rep.rays_seen, rep.rays * 8 / 10);
@@ -224,9 +246,11 @@ TEST(VisionRealFrame, RaysEndWhereTheCarpetEndsNotInTheWalls) {
     ++ended;
     beyond_view += e >= view - 3.0;
   }
-  std::printf("extended to the rim (%.0f px): %d rays seen, %d ended (%d at or beyond the calibrated view %.0f px), %d reach the rim; "
-              "%d crossings\n",
-              cam.view_radius_px(), seen, ended, beyond_view, view, at_rim, rep.crossings);
+  std::printf(
+      "extended to the rim (%.0f px): %d rays seen, %d ended (%d at or beyond the calibrated view "
+      "%.0f px), %d reach the rim; "
+      "%d crossings\n",
+      cam.view_radius_px(), seen, ended, beyond_view, view, at_rim, rep.crossings);
   EXPECT_LT(at_rim, seen / 10);
   EXPECT_GT(beyond_view, ended * 8 / 10);
   // The crossings within the calibrated view still agree with the model.
@@ -263,7 +287,9 @@ TEST(VisionRealFrame, RaysEndWhereTheCarpetEndsNotInTheWalls) {
 
 class VisionRendered : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() { renderer_ = new sim::OmniRenderer(load_field("fira-robosot"), load_camera("default")); }
+  static void SetUpTestSuite() {
+    renderer_ = new sim::OmniRenderer(load_field("fira-robosot"), load_camera("default"));
+  }
   static void TearDownTestSuite() {
     delete renderer_;
     renderer_ = nullptr;
@@ -284,8 +310,10 @@ cv::Mat perturb(const cv::Mat& img, Perturb p) {
       for (int u = 0; u < out.cols; ++u) {
         auto& px = out.at<cv::Vec3b>(v, u);
         const int mx = std::max({px[0], px[1], px[2]}), mn = std::min({px[0], px[1], px[2]});
-        if (mx >= 150 && mx - mn < 60) px = cv::Vec3b(static_cast<std::uint8_t>(mx * 210 / 255), static_cast<std::uint8_t>(mx * 180 / 255),
-                                                      static_cast<std::uint8_t>(mx * 145 / 255));
+        if (mx >= 150 && mx - mn < 60)
+          px = cv::Vec3b(static_cast<std::uint8_t>(mx * 210 / 255),
+                         static_cast<std::uint8_t>(mx * 180 / 255),
+                         static_cast<std::uint8_t>(mx * 145 / 255));
       }
   }
   return out;
@@ -321,11 +349,12 @@ Compared run(const sim::OmniRenderer& r, Perturb p, std::uint64_t seed, int fram
 TEST_F(VisionRendered, CrossingsMatchTheGeometryAndAreNoWorseThanFixedThresholds) {
   const std::uint64_t seed = 1302;
   std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
-  const std::pair<Perturb, const char*> cases[] = {{Perturb::kNone, "rendered"},
-                                                   {Perturb::kDark, "rendered, 55 % light"},
-                                                   {Perturb::kBright, "rendered, 135 % light"},
-                                                   {Perturb::kBluishLines, "rendered, bluish lines"},
-                                                   {Perturb::kRobots, "rendered, 4 robots"}};
+  const std::pair<Perturb, const char*> cases[] = {
+      {Perturb::kNone, "rendered"},
+      {Perturb::kDark, "rendered, 55 % light"},
+      {Perturb::kBright, "rendered, 135 % light"},
+      {Perturb::kBluishLines, "rendered, bluish lines"},
+      {Perturb::kRobots, "rendered, 4 robots"}};
   for (const auto& [p, name] : cases) {
     const Compared c = run(*renderer_, p, seed, 12);
     print((std::string(name) + ": extractor").c_str(), c.fresh);
@@ -352,7 +381,9 @@ TEST_F(VisionRendered, RobotOnTheCarpetEndsTheRaysItCovers) {
   for (int k = -10; k <= 10; ++k) {
     const double a = deg_to_rad(k);
     const double hit_cm = 100.0 * std::cos(a) - std::sqrt(400.0 - std::pow(100.0 * std::sin(a), 2));
-    EXPECT_NEAR(s.ray_end_px[static_cast<std::size_t>((k + 360) % 360)], cam.radius_px_at_ground(hit_cm), 2.5) << k;
+    EXPECT_NEAR(s.ray_end_px[static_cast<std::size_t>((k + 360) % 360)],
+                cam.radius_px_at_ground(hit_cm), 2.5)
+        << k;
   }
   EXPECT_LT(s.radii_px[0], s.ray_end_px[0]);  // the centre circle before it is kept
   ASSERT_EQ(rep.obstacles.size(), 1u);
@@ -368,21 +399,24 @@ TEST_F(VisionRendered, ThinLineBetweenIntegerSamplesIsFound) {
   // The line x + y = const at 120 px from the centre (perpendicular to the 45 deg diagonal).
   for (int v = 0; v < img.rows; ++v)
     for (int u = 0; u < img.cols; ++u)
-      if (static_cast<int>(std::lround((u - c.x) - (v - c.y))) == 170) img.at<cv::Vec3b>(v, u) = cv::Vec3b(200, 200, 200);
+      if (static_cast<int>(std::lround((u - c.x) - (v - c.y))) == 170)
+        img.at<cv::Vec3b>(v, u) = cv::Vec3b(200, 200, 200);
   CameraModel no_mast = cam;
   no_mast.masts.clear();
   LineExtractor ex(no_mast);
   ExtractionReport rep;
   const BearingScan b = ex.extract(img, 4, &rep);
   int rays = 0, hits = 0;
-  for (int j = -40 * 4; j <= 40 * 4; ++j) {  // bearings within 40 deg of the line's normal (+45 deg image angle)
+  for (int j = -40 * 4; j <= 40 * 4;
+       ++j) {  // bearings within 40 deg of the line's normal (+45 deg image angle)
     const int ray = ((j + 45 * 4) % 1440 + 1440) % 1440;
     const double phi = deg_to_rad(j / 4.0);
     const double r = 170.0 / std::sqrt(2.0) / std::cos(phi);
     if (r > cam.view_radius_px() - 2) continue;
     ++rays;
     bool hit = false;
-    for (int n = 0; n < kCrossingsPerRay; ++n) hit = hit || std::abs(b.radii_px[static_cast<std::size_t>(ray) * 4 + n] - r) <= 1.5;
+    for (int n = 0; n < kCrossingsPerRay; ++n)
+      hit = hit || std::abs(b.radii_px[static_cast<std::size_t>(ray) * 4 + n] - r) <= 1.5;
     hits += hit;
   }
   std::printf("thin diagonal line: found on %d of %d rays\n", hits, rays);
@@ -412,13 +446,15 @@ TEST(VisionNoMeasurement, BlackFrameAndWallsOnlyAreNotUsable) {
       if (r >= 180.0) continue;
       // The ring 180..210 px (beyond the carpet all round) repeated into the inner disc.
       const double rr = 180.0 + std::fmod(180.0 - r, 30.0);
-      const int su = static_cast<int>(std::lround(c.x + du / std::max(r, 1.0) * rr)), sv = static_cast<int>(std::lround(c.y + dv / std::max(r, 1.0) * rr));
-      walls.at<cv::Vec3b>(v, u) = f.image.at<cv::Vec3b>(std::clamp(sv, 0, walls.rows - 1), std::clamp(su, 0, walls.cols - 1));
+      const int su = static_cast<int>(std::lround(c.x + du / std::max(r, 1.0) * rr)),
+                sv = static_cast<int>(std::lround(c.y + dv / std::max(r, 1.0) * rr));
+      walls.at<cv::Vec3b>(v, u) = f.image.at<cv::Vec3b>(std::clamp(sv, 0, walls.rows - 1),
+                                                        std::clamp(su, 0, walls.cols - 1));
     }
   LineExtractor ex2(f.camera);
   (void)ex2.extract(walls, 4, &rep);
-  std::printf("walls only: %s (carpet %.0f %%, %d rays seen, %d crossings)\n", rep.reason.c_str(), 100 * rep.carpet_fraction,
-              rep.rays_seen, rep.crossings);
+  std::printf("walls only: %s (carpet %.0f %%, %d rays seen, %d crossings)\n", rep.reason.c_str(),
+              100 * rep.carpet_fraction, rep.rays_seen, rep.crossings);
   EXPECT_FALSE(rep.usable);
 }
 
@@ -449,8 +485,9 @@ TEST(VisionNoMeasurement, WhiteAndBlownOutFramesLeaveNoCarpetBehindAndALightJump
   EXPECT_FALSE(rep.usable);
   EXPECT_NE(rep.reason.find("no carpet"), std::string::npos) << rep.reason;
   (void)ex.extract(frame(12, 1.0), 2, &rep);
-  std::printf("then a normal frame: %s, carpet hue %.0f +- %.1f, V %.0f..%.0f, %d crossings\n", rep.usable ? "usable" : rep.reason.c_str(),
-              rep.carpet.hue, rep.carpet.hue_half_width, rep.carpet.val_min, rep.carpet.val_max, rep.crossings);
+  std::printf("then a normal frame: %s, carpet hue %.0f +- %.1f, V %.0f..%.0f, %d crossings\n",
+              rep.usable ? "usable" : rep.reason.c_str(), rep.carpet.hue, rep.carpet.hue_half_width,
+              rep.carpet.val_min, rep.carpet.val_max, rep.crossings);
   EXPECT_TRUE(rep.usable) << rep.reason;
   EXPECT_NEAR(rep.carpet.hue, 70.0, 8.0);  // the renderer's carpet paint, not a grey window
   EXPECT_FALSE(is_grey_carpet(rep.carpet.hue_half_width));
@@ -460,8 +497,8 @@ TEST(VisionNoMeasurement, WhiteAndBlownOutFramesLeaveNoCarpetBehindAndALightJump
     EXPECT_TRUE(rep.usable) << rep.reason;
   }
   (void)ex2.extract(frame(16, 1.6), 2, &rep);
-  std::printf("exposure 0.6x -> 1.6x: %s, %d rays seen, %d crossings\n", rep.usable ? "usable" : rep.reason.c_str(), rep.rays_seen,
-              rep.crossings);
+  std::printf("exposure 0.6x -> 1.6x: %s, %d rays seen, %d crossings\n",
+              rep.usable ? "usable" : rep.reason.c_str(), rep.rays_seen, rep.crossings);
   EXPECT_TRUE(rep.usable) << rep.reason;
 }
 
@@ -487,12 +524,18 @@ TEST(VisionModelConfig, BlockRoundTripsAndBadValuesNameTheField) {
     }
     return std::string("no error");
   };
-  EXPECT_NE(error_of(R"({"carpet_hsv": {"hue": 200, "hue_half_width": 5, "sat_min": 1, "val_min": 1, "val_max": 9}})")
-                .find("cam.json:vision.carpet_hsv.hue: must be an OpenCV hue in [0, 180) (got 200)"),
-            std::string::npos)
-      << error_of(R"({"carpet_hsv": {"hue": 200, "hue_half_width": 5, "sat_min": 1, "val_min": 1, "val_max": 9}})");
-  EXPECT_NE(error_of(R"({"extraction": {"end_run_px": 0}})").find("vision.extraction.end_run_px"), std::string::npos);
-  EXPECT_NE(error_of(R"({"carpet_hsv": {"hue": 20}})").find("vision.carpet_hsv.hue_half_width: missing"), std::string::npos);
+  EXPECT_NE(
+      error_of(
+          R"({"carpet_hsv": {"hue": 200, "hue_half_width": 5, "sat_min": 1, "val_min": 1, "val_max": 9}})")
+          .find("cam.json:vision.carpet_hsv.hue: must be an OpenCV hue in [0, 180) (got 200)"),
+      std::string::npos)
+      << error_of(
+             R"({"carpet_hsv": {"hue": 200, "hue_half_width": 5, "sat_min": 1, "val_min": 1, "val_max": 9}})");
+  EXPECT_NE(error_of(R"({"extraction": {"end_run_px": 0}})").find("vision.extraction.end_run_px"),
+            std::string::npos);
+  EXPECT_NE(
+      error_of(R"({"carpet_hsv": {"hue": 20}})").find("vision.carpet_hsv.hue_half_width: missing"),
+      std::string::npos);
   EXPECT_NE(error_of(R"({"colour": 1})").find("unknown key"), std::string::npos);
   // The vision block does not move the floor: not in the fingerprint.
   EXPECT_EQ(cam.fingerprint(), plain.fingerprint());
@@ -503,7 +546,8 @@ TEST(VisionModelConfig, RecordingMetaCarriesTheVisionBlock) {
   meta.camera = load_camera("default");
   meta.camera.vision.carpet_hsv = CarpetHsv{93.0, 5.0, 110.0, 30.0, 100.0};
   meta.camera.vision.extraction.min_crossings = 33;
-  const auto path = std::filesystem::temp_directory_path() / ("omniloc_vision_meta_" + std::to_string(::getpid()) + ".json");
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("omniloc_vision_meta_" + std::to_string(::getpid()) + ".json");
   write_meta(path, meta);
   const RecordingMeta back = read_meta(path);
   std::filesystem::remove(path);
@@ -525,7 +569,8 @@ TEST(VisionLargeView, ViewBeyond254PxIsScannedToItsEnd) {
   ASSERT_NEAR(big.view_radius_px(), 2.0 * load_camera("default").view_radius_px(), 1e-9);
   EXPECT_NEAR(big.scan_step_px(), big.view_radius_px() / 254.0, 1e-12);
   EXPECT_EQ(big.last_scan_sample(), 254);
-  EXPECT_EQ(big.first_scan_sample(), static_cast<int>(std::ceil(big.body_radius_px / big.scan_step_px())));
+  EXPECT_EQ(big.first_scan_sample(),
+            static_cast<int>(std::ceil(big.body_radius_px / big.scan_step_px())));
 
   const sim::OmniRenderer r(load_field("fira-robosot"), big);
   const std::uint64_t seed = 4771;
@@ -544,7 +589,8 @@ TEST(VisionLargeView, ViewBeyond254PxIsScannedToItsEnd) {
     const Scan got = rotate_to_field(ex.extract(img, 4, &rep), pose.yaw_deg);
     ASSERT_TRUE(rep.usable) << rep.reason;
     all.add(compare(got, expected_scan(r.field(), big, {pose.x_cm, pose.y_cm}), 1.0));
-    for (const std::uint8_t k : got.radii_px) beyond_old_end += k != kNoCrossing && k * big.scan_step_px() > 254.0;
+    for (const std::uint8_t k : got.radii_px)
+      beyond_old_end += k != kNoCrossing && k * big.scan_step_px() > 254.0;
   }
   print("1280 x 1024, view 477 px", all);
   std::printf("crossings beyond 254 px: %d\n", beyond_old_end);
@@ -556,12 +602,12 @@ TEST(VisionLargeView, ViewBeyond254PxIsScannedToItsEnd) {
 // ---------------------------------------------------------------------------------------------
 // The fast walk (LineExtractor::extract) against its reference (extract_reference: every pixel's
 // HSV recomputed on every ray): byte-identical scans and identical reports, frame after frame (the
-// adaptation state must evolve the same), on rendered frames (plain, dark, bright, robots), the real
-// frame with its calibrated camera and extended to the rim (walls, the ball), with the carpet
+// adaptation state must evolve the same), on rendered frames (plain, dark, bright, robots), the
+// real frame with its calibrated camera and extended to the rim (walls, the ball), with the carpet
 // estimated and given, at several ray densities.
 
-void expect_same(const BearingScan& a, const ExtractionReport& ra, const BearingScan& b, const ExtractionReport& rb,
-                 const std::string& what) {
+void expect_same(const BearingScan& a, const ExtractionReport& ra, const BearingScan& b,
+                 const ExtractionReport& rb, const std::string& what) {
   SCOPED_TRACE(what);
   EXPECT_EQ(a.rays_per_degree, b.rays_per_degree);
   EXPECT_TRUE(a.radii_px == b.radii_px);
@@ -588,7 +634,8 @@ void expect_same(const BearingScan& a, const ExtractionReport& ra, const Bearing
 
 // Three extractors of one camera, the fast walk (extract), the scalar bin walk and the reference,
 // fed the same frames in order.
-int expect_same_sequence(const CameraModel& cam, const std::vector<cv::Mat>& frames, int rpd, const std::string& what) {
+int expect_same_sequence(const CameraModel& cam, const std::vector<cv::Mat>& frames, int rpd,
+                         const std::string& what) {
   LineExtractor fast(cam), bins(cam), ref(cam);
   int crossings = 0;
   for (std::size_t i = 0; i < frames.size(); ++i) {
@@ -596,7 +643,8 @@ int expect_same_sequence(const CameraModel& cam, const std::vector<cv::Mat>& fra
     const BearingScan bf = fast.extract(frames[i], rpd, &rf);
     const BearingScan bb = bins.extract_with(LineExtractor::Walk::kBinWalk, frames[i], rpd, &rb);
     const BearingScan br = ref.extract_reference(frames[i], rpd, &rr);
-    const std::string at = ", frame " + std::to_string(i) + ", " + std::to_string(rpd) + " rays/deg";
+    const std::string at =
+        ", frame " + std::to_string(i) + ", " + std::to_string(rpd) + " rays/deg";
     expect_same(bf, rf, br, rr, what + at + ", fast walk");
     expect_same(bb, rb, br, rr, what + at + ", scalar bin walk");
     crossings += rr.crossings;
@@ -610,20 +658,24 @@ TEST_F(VisionRendered, FastExtractionEqualsTheReferenceByteForByte) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> ux(60, 690), uy(60, 490), uyaw(-180, 180);
   std::vector<cv::Mat> frames;
-  const Perturb kinds[] = {Perturb::kNone, Perturb::kRobots, Perturb::kDark, Perturb::kBright, Perturb::kRobots, Perturb::kNone};
+  const Perturb kinds[] = {Perturb::kNone,   Perturb::kRobots, Perturb::kDark,
+                           Perturb::kBright, Perturb::kRobots, Perturb::kNone};
   for (std::size_t i = 0; i < std::size(kinds); ++i) {
     const Pose2 pose{ux(rng), uy(rng), uyaw(rng)};
     sim::RenderOptions opt;
     opt.seed = seed + i;
     opt.gradient_direction_deg = 41.0 * static_cast<double>(i);
-    if (kinds[i] == Perturb::kRobots) opt.obstacles = sim::random_obstacles(renderer_->field(), pose, 4, opt.seed);
+    if (kinds[i] == Perturb::kRobots)
+      opt.obstacles = sim::random_obstacles(renderer_->field(), pose, 4, opt.seed);
     frames.push_back(perturb(renderer_->render(pose, opt), kinds[i]));
   }
-  frames.push_back(cv::Mat(frames[0].size(), CV_8UC3, cv::Scalar(0, 0, 0)));  // no carpet: estimated again next frame
+  frames.push_back(cv::Mat(frames[0].size(), CV_8UC3,
+                           cv::Scalar(0, 0, 0)));  // no carpet: estimated again next frame
   frames.push_back(frames[1]);
   const CameraModel& cam = renderer_->camera();
   int crossings = 0;
-  for (int rpd : {4, 2, 1, 3}) crossings += expect_same_sequence(cam, frames, rpd, "rendered, carpet estimated");
+  for (int rpd : {4, 2, 1, 3})
+    crossings += expect_same_sequence(cam, frames, rpd, "rendered, carpet estimated");
   // The carpet and the steps given by the camera (no estimation, the value window per sector).
   CameraModel given = cam;
   {
@@ -643,7 +695,8 @@ TEST(VisionRealFrame, FastExtractionEqualsTheReferenceByteForByte) {
   ASSERT_FALSE(f.image.empty());
   const std::vector<cv::Mat> frames{f.image, f.image, f.image};
   EXPECT_GT(expect_same_sequence(f.camera, frames, 4, "real frame"), 100);
-  EXPECT_GT(expect_same_sequence(extended_to_rim(f), frames, 4, "real frame extended to the rim"), 100);
+  EXPECT_GT(expect_same_sequence(extended_to_rim(f), frames, 4, "real frame extended to the rim"),
+            100);
   EXPECT_GT(expect_same_sequence(f.camera, frames, 2, "real frame"), 50);
 }
 

@@ -14,7 +14,9 @@
 namespace omniloc::sim {
 namespace {
 
-RobotConfig robot() { return RobotConfig{}; }
+RobotConfig robot() {
+  return RobotConfig{};
+}
 
 std::array<long long, 4> total_counts(World& w) {
   std::array<long long, 4> sum{};
@@ -89,7 +91,8 @@ TEST(SimTrajectory, EveryStandardTrajectoryIsSmoothBoundedAndOnTheField) {
       TrajectorySample prev = t.sample(0.0);
       for (double s = dt; s <= t.duration_s() + 0.1; s += dt) {
         const TrajectorySample cur = t.sample(s);
-        const Eigen::Vector2d fd((cur.pose.x_cm - prev.pose.x_cm) / dt, (cur.pose.y_cm - prev.pose.y_cm) / dt);
+        const Eigen::Vector2d fd((cur.pose.x_cm - prev.pose.x_cm) / dt,
+                                 (cur.pose.y_cm - prev.pose.y_cm) / dt);
         const Eigen::Vector2d mean_v = 0.5 * (cur.velocity_cm_per_s + prev.velocity_cm_per_s);
         max_dv_err = std::max(max_dv_err, (fd - mean_v).norm());
         EXPECT_NEAR((cur.pose.yaw_deg - prev.pose.yaw_deg) / dt,
@@ -106,8 +109,8 @@ TEST(SimTrajectory, EveryStandardTrajectoryIsSmoothBoundedAndOnTheField) {
         }
         prev = cur;
       }
-      EXPECT_LT(max_dv_err, 0.5);   // cm/s: finite difference vs analytic (second-order at 1 ms)
-      EXPECT_LT(max_acc, 400.0);    // cm/s^2 incl. centripetal; the profiles use <= 350 tangential
+      EXPECT_LT(max_dv_err, 0.5);  // cm/s: finite difference vs analytic (second-order at 1 ms)
+      EXPECT_LT(max_acc, 400.0);   // cm/s^2 incl. centripetal; the profiles use <= 350 tangential
       EXPECT_EQ(t.sample(t.duration_s() + 1.0).velocity_cm_per_s.norm(), 0.0);
     }
   }
@@ -167,7 +170,8 @@ TEST(SimWorld, RotationInPlaceCountsMatchEquation9) {
   World w(WorldConfig::noise_free(robot(), 5), make_trajectory("rotate_in_place"));
   const auto sum = total_counts(w);
   const double expect = 20.0 * deg_to_rad(270.0) / cm_per_count(robot());
-  for (std::size_t i = 0; i < 4; ++i) EXPECT_NEAR(static_cast<double>(sum[i]), expect, 1.0) << "wheel " << i + 1;
+  for (std::size_t i = 0; i < 4; ++i)
+    EXPECT_NEAR(static_cast<double>(sum[i]), expect, 1.0) << "wheel " << i + 1;
   EXPECT_NEAR(w.truth().yaw_deg, 270.0, 1e-3);
   EXPECT_NEAR(w.truth().x_cm, 375.0, 1e-6);
 }
@@ -212,8 +216,8 @@ TEST(SimWorld, StationaryGyroDriftsByItsBias) {
   SimWindow last;
   while (!w.finished()) last = w.next_window();
   const double expect = 10.0 + w.gyro().bias_deg_per_s() * 20.0;
-  std::printf("gyro bias %.5f deg/s, yaw after 20 s %.4f deg (expect %.4f)\n", w.gyro().bias_deg_per_s(),
-              last.window.gyro_yaw_deg, expect);
+  std::printf("gyro bias %.5f deg/s, yaw after 20 s %.4f deg (expect %.4f)\n",
+              w.gyro().bias_deg_per_s(), last.window.gyro_yaw_deg, expect);
   EXPECT_NEAR(last.window.gyro_yaw_deg, expect, 0.12);
   EXPECT_NE(w.gyro().bias_deg_per_s(), 0.0);
   EXPECT_EQ(last.truth.yaw_deg, 10.0);
@@ -269,7 +273,8 @@ TEST(SimWorld, BumpLengthensTheWheelPathByItsArcLength) {
   const int n = 200000;
   for (int k = 0; k < n; ++k) {
     const double x = -radius + (k + 0.5) * 2.0 * radius / n;
-    const double slope = -0.5 * height * kPi / radius * std::sin(kPi * std::abs(x) / radius) * (x < 0 ? -1.0 : 1.0);
+    const double slope =
+        -0.5 * height * kPi / radius * std::sin(kPi * std::abs(x) / radius) * (x < 0 ? -1.0 : 1.0);
     extra += (std::sqrt(1.0 + slope * slope) - 1.0) * 2.0 * radius / n;
   }
   WorldConfig clean = WorldConfig::noise_free(robot(), 4);
@@ -283,14 +288,16 @@ TEST(SimWorld, BumpLengthensTheWheelPathByItsArcLength) {
   const auto sb = total_counts(b);
   // The wheel's drive direction is 45 degrees off its path: it sees the extra path times sin 45.
   const double expect_counts = extra * std::sin(deg_to_rad(45.0)) / cm_per_count(robot());
-  std::printf("bump: extra path %.4f cm, wheel 4 extra counts %lld (expect %.1f)\n", extra, sb[3] - sa[3], expect_counts);
+  std::printf("bump: extra path %.4f cm, wheel 4 extra counts %lld (expect %.1f)\n", extra,
+              sb[3] - sa[3], expect_counts);
   EXPECT_NEAR(static_cast<double>(sb[3] - sa[3]), expect_counts, 0.03 * expect_counts + 2.0);
   EXPECT_EQ(sa[0], sb[0]);
   EXPECT_EQ(sa[1], sb[1]);
 }
 
-// Carried from mid-straight (x = 375 at about 3 s) to (200, 400) facing -90: no counts for the jump,
-// the gyro turns by -90, and the rest of the drive continues from there along the new heading.
+// Carried from mid-straight (x = 375 at about 3 s) to (200, 400) facing -90: no counts for the
+// jump, the gyro turns by -90, and the rest of the drive continues from there along the new
+// heading.
 TEST(SimWorld, KidnapMovesTheTruthButNotTheWheels) {
   WorldConfig plain = WorldConfig::noise_free(robot(), 6);
   WorldConfig carried = plain;
@@ -302,7 +309,8 @@ TEST(SimWorld, KidnapMovesTheTruthButNotTheWheels) {
   while (!a.finished()) {
     const SimWindow wa = a.next_window();
     const SimWindow wb = b.next_window();
-    ASSERT_EQ(wa.window.counts, wb.window.counts) << "window " << wa.window.seq;  // same wheel motion
+    ASSERT_EQ(wa.window.counts, wb.window.counts)
+        << "window " << wa.window.seq;  // same wheel motion
     if (wb.kidnapped) {
       ++flagged;
       at_kidnap_a = wa.truth;
@@ -312,8 +320,8 @@ TEST(SimWorld, KidnapMovesTheTruthButNotTheWheels) {
   EXPECT_EQ(flagged, 1);
   // After the kidnap the robot drives the rest of the line, 630 - x(3 s), along field -y.
   const double rest = 630.0 - make_trajectory("straight").sample(3.0).pose.x_cm;
-  std::printf("kidnapped at x = %.2f; ended at (%.3f, %.3f, %.3f)\n", at_kidnap_a.x_cm, b.truth().x_cm, b.truth().y_cm,
-              b.truth().yaw_deg);
+  std::printf("kidnapped at x = %.2f; ended at (%.3f, %.3f, %.3f)\n", at_kidnap_a.x_cm,
+              b.truth().x_cm, b.truth().y_cm, b.truth().yaw_deg);
   EXPECT_NEAR(b.truth().x_cm, 200.0, 0.05);
   EXPECT_NEAR(b.truth().y_cm, 400.0 - rest, 0.05);
   EXPECT_NEAR(b.truth().yaw_deg, -90.0, 1e-6);

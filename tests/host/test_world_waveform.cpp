@@ -13,7 +13,9 @@ namespace omniloc::sim {
 namespace {
 
 // Phase index g = {B, A^B}: 0,1,2,3 for AB = 00,10,11,01 (as the RTL decoder computes it).
-int phase(bool a, bool b) { return (b ? 2 : 0) | ((a != b) ? 1 : 0); }
+int phase(bool a, bool b) {
+  return (b ? 2 : 0) | ((a != b) ? 1 : 0);
+}
 
 // An edge counter written from the RTL's description, not from decoded_count().
 struct Decoder {
@@ -46,7 +48,8 @@ TEST(QuadratureStream, EdgesMatchPerCycleEvaluation) {
     expect_levels = 0;
     for (int m = 0; m < 4; ++m) {
       const std::int64_t q = quarter_of(position_at(ref.last_step(), m, c));
-      expect_levels = static_cast<std::uint8_t>(expect_levels | (level_a(q) << (2 * m)) | (level_b(q) << (2 * m + 1)));
+      expect_levels = static_cast<std::uint8_t>(expect_levels | (level_a(q) << (2 * m)) |
+                                                (level_b(q) << (2 * m + 1)));
     }
     const std::uint8_t before = stream.levels();
     const std::uint8_t got = stream.levels_at(c);
@@ -93,17 +96,25 @@ void compare_windows(int decoding, const char* trajectory, std::int64_t first_wi
     const SimWindow sw = world.next_window();
     std::array<long long, 4> before{};
     for (std::size_t m = 0; m < 4; ++m) before[m] = dec[m].count;
-    while (const auto e = stream.next_edge(sw.t_end_cycles)) dec[static_cast<std::size_t>(e->motor)].apply(e->a, e->b);
+    while (const auto e = stream.next_edge(sw.t_end_cycles))
+      dec[static_cast<std::size_t>(e->motor)].apply(e->a, e->b);
     for (std::size_t m = 0; m < 4; ++m)
-      ASSERT_EQ(dec[m].count - before[m], sw.window.counts[m]) << "window " << sw.window.seq << " motor " << m;
+      ASSERT_EQ(dec[m].count - before[m], sw.window.counts[m])
+          << "window " << sw.window.seq << " motor " << m;
     ++windows;
   }
   EXPECT_GT(windows, 300);
 }
 
-TEST(QuadratureStream, EdgeCountsEqualWindowCountsX4) { compare_windows(4, "figure_eight", 400'000); }
-TEST(QuadratureStream, EdgeCountsEqualWindowCountsX2OffsetWindows) { compare_windows(2, "boundary_tour", 123'457); }
-TEST(QuadratureStream, EdgeCountsEqualWindowCountsX1) { compare_windows(1, "straight", 400'000); }
+TEST(QuadratureStream, EdgeCountsEqualWindowCountsX4) {
+  compare_windows(4, "figure_eight", 400'000);
+}
+TEST(QuadratureStream, EdgeCountsEqualWindowCountsX2OffsetWindows) {
+  compare_windows(2, "boundary_tour", 123'457);
+}
+TEST(QuadratureStream, EdgeCountsEqualWindowCountsX1) {
+  compare_windows(1, "straight", 400'000);
+}
 
 TEST(QuadratureStream, BlockFillEqualsPerCycleLevels) {
   const WorldConfig cfg = WorldConfig::default_noise(RobotConfig{}, 31);
@@ -111,7 +122,8 @@ TEST(QuadratureStream, BlockFillEqualsPerCycleLevels) {
   QuadratureStream b(cfg, make_trajectory("circle"));
   std::vector<std::uint8_t> block(50'000);
   int changes = 0;
-  for (std::int64_t start = 1; start < 4'000'001; start += static_cast<std::int64_t>(block.size())) {
+  for (std::int64_t start = 1; start < 4'000'001;
+       start += static_cast<std::int64_t>(block.size())) {
     a.fill_levels(start, block);
     for (std::size_t k = 0; k < block.size(); ++k) {
       const std::uint8_t v = b.levels_at(start + static_cast<std::int64_t>(k));

@@ -33,8 +33,10 @@ inline constexpr double kTrialGridCm = 10.0;
 
 struct LocateOutcome {
   bool usable = false;
-  bool accepted = false;  // as the localizer decides (a position known with its heading up to 180 deg counts)
-  bool matched = false;   // below E_TH: accepted, or refused only because the lines cannot tell pose from twin
+  bool accepted =
+      false;  // as the localizer decides (a position known with its heading up to 180 deg counts)
+  bool matched =
+      false;  // below E_TH: accepted, or refused only because the lines cannot tell pose from twin
   double error_cm = 1e9, error_deg = 180.0;  // to the nearer of the pose and its twin
   std::string why;                           // no measurement: the extraction's reason
 };
@@ -42,40 +44,44 @@ struct LocateOutcome {
 struct VenueOutcome {
   std::uint64_t seed = 0;
   std::string field, spot;
-  bool calibrated = false;     // calibrate wrote a camera
-  std::string calib_step;      // failed step ("rim", "carpet", "lines", "view", "fit", "model", "self-check") or ""
+  bool calibrated = false;  // calibrate wrote a camera
+  std::string calib_step;   // failed step ("rim", "carpet", "lines", "view", "fit", "model",
+                            // "self-check") or ""
   std::string calib_error;
   double rms_px = 0.0, centre_error_px = 0.0;
-  double line_recall = 0.0;    // calibrate's self-check on the calibration frame
+  double line_recall = 0.0;  // calibrate's self-check on the calibration frame
   // The calibrated mapping against the true one: the largest relative ground-distance error over
   // the radii the lines measured (what the frame can tell) that the true camera's table reaches,
   // printed beside the goal's figures.
   double mapping_error = 0.0;
-  bool calib_good = false;     // calibrated, rms and centre within the goal
-  LocateOutcome located;       // with the calibrated camera (when calibrated)
-  LocateOutcome reference;     // with the venue's true (nominal) camera
+  bool calib_good = false;  // calibrated, rms and centre within the goal
+  LocateOutcome located;    // with the calibrated camera (when calibrated)
+  LocateOutcome reference;  // with the venue's true (nominal) camera
   [[nodiscard]] bool located_good() const {
     return located.matched && located.error_cm <= kLocateCm && located.error_deg <= kLocateDeg;
   }
   [[nodiscard]] bool wild() const { return located.accepted && located.error_cm > kWildCm; }
   /// The same judgement of the reference locate (with the true camera).
   [[nodiscard]] bool reference_good() const {
-    return reference.matched && reference.error_cm <= kLocateCm && reference.error_deg <= kLocateDeg;
+    return reference.matched && reference.error_cm <= kLocateCm &&
+           reference.error_deg <= kLocateDeg;
   }
 };
 
 /// The step a calibration error names (the analysis and fit say "no mirror rim", "no carpet", ...).
 inline std::string failed_step(const std::string& what) {
-  for (const auto& [key, step] : {std::pair{"no mirror rim", "rim"}, std::pair{"rim radius given", "rim"},
-                                  std::pair{"no carpet ring", "view"}, std::pair{"no carpet", "carpet"},
-                                  std::pair{"no lines", "lines"}, std::pair{"monotonic", "model"},
-                                  std::pair{"nothing fits", "fit"}, std::pair{"self-check failed", "self-check"}}) {
+  for (const auto& [key, step] :
+       {std::pair{"no mirror rim", "rim"}, std::pair{"rim radius given", "rim"},
+        std::pair{"no carpet ring", "view"}, std::pair{"no carpet", "carpet"},
+        std::pair{"no lines", "lines"}, std::pair{"monotonic", "model"},
+        std::pair{"nothing fits", "fit"}, std::pair{"self-check failed", "self-check"}}) {
     if (what.find(key) != std::string::npos) return step;
   }
   return "other";
 }
 
-inline LocateOutcome locate_with(const sim::Venue& v, const CameraModel& camera, const cv::Mat& frame, const Pose2& truth) {
+inline LocateOutcome locate_with(const sim::Venue& v, const CameraModel& camera,
+                                 const cv::Mat& frame, const Pose2& truth) {
   LocateOutcome o;
   static const LocalizerConfig config = load_localizer_config("default");
   const FeatureDb db = build_feature_db(v.field, camera, GridSpec::covering(v.field, kTrialGridCm));
@@ -87,7 +93,8 @@ inline LocateOutcome locate_with(const sim::Venue& v, const CameraModel& camera,
     o.why = rep.reason;
     return o;
   }
-  const GoalObservation goals = observe_goals(frame, camera, v.field, goal_colour_models(camera.vision));
+  const GoalObservation goals =
+      observe_goals(frame, camera, v.field, goal_colour_models(camera.vision));
   const SingleFrameResult r = locate_frame(config, v.field, camera, db, scan, std::nullopt, &goals);
   o.accepted = r.accepted || (r.heading_ambiguous && r.match.error < config.e_th);
   // A twin counts: a pose refused only because the lines cannot tell it from its twin (no goal
@@ -115,8 +122,10 @@ inline VenueOutcome run_venue(std::uint64_t seed) {
   const sim::VenueShots shots = sim::render_venue(v);
   out.field = v.field_name;
   out.spot = shots.spot.name;
-  // The venue's true camera: the reference locate, and the truth the calibrated mapping is judged by.
-  const CameraModel truth_camera = sim::nominal_camera(v.optics, std::hypot(v.field.total_x_cm(), v.field.total_y_cm()));
+  // The venue's true camera: the reference locate, and the truth the calibrated mapping is judged
+  // by.
+  const CameraModel truth_camera =
+      sim::nominal_camera(v.optics, std::hypot(v.field.total_x_cm(), v.field.total_y_cm()));
   try {
     truth_camera.validate(config::Origin("the venue's true camera"));
     out.reference = locate_with(v, truth_camera, shots.frame, shots.frame_pose);
@@ -125,7 +134,8 @@ inline VenueOutcome run_venue(std::uint64_t seed) {
   }
   CalibrationResult cal;
   try {
-    const CalibrationFrame f{shots.calib, "venue-" + std::to_string(seed), shots.spot.position_cm, std::nullopt};
+    const CalibrationFrame f{shots.calib, "venue-" + std::to_string(seed), shots.spot.position_cm,
+                             std::nullopt};
     // The known spots (centre spot, penalty marks) lie on the field's long axis, where the
     // handedness cannot be seen: the team says it (`--mirrored`), as it knows its camera.
     CalibrationOptions told;
@@ -141,8 +151,11 @@ inline VenueOutcome run_venue(std::uint64_t seed) {
   out.line_recall = cal.fits.front().line_recall;
   out.centre_error_px = (cal.camera.center_px - v.optics.centre_px).norm();
   for (double rr = cal.measured_min_px; rr <= cal.measured_max_px; rr += 1.0) {
-    const double truth_cm = truth_camera.ground_cm_at_radius(rr);  // NaN beyond the true table: not judged
-    if (std::isfinite(truth_cm)) out.mapping_error = std::max(out.mapping_error, std::abs(cal.radial.ground_cm(rr) / truth_cm - 1.0));
+    const double truth_cm =
+        truth_camera.ground_cm_at_radius(rr);  // NaN beyond the true table: not judged
+    if (std::isfinite(truth_cm))
+      out.mapping_error =
+          std::max(out.mapping_error, std::abs(cal.radial.ground_cm(rr) / truth_cm - 1.0));
   }
   out.calib_good = out.rms_px < kCalibRmsPx && out.centre_error_px < kCalibCentrePx;
   try {
@@ -158,23 +171,34 @@ inline VenueOutcome run_venue(std::uint64_t seed) {
 }
 
 inline const char* verdict(const LocateOutcome& o) {
-  return o.accepted ? "accepted" : o.matched ? "refused as ambiguous (pose or twin)" : "not accepted";
+  return o.accepted  ? "accepted"
+         : o.matched ? "refused as ambiguous (pose or twin)"
+                     : "not accepted";
 }
 
 inline void print_outcome(const VenueOutcome& o) {
-  std::printf("venue %llu (%s, %s): ", static_cast<unsigned long long>(o.seed), o.field.c_str(), o.spot.c_str());
+  std::printf("venue %llu (%s, %s): ", static_cast<unsigned long long>(o.seed), o.field.c_str(),
+              o.spot.c_str());
   if (!o.calibrated) {
     std::printf("calibrate failed at %s: %s", o.calib_step.c_str(), o.calib_error.c_str());
   } else {
-    std::printf("calibrated rms %.2f px, centre %.2f px off%s, mapping %.1f %% off at worst, self-check %.0f %%; located ",
-                o.rms_px, o.centre_error_px, o.calib_good ? "" : " (outside the goal)", 100 * o.mapping_error,
-                100 * o.line_recall);
-    if (!o.located.usable) std::printf("no measurement (%s)", o.located.why.c_str());
-    else std::printf("%.1f cm %.1f deg off, %s", o.located.error_cm, o.located.error_deg, verdict(o.located));
+    std::printf(
+        "calibrated rms %.2f px, centre %.2f px off%s, mapping %.1f %% off at worst, self-check "
+        "%.0f %%; located ",
+        o.rms_px, o.centre_error_px, o.calib_good ? "" : " (outside the goal)",
+        100 * o.mapping_error, 100 * o.line_recall);
+    if (!o.located.usable)
+      std::printf("no measurement (%s)", o.located.why.c_str());
+    else
+      std::printf("%.1f cm %.1f deg off, %s", o.located.error_cm, o.located.error_deg,
+                  verdict(o.located));
   }
   std::printf("; true camera: ");
-  if (!o.reference.usable) std::printf("no measurement (%s)\n", o.reference.why.c_str());
-  else std::printf("%.1f cm %.1f deg off, %s\n", o.reference.error_cm, o.reference.error_deg, verdict(o.reference));
+  if (!o.reference.usable)
+    std::printf("no measurement (%s)\n", o.reference.why.c_str());
+  else
+    std::printf("%.1f cm %.1f deg off, %s\n", o.reference.error_cm, o.reference.error_deg,
+                verdict(o.reference));
 }
 
 }  // namespace omniloc::test

@@ -12,7 +12,8 @@ int main() {
     const omniloc::FieldGeometry field = omniloc::load_field("fira-robosot");
     const omniloc::Pose2 a{100.0, 50.0, 90.0};
     const omniloc::Pose2 b = omniloc::compose(a, omniloc::Pose2{10.0, 0.0, 0.0});
-    std::printf("field %s %.0f x %.0f cm\n", field.name.c_str(), field.field_length_cm, field.field_width_cm);
+    std::printf("field %s %.0f x %.0f cm\n", field.name.c_str(), field.field_length_cm,
+                field.field_width_cm);
     std::printf("compose %.1f %.1f %.1f\n", b.x_cm, b.y_cm, b.yaw_deg);
     return 0;
   } catch (const std::exception& e) {

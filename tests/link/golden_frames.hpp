@@ -14,13 +14,15 @@ inline std::uint16_t golden_crc(const std::uint8_t* data, std::size_t n) {
   std::uint16_t crc = 0xFFFF;
   for (std::size_t i = 0; i < n; ++i) {
     crc ^= static_cast<std::uint16_t>(data[i] << 8);
-    for (int b = 0; b < 8; ++b) crc = (crc & 0x8000u) ? static_cast<std::uint16_t>((crc << 1) ^ 0x1021u)
-                                                      : static_cast<std::uint16_t>(crc << 1);
+    for (int b = 0; b < 8; ++b)
+      crc = (crc & 0x8000u) ? static_cast<std::uint16_t>((crc << 1) ^ 0x1021u)
+                            : static_cast<std::uint16_t>(crc << 1);
   }
   return crc;
 }
 
-inline std::vector<std::uint8_t> golden_frame(std::uint8_t type, const std::vector<std::uint8_t>& body) {
+inline std::vector<std::uint8_t> golden_frame(std::uint8_t type,
+                                              const std::vector<std::uint8_t>& body) {
   std::vector<std::uint8_t> f;
   f.reserve(body.size() + 5);
   f.push_back(regmap::kFrameSync);

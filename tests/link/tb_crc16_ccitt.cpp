@@ -33,20 +33,23 @@ TEST(Crc16Ccitt, CheckValueOf123456789) {
   VerilatedContext ctx;
   Vcrc16_ccitt dut(&ctx);
   std::uint16_t crc = 0xFFFF;
-  for (char c : std::string_view("123456789")) crc = rtl_crc(dut, crc, static_cast<std::uint8_t>(c));
+  for (char c : std::string_view("123456789"))
+    crc = rtl_crc(dut, crc, static_cast<std::uint8_t>(c));
   EXPECT_EQ(crc, 0x29B1);
 }
 
 TEST(Crc16Ccitt, EveryCrcAndByteMatchesBitSerialReference) {
   VerilatedContext ctx;
   Vcrc16_ccitt dut(&ctx);
-  std::mt19937_64 rng(omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 1));
+  std::mt19937_64 rng(omniloc::rtl_tb::test_seed(
+      ::testing::UnitTest::GetInstance()->current_test_info()->name(), 1));
   // All 256 bytes against 4096 random CRC states: 10^6 input pairs.
   for (int i = 0; i < 4096; ++i) {
     const auto crc = static_cast<std::uint16_t>(rng());
     for (int b = 0; b < 256; ++b) {
       const auto byte = static_cast<std::uint8_t>(b);
-      ASSERT_EQ(rtl_crc(dut, crc, byte), reference_crc(crc, byte)) << "crc " << crc << " byte " << b;
+      ASSERT_EQ(rtl_crc(dut, crc, byte), reference_crc(crc, byte))
+          << "crc " << crc << " byte " << b;
     }
   }
 }

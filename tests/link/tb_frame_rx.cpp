@@ -31,7 +31,8 @@ struct Event {
 };
 
 std::ostream& operator<<(std::ostream& os, const Event& e) {
-  return os << (e.error ? "error " : "request ") << int(e.code) << " addr/detail " << int(e.addr) << " data " << e.data;
+  return os << (e.error ? "error " : "request ") << int(e.code) << " addr/detail " << int(e.addr)
+            << " data " << e.data;
 }
 
 // The golden parser: same rules as the RTL, written from its specification.
@@ -71,7 +72,8 @@ std::vector<Event> golden_parse(const std::vector<Byte>& stream) {
     if (type == rm::kFrameReadReq && body == rm::kFrameReadReqBodyBytes) {
       events.push_back({false, type, frame[2], 0});
     } else if (type == rm::kFrameWriteReq && body == rm::kFrameWriteReqBodyBytes) {
-      const std::uint32_t data = frame[3] | frame[4] << 8 | frame[5] << 16 | static_cast<std::uint32_t>(frame[6]) << 24;
+      const std::uint32_t data =
+          frame[3] | frame[4] << 8 | frame[5] << 16 | static_cast<std::uint32_t>(frame[6]) << 24;
       events.push_back({false, type, frame[2], data});
     } else if (type == rm::kFrameSnapshotReq && body == rm::kFrameSnapshotReqBodyBytes) {
       events.push_back({false, type, 0, 0});
@@ -94,19 +96,42 @@ std::vector<Byte> make_stream(std::uint64_t seed, int items) {
     std::vector<std::uint8_t> body;
     std::uint8_t type = rm::kFrameReadReq;
     switch (rng() % 10) {
-      case 0: type = rm::kFrameReadReq; body = {addr}; break;
-      case 1: type = rm::kFrameWriteReq; body = {addr}; omniloc::tb::put_u32(body, data); break;
-      case 2: type = rm::kFrameSnapshotReq; break;
-      case 3: type = static_cast<std::uint8_t>(rng()); body.resize(rng() % 6); break;  // unknown type, valid CRC
-      case 4: type = rm::kFrameWriteReq; body = {addr, 1, 2}; break;                     // wrong length
-      default: break;
+      case 0:
+        type = rm::kFrameReadReq;
+        body = {addr};
+        break;
+      case 1:
+        type = rm::kFrameWriteReq;
+        body = {addr};
+        omniloc::tb::put_u32(body, data);
+        break;
+      case 2:
+        type = rm::kFrameSnapshotReq;
+        break;
+      case 3:
+        type = static_cast<std::uint8_t>(rng());
+        body.resize(rng() % 6);
+        break;  // unknown type, valid CRC
+      case 4:
+        type = rm::kFrameWriteReq;
+        body = {addr, 1, 2};
+        break;  // wrong length
+      default:
+        break;
     }
     auto frame = omniloc::tb::golden_frame(type, body);
     switch (rng() % 10) {
-      case 0: frame[2 + rng() % (frame.size() - 2)] ^= static_cast<std::uint8_t>(1u << (rng() % 8)); break;
-      case 1: frame[1] = static_cast<std::uint8_t>(7 + rng() % 200); break;  // oversized LEN
-      case 2: frame.resize(2 + rng() % (frame.size() - 2)); break;            // truncated
-      default: break;
+      case 0:
+        frame[2 + rng() % (frame.size() - 2)] ^= static_cast<std::uint8_t>(1u << (rng() % 8));
+        break;
+      case 1:
+        frame[1] = static_cast<std::uint8_t>(7 + rng() % 200);
+        break;  // oversized LEN
+      case 2:
+        frame.resize(2 + rng() % (frame.size() - 2));
+        break;  // truncated
+      default:
+        break;
     }
     append(frame);
     if (rng() % 5 == 0) {  // garbage, which may contain SYNC bytes
@@ -120,7 +145,8 @@ std::vector<Byte> make_stream(std::uint64_t seed, int items) {
   return s;
 }
 
-std::vector<Event> run(const std::vector<Byte>& stream, std::uint64_t seed, const std::string& vcd = {}) {
+std::vector<Event> run(const std::vector<Byte>& stream, std::uint64_t seed,
+                       const std::string& vcd = {}) {
   const omniloc::rtl_tb::TraceRequest trace{vcd, 0};
   omniloc::rtl_tb::Clocked<Vframe_rx> bench(vcd.empty() ? nullptr : &trace);
   auto& dut = bench.io();
@@ -139,10 +165,13 @@ std::vector<Event> run(const std::vector<Byte>& stream, std::uint64_t seed, cons
     const bool took = dut.byte_valid_i && dut.byte_ready_o;
     if (dut.ev_valid_o && dut.ev_ready_i) {
       events.push_back({dut.ev_error_o != 0, dut.ev_code_o, dut.ev_addr_o, dut.ev_data_o});
-      // The decoded kind link_engine acts on: READ_REQ / WRITE_REQ, neither for a snapshot or an error.
+      // The decoded kind link_engine acts on: READ_REQ / WRITE_REQ, neither for a snapshot or an
+      // error.
       const bool request = dut.ev_error_o == 0;
-      EXPECT_EQ(dut.ev_read_o != 0, request && dut.ev_code_o == omniloc::regmap::kFrameReadReq) << "ev_read_o";
-      EXPECT_EQ(dut.ev_write_o != 0, request && dut.ev_code_o == omniloc::regmap::kFrameWriteReq) << "ev_write_o";
+      EXPECT_EQ(dut.ev_read_o != 0, request && dut.ev_code_o == omniloc::regmap::kFrameReadReq)
+          << "ev_read_o";
+      EXPECT_EQ(dut.ev_write_o != 0, request && dut.ev_code_o == omniloc::regmap::kFrameWriteReq)
+          << "ev_write_o";
     }
     bench.step();
     if (took) {
@@ -157,7 +186,8 @@ std::vector<Event> run(const std::vector<Byte>& stream, std::uint64_t seed, cons
 }
 
 TEST(FrameRx, MixedStreamMatchesGoldenParser) {
-  const auto seed = omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 41);
+  const auto seed = omniloc::rtl_tb::test_seed(
+      ::testing::UnitTest::GetInstance()->current_test_info()->name(), 41);
   const auto stream = make_stream(seed, 3000);
   const auto expected = golden_parse(stream);
   const auto got = run(stream, seed);
@@ -171,12 +201,17 @@ TEST(FrameRx, MixedStreamMatchesGoldenParser) {
   // The mix really exercised every outcome.
   int requests = 0, crc = 0, malformed = 0, truncated = 0;
   for (const auto& e : expected) {
-    if (!e.error) ++requests;
-    else if (e.code == omniloc::regmap::kErrBadCrc) ++crc;
-    else if (e.addr == 0xFF) ++truncated;
-    else ++malformed;
+    if (!e.error)
+      ++requests;
+    else if (e.code == omniloc::regmap::kErrBadCrc)
+      ++crc;
+    else if (e.addr == 0xFF)
+      ++truncated;
+    else
+      ++malformed;
   }
-  std::printf("events: %d requests, %d bad CRC, %d malformed, %d truncated\n", requests, crc, malformed, truncated);
+  std::printf("events: %d requests, %d bad CRC, %d malformed, %d truncated\n", requests, crc,
+              malformed, truncated);
   EXPECT_GT(requests, 500);
   EXPECT_GT(crc, 100);
   EXPECT_GT(malformed, 100);

@@ -21,8 +21,8 @@ struct Frame {
   std::vector<std::uint8_t> body;
 };
 
-
-std::vector<std::uint8_t> run(const std::vector<Frame>& frames, std::uint64_t seed, const std::string& vcd = {}) {
+std::vector<std::uint8_t> run(const std::vector<Frame>& frames, std::uint64_t seed,
+                              const std::string& vcd = {}) {
   const omniloc::rtl_tb::TraceRequest trace{vcd, 0};
   omniloc::rtl_tb::Clocked<Vframe_tx> bench(vcd.empty() ? nullptr : &trace);
   auto& dut = bench.io();
@@ -31,7 +31,8 @@ std::vector<std::uint8_t> run(const std::vector<Frame>& frames, std::uint64_t se
   std::vector<std::uint8_t> out;
   std::size_t next = 0;
   int idle = 0;
-  const std::vector<std::uint8_t>* body = nullptr;  // the body frame_tx is sending (held by the caller)
+  const std::vector<std::uint8_t>* body =
+      nullptr;  // the body frame_tx is sending (held by the caller)
   for (std::uint64_t guard = 0; guard < 10'000'000; ++guard) {
     dut.start_i = 0;
     if (dut.ready_o) body = nullptr;
@@ -41,12 +42,14 @@ std::vector<std::uint8_t> run(const std::vector<Frame>& frames, std::uint64_t se
       dut.body_len_i = static_cast<std::uint8_t>(frames[next].body.size());
       body = &frames[next].body;
     } else {
-      // Garbage on type and length while nothing starts: it must not leak into the frame on the line.
+      // Garbage on type and length while nothing starts: it must not leak into the frame on the
+      // line.
       dut.type_i = static_cast<std::uint8_t>(rng());
       dut.body_len_i = static_cast<std::uint8_t>(rng() % (kMaxBody + 1));
     }
     const unsigned idx = dut.body_idx_o;
-    dut.body_byte_i = (body != nullptr && idx < body->size()) ? (*body)[idx] : static_cast<std::uint8_t>(rng());
+    dut.body_byte_i =
+        (body != nullptr && idx < body->size()) ? (*body)[idx] : static_cast<std::uint8_t>(rng());
     dut.byte_ready_i = (rng() % 4) != 0;
     const bool started = dut.start_i && dut.ready_o;
     if (dut.byte_valid_o && dut.byte_ready_i) out.push_back(dut.byte_o);
@@ -59,7 +62,8 @@ std::vector<std::uint8_t> run(const std::vector<Frame>& frames, std::uint64_t se
 }
 
 TEST(FrameTx, RandomFramesMatchGoldenEncoding) {
-  const auto seed = omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 31);
+  const auto seed = omniloc::rtl_tb::test_seed(
+      ::testing::UnitTest::GetInstance()->current_test_info()->name(), 31);
   std::mt19937_64 rng(seed);
   std::vector<Frame> frames(2000);
   std::vector<std::uint8_t> expected;

@@ -50,20 +50,23 @@ struct RegisterModel {
   }
   bool write(std::uint8_t a, std::uint32_t v) {
     const auto* r = find(a);
-    if (!r || (r->access != rm::Access::kReadWrite && r->access != rm::Access::kWriteOneToClear)) return true;
+    if (!r || (r->access != rm::Access::kReadWrite && r->access != rm::Access::kWriteOneToClear))
+      return true;
     if (a == rm::kRegPeriod && v < rm::kPeriodMinCycles) return true;
     values[a] = v;
     return false;
   }
 };
 
-// The frozen window bank of encoder_regs as the link reads it: byte k at bank_byte_i when tx_idx_i = k.
+// The frozen window bank of encoder_regs as the link reads it: byte k at bank_byte_i when tx_idx_i
+// = k.
 void drive_bank(Vlink_engine& dut, const std::vector<std::uint8_t>& bank) {
   dut.bank_byte_i = dut.tx_idx_i < bank.size() ? bank[dut.tx_idx_i] : 0;
 }
 
 // The body as frame_tx reads it: byte k through tx_idx_i / tx_byte_o (combinational).
-std::vector<std::uint8_t> body_bytes(Vlink_engine& dut, const std::vector<std::uint8_t>& bank, int n) {
+std::vector<std::uint8_t> body_bytes(Vlink_engine& dut, const std::vector<std::uint8_t>& bank,
+                                     int n) {
   std::vector<std::uint8_t> b;
   const auto idx = dut.tx_idx_i;
   for (int k = 0; k < n; ++k) {
@@ -99,7 +102,8 @@ struct Window {
 };
 
 TEST(LinkEngine, RequestsSnapshotsAndStreamingMatchGoldenModel) {
-  const auto seed = omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 51);
+  const auto seed = omniloc::rtl_tb::test_seed(
+      ::testing::UnitTest::GetInstance()->current_test_info()->name(), 51);
   std::mt19937_64 rng(seed);
   omniloc::rtl_tb::Clocked<Vlink_engine> bench;
   auto& dut = bench.io();
@@ -113,8 +117,11 @@ TEST(LinkEngine, RequestsSnapshotsAndStreamingMatchGoldenModel) {
   int tx_busy = 0;
   Frame sending{};
   int sending_len = -1;
-  std::vector<std::uint8_t> bank(rm::kFrameTelemetryBodyBytes, 0);  // the frozen bank (latched by SNAP_SEQ reads and win_consumed_o)
-  std::vector<std::size_t> snapshot_answers;  // expected_responses slots waiting for their SNAP_SEQ read
+  std::vector<std::uint8_t> bank(
+      rm::kFrameTelemetryBodyBytes,
+      0);  // the frozen bank (latched by SNAP_SEQ reads and win_consumed_o)
+  std::vector<std::size_t>
+      snapshot_answers;  // expected_responses slots waiting for their SNAP_SEQ read
   int requests_left = 3000;
   bool event_up = false;
   int next_window_in = 700;
@@ -136,14 +143,16 @@ TEST(LinkEngine, RequestsSnapshotsAndStreamingMatchGoldenModel) {
       dut.ev_write_i = 0;
       dut.ev_data_i = static_cast<std::uint32_t>(rng());
       // Mostly known addresses, sometimes any byte.
-      dut.ev_addr_i = rng() % 4 ? rm::kRegisters[rng() % rm::kRegisters.size()].address : static_cast<std::uint8_t>(rng());
+      dut.ev_addr_i = rng() % 4 ? rm::kRegisters[rng() % rm::kRegisters.size()].address
+                                : static_cast<std::uint8_t>(rng());
       if (kind < 4) {
         dut.ev_code_i = rm::kFrameReadReq;
         dut.ev_read_i = 1;  // frame_rx's decoded kind, as its proof states it
       } else if (kind < 7) {
         dut.ev_code_i = rm::kFrameWriteReq;
         dut.ev_write_i = 1;
-        if (rng() % 3 == 0) dut.ev_addr_i = rm::kRegPeriod, dut.ev_data_i = static_cast<std::uint32_t>(rng() % 128);
+        if (rng() % 3 == 0)
+          dut.ev_addr_i = rm::kRegPeriod, dut.ev_data_i = static_cast<std::uint32_t>(rng() % 128);
       } else if (kind < 9) {
         dut.ev_code_i = rm::kFrameSnapshotReq;
       } else {
@@ -157,8 +166,14 @@ TEST(LinkEngine, RequestsSnapshotsAndStreamingMatchGoldenModel) {
     dut.win_valid_i = 0;
     if (--next_window_in == 0) {
       next_window_in = 700 + static_cast<int>(rng() % 800);
-      win = {++seq, static_cast<std::uint32_t>(rng()), {}, static_cast<std::uint8_t>(rng() % 16), static_cast<std::uint8_t>(rng()),
-             static_cast<std::uint32_t>(rng()), static_cast<std::uint8_t>(rng()), static_cast<std::uint8_t>(rng())};
+      win = {++seq,
+             static_cast<std::uint32_t>(rng()),
+             {},
+             static_cast<std::uint8_t>(rng() % 16),
+             static_cast<std::uint8_t>(rng()),
+             static_cast<std::uint32_t>(rng()),
+             static_cast<std::uint8_t>(rng()),
+             static_cast<std::uint8_t>(rng())};
       for (auto& c : win.count) c = static_cast<std::uint32_t>(rng());
       if (rng() % 10 == 0) stream = !stream;
       dut.win_valid_i = 1;
@@ -195,11 +210,16 @@ TEST(LinkEngine, RequestsSnapshotsAndStreamingMatchGoldenModel) {
         }
       } else if (dut.ev_code_i == rm::kFrameWriteReq) {
         const auto* r = RegisterModel::find(a);
-        const bool writable = r && (r->access == rm::Access::kReadWrite || r->access == rm::Access::kWriteOneToClear);
-        if (!r) expected_responses.push_back({rm::kFrameError, {rm::kErrBadAddress, a}});
-        else if (!writable) expected_responses.push_back({rm::kFrameError, {rm::kErrReadOnly, a}});
-        else if (a == rm::kRegPeriod && dut.ev_data_i < rm::kPeriodMinCycles) expected_responses.push_back({rm::kFrameError, {rm::kErrBadValue, a}});
-        else expected_responses.push_back({rm::kFrameWriteAck, {a}});
+        const bool writable =
+            r && (r->access == rm::Access::kReadWrite || r->access == rm::Access::kWriteOneToClear);
+        if (!r)
+          expected_responses.push_back({rm::kFrameError, {rm::kErrBadAddress, a}});
+        else if (!writable)
+          expected_responses.push_back({rm::kFrameError, {rm::kErrReadOnly, a}});
+        else if (a == rm::kRegPeriod && dut.ev_data_i < rm::kPeriodMinCycles)
+          expected_responses.push_back({rm::kFrameError, {rm::kErrBadValue, a}});
+        else
+          expected_responses.push_back({rm::kFrameWriteAck, {a}});
       } else {
         // The answer is the window latched by the SNAP_SEQ read that follows.
         snapshot_answers.push_back(expected_responses.size());
@@ -238,7 +258,8 @@ TEST(LinkEngine, RequestsSnapshotsAndStreamingMatchGoldenModel) {
         sending_len = -1;
       } else if (rng() % 8 == 0 || tx_busy == 1) {
         // The body must stay as it was while the frame is on the line.
-        ASSERT_EQ(body_bytes(dut, bank, static_cast<int>(sending.body.size())), sending.body) << "body changed mid-frame";
+        ASSERT_EQ(body_bytes(dut, bank, static_cast<int>(sending.body.size())), sending.body)
+            << "body changed mid-frame";
       }
       --tx_busy;
     }
@@ -249,11 +270,14 @@ TEST(LinkEngine, RequestsSnapshotsAndStreamingMatchGoldenModel) {
     if (latch) bank = live;
   }
   ASSERT_EQ(responses.size(), expected_responses.size());
-  for (std::size_t i = 0; i < responses.size(); ++i) ASSERT_EQ(responses[i], expected_responses[i]) << "response " << i;
+  for (std::size_t i = 0; i < responses.size(); ++i)
+    ASSERT_EQ(responses[i], expected_responses[i]) << "response " << i;
   ASSERT_EQ(telemetry.size(), expected_telemetry.size());
-  for (std::size_t i = 0; i < telemetry.size(); ++i) ASSERT_EQ(telemetry[i], expected_telemetry[i]) << "telemetry " << i;
+  for (std::size_t i = 0; i < telemetry.size(); ++i)
+    ASSERT_EQ(telemetry[i], expected_telemetry[i]) << "telemetry " << i;
   EXPECT_EQ(consumed, static_cast<int>(telemetry.size()));
-  std::printf("%zu responses and %zu telemetry frames checked\n", responses.size(), telemetry.size());
+  std::printf("%zu responses and %zu telemetry frames checked\n", responses.size(),
+              telemetry.size());
   EXPECT_GT(telemetry.size(), 100u);
 }
 

@@ -12,6 +12,7 @@
 #include <random>
 #include <vector>
 
+#include "golden_quadrature.hpp"
 #include "omniloc/board_client.hpp"
 #include "omniloc/regmap.hpp"
 #include "omniloc/robot_config.hpp"
@@ -20,7 +21,6 @@
 #include "omniloc_sim/link_faults.hpp"
 #include "omniloc_sim/trajectory.hpp"
 #include "omniloc_sim/world.hpp"
-#include "golden_quadrature.hpp"
 #include "tb_support.hpp"
 
 namespace {
@@ -29,10 +29,11 @@ namespace rm = omniloc::regmap;
 using omniloc::sim::BoardSim;
 constexpr std::int64_t kCaptureLag = 4;
 
-
 TEST(OmnilocTop, RegistersErrorsAndStreamedWindowsThroughTheUartPins) {
-  const auto seed = omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 61);
-  omniloc::sim::QuadratureStream stream(omniloc::tb::board_world(seed), omniloc::sim::make_trajectory("figure_eight", seed));
+  const auto seed = omniloc::rtl_tb::test_seed(
+      ::testing::UnitTest::GetInstance()->current_test_info()->name(), 61);
+  omniloc::sim::QuadratureStream stream(omniloc::tb::board_world(seed),
+                                        omniloc::sim::make_trajectory("figure_eight", seed));
   omniloc::tb::GoldenQuadrature source(stream, BoardSim::kClockHz / 100);
   BoardSim board(&source);
   omniloc::sim::SimTransport transport(board);
@@ -41,7 +42,8 @@ TEST(OmnilocTop, RegistersErrorsAndStreamedWindowsThroughTheUartPins) {
   // Identity, over the wire.
   EXPECT_EQ(client.read_register(rm::kRegId), rm::kIdValue);
   EXPECT_EQ(client.read_register(rm::kRegVersion), rm::kVersionValue);
-  EXPECT_EQ(client.read_register(rm::kRegConfig), 4u) << "CONFIG.CHANNELS of the default board: four wheels";
+  EXPECT_EQ(client.read_register(rm::kRegConfig), 4u)
+      << "CONFIG.CHANNELS of the default board: four wheels";
 
   // Error answers: a read-only register, an unknown address, a refused value.
   try {
@@ -62,7 +64,8 @@ TEST(OmnilocTop, RegistersErrorsAndStreamedWindowsThroughTheUartPins) {
   } catch (const omniloc::BoardError& e) {
     EXPECT_EQ(e.error_code(), rm::kErrBadValue);
   }
-  EXPECT_EQ(client.read_register(rm::kRegPeriod), static_cast<std::uint32_t>(BoardSim::kClockHz / 100));
+  EXPECT_EQ(client.read_register(rm::kRegPeriod),
+            static_cast<std::uint32_t>(BoardSim::kClockHz / 100));
 
   // Enable x4 counting and streaming; read the control register back.
   std::uint32_t control = 0;
@@ -80,18 +83,21 @@ TEST(OmnilocTop, RegistersErrorsAndStreamedWindowsThroughTheUartPins) {
   std::array<std::int64_t, 4> streamed_sum{};
   while (windows.size() < 101) {
     const auto w = client.poll_telemetry(std::chrono::milliseconds(100));
-    ASSERT_TRUE(w.has_value()) << "no telemetry within 100 ms after " << windows.size() << " windows";
+    ASSERT_TRUE(w.has_value()) << "no telemetry within 100 ms after " << windows.size()
+                               << " windows";
     windows.push_back(*w);
     if (windows.size() < 2) continue;
     const auto& cur = windows.back();
     const auto& prev = windows[windows.size() - 2];
     ASSERT_EQ(cur.seq, prev.seq + 1) << "a window was lost";
-    ASSERT_EQ(cur.timestamp_cycles - prev.timestamp_cycles, BoardSim::kClockHz / 100) << "window period";
+    ASSERT_EQ(cur.timestamp_cycles - prev.timestamp_cycles, BoardSim::kClockHz / 100)
+        << "window period";
     const auto end = static_cast<std::int64_t>(cur.timestamp_cycles);
     const auto begin = static_cast<std::int64_t>(prev.timestamp_cycles);
     const auto e = source.counts_at(end - kCaptureLag);
     const auto b = source.counts_at(begin - kCaptureLag);
-    ASSERT_TRUE(e && b) << "window " << cur.seq << " ends at cycle " << end << ", not at a window boundary";
+    ASSERT_TRUE(e && b) << "window " << cur.seq << " ends at cycle " << end
+                        << ", not at a window boundary";
     for (int m = 0; m < 4; ++m) {
       ASSERT_EQ(cur.count[m], (*e)[m] - (*b)[m]) << "window " << cur.seq << " motor " << m + 1;
       streamed_sum[m] += cur.count[m];
@@ -99,9 +105,12 @@ TEST(OmnilocTop, RegistersErrorsAndStreamedWindowsThroughTheUartPins) {
     }
     ++checked;
   }
-  std::printf("%d windows checked against the golden decoder, %d motor-windows moving; sums %lld %lld %lld %lld\n",
-              checked, moving, static_cast<long long>(streamed_sum[0]), static_cast<long long>(streamed_sum[1]),
-              static_cast<long long>(streamed_sum[2]), static_cast<long long>(streamed_sum[3]));
+  std::printf(
+      "%d windows checked against the golden decoder, %d motor-windows moving; sums %lld %lld %lld "
+      "%lld\n",
+      checked, moving, static_cast<long long>(streamed_sum[0]),
+      static_cast<long long>(streamed_sum[1]), static_cast<long long>(streamed_sum[2]),
+      static_cast<long long>(streamed_sum[3]));
   EXPECT_GE(checked, 90);
   EXPECT_GE(moving, 200);
   EXPECT_EQ(source.illegal(), 0);
@@ -117,7 +126,8 @@ TEST(OmnilocTop, RegistersErrorsAndStreamedWindowsThroughTheUartPins) {
 // in both directions. read() runs the board until bytes come through or the timeout has passed.
 class FaultyBoardTransport final : public omniloc::Transport {
  public:
-  FaultyBoardTransport(BoardSim& board, omniloc::sim::FaultyUart& line) : board_(board), line_(line) {}
+  FaultyBoardTransport(BoardSim& board, omniloc::sim::FaultyUart& line)
+      : board_(board), line_(line) {}
   void write(std::span<const std::uint8_t> bytes) override { line_.to_board(bytes); }
   std::size_t read(std::span<std::uint8_t> out, std::chrono::milliseconds timeout) override {
     const std::int64_t deadline = board_.cycle() + timeout.count() * (BoardSim::kClockHz / 1000);
@@ -128,8 +138,12 @@ class FaultyBoardTransport final : public omniloc::Transport {
     }
     return n;
   }
-  [[nodiscard]] omniloc::TransportStatus status() const override { return {true, false, "faulty line", {}}; }
-  [[nodiscard]] std::chrono::steady_clock::time_point now() const override { return omniloc::sim::board_time(board_); }
+  [[nodiscard]] omniloc::TransportStatus status() const override {
+    return {true, false, "faulty line", {}};
+  }
+  [[nodiscard]] std::chrono::steady_clock::time_point now() const override {
+    return omniloc::sim::board_time(board_);
+  }
 
  private:
   BoardSim& board_;
@@ -137,8 +151,10 @@ class FaultyBoardTransport final : public omniloc::Transport {
 };
 
 TEST(OmnilocTop, FaultyLineNeverDeliversACorruptWindowOrRegister) {
-  const auto seed = omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 62);
-  omniloc::sim::QuadratureStream stream(omniloc::tb::board_world(seed), omniloc::sim::make_trajectory("random_walk", seed));
+  const auto seed = omniloc::rtl_tb::test_seed(
+      ::testing::UnitTest::GetInstance()->current_test_info()->name(), 62);
+  omniloc::sim::QuadratureStream stream(omniloc::tb::board_world(seed),
+                                        omniloc::sim::make_trajectory("random_walk", seed));
   omniloc::tb::GoldenQuadrature golden(stream, BoardSim::kClockHz / 100);
   BoardSim board(&golden);
   omniloc::sim::FaultRates rates;
@@ -164,11 +180,12 @@ TEST(OmnilocTop, FaultyLineNeverDeliversACorruptWindowOrRegister) {
     const auto w = client.poll_telemetry(std::chrono::milliseconds(100));
     if (!w.has_value()) {
       const auto& d = client.decoder_counters();
-      ADD_FAILURE() << "the stream stopped after " << accepted << " windows at board cycle " << board.cycle()
-                    << "; frames ok " << d.frames_ok << ", bad CRC " << d.bad_crc << ", bad length " << d.bad_length
-                    << ", resync bytes " << d.resync_bytes << ", bytes pending on the board side "
-                    << board.pending_from_board() << ", to the board " << board.counters().bytes_to_board
-                    << ", from the board " << board.counters().bytes_from_board;
+      ADD_FAILURE() << "the stream stopped after " << accepted << " windows at board cycle "
+                    << board.cycle() << "; frames ok " << d.frames_ok << ", bad CRC " << d.bad_crc
+                    << ", bad length " << d.bad_length << ", resync bytes " << d.resync_bytes
+                    << ", bytes pending on the board side " << board.pending_from_board()
+                    << ", to the board " << board.counters().bytes_to_board << ", from the board "
+                    << board.counters().bytes_from_board;
       return;
     }
     ++accepted;
@@ -176,11 +193,14 @@ TEST(OmnilocTop, FaultyLineNeverDeliversACorruptWindowOrRegister) {
       lost += static_cast<int>(w->seq - prev->seq - 1);
       // Every window that arrives is whole: it equals the golden count over its own span.
       const std::uint32_t windows = w->seq - prev->seq;
-      ASSERT_EQ(w->timestamp_cycles - prev->timestamp_cycles, windows * static_cast<std::uint32_t>(BoardSim::kClockHz / 100));
+      ASSERT_EQ(w->timestamp_cycles - prev->timestamp_cycles,
+                windows * static_cast<std::uint32_t>(BoardSim::kClockHz / 100));
       const auto e = golden.counts_at(static_cast<std::int64_t>(w->timestamp_cycles) - kCaptureLag);
-      const auto b = golden.counts_at(static_cast<std::int64_t>(w->timestamp_cycles) - kCaptureLag - BoardSim::kClockHz / 100);
+      const auto b = golden.counts_at(static_cast<std::int64_t>(w->timestamp_cycles) - kCaptureLag -
+                                      BoardSim::kClockHz / 100);
       ASSERT_TRUE(e && b);
-      for (int m = 0; m < 4; ++m) ASSERT_EQ(w->count[m], (*e)[m] - (*b)[m]) << "window " << w->seq << " motor " << m + 1;
+      for (int m = 0; m < 4; ++m)
+        ASSERT_EQ(w->count[m], (*e)[m] - (*b)[m]) << "window " << w->seq << " motor " << m + 1;
     }
     prev = w;
     // Now and then a write and a read back through the same faulty line: a value the host accepts
@@ -207,13 +227,17 @@ TEST(OmnilocTop, FaultyLineNeverDeliversACorruptWindowOrRegister) {
   const auto& faults_to = line.to_board_log();
   const auto& faults_from = line.from_board_log();
   const auto& dc = client.decoder_counters();
-  std::printf("%d windows accepted, %d lost (decoder counted %llu); %d register write/read checks, %llu retries; "
-              "faults: to board %llu corrupt %llu dropped, from board %llu corrupt %llu dropped; LINK_ERRORS 0x%08X\n",
-              accepted, lost, static_cast<unsigned long long>(dc.telemetry_lost), register_checks,
-              static_cast<unsigned long long>(client.counters().retries),
-              static_cast<unsigned long long>(faults_to.corrupted), static_cast<unsigned long long>(faults_to.dropped),
-              static_cast<unsigned long long>(faults_from.corrupted), static_cast<unsigned long long>(faults_from.dropped),
-              link_errors);
+  std::printf(
+      "%d windows accepted, %d lost (decoder counted %llu); %d register write/read checks, %llu "
+      "retries; "
+      "faults: to board %llu corrupt %llu dropped, from board %llu corrupt %llu dropped; "
+      "LINK_ERRORS 0x%08X\n",
+      accepted, lost, static_cast<unsigned long long>(dc.telemetry_lost), register_checks,
+      static_cast<unsigned long long>(client.counters().retries),
+      static_cast<unsigned long long>(faults_to.corrupted),
+      static_cast<unsigned long long>(faults_to.dropped),
+      static_cast<unsigned long long>(faults_from.corrupted),
+      static_cast<unsigned long long>(faults_from.dropped), link_errors);
   // Every loss shows in the counters.
   EXPECT_EQ(static_cast<std::uint64_t>(lost), dc.telemetry_lost);
   EXPECT_GT(faults_to.corrupted + faults_to.dropped, 0u);
@@ -228,13 +252,15 @@ TEST(OmnilocTop, FaultyLineNeverDeliversACorruptWindowOrRegister) {
 // snapshot registers read the same window as the snapshot body. Then the part goes silent (its
 // data-ready stops): the windows are flagged, STATUS.GYRO_FAULT is set, and it recovers.
 TEST(OmnilocTop, GyroSamplesLandInTheWindowsExactlyOnce) {
-  const auto seed = omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 35);
+  const auto seed = omniloc::rtl_tb::test_seed(
+      ::testing::UnitTest::GetInstance()->current_test_info()->name(), 35);
   omniloc::sim::Icm42688Params gp;
   gp.clk_hz = static_cast<double>(BoardSim::kClockHz);
   gp.noise_dps_rms = 0.16;
   gp.bias_dps = 0.3;
   gp.seed = seed;
-  omniloc::sim::Icm42688 gyro(gp, [](double t) { return 300.0 * std::sin(2.0 * 3.14159265358979 * 1.3 * t); });
+  omniloc::sim::Icm42688 gyro(
+      gp, [](double t) { return 300.0 * std::sin(2.0 * 3.14159265358979 * 1.3 * t); });
   BoardSim board(nullptr, &gyro);
   omniloc::sim::SimTransport transport(board);
   omniloc::BoardClient client(transport);
@@ -266,7 +292,8 @@ TEST(OmnilocTop, GyroSamplesLandInTheWindowsExactlyOnce) {
     }
     running_from = std::min(running_from, k);
     ASSERT_EQ(w.gyro_flags, 0u) << "window " << k;
-    ASSERT_LE(next + w.gyro_count, reads.size()) << "window " << k << " has samples the part never gave";
+    ASSERT_LE(next + w.gyro_count, reads.size())
+        << "window " << k << " has samples the part never gave";
     std::int64_t sum = 0;
     for (std::size_t i = 0; i < w.gyro_count; ++i) sum += reads[next + i].value;
     ASSERT_EQ(w.gyro_sum, sum) << "window " << k << " (seed " << seed << ")";
@@ -283,7 +310,8 @@ TEST(OmnilocTop, GyroSamplesLandInTheWindowsExactlyOnce) {
   // ... equal to the streamed window of that sequence number (taken already, or buffered while
   // the reads ran).
   std::optional<omniloc::protocol::Window> same;
-  if (windows.back().seq >= seq && seq > windows.front().seq) same = windows[seq - windows.front().seq];
+  if (windows.back().seq >= seq && seq > windows.front().seq)
+    same = windows[seq - windows.front().seq];
   for (int i = 0; i < 20 && !same; ++i) {
     const auto w = client.poll_telemetry(std::chrono::milliseconds(100));
     ASSERT_TRUE(w.has_value());
@@ -294,8 +322,11 @@ TEST(OmnilocTop, GyroSamplesLandInTheWindowsExactlyOnce) {
   EXPECT_EQ(rm::kSnapGyroCount.get(g), same->gyro_count);
   EXPECT_EQ(rm::kSnapGyroFlags.get(g), same->gyro_flags);
   EXPECT_GE(same->gyro_count, 9u);
-  std::printf("%zu windows, %zu samples summed exactly (seed %llu); snapshot window %u: sum %d LSB of %u samples\n",
-              windows.size(), next, static_cast<unsigned long long>(seed), seq, sum, rm::kSnapGyroCount.get(g));
+  std::printf(
+      "%zu windows, %zu samples summed exactly (seed %llu); snapshot window %u: sum %d LSB of %u "
+      "samples\n",
+      windows.size(), next, static_cast<unsigned long long>(seed), seq, sum,
+      rm::kSnapGyroCount.get(g));
 
   // The part stops giving data-ready: a timeout (flag 1) within 5 ms, then the start-up again.
   gyro.faults().no_data_ready = true;

@@ -14,8 +14,10 @@
 
 namespace {
 
-// The module's defaults are the board's clock and baud (common/regmap.json "link"): 12 cycles a bit.
-constexpr double kClksPerBit = static_cast<double>(omniloc::regmap::kBoardClockHz) / omniloc::regmap::kUartBaud;
+// The module's defaults are the board's clock and baud (common/regmap.json "link"): 12 cycles a
+// bit.
+constexpr double kClksPerBit =
+    static_cast<double>(omniloc::regmap::kBoardClockHz) / omniloc::regmap::kUartBaud;
 
 struct LineEvent {
   std::uint64_t cycle;
@@ -23,8 +25,8 @@ struct LineEvent {
 };
 
 struct Stimulus {
-  std::vector<std::uint8_t> levels;         // the line, one sample a clock cycle
-  std::vector<std::uint8_t> good_bytes;      // bytes sent with a correct stop bit
+  std::vector<std::uint8_t> levels;      // the line, one sample a clock cycle
+  std::vector<std::uint8_t> good_bytes;  // bytes sent with a correct stop bit
   int framing_errors = 0;
 };
 
@@ -94,7 +96,8 @@ Result play(const Stimulus& s, Ready ready, const std::string& vcd = {}) {
 }
 
 TEST(UartRx, BytesAtBaudErrorsWithFramingErrorsAndGlitches) {
-  const auto seed = omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 21);
+  const auto seed = omniloc::rtl_tb::test_seed(
+      ::testing::UnitTest::GetInstance()->current_test_info()->name(), 21);
   const auto s = make_line(seed, 4000, 0.05);
   const auto always = [](std::size_t) { return true; };
   const auto r = play(s, always);
@@ -110,7 +113,8 @@ TEST(UartRx, BytesAtBaudErrorsWithFramingErrorsAndGlitches) {
 }
 
 TEST(UartRx, StalledConsumerKeepsOldestByteAndCountsEveryOverrun) {
-  const auto seed = omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 22);
+  const auto seed = omniloc::rtl_tb::test_seed(
+      ::testing::UnitTest::GetInstance()->current_test_info()->name(), 22);
   const auto s = make_line(seed, 50, 0.0);
   // The consumer never takes anything until the line is quiet: byte 1 is held, 49 are overruns.
   const auto never = [](std::size_t) { return false; };

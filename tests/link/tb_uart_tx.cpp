@@ -12,8 +12,10 @@
 
 namespace {
 
-// The module's defaults are the board's clock and baud (common/regmap.json "link"): 12 cycles a bit.
-constexpr int kClksPerBit = static_cast<int>(omniloc::regmap::kBoardClockHz / omniloc::regmap::kUartBaud);
+// The module's defaults are the board's clock and baud (common/regmap.json "link"): 12 cycles a
+// bit.
+constexpr int kClksPerBit =
+    static_cast<int>(omniloc::regmap::kBoardClockHz / omniloc::regmap::kUartBaud);
 
 struct Decoded {
   std::vector<std::uint8_t> bytes;
@@ -39,8 +41,8 @@ Decoded decode_line(const std::vector<std::uint8_t>& line) {
       const std::uint8_t level = line[t + bit * kClksPerBit];
       for (int c = 0; c < kClksPerBit; ++c) {
         if (line[t + bit * kClksPerBit + c] != level) {
-          out.errors.push_back("bit " + std::to_string(bit) + " of the frame at cycle " + std::to_string(t) +
-                               " changes inside its bit time");
+          out.errors.push_back("bit " + std::to_string(bit) + " of the frame at cycle " +
+                               std::to_string(t) + " changes inside its bit time");
         }
       }
       if (bit == 0 && level != 0) out.errors.push_back("start bit high at " + std::to_string(t));
@@ -54,8 +56,8 @@ Decoded decode_line(const std::vector<std::uint8_t>& line) {
 }
 
 // Sends `bytes` with random idle gaps; returns the recorded line.
-std::vector<std::uint8_t> run(const std::vector<std::uint8_t>& bytes, std::uint64_t seed, bool back_to_back,
-                              const std::string& vcd = {}) {
+std::vector<std::uint8_t> run(const std::vector<std::uint8_t>& bytes, std::uint64_t seed,
+                              bool back_to_back, const std::string& vcd = {}) {
   const omniloc::rtl_tb::TraceRequest trace{vcd, 0};
   omniloc::rtl_tb::Clocked<Vuart_tx> bench(vcd.empty() ? nullptr : &trace);
   auto& dut = bench.io();
@@ -98,13 +100,22 @@ void check(std::uint64_t seed, bool back_to_back) {
     run(bytes, seed, back_to_back, vcd);
     ADD_FAILURE() << "trace: " << vcd;
   }
-  ASSERT_TRUE(decoded.errors.empty()) << decoded.errors.size() << " line errors, the first: " << decoded.errors.front();
+  ASSERT_TRUE(decoded.errors.empty())
+      << decoded.errors.size() << " line errors, the first: " << decoded.errors.front();
   ASSERT_EQ(decoded.bytes.size(), bytes.size());
   EXPECT_EQ(decoded.bytes, bytes);
 }
 
-TEST(UartTx, RandomBytesWithGapsDecodeExactly) { check(omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 11), false); }
+TEST(UartTx, RandomBytesWithGapsDecodeExactly) {
+  check(omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(),
+                                   11),
+        false);
+}
 
-TEST(UartTx, BackToBackBytesDecodeExactly) { check(omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 12), true); }
+TEST(UartTx, BackToBackBytesDecodeExactly) {
+  check(omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(),
+                                   12),
+        true);
+}
 
 }  // namespace

@@ -29,11 +29,11 @@ const daemon::DaemonModels& models() {
 }
 
 struct GyroRun {
-  std::vector<EncoderWindow> windows;   // as the daemon took them, with their heading
-  std::vector<Pose2> truth;             // the simulator's pose at each window's end
+  std::vector<EncoderWindow> windows;  // as the daemon took them, with their heading
+  std::vector<Pose2> truth;            // the simulator's pose at each window's end
   std::vector<std::string> status_lines;
-  std::string datagram;                 // one datagram from the middle of the run
-  std::string describe;                 // the heading source at the end
+  std::string datagram;                        // one datagram from the middle of the run
+  std::string describe;                        // the heading source at the end
   double worst_published_yaw_error_deg = 0.0;  // the datagrams' yaw against truth (field frame)
   GyroState state = GyroState::kNoGyro;
 };
@@ -64,8 +64,9 @@ GyroRun drive(const char* trajectory, std::uint64_t seed, double seconds, std::u
   io.observer.on_pose = [&](const daemon::PoseEvent& e) {
     if (run.windows.size() == 150) run.datagram = daemon::pose_json(e.message);
     if (const auto t = robot.truth().truth(e.message.t_ms))
-      run.worst_published_yaw_error_deg = std::max(run.worst_published_yaw_error_deg,
-                                                   std::fabs(angle_diff_deg(e.message.yaw_deg, t->yaw_deg)));
+      run.worst_published_yaw_error_deg =
+          std::max(run.worst_published_yaw_error_deg,
+                   std::fabs(angle_diff_deg(e.message.yaw_deg, t->yaw_deg)));
   };
   io.observer.on_status = [&](const std::string& line) { run.status_lines.push_back(line); };
   io.logger = Logger(LogLevel::kWarning, [](LogLevel, std::string_view) {});
@@ -83,7 +84,8 @@ GyroRun drive(const char* trajectory, std::uint64_t seed, double seconds, std::u
 }
 
 /// The largest difference between a heading's turn since window `from` and the truth's.
-double worst_turn_error_deg(const GyroRun& run, const std::vector<double>& heading_deg, std::size_t from) {
+double worst_turn_error_deg(const GyroRun& run, const std::vector<double>& heading_deg,
+                            std::size_t from) {
   double worst = 0.0;
   for (std::size_t i = from; i < run.windows.size(); ++i) {
     const double measured = angle_diff_deg(heading_deg[i], heading_deg[from]);
@@ -139,18 +141,24 @@ TEST(DaemonGyro, HeadingComesFromTheBoardsGyroWindowsEndToEnd) {
   // same windows carries the slip.
   const double worst = worst_turn_error_deg(run, daemon_heading(run), first_running + 10);
   const double wheels = worst_turn_error_deg(run, wheel_heading(run), first_running + 10);
-  const double turned = std::fabs(angle_diff_deg(run.truth.back().yaw_deg, run.truth[first_running + 10].yaw_deg));
-  std::printf("%zu windows, %llu gyro samples; the robot turned %.1f deg net; worst heading error: the daemon's "
-              "(gyro) %.3f deg, the wheels' alone %.3f deg\n",
-              run.windows.size(), static_cast<unsigned long long>(samples), turned, worst, wheels);
+  const double turned =
+      std::fabs(angle_diff_deg(run.truth.back().yaw_deg, run.truth[first_running + 10].yaw_deg));
+  std::printf(
+      "%zu windows, %llu gyro samples; the robot turned %.1f deg net; worst heading error: the "
+      "daemon's "
+      "(gyro) %.3f deg, the wheels' alone %.3f deg\n",
+      run.windows.size(), static_cast<unsigned long long>(samples), turned, worst, wheels);
   EXPECT_LT(worst, 1.0);
   EXPECT_GT(wheels, 3.0 * worst) << "the slip should fool the wheels, not the gyro";
   // The published yaw is the field's: the start pose aligned the relative gyro (no camera here).
-  std::printf("worst published yaw error against truth %.3f deg\n", run.worst_published_yaw_error_deg);
+  std::printf("worst published yaw error against truth %.3f deg\n",
+              run.worst_published_yaw_error_deg);
   EXPECT_LT(run.worst_published_yaw_error_deg, 1.0);
-  EXPECT_TRUE(run.state == GyroState::kLearningBias || run.state == GyroState::kRunning) << run.describe;
+  EXPECT_TRUE(run.state == GyroState::kLearningBias || run.state == GyroState::kRunning)
+      << run.describe;
   bool said_gyro = false;
-  for (const auto& line : run.status_lines) said_gyro |= line.find("heading=gyro") != std::string::npos;
+  for (const auto& line : run.status_lines)
+    said_gyro |= line.find("heading=gyro") != std::string::npos;
   EXPECT_TRUE(said_gyro) << "no status line said heading=gyro";
   std::printf("a datagram as sent: %s\n", run.datagram.c_str());
   EXPECT_FALSE(run.datagram.empty());
@@ -165,15 +173,19 @@ TEST(DaemonGyro, NoGyroOnTheBoardIsReportedAndTheWheelsHoldTheHeading) {
     EXPECT_EQ(g.samples, 0u);
     absent += (g.flags >> regmap::kGyroFlagAbsent) & 1u;
   }
-  EXPECT_EQ(absent, static_cast<int>(run.windows.size()) - 20) << "ABSENT from the first wrong WHO_AM_I on";
+  EXPECT_EQ(absent, static_cast<int>(run.windows.size()) - 20)
+      << "ABSENT from the first wrong WHO_AM_I on";
   EXPECT_EQ(run.state, GyroState::kMissing);
   EXPECT_NE(run.describe.find("gyro missing"), std::string::npos) << run.describe;
   bool said = false;
-  for (const auto& line : run.status_lines) said |= line.find("heading=wheels-no-gyro") != std::string::npos;
+  for (const auto& line : run.status_lines)
+    said |= line.find("heading=wheels-no-gyro") != std::string::npos;
   EXPECT_TRUE(said) << "no status line said heading=wheels-no-gyro";
-  // The wheels' rotation (least squares of eq. (9)) still follows the turn, with the encoders' noise.
+  // The wheels' rotation (least squares of eq. (9)) still follows the turn, with the encoders'
+  // noise.
   const double worst = worst_turn_error_deg(run, daemon_heading(run), 20);
-  std::printf("no gyro: the wheels' heading's worst error %.3f deg (%s)\n", worst, run.describe.c_str());
+  std::printf("no gyro: the wheels' heading's worst error %.3f deg (%s)\n", worst,
+              run.describe.c_str());
   EXPECT_LT(worst, 5.0);
 }
 

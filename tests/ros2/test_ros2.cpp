@@ -26,8 +26,10 @@ namespace {
 // Discovery on loopback by unicast only: the test does not depend on the machine's network (CI
 // containers, firewalls) and cannot disturb a real robot on the LAN.
 constexpr const char* kLoopbackDds =
-    "<CycloneDDS><Domain id=\"any\"><General><Interfaces><NetworkInterface name=\"lo\"/></Interfaces>"
-    "<AllowMulticast>false</AllowMulticast></General><Discovery><ParticipantIndex>auto</ParticipantIndex>"
+    "<CycloneDDS><Domain id=\"any\"><General><Interfaces><NetworkInterface "
+    "name=\"lo\"/></Interfaces>"
+    "<AllowMulticast>false</AllowMulticast></General><Discovery><ParticipantIndex>auto</"
+    "ParticipantIndex>"
     "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain></CycloneDDS>";
 
 using omniloc::test::TempDir;
@@ -51,9 +53,13 @@ std::vector<std::vector<std::string>> lines_of(const std::string& text, const st
   return out;
 }
 
-double yaw_of(double qz, double qw) { return std::atan2(2.0 * qz * qw, qw * qw - qz * qz) * 180.0 / M_PI; }
+double yaw_of(double qz, double qw) {
+  return std::atan2(2.0 * qz * qw, qw * qw - qz * qz) * 180.0 / M_PI;
+}
 
-double yaw_gap(double a, double b) { return std::fabs(std::remainder(a - b, 360.0)); }
+double yaw_gap(double a, double b) {
+  return std::fabs(std::remainder(a - b, 360.0));
+}
 
 TEST(Ros2Topics, ASubscriberBuiltFromTheIdlReceivesTheDatagramsPoses) {
   TempDir dir("ros2");
@@ -61,15 +67,18 @@ TEST(Ros2Topics, ASubscriberBuiltFromTheIdlReceivesTheDatagramsPoses) {
   const int domain = 150 + ::getpid() % 80;  // apart from other runs of this test on the machine
   omniloc::test::UdpReceiver rx;
   ASSERT_NE(rx.port(), 0);
-  const std::string cmd = "( " + std::string(ROS2_ECHO_PATH) + " " + std::to_string(domain) + " 150 20 >" +
-                          (dir.path / "echo.txt").string() + " 2>" + (dir.path / "echo.err").string() + " & " +
-                          std::string(OMNILOCD_SIM_PATH) + " --duration-s 3 --status-period-s 0 --udp-port " +
-                          std::to_string(rx.port()) + " --ros2-domain-id " + std::to_string(domain) + " >" +
-                          (dir.path / "daemon.log").string() + " 2>&1; echo daemon $? >" +
-                          (dir.path / "rc.txt").string() + "; wait )";
-  const double start_s = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+  const std::string cmd =
+      "( " + std::string(ROS2_ECHO_PATH) + " " + std::to_string(domain) + " 150 20 >" +
+      (dir.path / "echo.txt").string() + " 2>" + (dir.path / "echo.err").string() + " & " +
+      std::string(OMNILOCD_SIM_PATH) + " --duration-s 3 --status-period-s 0 --udp-port " +
+      std::to_string(rx.port()) + " --ros2-domain-id " + std::to_string(domain) + " >" +
+      (dir.path / "daemon.log").string() + " 2>&1; echo daemon $? >" +
+      (dir.path / "rc.txt").string() + "; wait )";
+  const double start_s =
+      std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
   ASSERT_EQ(std::system(cmd.c_str()), 0);
-  const double now_s = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+  const double now_s =
+      std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
   ASSERT_EQ(slurp(dir.path / "rc.txt"), "daemon 0\n") << slurp(dir.path / "daemon.log");
 
   std::vector<nlohmann::json> grams;
@@ -80,17 +89,21 @@ TEST(Ros2Topics, ASubscriberBuiltFromTheIdlReceivesTheDatagramsPoses) {
   const std::string echo = slurp(dir.path / "echo.txt");
   const auto poses = lines_of(echo, "pose");
   const auto odoms = lines_of(echo, "odom");
-  std::printf("%zu datagrams with a pose; ros2_echo got %zu pose and %zu odom messages; first:\n  %s\n", grams.size(),
-              poses.size(), odoms.size(), echo.substr(0, echo.find('\n')).c_str());
+  std::printf(
+      "%zu datagrams with a pose; ros2_echo got %zu pose and %zu odom messages; first:\n  %s\n",
+      grams.size(), poses.size(), odoms.size(), echo.substr(0, echo.find('\n')).c_str());
   ASSERT_GE(poses.size(), 150u) << slurp(dir.path / "echo.err") << slurp(dir.path / "daemon.log");
   ASSERT_GE(odoms.size(), 140u);
 
   // The first message received is some datagram (discovery takes a moment: volatile topics drop
   // what was sent before the subscriber matched); from there on, message i is datagram k + i.
-  const auto x_of = [](const std::vector<std::string>& f, int i) { return std::stod(f[static_cast<std::size_t>(i)]); };
+  const auto x_of = [](const std::vector<std::string>& f, int i) {
+    return std::stod(f[static_cast<std::size_t>(i)]);
+  };
   std::size_t k = 0;
-  while (k < grams.size() && !(std::fabs(grams[k]["x_cm"].get<double>() - 100.0 * x_of(poses[0], 5)) < 0.01 &&
-                               std::fabs(grams[k]["y_cm"].get<double>() - 100.0 * x_of(poses[0], 6)) < 0.01))
+  while (k < grams.size() &&
+         !(std::fabs(grams[k]["x_cm"].get<double>() - 100.0 * x_of(poses[0], 5)) < 0.01 &&
+           std::fabs(grams[k]["y_cm"].get<double>() - 100.0 * x_of(poses[0], 6)) < 0.01))
     ++k;
   ASSERT_LT(k, grams.size()) << "the first pose message matches no datagram";
   int prev_sec = 0;
@@ -107,7 +120,8 @@ TEST(Ros2Topics, ASubscriberBuiltFromTheIdlReceivesTheDatagramsPoses) {
     EXPECT_EQ(x_of(f, 7), 0.0);
     EXPECT_EQ(x_of(f, 8), 0.0);
     EXPECT_EQ(x_of(f, 9), 0.0);
-    EXPECT_LT(yaw_gap(yaw_of(x_of(f, 10), x_of(f, 11)), g["yaw_deg"].get<double>()), 0.01) << "message " << i;
+    EXPECT_LT(yaw_gap(yaw_of(x_of(f, 10), x_of(f, 11)), g["yaw_deg"].get<double>()), 0.01)
+        << "message " << i;
     EXPECT_NEAR(std::hypot(x_of(f, 10), x_of(f, 11)), 1.0, 1e-9);
     const double sigma_m = g["uncertainty_cm"].get<double>() / 100.0;
     const double sigma_rad = g["uncertainty_yaw_deg"].get<double>() * M_PI / 180.0;
@@ -170,33 +184,39 @@ TEST(Ros2Topics, AnInitialPoseMovesThePublishedPose) {
   const int domain = 150 + (::getpid() + 40) % 80;
   omniloc::test::UdpReceiver rx;
   ASSERT_NE(rx.port(), 0);
-  const std::string cmd = "( " + std::string(OMNILOCD_SIM_PATH) + " --duration-s 4 --status-period-s 0 --udp-port " +
-                          std::to_string(rx.port()) + " --ros2-domain-id " + std::to_string(domain) + " >" +
-                          (dir.path / "daemon.log").string() + " 2>&1 & sleep 1; " + std::string(ROS2_ECHO_PATH) + " " +
-                          std::to_string(domain) + " 5 20 --initialpose 2.0 1.5 0.5235987755982988 >" +
-                          (dir.path / "echo.txt").string() + " 2>&1; wait )";
+  const std::string cmd =
+      "( " + std::string(OMNILOCD_SIM_PATH) + " --duration-s 4 --status-period-s 0 --udp-port " +
+      std::to_string(rx.port()) + " --ros2-domain-id " + std::to_string(domain) + " >" +
+      (dir.path / "daemon.log").string() + " 2>&1 & sleep 1; " + std::string(ROS2_ECHO_PATH) + " " +
+      std::to_string(domain) + " 5 20 --initialpose 2.0 1.5 0.5235987755982988 >" +
+      (dir.path / "echo.txt").string() + " 2>&1; wait )";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << slurp(dir.path / "echo.txt");
-  ASSERT_NE(slurp(dir.path / "echo.txt").find("sent initialpose 2.0000 1.5000 0.523599 ok"), std::string::npos)
+  ASSERT_NE(slurp(dir.path / "echo.txt").find("sent initialpose 2.0000 1.5000 0.523599 ok"),
+            std::string::npos)
       << slurp(dir.path / "echo.txt");
   std::vector<nlohmann::json> grams;
   for (const std::string& g : rx.drain()) grams.push_back(nlohmann::json::parse(g));
   std::size_t jump = 0;
   for (std::size_t i = 1; i < grams.size() && jump == 0; ++i) {
     const auto d = [&](std::size_t k) {
-      return std::hypot(grams[k]["x_cm"].get<double>() - 200.0, grams[k]["y_cm"].get<double>() - 150.0);
+      return std::hypot(grams[k]["x_cm"].get<double>() - 200.0,
+                        grams[k]["y_cm"].get<double>() - 150.0);
     };
     if (d(i) < 3.0 && d(i - 1) > 50.0) jump = i;
   }
-  ASSERT_GT(jump, 0u) << "no datagram jumped to (200, 150) cm; log:\n" << slurp(dir.path / "daemon.log");
+  ASSERT_GT(jump, 0u) << "no datagram jumped to (200, 150) cm; log:\n"
+                      << slurp(dir.path / "daemon.log");
   std::printf("datagram %zu after /initialpose: %s\n", jump, grams[jump].dump().c_str());
   EXPECT_LT(yaw_gap(grams[jump]["yaw_deg"].get<double>(), 30.0), 1.0);
-  EXPECT_NE(slurp(dir.path / "daemon.log").find("pose set by command to (200.0, 150.0) cm"), std::string::npos);
+  EXPECT_NE(slurp(dir.path / "daemon.log").find("pose set by command to (200.0, 150.0) cm"),
+            std::string::npos);
 }
 
 TEST(Ros2Topics, AnUnusableDomainIsRefusedByName) {
   TempDir dir("ros2_bad");
-  const std::string cmd = std::string(OMNILOCD_SIM_PATH) + " --duration-s 1 --ros2-domain-id 233 >" +
-                          (dir.path / "log").string() + " 2>&1";
+  const std::string cmd = std::string(OMNILOCD_SIM_PATH) +
+                          " --duration-s 1 --ros2-domain-id 233 >" + (dir.path / "log").string() +
+                          " 2>&1";
   const int status = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 2);

@@ -13,7 +13,8 @@ std::vector<Change> filter(bool initial, const std::vector<Change>& pin, unsigne
   bool level = initial;
   for (std::size_t i = 0; i < pin.size(); ++i) {
     if (i > 0 && pin[i].edge <= pin[i - 1].edge) {
-      throw std::invalid_argument("golden filter: pin changes out of order at index " + std::to_string(i));
+      throw std::invalid_argument("golden filter: pin changes out of order at index " +
+                                  std::to_string(i));
     }
     const bool last = (i + 1 == pin.size());
     const std::uint64_t duration = last ? hold : pin[i + 1].edge - pin[i].edge;
@@ -69,7 +70,8 @@ Decoder::Out Decoder::sample(bool a, bool b, bool valid, bool en, Mode mode) {
 }
 
 std::vector<Pulse> channel_pulses(bool a0, bool b0, const std::vector<Change>& a_pin,
-                                  const std::vector<Change>& b_pin, unsigned filter_len, Mode mode) {
+                                  const std::vector<Change>& b_pin, unsigned filter_len,
+                                  Mode mode) {
   const auto fa = filter(a0, a_pin, filter_len);
   const auto fb = filter(b0, b_pin, filter_len);
   Decoder dec;
@@ -92,7 +94,8 @@ std::vector<Pulse> channel_pulses(bool a0, bool b0, const std::vector<Change>& a
   return pulses;
 }
 
-std::vector<Window> windows(const std::vector<Pulse>& pulses, const std::vector<std::uint64_t>& ticks) {
+std::vector<Window> windows(const std::vector<Pulse>& pulses,
+                            const std::vector<std::uint64_t>& ticks) {
   std::vector<Window> out;
   std::size_t i = 0;
   std::uint32_t position = 0;

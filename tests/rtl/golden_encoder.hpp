@@ -65,6 +65,7 @@ struct Window {
   bool dir = false;
   std::uint64_t errors = 0;
 };
-std::vector<Window> windows(const std::vector<Pulse>& pulses, const std::vector<std::uint64_t>& ticks);
+std::vector<Window> windows(const std::vector<Pulse>& pulses,
+                            const std::vector<std::uint64_t>& ticks);
 
 }  // namespace omniloc::rtl_golden

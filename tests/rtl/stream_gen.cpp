@@ -60,7 +60,13 @@ PinStream generate_stream(std::mt19937_64& rng, const StreamProfile& p, std::uin
       const bool on_a = (rng() & 1) != 0;
       const std::uint64_t width = rand_in(1, 2 * hold + 1);
       t = ready(on_a, t);
-      if (on_a) { g.toggle_a(t); g.toggle_a(t + width); } else { g.toggle_b(t); g.toggle_b(t + width); }
+      if (on_a) {
+        g.toggle_a(t);
+        g.toggle_a(t + width);
+      } else {
+        g.toggle_b(t);
+        g.toggle_b(t + width);
+      }
       t += width + rand_in(p.min_gap, p.max_gap);
     } else if (r < p.p_pause + p.p_bounce + p.p_illegal) {
       t = std::max(ready(true, t), ready(false, t));
@@ -72,13 +78,22 @@ PinStream generate_stream(std::mt19937_64& rng, const StreamProfile& p, std::uin
       // one filter length later: the pair straddles (or just touches) the window boundary.
       // Pin edge e shows as a pulse after edge e + hold + 2.
       const auto it = std::lower_bound(ticks.begin(), ticks.end(), t + 2 * hold + 8);
-      if (it == ticks.end()) { t += 1; continue; }
+      if (it == ticks.end()) {
+        t += 1;
+        continue;
+      }
       const std::uint64_t target = *it - hold - 2 + rand_in(0, 2) - 1;
       const bool on_a = g.step_toggles_a();
       const std::uint64_t e1 = ready(on_a, std::max(target, t));
-      if (on_a) g.toggle_a(e1); else g.toggle_b(e1);
+      if (on_a)
+        g.toggle_a(e1);
+      else
+        g.toggle_b(e1);
       const std::uint64_t e2 = e1 + hold + rand_in(0, 1);
-      if (on_a) g.toggle_a(e2); else g.toggle_b(e2);
+      if (on_a)
+        g.toggle_a(e2);
+      else
+        g.toggle_b(e2);
       g.forward = !g.forward;
       g.s.steps += 2;
       t = e2 + rand_in(p.min_gap, p.max_gap);
@@ -86,7 +101,10 @@ PinStream generate_stream(std::mt19937_64& rng, const StreamProfile& p, std::uin
       if (u(rng) < p.p_reverse) g.forward = !g.forward;
       const bool on_a = g.step_toggles_a();
       t = ready(on_a, t);
-      if (on_a) g.toggle_a(t); else g.toggle_b(t);
+      if (on_a)
+        g.toggle_a(t);
+      else
+        g.toggle_b(t);
       ++g.s.steps;
       t += rand_in(p.min_gap, p.max_gap);
     }

@@ -12,12 +12,12 @@
 namespace omniloc::rtl_tb {
 
 struct StreamProfile {
-  std::uint64_t min_gap = 1;      // cycles between changes of different pins (>= 1)
+  std::uint64_t min_gap = 1;  // cycles between changes of different pins (>= 1)
   std::uint64_t max_gap = 1;
-  double p_reverse = 0.0;         // a step reverses the running direction
-  double p_bounce = 0.0;          // a pin toggles and returns (width below or above the filter)
-  double p_illegal = 0.0;         // A and B change together
-  double p_pause = 0.0;           // stop for up to max_pause cycles
+  double p_reverse = 0.0;  // a step reverses the running direction
+  double p_bounce = 0.0;   // a pin toggles and returns (width below or above the filter)
+  double p_illegal = 0.0;  // A and B change together
+  double p_pause = 0.0;    // stop for up to max_pause cycles
   std::uint64_t max_pause = 0;
   double p_boundary_reversal = 0.0;  // step + reversal whose pulses straddle a window boundary
 };

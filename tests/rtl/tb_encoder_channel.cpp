@@ -49,7 +49,8 @@ Result run(std::uint64_t seed, unsigned filter_len, Mode mode, const TraceReques
   const auto stream = omniloc::rtl_tb::generate_stream(rng, p, 200'000, 20, filter_len, ticks);
   res.steps = stream.steps;
   while (ticks.back() > stream.end_edge + 2000) ticks.pop_back();
-  const auto pulses = omniloc::rtl_golden::channel_pulses(stream.a0, stream.b0, stream.a, stream.b, filter_len, mode);
+  const auto pulses = omniloc::rtl_golden::channel_pulses(stream.a0, stream.b0, stream.a, stream.b,
+                                                          filter_len, mode);
   const auto golden = omniloc::rtl_golden::windows(pulses, ticks);
 
   Clocked<Vencoder_channel> dut(trace);
@@ -78,14 +79,16 @@ Result run(std::uint64_t seed, unsigned filter_len, Mode mode, const TraceReques
       const auto& g = golden[k];
       res.errors += g.errors;
       // ERROR_COUNT saturates at 2^ERROR_COUNT_BITS - 1 (255).
-      const std::uint64_t saturated = std::min<std::uint64_t>(res.errors, (1u << rm::kErrorCountBits) - 1);
-      if (static_cast<std::int32_t>(dut->win_count_o) != g.count || dut->win_position_o != g.position ||
-          (dut->win_dir_o != 0) != g.dir || dut->err_count_o != saturated) {
+      const std::uint64_t saturated =
+          std::min<std::uint64_t>(res.errors, (1u << rm::kErrorCountBits) - 1);
+      if (static_cast<std::int32_t>(dut->win_count_o) != g.count ||
+          dut->win_position_o != g.position || (dut->win_dir_o != 0) != g.dir ||
+          dut->err_count_o != saturated) {
         res.failure = "window " + std::to_string(k) + ": count " +
                       std::to_string(static_cast<std::int32_t>(dut->win_count_o)) + " position " +
-                      std::to_string(dut->win_position_o) + " errors " + std::to_string(dut->err_count_o) +
-                      "; golden " + std::to_string(g.count) + " " + std::to_string(g.position) + " " +
-                      std::to_string(res.errors);
+                      std::to_string(dut->win_position_o) + " errors " +
+                      std::to_string(dut->err_count_o) + "; golden " + std::to_string(g.count) +
+                      " " + std::to_string(g.position) + " " + std::to_string(res.errors);
         res.fail_cycle = e;
         return res;
       }
@@ -98,14 +101,16 @@ Result run(std::uint64_t seed, unsigned filter_len, Mode mode, const TraceReques
 
 TEST(EncoderChannel, MatchesGoldenWindowsInAllModes) {
   const std::uint64_t seed = omniloc::rtl_tb::test_seed("encoder_channel", 8080);
-  for (const auto& [len, mode] : {std::pair{0u, Mode::kX4}, std::pair{2u, Mode::kX2}, std::pair{5u, Mode::kX1},
-                                  std::pair{9u, Mode::kX4}}) {
+  for (const auto& [len, mode] : {std::pair{0u, Mode::kX4}, std::pair{2u, Mode::kX2},
+                                  std::pair{5u, Mode::kX1}, std::pair{9u, Mode::kX4}}) {
     const auto res = run(seed + len, len, mode, nullptr);
     std::cout << "[encoder_channel] filter " << len << " mode " << static_cast<unsigned>(mode)
-              << ": steps=" << res.steps << " windows=" << res.windows << " illegal=" << res.errors << "\n";
+              << ": steps=" << res.steps << " windows=" << res.windows << " illegal=" << res.errors
+              << "\n";
     if (!res.failure.empty()) {
-      const TraceRequest tr{omniloc::rtl_tb::trace_path("encoder_channel_len" + std::to_string(len), seed + len),
-                            res.fail_cycle > 3000 ? res.fail_cycle - 3000 : 0};
+      const TraceRequest tr{
+          omniloc::rtl_tb::trace_path("encoder_channel_len" + std::to_string(len), seed + len),
+          res.fail_cycle > 3000 ? res.fail_cycle - 3000 : 0};
       run(seed + len, len, mode, &tr);
       FAIL() << res.failure << " seed " << seed + len << "; trace: " << tr.path;
     }

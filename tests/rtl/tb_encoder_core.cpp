@@ -52,7 +52,7 @@ struct StreamConfig {
 };
 
 struct StreamReport {
-  std::string failure;          // empty: passed
+  std::string failure;  // empty: passed
   std::uint64_t fail_cycle = 0;
   std::array<std::uint64_t, 4> steps{};
   std::array<std::uint64_t, 4> counted{};
@@ -64,9 +64,9 @@ struct StreamReport {
 
 // The snapshot reader: SNAP_SEQ (latches) then the rest of the bank, one read per cycle.
 const std::vector<std::uint8_t> kSnapshotOrder = {
-    rm::kRegSnapSeq, rm::kRegSnapCount0, rm::kRegSnapCount1, rm::kRegSnapCount2,
-    rm::kRegSnapCount3, rm::kRegSnapPosition0, rm::kRegSnapPosition1, rm::kRegSnapPosition2,
-    rm::kRegSnapPosition3, rm::kRegSnapDir, rm::kRegSnapTimestamp};
+    rm::kRegSnapSeq,       rm::kRegSnapCount0,    rm::kRegSnapCount1,    rm::kRegSnapCount2,
+    rm::kRegSnapCount3,    rm::kRegSnapPosition0, rm::kRegSnapPosition1, rm::kRegSnapPosition2,
+    rm::kRegSnapPosition3, rm::kRegSnapDir,       rm::kRegSnapTimestamp};
 
 StreamReport run_streams(const StreamConfig& cfg, std::uint64_t seed,
                          const omniloc::rtl_tb::TraceRequest* trace) {
@@ -99,7 +99,8 @@ StreamReport run_streams(const StreamConfig& cfg, std::uint64_t seed,
     rep.steps[ch] = streams[ch].steps;
   }
   const std::uint64_t horizon = end_edge + 8;
-  ticks.erase(std::upper_bound(ticks.begin(), ticks.end(), horizon + cfg.period_cycles), ticks.end());
+  ticks.erase(std::upper_bound(ticks.begin(), ticks.end(), horizon + cfg.period_cycles),
+              ticks.end());
   while (ticks.back() < horizon + 16) ticks.push_back(ticks.back() + cfg.period_cycles);
   const std::uint64_t last_tick = ticks.back();
 
@@ -112,12 +113,14 @@ StreamReport run_streams(const StreamConfig& cfg, std::uint64_t seed,
         streams[ch].a0, streams[ch].b0, streams[ch].a, streams[ch].b, cfg.filter_len, cfg.mode);
     golden[ch] = omniloc::rtl_golden::windows(pulses, ticks);
     // A channel the core was not built with counts nothing, whatever its pins do.
-    if (ch >= kBuiltChannels) std::fill(golden[ch].begin(), golden[ch].end(), omniloc::rtl_golden::Window{});
+    if (ch >= kBuiltChannels)
+      std::fill(golden[ch].begin(), golden[ch].end(), omniloc::rtl_golden::Window{});
     first_error_window[ch] = UINT64_MAX;
     for (std::size_t k = 0; k < golden[ch].size(); ++k) {
       golden_errors[ch] += golden[ch][k].errors;
       golden_total[ch] += golden[ch][k].count;
-      if (golden[ch][k].errors != 0 && first_error_window[ch] == UINT64_MAX) first_error_window[ch] = k;
+      if (golden[ch][k].errors != 0 && first_error_window[ch] == UINT64_MAX)
+        first_error_window[ch] = k;
     }
     for (const auto& p : pulses) rep.counted[ch] += (p.delta != 0);
   }
@@ -146,18 +149,19 @@ StreamReport run_streams(const StreamConfig& cfg, std::uint64_t seed,
   // captured before that edge; every SNAP_* read answers from the bank as it stood before its own
   // edge. frozen_seq models it (0 = nothing latched yet); snap_frozen holds, per read of the
   // snapshot, the window it must describe.
-  std::uint64_t live_seq = 0;     // windows captured at earlier edges
+  std::uint64_t live_seq = 0;  // windows captured at earlier edges
   std::uint64_t frozen_seq = 0;
   std::vector<std::uint64_t> snap_frozen;
-  int acting_read = -1;           // the address read in the previous cycle, or -1
-  int reader_wait = 0;            // cycles since the last read was issued
+  int acting_read = -1;  // the address read in the previous cycle, or -1
+  int reader_wait = 0;   // cycles since the last read was issued
   std::uniform_int_distribution<int> reader_start(0, 199);
   std::uint64_t expected_seq = 1;
   bool consume_next = false;
 
   while (h.cycle() <= last_tick + 2 && rep.failure.empty()) {
     const std::uint64_t s = h.cycle();
-    if (trace != nullptr && trace->from_cycle != 0 && s == trace->from_cycle) h.open_trace(trace->path);
+    if (trace != nullptr && trace->from_cycle != 0 && s == trace->from_cycle)
+      h.open_trace(trace->path);
     for (int ch = 0; ch < 4; ++ch) {
       const auto bit = static_cast<std::uint8_t>(1u << ch);
       while (ia[ch] < streams[ch].a.size() && streams[ch].a[ia[ch]].edge == s) {
@@ -227,8 +231,8 @@ StreamReport run_streams(const StreamConfig& cfg, std::uint64_t seed,
               std::ostringstream os;
               os << "torn or wrong snapshot of window " << seq << " channel " << ch << ": count "
                  << static_cast<std::int32_t>(snap[1 + ch]) << " position " << snap[5 + ch]
-                 << ", golden (windows " << snap_frozen[1 + ch] << ", " << snap_frozen[5 + ch] << ") "
-                 << (snap_frozen[1 + ch] ? golden[ch][kc].count : 0) << " / "
+                 << ", golden (windows " << snap_frozen[1 + ch] << ", " << snap_frozen[5 + ch]
+                 << ") " << (snap_frozen[1 + ch] ? golden[ch][kc].count : 0) << " / "
                  << (snap_frozen[5 + ch] ? golden[ch][kp].position : 0u);
               fail(os.str());
             }
@@ -236,7 +240,8 @@ StreamReport run_streams(const StreamConfig& cfg, std::uint64_t seed,
           std::uint32_t dir = 0;
           const std::size_t kd = window_of(9);
           for (int ch = 0; ch < 4; ++ch) dir |= (golden[ch][kd].dir ? 1u : 0u) << ch;
-          if (snap[9] != dir) fail("snapshot SNAP_DIR mismatch in window " + std::to_string(kd + 1));
+          if (snap[9] != dir)
+            fail("snapshot SNAP_DIR mismatch in window " + std::to_string(kd + 1));
           const std::size_t kt = window_of(10);
           if (snap[10] != static_cast<std::uint32_t>(ticks[kt] - 1)) {
             fail("snapshot SNAP_TIMESTAMP " + std::to_string(snap[10]) + " != golden " +
@@ -257,12 +262,16 @@ StreamReport run_streams(const StreamConfig& cfg, std::uint64_t seed,
       const auto w = h.window();
       consume_next = true;
       if (w.seq != expected_seq) {
-        fail("window sequence " + std::to_string(w.seq) + ", expected " + std::to_string(expected_seq));
+        fail("window sequence " + std::to_string(w.seq) + ", expected " +
+             std::to_string(expected_seq));
         break;
       }
       const std::size_t k = expected_seq - 1;
-      if (s != ticks[k] + 1) fail("win_valid_o at edge " + std::to_string(s) + ", golden " + std::to_string(ticks[k] + 1));
-      if (w.timestamp != static_cast<std::uint32_t>(ticks[k] - 1)) fail("window timestamp mismatch in window " + std::to_string(w.seq));
+      if (s != ticks[k] + 1)
+        fail("win_valid_o at edge " + std::to_string(s) + ", golden " +
+             std::to_string(ticks[k] + 1));
+      if (w.timestamp != static_cast<std::uint32_t>(ticks[k] - 1))
+        fail("window timestamp mismatch in window " + std::to_string(w.seq));
       std::uint8_t illegal_bits = 0;
       for (int ch = 0; ch < 4; ++ch) {
         const auto& gw = golden[ch][k];
@@ -292,7 +301,8 @@ StreamReport run_streams(const StreamConfig& cfg, std::uint64_t seed,
     for (int ch = 0; ch < 4; ++ch) {
       // ERROR_COUNTn saturates at 2^ERROR_COUNT_BITS - 1 (the hostile streams make thousands).
       const auto e = h.read(static_cast<std::uint8_t>(rm::kRegErrorCount0 + ch));
-      const std::uint64_t saturated = std::min<std::uint64_t>(golden_errors[ch], (1u << rm::kErrorCountBits) - 1);
+      const std::uint64_t saturated =
+          std::min<std::uint64_t>(golden_errors[ch], (1u << rm::kErrorCountBits) - 1);
       if (e.err || e.data != saturated) {
         fail("ERROR_COUNT" + std::to_string(ch) + " = " + std::to_string(e.data) + ", golden " +
              std::to_string(golden_errors[ch]) + " saturated at " + std::to_string(saturated));
@@ -301,7 +311,8 @@ StreamReport run_streams(const StreamConfig& cfg, std::uint64_t seed,
       for (const auto& gw : golden[ch]) sum += gw.count;
       if (sum != golden_total[ch]) fail("golden sum inconsistent");
       // Sum of windows == final position (what the core reports in its last window).
-      if (static_cast<std::uint32_t>(sum) != golden[ch].back().position) fail("golden position != sum");
+      if (static_cast<std::uint32_t>(sum) != golden[ch].back().position)
+        fail("golden position != sum");
     }
   }
   rep.cycles = h.cycle();
@@ -312,9 +323,11 @@ void run_and_check(const StreamConfig& cfg, std::uint64_t default_seed) {
   const std::uint64_t seed = omniloc::rtl_tb::test_seed(cfg.name, default_seed);
   const auto rep = run_streams(cfg, seed, nullptr);
   std::cout << "[" << cfg.name << "] cycles=" << rep.cycles << " windows=" << rep.windows
-            << " snapshots=" << rep.snapshots << " re-latched mid-snapshot=" << rep.relatched << "\n";
+            << " snapshots=" << rep.snapshots << " re-latched mid-snapshot=" << rep.relatched
+            << "\n";
   for (int ch = 0; ch < 4; ++ch) {
-    std::cout << "  channel " << ch << ": steps=" << rep.steps[ch] << " counted=" << rep.counted[ch] << "\n";
+    std::cout << "  channel " << ch << ": steps=" << rep.steps[ch] << " counted=" << rep.counted[ch]
+              << "\n";
   }
   if (!rep.failure.empty()) {
     omniloc::rtl_tb::TraceRequest tr{omniloc::rtl_tb::trace_path(cfg.name, seed),
@@ -428,14 +441,18 @@ void step_forward(std::uint8_t& a, std::uint8_t& b, int ch) {
   const auto bit = static_cast<std::uint8_t>(1u << ch);
   const bool av = a & bit;
   const bool bv = b & bit;
-  if (av == bv) a ^= bit; else b ^= bit;
+  if (av == bv)
+    a ^= bit;
+  else
+    b ^= bit;
 }
 
 TEST(EncoderCore, RegistersFromTheBus) {
   EncoderCoreHarness h;
   EXPECT_EQ(h.read(rm::kRegId).data, rm::kIdValue);
   EXPECT_EQ(h.read(rm::kRegVersion).data, rm::kVersionValue);
-  EXPECT_EQ(h.read(rm::kRegConfig).data, static_cast<std::uint32_t>(kBuiltChannels)) << "CONFIG.CHANNELS";
+  EXPECT_EQ(h.read(rm::kRegConfig).data, static_cast<std::uint32_t>(kBuiltChannels))
+      << "CONFIG.CHANNELS";
   EXPECT_EQ(h.read(rm::kRegPeriod).data, kDefaultPeriodCycles);
   EXPECT_EQ(h.read(rm::kRegControl).data, 0u);
   // Unknown addresses, read-only registers and refused values: err, nothing changes.
@@ -506,8 +523,10 @@ TEST(EncoderCore, NoCountWithoutEnableAndNoEdgeAtPowerUp) {
   for (int ch = 0; ch < 4; ++ch) {
     // A channel the core was not built with moved with the others but counts nothing.
     const std::uint32_t expected = ch < kBuiltChannels ? 7u : 0u;
-    EXPECT_EQ(h.read(static_cast<std::uint8_t>(rm::kRegSnapPosition0 + ch)).data, expected) << "channel " << ch;
-    EXPECT_EQ(h.read(static_cast<std::uint8_t>(rm::kRegErrorCount0 + ch)).data, 0u) << "channel " << ch;
+    EXPECT_EQ(h.read(static_cast<std::uint8_t>(rm::kRegSnapPosition0 + ch)).data, expected)
+        << "channel " << ch;
+    EXPECT_EQ(h.read(static_cast<std::uint8_t>(rm::kRegErrorCount0 + ch)).data, 0u)
+        << "channel " << ch;
   }
   EXPECT_EQ(h.read(rm::kRegStatus).data & 0xFu, 0u);
 }
@@ -536,7 +555,7 @@ TEST(EncoderCore, OverrunWhenAWindowIsNotConsumed) {
   for (int i = 0; i < 20; ++i) {
     h.step(60);
     ASSERT_FALSE(h.read(rm::kRegSnapSeq).err);
-    h.step(40 - EncoderCoreHarness::kBusLatency);   // 100 cycles a round, one read per window
+    h.step(40 - EncoderCoreHarness::kBusLatency);  // 100 cycles a round, one read per window
   }
   EXPECT_EQ(h.read(rm::kRegStatus).data & 0x10u, 0u);
 }

@@ -35,7 +35,7 @@ struct Inputs {
   std::array<std::uint32_t, 4> pos{};
   std::uint8_t dir = 0;
   std::array<std::uint32_t, 4> errs{};
-  std::uint32_t gyro_sum = 0;   // 24-bit two's complement, as gyro_accum gives it
+  std::uint32_t gyro_sum = 0;  // 24-bit two's complement, as gyro_accum gives it
   std::uint8_t gyro_count = 0;
   std::uint8_t gyro_flags = 0;
 };
@@ -74,20 +74,52 @@ struct Model {
     bool writable = false;
     std::uint32_t value = 0;
     switch (in.addr) {
-      case rm::kRegId: value = rm::kIdValue; break;
-      case rm::kRegVersion: value = rm::kVersionValue; break;
-      case rm::kRegConfig: value = 4; break;  // CONFIG.CHANNELS of the default build: four wheels
-      case rm::kRegControl: value = (enable ? 1u : 0u) | (decode << 1) | (stream ? 8u : 0u); writable = true; break;
-      case rm::kRegFilter: value = filter; writable = true; break;
-      case rm::kRegPeriod: value = period; writable = true; break;
-      case rm::kRegStatus: value = status; writable = true; break;
-      case rm::kRegTimestamp: value = in.timestamp; break;
-      case rm::kRegSnapSeq: value = seq; break;
-      case rm::kRegSnapTimestamp: value = snap_ts; break;
-      case rm::kRegSnapDir: value = snap_dir; break;
-      case rm::kRegSnapStatus: value = snap_status; break;
-      case rm::kRegSnapGyroSum: value = snap_gyro_sum; break;
-      case rm::kRegSnapGyro: value = snap_gyro_count | static_cast<std::uint32_t>(snap_gyro_flags) << 8; break;
+      case rm::kRegId:
+        value = rm::kIdValue;
+        break;
+      case rm::kRegVersion:
+        value = rm::kVersionValue;
+        break;
+      case rm::kRegConfig:
+        value = 4;
+        break;  // CONFIG.CHANNELS of the default build: four wheels
+      case rm::kRegControl:
+        value = (enable ? 1u : 0u) | (decode << 1) | (stream ? 8u : 0u);
+        writable = true;
+        break;
+      case rm::kRegFilter:
+        value = filter;
+        writable = true;
+        break;
+      case rm::kRegPeriod:
+        value = period;
+        writable = true;
+        break;
+      case rm::kRegStatus:
+        value = status;
+        writable = true;
+        break;
+      case rm::kRegTimestamp:
+        value = in.timestamp;
+        break;
+      case rm::kRegSnapSeq:
+        value = seq;
+        break;
+      case rm::kRegSnapTimestamp:
+        value = snap_ts;
+        break;
+      case rm::kRegSnapDir:
+        value = snap_dir;
+        break;
+      case rm::kRegSnapStatus:
+        value = snap_status;
+        break;
+      case rm::kRegSnapGyroSum:
+        value = snap_gyro_sum;
+        break;
+      case rm::kRegSnapGyro:
+        value = snap_gyro_count | static_cast<std::uint32_t>(snap_gyro_flags) << 8;
+        break;
       default:
         if (in.addr >= rm::kRegSnapCount0 && in.addr <= rm::kRegSnapCount3) {
           value = snap_count[in.addr - rm::kRegSnapCount0];
@@ -110,10 +142,16 @@ struct Model {
       }
     }
     if (wr && in.addr == rm::kRegFilter) {
-      if (in.wdata > 255) refused = true; else n.filter = in.wdata;
+      if (in.wdata > 255)
+        refused = true;
+      else
+        n.filter = in.wdata;
     }
     if (wr && in.addr == rm::kRegPeriod) {
-      if (in.wdata < rm::kPeriodMinCycles) refused = true; else n.period = in.wdata;
+      if (in.wdata < rm::kPeriodMinCycles)
+        refused = true;
+      else
+        n.period = in.wdata;
     }
     const bool latch = rd && in.addr == rm::kRegSnapSeq;
     const bool consumed = latch || in.consumed;
@@ -122,8 +160,8 @@ struct Model {
     if (wr && in.addr == rm::kRegStatus) next_status &= static_cast<std::uint8_t>(~in.wdata & 0x7F);
     // GYRO_FAULT: in the cycle after a capture the gyro inputs hold that window's flags.
     const bool gyro_fault = win_valid && in.gyro_flags != 0;
-    next_status |= static_cast<std::uint8_t>((in.illegal & 0xF) | (overrun ? 0x10 : 0) | (refused ? 0x20 : 0) |
-                                             (gyro_fault ? 0x40 : 0));
+    next_status |= static_cast<std::uint8_t>((in.illegal & 0xF) | (overrun ? 0x10 : 0) |
+                                             (refused ? 0x20 : 0) | (gyro_fault ? 0x40 : 0));
     n.status = next_status;
     n.win_valid = in.capture;
     if (in.capture) {
@@ -156,7 +194,9 @@ struct Model {
 // as the link sends it.
 std::vector<std::uint8_t> bank_body(const Model& m) {
   std::vector<std::uint8_t> b;
-  auto put = [&](std::uint32_t v) { for (int k = 0; k < 4; ++k) b.push_back(static_cast<std::uint8_t>(v >> (8 * k))); };
+  auto put = [&](std::uint32_t v) {
+    for (int k = 0; k < 4; ++k) b.push_back(static_cast<std::uint8_t>(v >> (8 * k)));
+  };
   put(m.snap_seq);
   put(m.snap_ts);
   for (auto c : m.snap_count) put(c);
@@ -171,20 +211,24 @@ std::vector<std::uint8_t> bank_body(const Model& m) {
 // idx: the bank byte to check this cycle (kFrameTelemetryBodyBytes = past the body, reads 0).
 std::string compare(Vencoder_regs& d, const Model& m, unsigned idx = 0) {
   auto field = [](const char* name, std::uint64_t got, std::uint64_t want) {
-    return got == want ? std::string() : std::string(name) + " " + std::to_string(got) + " != golden " + std::to_string(want);
+    return got == want ? std::string()
+                       : std::string(name) + " " + std::to_string(got) + " != golden " +
+                             std::to_string(want);
   };
   const auto body = bank_body(m);
   d.bank_idx_i = static_cast<std::uint8_t>(idx);
   d.eval();
   if (auto s = field("bank_byte_o", d.bank_byte_o, idx < body.size() ? body[idx] : 0); !s.empty())
     return s + " (bank byte " + std::to_string(idx) + ")";
-  for (const auto& s : {field("reg_ack_o", d.reg_ack_o, m.ack), field("reg_err_o", d.reg_err_o, m.err),
-                        field("reg_rdata_o", d.reg_rdata_o, m.rdata), field("enable_o", d.enable_o, m.enable),
-                        field("decode_o", d.decode_o, m.decode), field("stream_o", d.stream_o, m.stream),
-                        field("filter_len_o", d.filter_len_o, m.filter), field("period_o", d.period_o, m.period),
-                        field("status_o", d.status_o, m.status), field("win_valid_o", d.win_valid_o, m.win_valid),
-                        field("win_seq_o", d.win_seq_o, m.seq), field("win_timestamp_o", d.win_timestamp_o, m.win_ts),
-                        field("win_status_o", d.win_status_o, m.win_status)}) {
+  for (const auto& s :
+       {field("reg_ack_o", d.reg_ack_o, m.ack), field("reg_err_o", d.reg_err_o, m.err),
+        field("reg_rdata_o", d.reg_rdata_o, m.rdata), field("enable_o", d.enable_o, m.enable),
+        field("decode_o", d.decode_o, m.decode), field("stream_o", d.stream_o, m.stream),
+        field("filter_len_o", d.filter_len_o, m.filter), field("period_o", d.period_o, m.period),
+        field("status_o", d.status_o, m.status), field("win_valid_o", d.win_valid_o, m.win_valid),
+        field("win_seq_o", d.win_seq_o, m.seq),
+        field("win_timestamp_o", d.win_timestamp_o, m.win_ts),
+        field("win_status_o", d.win_status_o, m.win_status)}) {
     if (!s.empty()) return s;
   }
   return {};
@@ -215,21 +259,34 @@ Result run(std::uint64_t seed, std::uint64_t cycles, const TraceRequest* trace) 
     bool err = false;
     std::uint32_t rdata = 0;
   } answer;
-  const std::array<std::uint8_t, 10> hot = {rm::kRegControl, rm::kRegFilter, rm::kRegPeriod, rm::kRegStatus,
-                                            rm::kRegSnapSeq, rm::kRegSnapCount2, rm::kRegSnapStatus, rm::kRegId,
-                                            rm::kRegSnapGyroSum, rm::kRegSnapGyro};
+  const std::array<std::uint8_t, 10> hot = {
+      rm::kRegControl,     rm::kRegFilter,     rm::kRegPeriod,     rm::kRegStatus,
+      rm::kRegSnapSeq,     rm::kRegSnapCount2, rm::kRegSnapStatus, rm::kRegId,
+      rm::kRegSnapGyroSum, rm::kRegSnapGyro};
   for (std::uint64_t i = 0; i < cycles; ++i) {
     const unsigned r = static_cast<unsigned>(rng() % 100);
     in.rd = r < 35 || r >= 98;
     in.wr = (r >= 35 && r < 60) || r >= 98;
     in.addr = (rng() % 4 == 0) ? static_cast<std::uint8_t>(rng() % 256) : hot[rng() % hot.size()];
     switch (rng() % 6) {
-      case 0: in.wdata = static_cast<std::uint32_t>(rng()); break;
-      case 1: in.wdata = static_cast<std::uint32_t>(rng() % 16); break;        // CONTROL-like
-      case 2: in.wdata = static_cast<std::uint32_t>(rng() % 300); break;       // FILTER-like
-      case 3: in.wdata = static_cast<std::uint32_t>(60 + rng() % 8); break;    // around PERIOD_MIN
-      case 4: in.wdata = 0x7F; break;                                          // clear all flags
-      default: in.wdata = static_cast<std::uint32_t>(1u << (rng() % 7)); break;
+      case 0:
+        in.wdata = static_cast<std::uint32_t>(rng());
+        break;
+      case 1:
+        in.wdata = static_cast<std::uint32_t>(rng() % 16);
+        break;  // CONTROL-like
+      case 2:
+        in.wdata = static_cast<std::uint32_t>(rng() % 300);
+        break;  // FILTER-like
+      case 3:
+        in.wdata = static_cast<std::uint32_t>(60 + rng() % 8);
+        break;  // around PERIOD_MIN
+      case 4:
+        in.wdata = 0x7F;
+        break;  // clear all flags
+      default:
+        in.wdata = static_cast<std::uint32_t>(1u << (rng() % 7));
+        break;
     }
     in.capture = rng() % 23 == 0;
     in.illegal = (rng() % 40 == 0) ? static_cast<std::uint8_t>(rng() % 16) : 0;
@@ -279,7 +336,9 @@ Result run(std::uint64_t seed, std::uint64_t cycles, const TraceRequest* trace) 
     shown.err = answer.err;
     shown.rdata = answer.rdata;
     answer = {model.ack, model.err, model.rdata};
-    if (auto s = compare(dut.io(), shown, static_cast<unsigned>(e % (rm::kFrameTelemetryBodyBytes + 1))); !s.empty()) {
+    if (auto s =
+            compare(dut.io(), shown, static_cast<unsigned>(e % (rm::kFrameTelemetryBodyBytes + 1)));
+        !s.empty()) {
       res.failure = "edge " + std::to_string(e) + ": " + s;
       res.fail_cycle = e;
       return res;
@@ -294,8 +353,9 @@ Result run(std::uint64_t seed, std::uint64_t cycles, const TraceRequest* trace) 
 TEST(EncoderRegs, MatchesGoldenRegisterFile) {
   const std::uint64_t seed = omniloc::rtl_tb::test_seed("encoder_regs", 2718);
   const auto res = run(seed, 1'000'000, nullptr);
-  std::cout << "[encoder_regs] bus errors=" << res.errors << " refused or read-only writes=" << res.refused
-            << " overrun events=" << res.overruns << "\n";
+  std::cout << "[encoder_regs] bus errors=" << res.errors
+            << " refused or read-only writes=" << res.refused << " overrun events=" << res.overruns
+            << "\n";
   if (!res.failure.empty()) {
     const TraceRequest tr{omniloc::rtl_tb::trace_path("encoder_regs", seed),
                           res.fail_cycle > 2000 ? res.fail_cycle - 2000 : 0};

@@ -25,7 +25,8 @@ struct Result {
   std::uint64_t passed = 0;
 };
 
-Result run(unsigned len, bool initial, std::uint64_t seed, std::uint64_t cycles, const TraceRequest* trace) {
+Result run(unsigned len, bool initial, std::uint64_t seed, std::uint64_t cycles,
+           const TraceRequest* trace) {
   std::mt19937_64 rng(seed);
   Result res;
   // Runs from 1 to 2*len+2 cycles: about half of them shorter than the filter.
@@ -58,7 +59,8 @@ Result run(unsigned len, bool initial, std::uint64_t seed, std::uint64_t cycles,
       if (!dut->valid_o) return res.failure = "valid_o low after priming", res.fail_cycle = e, res;
       if ((dut->out_o != 0) != expected) {
         res.failure = "out_o " + std::to_string(dut->out_o) + " at edge " + std::to_string(e) +
-                      ", golden " + std::to_string(expected) + " (filter " + std::to_string(len) + ")";
+                      ", golden " + std::to_string(expected) + " (filter " + std::to_string(len) +
+                      ")";
         res.fail_cycle = e;
         return res;
       }
@@ -93,6 +95,7 @@ TEST_P(InputConditioner, MatchesGoldenFilter) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(FilterLengths, InputConditioner, ::testing::Values(0u, 1u, 2u, 3u, 7u, 64u, 255u));
+INSTANTIATE_TEST_SUITE_P(FilterLengths, InputConditioner,
+                         ::testing::Values(0u, 1u, 2u, 3u, 7u, 64u, 255u));
 
 }  // namespace

@@ -65,10 +65,11 @@ Result run(std::uint64_t seed, std::uint64_t cycles, const TraceRequest* trace) 
     if ((dut->up_o != 0) != g.up || (dut->down_o != 0) != g.down || (dut->err_o != 0) != g.err ||
         (dut->dir_o != 0) != g.dir) {
       res.failure = "edge " + std::to_string(e) + ": up/down/err/dir " + std::to_string(dut->up_o) +
-                    std::to_string(dut->down_o) + std::to_string(dut->err_o) + std::to_string(dut->dir_o) +
-                    ", golden " + std::to_string(g.up) + std::to_string(g.down) + std::to_string(g.err) +
-                    std::to_string(g.dir) + " (mode " + std::to_string(static_cast<unsigned>(mode)) +
-                    ", en " + std::to_string(en) + ")";
+                    std::to_string(dut->down_o) + std::to_string(dut->err_o) +
+                    std::to_string(dut->dir_o) + ", golden " + std::to_string(g.up) +
+                    std::to_string(g.down) + std::to_string(g.err) + std::to_string(g.dir) +
+                    " (mode " + std::to_string(static_cast<unsigned>(mode)) + ", en " +
+                    std::to_string(en) + ")";
       res.fail_cycle = e;
       return res;
     }
@@ -99,7 +100,8 @@ TEST(QuadratureDecoder, MatchesGoldenTableInAllModes) {
 // and the same cycle backwards gives the negatives.
 TEST(QuadratureDecoder, OneCycleHandComputed) {
   const std::array<std::array<int, 2>, 5> forward = {{{0, 0}, {1, 0}, {1, 1}, {0, 1}, {0, 0}}};
-  for (const auto& [mode, expected] : std::array<std::pair<unsigned, int>, 3>{{{0, 4}, {1, 2}, {2, 1}}}) {
+  for (const auto& [mode, expected] :
+       std::array<std::pair<unsigned, int>, 3>{{{0, 4}, {1, 2}, {2, 1}}}) {
     for (const bool backwards : {false, true}) {
       Clocked<Vquadrature_decoder> dut;
       dut->a_i = 0;

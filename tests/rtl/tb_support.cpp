@@ -11,8 +11,8 @@ std::uint64_t test_seed(const std::string& test_name, std::uint64_t fallback) {
   if (const char* env = std::getenv("OMNILOC_SEED"); env != nullptr && *env != '\0') {
     seed = std::strtoull(env, nullptr, 0);
   }
-  std::cout << "[seed] " << test_name << " seed=" << seed
-            << " (replay with OMNILOC_SEED=" << seed << ")" << std::endl;
+  std::cout << "[seed] " << test_name << " seed=" << seed << " (replay with OMNILOC_SEED=" << seed
+            << ")" << std::endl;
   return seed;
 }
 

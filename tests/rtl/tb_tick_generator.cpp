@@ -21,7 +21,9 @@ struct Result {
   std::uint64_t fail_cycle = 0;
 };
 
-Result fail_at(std::uint64_t e, const std::string& what) { return {what + " at edge " + std::to_string(e), e}; }
+Result fail_at(std::uint64_t e, const std::string& what) {
+  return {what + " at edge " + std::to_string(e), e};
+}
 
 Result run_defaults(int windows, const TraceRequest* trace) {
   Clocked<Vtick_generator> dut(trace);
@@ -34,13 +36,18 @@ Result run_defaults(int windows, const TraceRequest* trace) {
     const std::uint64_t e = dut.cycle();
     dut.step();
     // Timestamp counts edges since reset: 1 after the first.
-    if (dut->timestamp_o != static_cast<std::uint32_t>(e - first_edge + 1)) return fail_at(e, "timestamp_o wrong");
+    if (dut->timestamp_o != static_cast<std::uint32_t>(e - first_edge + 1))
+      return fail_at(e, "timestamp_o wrong");
     if (dut->tick_o) {
-      const std::uint64_t golden = ticks == 0 ? first_edge + kDefaultPeriodCycles - 1 : last_tick + kDefaultPeriodCycles;
-      if (e != golden) return fail_at(e, "tick " + std::to_string(ticks) + " expected at " + std::to_string(golden));
+      const std::uint64_t golden =
+          ticks == 0 ? first_edge + kDefaultPeriodCycles - 1 : last_tick + kDefaultPeriodCycles;
+      if (e != golden)
+        return fail_at(e,
+                       "tick " + std::to_string(ticks) + " expected at " + std::to_string(golden));
       last_tick = e;
       ++ticks;
-    } else if (e == (ticks == 0 ? first_edge + kDefaultPeriodCycles - 1 : last_tick + kDefaultPeriodCycles)) {
+    } else if (e == (ticks == 0 ? first_edge + kDefaultPeriodCycles - 1
+                                : last_tick + kDefaultPeriodCycles)) {
       return fail_at(e, "missing tick " + std::to_string(ticks));
     }
   }
@@ -76,10 +83,12 @@ Result run_changes(std::uint64_t seed, int windows, const TraceRequest* trace) {
     const std::uint64_t e = dut.cycle();
     dut.step();
     const bool golden_tick = (e == next_tick);
-    if ((dut->tick_o != 0) != golden_tick) return fail_at(e, "tick_o " + std::to_string(dut->tick_o));
+    if ((dut->tick_o != 0) != golden_tick)
+      return fail_at(e, "tick_o " + std::to_string(dut->tick_o));
     if (golden_tick) {
       ++ticks;
-      if (dut->period_o != requested) return fail_at(e, "period_o not the period sampled at the tick");
+      if (dut->period_o != requested)
+        return fail_at(e, "period_o not the period sampled at the tick");
       next_tick = e + requested;
     }
   }

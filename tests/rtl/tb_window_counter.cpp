@@ -29,8 +29,8 @@ Result run(std::uint64_t seed, int cycles, const omniloc::rtl_tb::TraceRequest* 
   dut->down_i = 0;
   dut->capture_i = 0;
   dut.reset(2);
-  std::int64_t running = 0;      // golden count of the open window
-  std::uint32_t position = 0;    // golden position
+  std::int64_t running = 0;    // golden count of the open window
+  std::uint32_t position = 0;  // golden position
   std::int64_t window = 0;
   std::uint32_t window_pos = 0;
   bool window_dir = false;
@@ -62,12 +62,17 @@ Result run(std::uint64_t seed, int cycles, const omniloc::rtl_tb::TraceRequest* 
       res.pulses_in_capture_cycle += (delta != 0);
     }
     std::string what;
-    if (static_cast<std::int32_t>(dut->win_count_o) != window) what = "win_count_o";
-    else if (dut->win_position_o != window_pos) what = "win_position_o";
-    else if ((dut->win_dir_o != 0) != window_dir) what = "win_dir_o";
-    else if (dut->position_o != position) what = "position_o";
+    if (static_cast<std::int32_t>(dut->win_count_o) != window)
+      what = "win_count_o";
+    else if (dut->win_position_o != window_pos)
+      what = "win_position_o";
+    else if ((dut->win_dir_o != 0) != window_dir)
+      what = "win_dir_o";
+    else if (dut->position_o != position)
+      what = "position_o";
     // Conservation: what was captured plus what is open is all there was.
-    else if (static_cast<std::uint32_t>(sum_of_windows + running) != position) what = "golden conservation";
+    else if (static_cast<std::uint32_t>(sum_of_windows + running) != position)
+      what = "golden conservation";
     if (!what.empty()) {
       res.failure = what + " differs from the golden model at edge " + std::to_string(e);
       res.fail_cycle = e;

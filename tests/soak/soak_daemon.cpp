@@ -1,5 +1,5 @@
-// Daemon soak: omnilocd's Daemon on the simulated robot (as omnilocd-sim runs it) for a long stretch
-// of simulated time, as fast as the simulation goes, with faults injected on a schedule:
+// Daemon soak: omnilocd's Daemon on the simulated robot (as omnilocd-sim runs it) for a long
+// stretch of simulated time, as fast as the simulation goes, with faults injected on a schedule:
 //   - the board unplugged and plugged back (the link throws kDeviceGone, reopening fails with
 //     kNotFound, what the board sends meanwhile is lost),
 //   - the camera stalling (no frame delivered),
@@ -17,7 +17,8 @@
 // odometry_only while the camera stalls, the recording stopped) and survived (a datagram with
 // status ok within 5 s of its end). At the end the recording is replayed with `omniloc replay` and
 // its replayable span is compared with the time the disk filled. RSS (VmRSS) is read at 10 s of
-// simulated time (after the warm-up) and at the end. Prints the figures; exits 1 when a check fails.
+// simulated time (after the warm-up) and at the end. Prints the figures; exits 1 when a check
+// fails.
 //
 //   soak_daemon [--minutes M | --duration-s S] [--board reference|verilated] [--camera-fps F]
 //               [--seed N] [--out DIR] [--max-rss-growth-mb MB]
@@ -26,10 +27,10 @@
 // simulated second on this machine); reference (default) is the C++ golden model of the board's
 // protocol behind the same Transport interface (sim/include/omniloc_sim/reference_board.hpp), fast
 // enough for an hour of simulated time in minutes. docs/TESTING.md "Daemon soak".
-#include <sys/resource.h>
-#include <sys/socket.h>
 #include <arpa/inet.h>
 #include <netinet/in.h>
+#include <sys/resource.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -49,6 +50,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "../host/udp_receiver.hpp"
 #include "omniloc/daemon.hpp"
 #include "omniloc/recording.hpp"
 #include "omniloc_sim/playing_area.hpp"
@@ -57,7 +59,6 @@
 #include "omniloc_sim/sim_robot.hpp"
 #include "omniloc_sim/trajectory.hpp"
 #include "omniloc_sim/world.hpp"
-#include "../host/udp_receiver.hpp"
 
 #ifndef OMNILOC_CLI_PATH
 #error "OMNILOC_CLI_PATH (the omniloc program, for `omniloc replay`) must be defined"
@@ -73,7 +74,8 @@ constexpr double kWindowMs = 10.0;
 constexpr double kCycleMs = 30'000.0;
 constexpr double kResumeWithinMs = 5'000.0;
 constexpr double kGapMs = 20.0;
-constexpr double kMaxBurstGapMs = 250.0 + 2 * kWindowMs;  // the daemon's board-silence timeout, + a window each side
+constexpr double kMaxBurstGapMs =
+    250.0 + 2 * kWindowMs;  // the daemon's board-silence timeout, + a window each side
 
 struct Options {
   double duration_s = 3600.0;
@@ -96,26 +98,37 @@ Options parse(int argc, char** argv) {
       const std::string v = text();
       char* end = nullptr;
       const double x = std::strtod(v.c_str(), &end);
-      if (v.empty() || *end != '\0' || !std::isfinite(x)) throw std::invalid_argument(a + ": not a number: '" + v + "'");
+      if (v.empty() || *end != '\0' || !std::isfinite(x))
+        throw std::invalid_argument(a + ": not a number: '" + v + "'");
       return x;
     };
-    if (a == "--minutes") o.duration_s = 60.0 * number();
-    else if (a == "--duration-s") o.duration_s = number();
-    else if (a == "--board") o.board = text();
-    else if (a == "--camera-fps") o.camera_fps = number();
-    else if (a == "--seed") o.seed = static_cast<std::uint64_t>(number());
-    else if (a == "--out") o.out = text();
-    else if (a == "--max-rss-growth-mb") o.max_rss_growth_mb = number();
+    if (a == "--minutes")
+      o.duration_s = 60.0 * number();
+    else if (a == "--duration-s")
+      o.duration_s = number();
+    else if (a == "--board")
+      o.board = text();
+    else if (a == "--camera-fps")
+      o.camera_fps = number();
+    else if (a == "--seed")
+      o.seed = static_cast<std::uint64_t>(number());
+    else if (a == "--out")
+      o.out = text();
+    else if (a == "--max-rss-growth-mb")
+      o.max_rss_growth_mb = number();
     else
-      throw std::invalid_argument("unknown option '" + a +
-                                  "' (--minutes M | --duration-s S, --board reference|verilated, --camera-fps F, "
-                                  "--seed N, --out DIR, --max-rss-growth-mb MB)");
+      throw std::invalid_argument(
+          "unknown option '" + a +
+          "' (--minutes M | --duration-s S, --board reference|verilated, --camera-fps F, "
+          "--seed N, --out DIR, --max-rss-growth-mb MB)");
   }
   if (!(o.duration_s >= 60.0 && o.duration_s <= 86400.0))
-    throw std::invalid_argument("--duration-s / --minutes: the run must last 60 s .. 24 h of simulated time");
+    throw std::invalid_argument(
+        "--duration-s / --minutes: the run must last 60 s .. 24 h of simulated time");
   if (o.board != "reference" && o.board != "verilated")
     throw std::invalid_argument("--board: 'reference' or 'verilated', got '" + o.board + "'");
-  if (!(o.camera_fps >= 1.0 && o.camera_fps <= 60.0)) throw std::invalid_argument("--camera-fps must be 1 .. 60");
+  if (!(o.camera_fps >= 1.0 && o.camera_fps <= 60.0))
+    throw std::invalid_argument("--camera-fps must be 1 .. 60");
   if (!(o.max_rss_growth_mb > 0.0)) throw std::invalid_argument("--max-rss-growth-mb must be > 0");
   return o;
 }
@@ -125,10 +138,14 @@ Options parse(int argc, char** argv) {
 enum class FaultKind { kUnplug, kCameraStall, kCorruptBurst, kDiskFull };
 const char* fault_name(FaultKind k) {
   switch (k) {
-    case FaultKind::kUnplug: return "board unplugged";
-    case FaultKind::kCameraStall: return "camera stall";
-    case FaultKind::kCorruptBurst: return "corrupt bytes on the link";
-    case FaultKind::kDiskFull: return "disk full under the recording";
+    case FaultKind::kUnplug:
+      return "board unplugged";
+    case FaultKind::kCameraStall:
+      return "camera stall";
+    case FaultKind::kCorruptBurst:
+      return "corrupt bytes on the link";
+    case FaultKind::kDiskFull:
+      return "disk full under the recording";
   }
   return "?";
 }
@@ -136,8 +153,8 @@ const char* fault_name(FaultKind k) {
 struct Fault {
   FaultKind kind;
   double from_ms, to_ms;
-  bool noticed = false;             // its effect showed in the stream (or the report)
-  double resumed_ms = -1.0;         // first datagram with status ok after to_ms
+  bool noticed = false;      // its effect showed in the stream (or the report)
+  double resumed_ms = -1.0;  // first datagram with status ok after to_ms
   [[nodiscard]] bool active(double t) const { return t >= from_ms && t < to_ms; }
 };
 
@@ -158,7 +175,8 @@ std::vector<Fault> make_schedule(double duration_ms) {
 struct Faults {
   std::vector<Fault> list;
   [[nodiscard]] bool any(FaultKind k, double t) const {
-    return std::any_of(list.begin(), list.end(), [&](const Fault& f) { return f.kind == k && f.active(t); });
+    return std::any_of(list.begin(), list.end(),
+                       [&](const Fault& f) { return f.kind == k && f.active(t); });
   }
 };
 
@@ -167,9 +185,13 @@ struct Faults {
 /// Any board's transport, unplugged and corrupted on the schedule (daemon time from the clock).
 class FaultyTransport final : public Transport {
  public:
-  FaultyTransport(std::unique_ptr<Transport> inner, const Faults& faults, DaemonClock& clock, std::mt19937_64& rng,
-                  std::uint64_t& corrupted)
-      : inner_(std::move(inner)), faults_(faults), clock_(clock), rng_(rng), corrupted_(corrupted) {}
+  FaultyTransport(std::unique_ptr<Transport> inner, const Faults& faults, DaemonClock& clock,
+                  std::mt19937_64& rng, std::uint64_t& corrupted)
+      : inner_(std::move(inner)),
+        faults_(faults),
+        clock_(clock),
+        rng_(rng),
+        corrupted_(corrupted) {}
   void write(std::span<const std::uint8_t> bytes) override {
     check();
     inner_->write(bytes);
@@ -213,7 +235,9 @@ class StallingCamera final : public FrameSource {
     if (faults_.any(FaultKind::kCameraStall, now_ms)) return std::nullopt;
     return f;
   }
-  [[nodiscard]] std::string describe() const override { return inner_.describe() + " (stalls on a schedule)"; }
+  [[nodiscard]] std::string describe() const override {
+    return inner_.describe() + " (stalls on a schedule)";
+  }
 
  private:
   FrameSource& inner_;
@@ -234,7 +258,8 @@ struct ReferenceRobot {
 
   static sim::ReferenceBoardConfig board_config() {
     sim::ReferenceBoardConfig c;
-    c.keep_history = false;  // hours of frames would otherwise be kept for tests that read them back
+    c.keep_history =
+        false;  // hours of frames would otherwise be kept for tests that read them back
     return c;
   }
   ReferenceRobot(const sim::WorldConfig& wc, sim::Trajectory trajectory, const Faults& f)
@@ -242,7 +267,8 @@ struct ReferenceRobot {
         board(board_config(),
               [this](std::uint32_t) {
                 const sim::SimWindow w = world.next_window();
-                log.add(static_cast<double>(windows_run) * kWindowMs, w.truth, w.window.gyro_yaw_deg);
+                log.add(static_cast<double>(windows_run) * kWindowMs, w.truth,
+                        w.window.gyro_yaw_deg);
                 return w.window.counts;
               }),
         faults(f) {}
@@ -285,10 +311,13 @@ class ReferenceTransport final : public Transport {
       r_.advance_to(std::min(static_cast<double>(r_.windows_run + 1) * kWindowMs, deadline));
     }
   }
-  [[nodiscard]] TransportStatus status() const override { return {true, false, "reference board (C++ model)", {}}; }
+  [[nodiscard]] TransportStatus status() const override {
+    return {true, false, "reference board (C++ model)", {}};
+  }
   [[nodiscard]] std::chrono::steady_clock::time_point now() const override {
-    return std::chrono::steady_clock::time_point(std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-        std::chrono::duration<double, std::milli>(r_.now_ms)));
+    return std::chrono::steady_clock::time_point(
+        std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+            std::chrono::duration<double, std::milli>(r_.now_ms)));
   }
 
  private:
@@ -308,9 +337,12 @@ sim::Trajectory long_random_walk(std::uint64_t seed, const sim::PlayingArea& f, 
   while (t.duration_s() < duration_s + 1.0) {
     const sim::MotionLimits lim{uspeed(rng), 250.0, 60.0 + 100.0 * u01(rng), 360.0};
     const double pick = u01(rng);
-    if (pick < 0.1) t.rotate_by(uyaw(rng), lim);
-    else if (pick < 0.15) t.wait(0.2 + 0.5 * u01(rng));
-    else t.line_to({ux(rng), uy(rng)}, uyaw(rng), lim);
+    if (pick < 0.1)
+      t.rotate_by(uyaw(rng), lim);
+    else if (pick < 0.15)
+      t.wait(0.2 + 0.5 * u01(rng));
+    else
+      t.line_to({ux(rng), uy(rng)}, uyaw(rng), lim);
   }
   return t;
 }
@@ -331,9 +363,9 @@ double rss_mb() {
 struct StreamStats {
   std::uint64_t received = 0;
   std::uint64_t unparsable = 0;
-  std::uint64_t seq_lost = 0;      // datagrams missing by seq
+  std::uint64_t seq_lost = 0;  // datagrams missing by seq
   std::uint64_t seq_backwards = 0;
-  std::uint64_t time_gaps = 0;     // consecutive datagrams more than kGapMs apart (daemon time)
+  std::uint64_t time_gaps = 0;  // consecutive datagrams more than kGapMs apart (daemon time)
   std::uint64_t gaps_outside_bursts = 0;  // of them, not during a corrupt burst's link silence
   double longest_gap_ms = 0.0;
   std::vector<std::pair<double, double>> first_gaps;  // (time, length) of the first 10 gaps
@@ -350,8 +382,8 @@ void take_datagram(std::string_view text, StreamStats& s, std::vector<Fault>& fa
     ++s.unparsable;
     return;
   }
-  if (!j.is_object() || !j.contains("seq") || !j.contains("t_ms") || !j.contains("status") || !j["seq"].is_number_unsigned() ||
-      !j["t_ms"].is_number() || !j["status"].is_string()) {
+  if (!j.is_object() || !j.contains("seq") || !j.contains("t_ms") || !j.contains("status") ||
+      !j["seq"].is_number_unsigned() || !j["t_ms"].is_number() || !j["status"].is_string()) {
     ++s.unparsable;
     return;
   }
@@ -369,7 +401,8 @@ void take_datagram(std::string_view text, StreamStats& s, std::vector<Fault>& fa
       // A burst silences the link: windows are lost, and after kBoardSilentMs without one the
       // daemon declares the board gone and sends degraded datagrams (docs/DAEMON.md).
       const bool in_burst = std::any_of(faults.begin(), faults.end(), [&](const Fault& f) {
-        return f.kind == FaultKind::kCorruptBurst && s.last_t_ms >= f.from_ms - kWindowMs && s.last_t_ms < f.to_ms;
+        return f.kind == FaultKind::kCorruptBurst && s.last_t_ms >= f.from_ms - kWindowMs &&
+               s.last_t_ms < f.to_ms;
       });
       if (!in_burst) ++s.gaps_outside_bursts;
     }
@@ -378,14 +411,20 @@ void take_datagram(std::string_view text, StreamStats& s, std::vector<Fault>& fa
   ++s.received;
   s.last_seq = seq;
   s.last_t_ms = t;
-  if (status == "ok") ++s.ok;
-  else if (status == "degraded") ++s.degraded;
-  else if (status == "odometry_only") ++s.odometry_only;
-  else if (status == "lost") ++s.lost;
-  else ++s.other;
+  if (status == "ok")
+    ++s.ok;
+  else if (status == "degraded")
+    ++s.degraded;
+  else if (status == "odometry_only")
+    ++s.odometry_only;
+  else if (status == "lost")
+    ++s.lost;
+  else
+    ++s.other;
   for (Fault& f : faults) {
     if (f.kind == FaultKind::kUnplug && f.active(t) && status == "degraded") f.noticed = true;
-    if (f.kind == FaultKind::kCameraStall && f.active(t) && status == "odometry_only") f.noticed = true;
+    if (f.kind == FaultKind::kCameraStall && f.active(t) && status == "odometry_only")
+      f.noticed = true;
     if (f.resumed_ms < 0 && t >= f.to_ms && status == "ok") f.resumed_ms = t;
   }
 }
@@ -393,8 +432,8 @@ void take_datagram(std::string_view text, StreamStats& s, std::vector<Fault>& fa
 /// Last pose time of `omniloc replay` over the recording (-1 when it fails), its stdout kept.
 double replay(const fs::path& rec, std::string& output) {
   const fs::path poses = rec.parent_path() / "replayed_poses.csv";
-  const std::string cmd = std::string("'") + OMNILOC_CLI_PATH + "' replay '" + rec.string() + "' --out '" +
-                          poses.string() + "' 2>&1";
+  const std::string cmd = std::string("'") + OMNILOC_CLI_PATH + "' replay '" + rec.string() +
+                          "' --out '" + poses.string() + "' 2>&1";
   FILE* p = ::popen(cmd.c_str(), "r");
   if (p == nullptr) return -1.0;
   char buf[512];
@@ -417,16 +456,19 @@ int run(const Options& o) {
   cfg.camera_fps = o.camera_fps;
   cfg.udp_address = "127.0.0.1";
   test::UdpReceiver sink;  // the tests' receiver: non-blocking, 8 MB of buffer, a free port
-  if (sink.port() == 0) throw std::runtime_error(std::string("soak: UDP socket on 127.0.0.1: ") + std::strerror(errno));
+  if (sink.port() == 0)
+    throw std::runtime_error(std::string("soak: UDP socket on 127.0.0.1: ") + std::strerror(errno));
   cfg.udp_port = sink.port();
   cfg.control_port = 0;
   cfg.record_dir = rec.string();
   cfg.reconnect_period_ms = 200;
   cfg.status_period_s = 30.0;
   cfg.duration_s = o.duration_s;
-  std::printf("soak: %.0f s of simulated time, %s board, camera %.0f fps, seed %llu, %zu faults scheduled, output %s\n",
-              o.duration_s, o.board.c_str(), o.camera_fps, static_cast<unsigned long long>(o.seed), faults.list.size(),
-              out.c_str());
+  std::printf(
+      "soak: %.0f s of simulated time, %s board, camera %.0f fps, seed %llu, %zu faults scheduled, "
+      "output %s\n",
+      o.duration_s, o.board.c_str(), o.camera_fps, static_cast<unsigned long long>(o.seed),
+      faults.list.size(), out.c_str());
   std::fflush(stdout);
   const DaemonModels models = load_models(cfg);
   const sim::PlayingArea area = sim::playing_area(models.field);
@@ -450,16 +492,19 @@ int run(const Options& o) {
     io = verilated->io();
     truth = &verilated->truth();
   } else {
-    reference = std::make_unique<ReferenceRobot>(sim::WorldConfig::default_noise(models.robot, o.seed, area),
-                                                 std::move(trajectory), faults);
+    reference = std::make_unique<ReferenceRobot>(
+        sim::WorldConfig::default_noise(models.robot, o.seed, area), std::move(trajectory), faults);
     reference_clock = std::make_unique<ReferenceClock>(*reference);
     renderer = std::make_unique<sim::OmniRenderer>(models.field, models.camera);
     sim::RenderOptions ro;
     ro.seed = o.seed;
-    reference_camera = std::make_unique<sim::SimCamera>(*renderer, reference->log, o.camera_fps, ro);
+    reference_camera =
+        std::make_unique<sim::SimCamera>(*renderer, reference->log, o.camera_fps, ro);
     io.clock = reference_clock.get();
     ReferenceRobot* r = reference.get();
-    io.open_board = [r]() -> std::unique_ptr<Transport> { return std::make_unique<ReferenceTransport>(*r); };
+    io.open_board = [r]() -> std::unique_ptr<Transport> {
+      return std::make_unique<ReferenceTransport>(*r);
+    };
     io.camera = reference_camera.get();
     io.heading = &reference->log;
     truth = &reference->log;
@@ -523,30 +568,47 @@ int run(const Options& o) {
 
   // ---- report
   std::printf("%s\n", report_line(r).c_str());
-  std::printf("poses: %llu datagrams received (%llu sent), %llu lost by seq, %llu out of order, %llu unparsable; "
-              "%llu gaps > %.0f ms (longest %.0f ms); ok %llu, degraded %llu, odometry_only %llu, lost %llu, other %llu\n",
-              static_cast<unsigned long long>(stream.received), static_cast<unsigned long long>(r.published),
-              static_cast<unsigned long long>(stream.seq_lost), static_cast<unsigned long long>(stream.seq_backwards),
-              static_cast<unsigned long long>(stream.unparsable), static_cast<unsigned long long>(stream.time_gaps),
-              kGapMs, stream.longest_gap_ms, static_cast<unsigned long long>(stream.ok),
-              static_cast<unsigned long long>(stream.degraded), static_cast<unsigned long long>(stream.odometry_only),
-              static_cast<unsigned long long>(stream.lost), static_cast<unsigned long long>(stream.other));
+  std::printf(
+      "poses: %llu datagrams received (%llu sent), %llu lost by seq, %llu out of order, %llu "
+      "unparsable; "
+      "%llu gaps > %.0f ms (longest %.0f ms); ok %llu, degraded %llu, odometry_only %llu, lost "
+      "%llu, other %llu\n",
+      static_cast<unsigned long long>(stream.received),
+      static_cast<unsigned long long>(r.published),
+      static_cast<unsigned long long>(stream.seq_lost),
+      static_cast<unsigned long long>(stream.seq_backwards),
+      static_cast<unsigned long long>(stream.unparsable),
+      static_cast<unsigned long long>(stream.time_gaps), kGapMs, stream.longest_gap_ms,
+      static_cast<unsigned long long>(stream.ok), static_cast<unsigned long long>(stream.degraded),
+      static_cast<unsigned long long>(stream.odometry_only),
+      static_cast<unsigned long long>(stream.lost), static_cast<unsigned long long>(stream.other));
   std::string gaps;
-  for (const auto& [at, len] : stream.first_gaps) gaps += " " + std::to_string(static_cast<int>(len)) + " ms at " +
-                                                          std::to_string(static_cast<int>(at / 1000.0)) + " s;";
+  for (const auto& [at, len] : stream.first_gaps)
+    gaps += " " + std::to_string(static_cast<int>(len)) + " ms at " +
+            std::to_string(static_cast<int>(at / 1000.0)) + " s;";
   std::printf("gaps: %llu outside a corrupt burst; first ones:%s\n",
-              static_cast<unsigned long long>(stream.gaps_outside_bursts), gaps.empty() ? " none" : gaps.c_str());
-  std::printf("link: %llu bytes corrupted in %zu bursts; board lost %llu x, back %llu x; %llu bad CRC, %llu telemetry gaps\n",
-              static_cast<unsigned long long>(corrupted),
-              static_cast<std::size_t>(std::count_if(faults.list.begin(), faults.list.end(),
-                                                     [](const Fault& f) { return f.kind == FaultKind::kCorruptBurst; })),
-              static_cast<unsigned long long>(r.board_losses), static_cast<unsigned long long>(r.reconnects),
-              static_cast<unsigned long long>(r.bad_crc), static_cast<unsigned long long>(r.telemetry_gaps));
-  std::printf("memory: RSS %.1f MB at 10 s, %.1f MB at the end (growth %+.1f MB, bound %.0f MB), max %.1f MB\n", rss_start,
-              rss_end, rss_end - rss_start, o.max_rss_growth_mb, rss_max);
-  std::printf("recording: disk full at %.1f s (file size limit %.0f bytes); %s; replay: %s\n", disk_full_at_ms / 1000.0,
-              disk_limit_bytes, r.recording_error.empty() ? "no write error" : r.recording_error.c_str(),
-              replayed_to_ms < 0 ? "FAILED" : ("poses up to " + std::to_string(replayed_to_ms / 1000.0) + " s").c_str());
+              static_cast<unsigned long long>(stream.gaps_outside_bursts),
+              gaps.empty() ? " none" : gaps.c_str());
+  std::printf(
+      "link: %llu bytes corrupted in %zu bursts; board lost %llu x, back %llu x; %llu bad CRC, "
+      "%llu telemetry gaps\n",
+      static_cast<unsigned long long>(corrupted),
+      static_cast<std::size_t>(
+          std::count_if(faults.list.begin(), faults.list.end(),
+                        [](const Fault& f) { return f.kind == FaultKind::kCorruptBurst; })),
+      static_cast<unsigned long long>(r.board_losses),
+      static_cast<unsigned long long>(r.reconnects), static_cast<unsigned long long>(r.bad_crc),
+      static_cast<unsigned long long>(r.telemetry_gaps));
+  std::printf(
+      "memory: RSS %.1f MB at 10 s, %.1f MB at the end (growth %+.1f MB, bound %.0f MB), max %.1f "
+      "MB\n",
+      rss_start, rss_end, rss_end - rss_start, o.max_rss_growth_mb, rss_max);
+  std::printf("recording: disk full at %.1f s (file size limit %.0f bytes); %s; replay: %s\n",
+              disk_full_at_ms / 1000.0, disk_limit_bytes,
+              r.recording_error.empty() ? "no write error" : r.recording_error.c_str(),
+              replayed_to_ms < 0
+                  ? "FAILED"
+                  : ("poses up to " + std::to_string(replayed_to_ms / 1000.0) + " s").c_str());
   std::printf("--- omniloc replay:\n%s---\n", replay_output.c_str());
 
   std::vector<std::string> failures;
@@ -556,29 +618,34 @@ int run(const Options& o) {
     survived += ok ? 1 : 0;
     if (!ok) {
       char buf[200];
-      std::snprintf(buf, sizeof buf, "%s at %.1f-%.1f s: %s", fault_name(f.kind), f.from_ms / 1000.0, f.to_ms / 1000.0,
-                    !f.noticed ? "never showed in the stream or the report"
-                               : f.resumed_ms < 0 ? "the stream never came back to ok"
-                                                  : "ok again only after more than 5 s");
+      std::snprintf(buf, sizeof buf, "%s at %.1f-%.1f s: %s", fault_name(f.kind),
+                    f.from_ms / 1000.0, f.to_ms / 1000.0,
+                    !f.noticed         ? "never showed in the stream or the report"
+                    : f.resumed_ms < 0 ? "the stream never came back to ok"
+                                       : "ok again only after more than 5 s");
       failures.emplace_back(buf);
     }
   }
-  std::printf("faults: %d of %zu survived (noticed, then status ok within %.0f s of the end)\n", survived, faults.list.size(),
-              kResumeWithinMs / 1000.0);
+  std::printf("faults: %d of %zu survived (noticed, then status ok within %.0f s of the end)\n",
+              survived, faults.list.size(), kResumeWithinMs / 1000.0);
   auto require = [&](bool ok, const std::string& what) {
     if (!ok) failures.push_back(what);
   };
-  require(r.stop_reason == "duration", "the run stopped for '" + r.stop_reason + "', not its duration");
-  require(stream.unparsable == 0 && stream.seq_backwards == 0, "unparsable or out-of-order datagrams");
+  require(r.stop_reason == "duration",
+          "the run stopped for '" + r.stop_reason + "', not its duration");
+  require(stream.unparsable == 0 && stream.seq_backwards == 0,
+          "unparsable or out-of-order datagrams");
   require(stream.received + stream.seq_lost == r.published && stream.seq_lost == 0,
           "datagrams lost on the loopback (received + lost by seq != sent, or lost > 0)");
-  require(stream.gaps_outside_bursts == 0, "a gap in the pose stream (> 20 ms) outside a corrupt burst");
+  require(stream.gaps_outside_bursts == 0,
+          "a gap in the pose stream (> 20 ms) outside a corrupt burst");
   require(stream.longest_gap_ms <= kMaxBurstGapMs,
           "a gap in the pose stream longer than the board-silence timeout (250 ms) + a window");
   require(stream.received >= static_cast<std::uint64_t>(0.99 * duration_ms / kWindowMs),
           "fewer datagrams than 99 % of one per 10 ms");
   require(rss_start > 0 && rss_end - rss_start <= o.max_rss_growth_mb, "RSS grew beyond the bound");
-  require(r.recording_failures == 1, "the recording did not stop exactly once at the disk-full point");
+  require(r.recording_failures == 1,
+          "the recording did not stop exactly once at the disk-full point");
   require(replayed_to_ms >= disk_full_at_ms - 2000.0 && replayed_to_ms <= disk_full_at_ms + 1000.0,
           "the recording does not replay up to the disk-full point (-2 s .. +1 s)");
   for (const std::string& f : failures) std::printf("soak: FAILED: %s\n", f.c_str());

@@ -42,17 +42,26 @@ Options parse(int argc, char** argv) {
       if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
       char* end = nullptr;
       const double v = std::strtod(argv[++i], &end);
-      if (end == argv[i] || *end != '\0' || !std::isfinite(v)) throw std::invalid_argument(a + ": not a number: " + argv[i]);
+      if (end == argv[i] || *end != '\0' || !std::isfinite(v))
+        throw std::invalid_argument(a + ": not a number: " + argv[i]);
       return v;
     };
-    if (a == "--minutes") o.minutes = value();
-    else if (a == "--seed") o.seed = static_cast<std::uint64_t>(value());
-    else if (a == "--camera-hz") o.camera_hz = value();
-    else if (a == "--gyro-bias") o.gyro_bias_deg_per_s = value();
-    else throw std::invalid_argument("unknown option " + a + " (--minutes N --seed S --camera-hz HZ --gyro-bias DEG_PER_S)");
+    if (a == "--minutes")
+      o.minutes = value();
+    else if (a == "--seed")
+      o.seed = static_cast<std::uint64_t>(value());
+    else if (a == "--camera-hz")
+      o.camera_hz = value();
+    else if (a == "--gyro-bias")
+      o.gyro_bias_deg_per_s = value();
+    else
+      throw std::invalid_argument("unknown option " + a +
+                                  " (--minutes N --seed S --camera-hz HZ --gyro-bias DEG_PER_S)");
   }
-  if (!(o.minutes > 0.0 && o.minutes <= 120.0)) throw std::invalid_argument("--minutes must be in (0, 120]");
-  if (!(o.camera_hz >= 1.0 && o.camera_hz <= 60.0)) throw std::invalid_argument("--camera-hz must be in [1, 60]");
+  if (!(o.minutes > 0.0 && o.minutes <= 120.0))
+    throw std::invalid_argument("--minutes must be in (0, 120]");
+  if (!(o.camera_hz >= 1.0 && o.camera_hz <= 60.0))
+    throw std::invalid_argument("--camera-hz must be in [1, 60]");
   return o;
 }
 
@@ -64,14 +73,18 @@ sim::Trajectory long_random_walk(double seconds, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> ux(f.x_min_cm + margin, f.x_max_cm - margin);
   std::uniform_real_distribution<double> uy(f.y_min_cm + margin, f.y_max_cm - margin);
-  std::uniform_real_distribution<double> uyaw(-180.0, 180.0), uspeed(40.0, 150.0), uaccel(150.0, 350.0), u01(0.0, 1.0);
+  std::uniform_real_distribution<double> uyaw(-180.0, 180.0), uspeed(40.0, 150.0),
+      uaccel(150.0, 350.0), u01(0.0, 1.0);
   sim::Trajectory t("soak", {ux(rng), uy(rng), uyaw(rng)});
   while (t.duration_s() < seconds) {
     const sim::MotionLimits lim{uspeed(rng), uaccel(rng), 60.0 + 120.0 * u01(rng), 360.0};
     const double pick = u01(rng);
-    if (pick < 0.1) t.rotate_by(uyaw(rng), lim);
-    else if (pick < 0.2) t.wait(0.5 + 2.0 * u01(rng));
-    else t.line_to({ux(rng), uy(rng)}, uyaw(rng), lim);
+    if (pick < 0.1)
+      t.rotate_by(uyaw(rng), lim);
+    else if (pick < 0.2)
+      t.wait(0.5 + 2.0 * u01(rng));
+    else
+      t.line_to({ux(rng), uy(rng)}, uyaw(rng), lim);
   }
   return t;
 }
@@ -112,8 +125,9 @@ struct VariantResult {
 
 std::mutex g_print;  // the two variants' progress lines
 
-VariantResult run_variant(const char* name, bool image_heading, const Options& o, const sim::OmniRenderer& renderer,
-                          const FeatureDb& db, const RobotConfig& robot) {
+VariantResult run_variant(const char* name, bool image_heading, const Options& o,
+                          const sim::OmniRenderer& renderer, const FeatureDb& db,
+                          const RobotConfig& robot) {
   VariantResult r;
   r.name = name;
   const sim::Trajectory trajectory = long_random_walk(o.minutes * 60.0, o.seed);
@@ -132,11 +146,13 @@ VariantResult run_variant(const char* name, bool image_heading, const Options& o
     r.minutes.push_back(minute);
     r.total.merge(minute);
     std::lock_guard lock(g_print);
-    std::printf("  %-13s minute %5.1f | mean %6.2f cm  max %7.2f cm | yaw mean %5.2f  max %6.2f deg | lost %5.1f %% | "
-                "drift learnt %+.3f deg/s\n",
-                name, t_ms / 60000.0, minute.sum_xy / std::max(1, minute.windows), minute.max_xy,
-                minute.sum_yaw / std::max(1, minute.windows), minute.max_yaw,
-                100.0 * minute.lost / std::max(1, minute.windows), localizer.yaw_drift_deg_per_s());
+    std::printf(
+        "  %-13s minute %5.1f | mean %6.2f cm  max %7.2f cm | yaw mean %5.2f  max %6.2f deg | lost "
+        "%5.1f %% | "
+        "drift learnt %+.3f deg/s\n",
+        name, t_ms / 60000.0, minute.sum_xy / std::max(1, minute.windows), minute.max_xy,
+        minute.sum_yaw / std::max(1, minute.windows), minute.max_yaw,
+        100.0 * minute.lost / std::max(1, minute.windows), localizer.yaw_drift_deg_per_s());
     std::fflush(stdout);
     minute = {};
   };
@@ -164,11 +180,14 @@ int main(int argc, char** argv) {
   try {
     const Options o = parse(argc, argv);
     const sim::OmniRenderer renderer(load_field("fira-robosot"), load_camera("default"));
-    const FeatureDb db = build_feature_db(renderer.field(), renderer.camera(), GridSpec::covering(renderer.field(), 10.0));
+    const FeatureDb db = build_feature_db(renderer.field(), renderer.camera(),
+                                          GridSpec::covering(renderer.field(), 10.0));
     const RobotConfig robot = load_named_robot_config("default");
-    std::printf("soak: %.1f simulated minutes of random driving, seed %llu, camera %.0f Hz, default noise, extra gyro "
-                "bias %.3f deg/s; two variants in parallel\n",
-                o.minutes, static_cast<unsigned long long>(o.seed), o.camera_hz, o.gyro_bias_deg_per_s);
+    std::printf(
+        "soak: %.1f simulated minutes of random driving, seed %llu, camera %.0f Hz, default noise, "
+        "extra gyro "
+        "bias %.3f deg/s; two variants in parallel\n",
+        o.minutes, static_cast<unsigned long long>(o.seed), o.camera_hz, o.gyro_bias_deg_per_s);
     std::fflush(stdout);
     VariantResult with, without;
     std::exception_ptr error;
@@ -186,13 +205,17 @@ int main(int argc, char** argv) {
     std::printf("\nsummary over %.1f min (position error in cm, yaw error in deg):\n", o.minutes);
     for (const VariantResult* v : {&with, &without}) {
       const MinuteStats& t = v->total;
-      std::printf("  %-13s mean %6.2f  max %7.2f | yaw mean %5.2f  max %6.2f | lost %5.1f %%, odometry-only %5.1f %% | "
-                  "frames %d, accepted %d, lost events %d, yaw corrections %d | gyro bias at the end %+.3f deg/s, "
-                  "learnt %+.3f\n",
-                  v->name, t.sum_xy / std::max(1, t.windows), t.max_xy, t.sum_yaw / std::max(1, t.windows), t.max_yaw,
-                  100.0 * t.lost / std::max(1, t.windows), 100.0 * t.odometry / std::max(1, t.windows), v->stats.frames,
-                  v->stats.accepted, v->stats.lost_events, v->stats.yaw_corrections, v->true_bias_deg_per_s,
-                  v->learnt_drift_deg_per_s);
+      std::printf(
+          "  %-13s mean %6.2f  max %7.2f | yaw mean %5.2f  max %6.2f | lost %5.1f %%, "
+          "odometry-only %5.1f %% | "
+          "frames %d, accepted %d, lost events %d, yaw corrections %d | gyro bias at the end %+.3f "
+          "deg/s, "
+          "learnt %+.3f\n",
+          v->name, t.sum_xy / std::max(1, t.windows), t.max_xy, t.sum_yaw / std::max(1, t.windows),
+          t.max_yaw, 100.0 * t.lost / std::max(1, t.windows),
+          100.0 * t.odometry / std::max(1, t.windows), v->stats.frames, v->stats.accepted,
+          v->stats.lost_events, v->stats.yaw_corrections, v->true_bias_deg_per_s,
+          v->learnt_drift_deg_per_s);
     }
     const MinuteStats& t = with.total;
     const bool ok = t.sum_xy / std::max(1, t.windows) < 3.0 && t.max_yaw < 1.0 && t.lost == 0;

@@ -3,17 +3,17 @@
 // that file must refuse a broken one with the file and line.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <regex>
 #include <sstream>
-#include <vector>
 #include <stdexcept>
 #include <string>
-#include <algorithm>
-#include <unistd.h>
+#include <vector>
 
 #include "omniloc/usb_transport.hpp"
 #include "omniloc_sim/ft2232h_eeprom.hpp"
@@ -35,14 +35,16 @@ TEST(FirmwareEeprom, HostLooksForTheIdentityTheEepromGives) {
 
 // The udev rule shipped for the board (packaging/udev/60-omniloc.rules) matches the same identity.
 // There is no udevd in CI, so the rule is checked here: every line is a comment, or comma-separated
-// KEY[{attribute}]OP"value" items with keys and operators udev knows (udev(7)), and the one matching
-// rule names exactly the EEPROM's VID, PID and product and grants the daemon's group access.
+// KEY[{attribute}]OP"value" items with keys and operators udev knows (udev(7)), and the one
+// matching rule names exactly the EEPROM's VID, PID and product and grants the daemon's group
+// access.
 TEST(FirmwareEeprom, UdevRuleMatchesTheEepromIdentity) {
   const sim::EepromIdentity id = sim::read_eeprom_identity(OMNILOC_EEPROM_CONF);
   std::ifstream in(OMNILOC_UDEV_RULE);
   ASSERT_TRUE(in) << OMNILOC_UDEV_RULE;
   const std::regex item(R"re(^([A-Z]+)(\{([A-Za-z_]+)\})?(==|!=|\+=|-=|:=|=)"([^"]*)"$)re");
-  const std::vector<std::string> known{"ACTION", "SUBSYSTEM", "ENV", "ATTR", "MODE", "GROUP", "SYMLINK", "GOTO", "LABEL"};
+  const std::vector<std::string> known{"ACTION", "SUBSYSTEM", "ENV",  "ATTR", "MODE",
+                                       "GROUP",  "SYMLINK",   "GOTO", "LABEL"};
   std::vector<std::map<std::string, std::string>> rules;  // "KEY{attr}OP" -> value
   std::string line;
   for (int n = 1; std::getline(in, line); ++n) {
@@ -52,8 +54,10 @@ TEST(FirmwareEeprom, UdevRuleMatchesTheEepromIdentity) {
     for (std::string it; std::getline(items, it, ',');) {
       it.erase(0, it.find_first_not_of(' '));
       std::smatch m;
-      ASSERT_TRUE(std::regex_match(it, m, item)) << OMNILOC_UDEV_RULE << ":" << n << ": not KEY{attr}OP\"value\": " << it;
-      ASSERT_NE(std::find(known.begin(), known.end(), m[1].str()), known.end()) << ":" << n << ": unknown key " << m[1];
+      ASSERT_TRUE(std::regex_match(it, m, item))
+          << OMNILOC_UDEV_RULE << ":" << n << ": not KEY{attr}OP\"value\": " << it;
+      ASSERT_NE(std::find(known.begin(), known.end(), m[1].str()), known.end())
+          << ":" << n << ": unknown key " << m[1];
       rule[m[1].str() + (m[2].matched ? m[2].str() : "") + m[4].str()] = m[5].str();
     }
     rules.push_back(rule);
@@ -117,7 +121,7 @@ class EepromFiles : public ::testing::Test {
 TEST_F(EepromFiles, ReadsKeysQuotesNumbersAndComments) {
   const sim::EepromIdentity id = sim::read_eeprom_identity(write(kGood));
   EXPECT_EQ(id.vendor_id, 0x0403);
-  EXPECT_EQ(id.product_id, 0x6010);  // 24592 in decimal
+  EXPECT_EQ(id.product_id, 0x6010);               // 24592 in decimal
   EXPECT_EQ(id.manufacturer, "ACME # robotics");  // a '#' inside quotes is not a comment
   EXPECT_EQ(id.product, "omniloc encoder board");
   EXPECT_EQ(id.serial, "OL000042");
@@ -128,17 +132,21 @@ TEST_F(EepromFiles, BrokenFilesAreNamedWithTheLine) {
   const std::string file = (dir_ / "eeprom.conf").string();
   std::string good = kGood;
 
-  EXPECT_EQ(error_of(good + "max_power 500\n"), file + ":9: expected key=value, got 'max_power 500'");
+  EXPECT_EQ(error_of(good + "max_power 500\n"),
+            file + ":9: expected key=value, got 'max_power 500'");
   std::string bad_vid = good;
   bad_vid.replace(bad_vid.find("0x0403"), 6, "0x04g3");
   EXPECT_EQ(error_of(bad_vid), file + ":2: vendor_id '0x04g3' is not a 16-bit number");
-  EXPECT_EQ(error_of(good + "product=\"other\"\n"), file + ":9: 'product' given again (first on line 5)");
-  EXPECT_EQ(error_of("vendor_id=0x0403\nproduct_id=0x16010\n" + good.substr(good.find("manufacturer"))),
-            file + ":2: product_id '0x16010' is not a 16-bit number");
+  EXPECT_EQ(error_of(good + "product=\"other\"\n"),
+            file + ":9: 'product' given again (first on line 5)");
+  EXPECT_EQ(
+      error_of("vendor_id=0x0403\nproduct_id=0x16010\n" + good.substr(good.find("manufacturer"))),
+      file + ":2: product_id '0x16010' is not a 16-bit number");
   EXPECT_EQ(error_of(good + "serial=\"OL0\n"), file + ":9: unterminated string in 'serial=\"OL0'");
 
   std::string no_product = good;
-  no_product.erase(no_product.find("product="), std::string("product=\"omniloc encoder board\"\n").size());
+  no_product.erase(no_product.find("product="),
+                   std::string("product=\"omniloc encoder board\"\n").size());
   EXPECT_EQ(error_of(no_product), file + ": no 'product' key");
 
   const fs::path missing = dir_ / "absent.conf";

@@ -28,7 +28,8 @@ TEST(FtdiBaud, SpecialCodesAndFractions) {
   // 8 Mbaud = 12 MHz / 1.5: special code 1; 6 Mbaud = divisor 2: code 2.
   EXPECT_EQ(h_series_baud(8'000'000, kPortB).value, 0x0001);
   EXPECT_EQ(h_series_baud(6'000'000, kPortB).value, 0x0002);
-  // 115200: 12e6/115200 = 104.1667 -> 104 1/8 = 833/8: integer 104 (0x68), fraction 1/8 coded 3 << 14.
+  // 115200: 12e6/115200 = 104.1667 -> 104 1/8 = 833/8: integer 104 (0x68), fraction 1/8 coded 3
+  // << 14.
   const auto b = h_series_baud(115'200, kPortB);
   EXPECT_EQ(b.value, 0xC068);
   EXPECT_EQ(b.index, 0x0202);

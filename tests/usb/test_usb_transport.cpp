@@ -1,12 +1,12 @@
-// UsbTransport against the emulated FT2232H (umockdev): open, configure, read the ID register, stream a
-// second of windows, line-status errors, and an unplug in the middle of streaming. Run under
-// `umockdev-wrapper` (CTest does).
+// UsbTransport against the emulated FT2232H (umockdev): open, configure, read the ID register,
+// stream a second of windows, line-status errors, and an unplug in the middle of streaming. Run
+// under `umockdev-wrapper` (CTest does).
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
 #include <atomic>
 #include <cstdio>
 #include <string>
-#include <sys/wait.h>
 #include <thread>
 
 #include "omniloc/board_client.hpp"
@@ -43,7 +43,9 @@ sim::Ft2232hConfig stock_ftdi_config() {
 }
 
 /// The identity the omniloc board's EEPROM gives it (firmware/ft2232h_eeprom.conf, its one source).
-sim::EepromIdentity eeprom() { return sim::read_eeprom_identity(OMNILOC_EEPROM_CONF); }
+sim::EepromIdentity eeprom() {
+  return sim::read_eeprom_identity(OMNILOC_EEPROM_CONF);
+}
 
 class UsbLink : public ::testing::Test {
  protected:
@@ -102,8 +104,10 @@ TEST_F(UsbLink, ConfiguresChannelBAndReadsTheId) {
   EXPECT_EQ(s.baud_value, 0x000C);  // 1 Mbaud
   EXPECT_EQ(s.baud_index, 0x0202);
   EXPECT_EQ(s.latency_ms, 1);
-  for (const auto& c : s.control) EXPECT_TRUE(c.accepted) << "request " << int(c.request) << " stalled";
-  EXPECT_TRUE(s.unhandled_ioctls.empty()) << "first unhandled ioctl 0x" << std::hex << s.unhandled_ioctls.front();
+  for (const auto& c : s.control)
+    EXPECT_TRUE(c.accepted) << "request " << int(c.request) << " stalled";
+  EXPECT_TRUE(s.unhandled_ioctls.empty())
+      << "first unhandled ioctl 0x" << std::hex << s.unhandled_ioctls.front();
   EXPECT_FALSE(other.state().interface_claimed);
   EXPECT_EQ(t.actual_baud(), 1'000'000u);
   EXPECT_EQ(t.board().serial, eeprom().serial);
@@ -159,10 +163,12 @@ TEST_F(UsbLink, StreamsASecondOfWindows) {
   EXPECT_GT(s.bulk_in_packets, s.status_only_packets + 4);  // the burst took >= 4 full packets
   const auto ts = t.status();
   EXPECT_EQ(ts.counters.bytes_read, s.bulk_in_bytes);
-  // The bridge keeps answering bulk-IN polls with status-only packets; the ones whose completion the
-  // transport's event thread has not handled yet (at most its transfers in flight) are not counted.
+  // The bridge keeps answering bulk-IN polls with status-only packets; the ones whose completion
+  // the transport's event thread has not handled yet (at most its transfers in flight) are not
+  // counted.
   EXPECT_LE(ts.counters.packets_in, s.bulk_in_packets);
-  EXPECT_LE(s.bulk_in_packets - ts.counters.packets_in, static_cast<std::uint64_t>(UsbTransportOptions{}.in_transfers));
+  EXPECT_LE(s.bulk_in_packets - ts.counters.packets_in,
+            static_cast<std::uint64_t>(UsbTransportOptions{}.in_transfers));
   EXPECT_EQ(ts.counters.line_framing, 0u);
 }
 
@@ -211,9 +217,10 @@ TEST_F(UsbLink, ReportsUnplugInTheMiddleOfStreaming) {
   clock.join();
   EXPECT_TRUE(gone) << "unplug not reported; " << received << " windows received";
   // Every frame the bridge delivered before the unplug was accepted (the last window may have been
-  // captured after the bridge's last packet: those bytes die with the cable). The one WRITE_ACK aside,
-  // the bridge carried only telemetry.
-  const auto delivered = device.state().bulk_in_bytes - protocol::frame_bytes(regmap::kFrameWriteAckBodyBytes);
+  // captured after the bridge's last packet: those bytes die with the cable). The one WRITE_ACK
+  // aside, the bridge carried only telemetry.
+  const auto delivered =
+      device.state().bulk_in_bytes - protocol::frame_bytes(regmap::kFrameWriteAckBodyBytes);
   EXPECT_EQ(delivered % protocol::frame_bytes(regmap::kFrameTelemetryBodyBytes), 0u);
   EXPECT_EQ(received, delivered / protocol::frame_bytes(regmap::kFrameTelemetryBodyBytes));
   EXPECT_GE(received, 10u);  // streaming really ran before the unplug
@@ -227,8 +234,8 @@ TEST_F(UsbLink, ReportsUnplugInTheMiddleOfStreaming) {
 }
 
 #ifdef OMNILOC_CLI_PATH
-/// Runs the omniloc command line as a child process; it inherits umockdev's preload and testbed, so it
-/// sees the emulated bus. Returns {exit status, stdout + stderr}.
+/// Runs the omniloc command line as a child process; it inherits umockdev's preload and testbed, so
+/// it sees the emulated bus. Returns {exit status, stdout + stderr}.
 std::pair<int, std::string> run_cli(const std::string& args) {
   const std::string cmd = std::string(OMNILOC_CLI_PATH) + " " + args + " 2>&1";
   std::FILE* p = popen(cmd.c_str(), "r");
@@ -242,7 +249,8 @@ std::pair<int, std::string> run_cli(const std::string& args) {
 
 std::string row(const protocol::Window& w) {
   char buf[128];
-  std::snprintf(buf, sizeof buf, "%10u %11d %11d %11d %11d", w.seq, w.count[0], w.count[1], w.count[2], w.count[3]);
+  std::snprintf(buf, sizeof buf, "%10u %11d %11d %11d %11d", w.seq, w.count[0], w.count[1],
+                w.count[2], w.count[3]);
   return buf;
 }
 
@@ -261,8 +269,11 @@ TEST_F(UsbLink, ProbeOncePrintsIdStatusAndASnapshot) {
   EXPECT_NE(out.find("<- omniloc board"), std::string::npos) << out;
   EXPECT_NE(out.find("Dual RS232-HS"), std::string::npos) << out;
   EXPECT_NE(out.find("ID 0x4F4D4E4C  register map 0.3.0"), std::string::npos) << out;
-  EXPECT_NE(out.find("CONFIG channels 4 (the bitstream counts 4 wheels)"), std::string::npos) << out;
-  EXPECT_NE(out.find("GYRO_STATE running 1 absent 0 faults 0 (the ICM-42688-P is read)"), std::string::npos) << out;
+  EXPECT_NE(out.find("CONFIG channels 4 (the bitstream counts 4 wheels)"), std::string::npos)
+      << out;
+  EXPECT_NE(out.find("GYRO_STATE running 1 absent 0 faults 0 (the ICM-42688-P is read)"),
+            std::string::npos)
+      << out;
   EXPECT_NE(out.find("CONTROL 0x00000001 (ENABLE 1"), std::string::npos) << out;
   EXPECT_NE(out.find(row(board.windows().back())), std::string::npos) << out;
 }

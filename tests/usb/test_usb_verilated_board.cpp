@@ -14,7 +14,6 @@
 #include <vector>
 
 #include "../link/golden_quadrature.hpp"
-#include "tb_support.hpp"
 #include "omniloc/board_client.hpp"
 #include "omniloc/robot_config.hpp"
 #include "omniloc/usb_transport.hpp"
@@ -22,6 +21,7 @@
 #include "omniloc_sim/ft2232h_model.hpp"
 #include "omniloc_sim/icm42688.hpp"
 #include "omniloc_sim/trajectory.hpp"
+#include "tb_support.hpp"
 
 namespace omniloc {
 namespace {
@@ -32,11 +32,12 @@ using sim::BoardSim;
 constexpr std::int64_t kWindowCycles = BoardSim::kClockHz / 100;
 constexpr std::int64_t kCaptureLag = 4;  // docs/RTL.md: pin -> window counter with the filter off
 
-/// The Verilated board as the FT2232H's UART side, clocked by its own thread: it runs as fast as the
-/// model allows (about half of real time here), one millisecond of board time per lock.
+/// The Verilated board as the FT2232H's UART side, clocked by its own thread: it runs as fast as
+/// the model allows (about half of real time here), one millisecond of board time per lock.
 class ClockedBoard final : public sim::UartSide {
  public:
-  ClockedBoard(sim::EncoderSource& source, sim::Icm42688& gyro) : board_(&source, &gyro), thread_([this] { run(); }) {}
+  ClockedBoard(sim::EncoderSource& source, sim::Icm42688& gyro)
+      : board_(&source, &gyro), thread_([this] { run(); }) {}
   ~ClockedBoard() override {
     stop_ = true;
     thread_.join();
@@ -88,19 +89,23 @@ class ClockedBoard final : public sim::UartSide {
   std::thread thread_;
 };
 
-
 TEST(UsbVerilatedBoard, StreamsGoldenWindowsThenReportsUnplug) {
-  const auto seed = omniloc::rtl_tb::test_seed(::testing::UnitTest::GetInstance()->current_test_info()->name(), 71);
-  sim::QuadratureStream stream(omniloc::tb::board_world(seed), sim::make_trajectory("circle", seed));
+  const auto seed = omniloc::rtl_tb::test_seed(
+      ::testing::UnitTest::GetInstance()->current_test_info()->name(), 71);
+  sim::QuadratureStream stream(omniloc::tb::board_world(seed),
+                               sim::make_trajectory("circle", seed));
   tb::GoldenQuadrature golden(stream, kWindowCycles);
   sim::EmulatedUsb usb;
   sim::Icm42688Params gp;
   gp.clk_hz = static_cast<double>(BoardSim::kClockHz);
   gp.noise_dps_rms = 0.16;
   gp.seed = seed;
-  sim::Icm42688 gyro(gp, [](double t) { return 120.0 * std::sin(2.0 * 3.14159265358979 * 0.7 * t) - 40.0; });
+  sim::Icm42688 gyro(
+      gp, [](double t) { return 120.0 * std::sin(2.0 * 3.14159265358979 * 0.7 * t) - 40.0; });
   ClockedBoard board(golden, gyro);
-  sim::Ft2232hModel device(usb, board, sim::Ft2232hConfig::programmed_with(sim::read_eeprom_identity(OMNILOC_EEPROM_CONF)));
+  sim::Ft2232hModel device(
+      usb, board,
+      sim::Ft2232hConfig::programmed_with(sim::read_eeprom_identity(OMNILOC_EEPROM_CONF)));
 
   UsbTransport transport;
   BoardClientOptions options;
@@ -123,7 +128,8 @@ TEST(UsbVerilatedBoard, StreamsGoldenWindowsThenReportsUnplug) {
     if (prev) {
       ASSERT_EQ(w->seq, prev->seq + 1) << "a window was lost";
       const auto e = golden.counts_at(static_cast<std::int64_t>(w->timestamp_cycles) - kCaptureLag);
-      const auto b = golden.counts_at(static_cast<std::int64_t>(prev->timestamp_cycles) - kCaptureLag);
+      const auto b =
+          golden.counts_at(static_cast<std::int64_t>(prev->timestamp_cycles) - kCaptureLag);
       ASSERT_TRUE(e && b) << "window " << w->seq << " does not end at a window boundary";
       for (int m = 0; m < 4; ++m) {
         ASSERT_EQ(w->count[m], (*e)[m] - (*b)[m]) << "window " << w->seq << " motor " << m + 1;
@@ -154,8 +160,11 @@ TEST(UsbVerilatedBoard, StreamsGoldenWindowsThenReportsUnplug) {
   EXPECT_GT(moving, 300);
   EXPECT_EQ(golden.illegal(), 0);
   EXPECT_EQ(transport.status().counters.line_framing, 0u);
-  std::printf("%d windows over emulated USB equal the golden decoder (%d motor-windows moving); %zu gyro samples "
-              "summed exactly into %d windows\n", checked, moving, next, with_samples);
+  std::printf(
+      "%d windows over emulated USB equal the golden decoder (%d motor-windows moving); %zu gyro "
+      "samples "
+      "summed exactly into %d windows\n",
+      checked, moving, next, with_samples);
 
   // Unplug while streaming: the next read reports the device gone.
   device.unplug();

@@ -1,5 +1,5 @@
-// The command line of omnilocd and omnilocd-sim, with CLI11: `--config FILE`, then one option per key
-// of the daemon's key table (daemon_config_keys(): the same table drives the JSON reader), as
+// The command line of omnilocd and omnilocd-sim, with CLI11: `--config FILE`, then one option per
+// key of the daemon's key table (daemon_config_keys(): the same table drives the JSON reader), as
 // `--udp-port 5600` or `--udp-port=5600`, plus --help (every option, its default) and --version.
 // The values are parsed by the key table (set_daemon_key), so a flag and a config file refuse the
 // same things with the same messages; flags override the file whatever their order.
@@ -44,7 +44,8 @@ inline std::string flag_names_of(std::string_view key) {
 /// Adds --config and one option per daemon key to `app`; the values land in `cl` (which must
 /// outlive the parse).
 inline void add_daemon_options(CLI::App& app, DaemonCommandLine& cl) {
-  app.add_option("--config", cl.config_path, "JSON config file (docs/DAEMON.md); the flags below override it");
+  app.add_option("--config", cl.config_path,
+                 "JSON config file (docs/DAEMON.md); the flags below override it");
   const auto& table = daemon::daemon_config_keys();
   cl.keys.clear();
   cl.values.assign(table.size(), std::nullopt);  // sized once: the callbacks keep pointers into it
@@ -55,23 +56,29 @@ inline void add_daemon_options(CLI::App& app, DaemonCommandLine& cl) {
     const config::Json v = *k.write(defaults);
     const std::string shown = v.is_string() ? "\"" + v.get<std::string>() + "\"" : v.dump();
     std::optional<std::string>* slot = &cl.values[i];
-    app.add_option_function<std::string>(flag_names_of(k.name), [slot](const std::string& text) { *slot = text; },
-                                         std::string(k.help))
+    app.add_option_function<std::string>(
+           flag_names_of(k.name), [slot](const std::string& text) { *slot = text; },
+           std::string(k.help))
         ->type_name(k.kind == config::Kind::kText ? "TEXT" : "NUMBER")
         ->default_str(shown);
   }
   app.add_flag("-v,--verbose", cl.verbose, "log one level more than log_level (repeatable: -vv)");
-  app.add_flag("-q,--quiet", cl.quiet, "log one level less than log_level (repeatable: -qq: errors only)");
+  app.add_flag("-q,--quiet", cl.quiet,
+               "log one level less than log_level (repeatable: -qq: errors only)");
 }
 
-/// The program's logger: the config's log_level moved by -v / -q, to standard error as "PROGRAM: ...".
-inline Logger daemon_logger(const daemon::DaemonConfig& config, const DaemonCommandLine& cl, std::string program) {
+/// The program's logger: the config's log_level moved by -v / -q, to standard error as "PROGRAM:
+/// ...".
+inline Logger daemon_logger(const daemon::DaemonConfig& config, const DaemonCommandLine& cl,
+                            std::string program) {
   const LogLevel base = parse_log_level(config.log_level, "log_level");
-  return Logger(adjust_log_level(base, cl.verbose, cl.quiet), Logger::stderr_sink(std::move(program)));
+  return Logger(adjust_log_level(base, cl.verbose, cl.quiet),
+                Logger::stderr_sink(std::move(program)));
 }
 
 /// The configuration the command line asks for: the defaults, the --config file over them, each
-/// given flag over that; validated. Throws ConfigError naming the file or "command line" and the key.
+/// given flag over that; validated. Throws ConfigError naming the file or "command line" and the
+/// key.
 inline daemon::DaemonConfig daemon_config_from(const DaemonCommandLine& cl) {
   daemon::DaemonConfig c;
   if (!cl.config_path.empty()) c = daemon::load_daemon_config(cl.config_path);

@@ -17,7 +17,8 @@ class LiveViewAttachment {
  public:
   /// Nothing when config.http_port is 0; else the server, listening, or std::runtime_error saying
   /// why not (port in use, a build without cpp-httplib). `models` must outlive the attachment.
-  LiveViewAttachment(const daemon::DaemonConfig& config, const daemon::DaemonModels& models, const Logger& log) {
+  LiveViewAttachment(const daemon::DaemonConfig& config, const daemon::DaemonModels& models,
+                     const Logger& log) {
     if (config.http_port == 0) return;
     live::LiveViewOptions o;
     o.address = config.http_address;

@@ -10,8 +10,8 @@
 #include <utility>
 
 #include "omniloc/daemon.hpp"
-#include "omniloc/log.hpp"
 #include "omniloc/daemon_config.hpp"
+#include "omniloc/log.hpp"
 #include "omniloc/ros2_bridge.hpp"
 
 namespace omniloc::cli {
@@ -27,8 +27,9 @@ class Ros2Attachment {
     rc.frame_id = config.ros2_frame_id;
     bridge_ = std::make_unique<ros2::Ros2Bridge>(rc);
     frame_id_ = rc.frame_id;
-    log_.info("ROS 2 topics " + rc.topic_prefix + "/pose, " + rc.topic_prefix + "/odom (subscribed: " +
-        rc.initial_pose_topic + ") in DDS domain " + std::to_string(rc.domain_id));
+    log_.info("ROS 2 topics " + rc.topic_prefix + "/pose, " + rc.topic_prefix +
+              "/odom (subscribed: " + rc.initial_pose_topic + ") in DDS domain " +
+              std::to_string(rc.domain_id));
   }
 
   /// Chains the publication onto `observer`'s on_pose and the /initialpose subscription onto its
@@ -41,7 +42,8 @@ class Ros2Attachment {
       const auto ip = bridge_->take_initial_pose();
       if (!ip) return;
       if (!ip->frame_id.empty() && ip->frame_id != frame_id_) {
-        log_.warning("ROS 2: /initialpose in frame '" + ip->frame_id + "' ignored (poses are in '" + frame_id_ + "')");
+        log_.warning("ROS 2: /initialpose in frame '" + ip->frame_id + "' ignored (poses are in '" +
+                     frame_id_ + "')");
         return;
       }
       try {
@@ -50,9 +52,11 @@ class Ros2Attachment {
         log_.warning(std::string("ROS 2: /initialpose refused: ") + e.what());
       }
     };
-    observer.on_pose = [bridge = bridge_.get(), next = std::move(observer.on_pose)](const daemon::PoseEvent& e) {
+    observer.on_pose = [bridge = bridge_.get(),
+                        next = std::move(observer.on_pose)](const daemon::PoseEvent& e) {
       if (next) next(e);
-      if (e.message.status == daemon::DaemonStatus::kNoBoard || e.message.status == daemon::DaemonStatus::kStarting)
+      if (e.message.status == daemon::DaemonStatus::kNoBoard ||
+          e.message.status == daemon::DaemonStatus::kStarting)
         return;  // no pose yet: nothing to put on a pose topic
       ros2::Ros2Pose p;
       p.stamp_unix_ms = e.message.wall_ms;

@@ -9,7 +9,9 @@ namespace omniloc::cli {
 /// a static object, and the only thing it may safely do is set a volatile sig_atomic_t.
 inline volatile std::sig_atomic_t g_stop_requested = 0;
 
-extern "C" inline void on_stop_signal(int) { g_stop_requested = 1; }
+extern "C" inline void on_stop_signal(int) {
+  g_stop_requested = 1;
+}
 
 /// No SA_RESTART: a blocking read returns early and the loop sees the flag.
 inline void install_stop_signal_handlers() {

@@ -29,7 +29,8 @@ namespace omniloc::cli {
 template <class T>
 T parse_number_as(const std::string& text, const std::string& flag, T min, T max) {
   if constexpr (std::is_floating_point_v<T>) {
-    return static_cast<T>(parse_double(text, flag, static_cast<double>(min), static_cast<double>(max)));
+    return static_cast<T>(
+        parse_double(text, flag, static_cast<double>(min), static_cast<double>(max)));
   } else if constexpr (std::is_signed_v<T>) {
     return static_cast<T>(parse_int(text, flag, min, max));
   } else {
@@ -42,7 +43,8 @@ template <class T>
 std::string number_type_name(T min, T max) {
   std::ostringstream os;
   os << (std::is_floating_point_v<T> ? "NUMBER" : std::is_signed_v<T> ? "INT" : "UINT");
-  const bool whole_range = min == std::numeric_limits<T>::lowest() && max == std::numeric_limits<T>::max();
+  const bool whole_range =
+      min == std::numeric_limits<T>::lowest() && max == std::numeric_limits<T>::max();
   if (!whole_range) os << " in [" << min << ", " << max << "]";
   return os.str();
 }
@@ -58,8 +60,9 @@ std::string number_text(T value) {
 /// `store`; a bad text is a CLI11 ValidationError (exit 2) saying
 /// "--seed: must be an integer in [0, ...] (got 'abc')".
 template <class T>
-CLI::Option* add_number_callback(CLI::App& app, const std::string& flag, std::function<void(T)> store,
-                                 const std::string& help, T min, T max) {
+CLI::Option* add_number_callback(CLI::App& app, const std::string& flag,
+                                 std::function<void(T)> store, const std::string& help, T min,
+                                 T max) {
   auto parse = [store = std::move(store), flag, min, max](const std::string& text) {
     try {
       store(parse_number_as<T>(text, flag, min, max));
@@ -67,14 +70,18 @@ CLI::Option* add_number_callback(CLI::App& app, const std::string& flag, std::fu
       throw CLI::ValidationError(e.what());
     }
   };
-  return app.add_option_function<std::string>(flag, parse, help)->type_name(number_type_name(min, max));
+  return app.add_option_function<std::string>(flag, parse, help)
+      ->type_name(number_type_name(min, max));
 }
 
 /// add_number_callback into `value`, whose value now is the default --help shows.
 template <class T>
-CLI::Option* add_number_option(CLI::App& app, const std::string& flag, T& value, const std::string& help,
-                               T min = std::numeric_limits<T>::lowest(), T max = std::numeric_limits<T>::max()) {
-  return add_number_callback<T>(app, flag, [&value](T v) { value = v; }, help, min, max)->default_str(number_text(value));
+CLI::Option* add_number_option(CLI::App& app, const std::string& flag, T& value,
+                               const std::string& help, T min = std::numeric_limits<T>::lowest(),
+                               T max = std::numeric_limits<T>::max()) {
+  return add_number_callback<T>(
+             app, flag, [&value](T v) { value = v; }, help, min, max)
+      ->default_str(number_text(value));
 }
 
 /// One subcommand: its CLI11 app (owned by the parent) and what runs when it was chosen. The
@@ -98,7 +105,8 @@ inline std::string command_path(const CLI::App& app) {
 /// CLI11's failure message as "PROGRAM COMMAND: error: WHAT" and where to find the options.
 inline std::string failure_message_with_path(const CLI::App* app, const CLI::Error& e) {
   const std::string path = command_path(*app);
-  return path + ": error: " + e.what() + "\nRun '" + path + " --help' for every option and its default.\n";
+  return path + ": error: " + e.what() + "\nRun '" + path +
+         " --help' for every option and its default.\n";
 }
 
 /// The top-level app of a program with subcommands (call it before adding them): --version as
@@ -108,20 +116,23 @@ inline void setup_program(CLI::App& app, const std::string& name) {
   app.name(name);
   app.set_version_flag("--version", version_line(name));
   app.require_subcommand(1);
-  app.option_defaults()->disable_flag_override();  // "--paper=3" is an error, not a flag set 3 times
+  app.option_defaults()
+      ->disable_flag_override();  // "--paper=3" is an error, not a flag set 3 times
   app.failure_message(failure_message_with_path);
 }
 
 /// Parses the command line and runs the chosen subcommand: 0 / 2 from the parse (help, version,
 /// bad usage), else the command's exit code; an exception from it is "PROGRAM COMMAND: error: ..."
 /// on stderr and 1. `help` as the first word is --help.
-inline int run_program(CLI::App& app, int argc, char** argv, const std::vector<Subcommand>& commands) {
+inline int run_program(CLI::App& app, int argc, char** argv,
+                       const std::vector<Subcommand>& commands) {
   std::vector<std::string> args(argv + 1, argv + argc);
   if (!args.empty() && args.front() == "help") args.front() = "--help";
   const auto named = [&](const CLI::App* s) { return s->check_name(args.front()); };
-  if (!args.empty() && !args.front().starts_with("-") && std::as_const(app).get_subcommands(named).empty()) {
-    std::fprintf(stderr, "%s: error: unknown command '%s'\n\n%s", app.get_name().c_str(), args.front().c_str(),
-                 app.help().c_str());
+  if (!args.empty() && !args.front().starts_with("-") &&
+      std::as_const(app).get_subcommands(named).empty()) {
+    std::fprintf(stderr, "%s: error: unknown command '%s'\n\n%s", app.get_name().c_str(),
+                 args.front().c_str(), app.help().c_str());
     return 2;
   }
   std::reverse(args.begin(), args.end());  // CLI11's vector form takes the arguments last first

@@ -47,7 +47,8 @@ AnalysisHints hints_of(const CalibrateArgs& a) {
   if (!a.centre.empty()) h.centre_px = parse_pixel(a.centre, "--center");
   if (a.rim_radius_px > 0.0) h.rim_radius_px = a.rim_radius_px;
   if (h.centre_px.has_value() != h.rim_radius_px.has_value()) {
-    throw NumberError("--center and --rim-radius come together (the mirror's disc replaces the rim search)");
+    throw NumberError(
+        "--center and --rim-radius come together (the mirror's disc replaces the rim search)");
   }
   if (!a.mirrored.empty()) h.mirrored = a.mirrored == "yes";
   return h;
@@ -58,15 +59,19 @@ AnalysisHints hints_of(const CalibrateArgs& a) {
 CalibrationFrame parse_pose(const std::string& text) {
   std::vector<std::string> parts(1);
   for (char ch : text) {
-    if (ch == ',') parts.emplace_back();
-    else parts.back() += ch;
+    if (ch == ',')
+      parts.emplace_back();
+    else
+      parts.back() += ch;
   }
-  if (parts.size() != 2 && parts.size() != 3) throw NumberError("'" + text + "' is not X,Y or X,Y,YAW");
+  if (parts.size() != 2 && parts.size() != 3)
+    throw NumberError("'" + text + "' is not X,Y or X,Y,YAW");
   const char* names[] = {"X", "Y", "YAW"};
   const double limits[] = {1e6, 1e6, 360.0};  // cm, cm, deg
   std::vector<double> v;
   for (std::size_t i = 0; i < parts.size(); ++i)
-    v.push_back(parse_double(parts[i], std::string(names[i]) + " of '" + text + "'", -limits[i], limits[i]));
+    v.push_back(parse_double(parts[i], std::string(names[i]) + " of '" + text + "'", -limits[i],
+                             limits[i]));
   CalibrationFrame f;
   f.position_cm = {v[0], v[1]};
   if (v.size() == 3) f.yaw_deg = v[2];
@@ -102,8 +107,8 @@ class DebugPictures {
     std::error_code ec;
     std::filesystem::create_directories(dir_, ec);
     if (ec || !std::filesystem::is_directory(dir_)) {
-      std::fprintf(stderr, "omniloc calibrate: error: cannot create the debug directory '%s': %s\n", dir_.string().c_str(),
-                   ec ? ec.message().c_str() : "not a directory");
+      std::fprintf(stderr, "omniloc calibrate: error: cannot create the debug directory '%s': %s\n",
+                   dir_.string().c_str(), ec ? ec.message().c_str() : "not a directory");
       return false;
     }
     return true;
@@ -119,10 +124,12 @@ class DebugPictures {
     } catch (const std::exception& e) {
       std::fprintf(stderr, "omniloc calibrate: %s\n", e.what());
     }
-    if (ok) ++written_;
+    if (ok)
+      ++written_;
     else {
       ++failed_;
-      std::fprintf(stderr, "omniloc calibrate: error: cannot write debug picture '%s'\n", path.string().c_str());
+      std::fprintf(stderr, "omniloc calibrate: error: cannot write debug picture '%s'\n",
+                   path.string().c_str());
     }
   }
 
@@ -158,24 +165,29 @@ int run_calibrate(const CalibrateArgs& a) {
   std::vector<CalibrationFrame> poses;
   for (const auto& p : a.poses) poses.push_back(parse_pose(p));
   if (!poses.empty() && poses.size() != 1 && poses.size() != images.size()) {
-    std::fprintf(stderr, "omniloc calibrate: %zu --pose for %zu images (give one per image, or one for all)\n", poses.size(),
-                 images.size());
+    std::fprintf(
+        stderr,
+        "omniloc calibrate: %zu --pose for %zu images (give one per image, or one for all)\n",
+        poses.size(), images.size());
     return 2;
   }
   const FieldGeometry field = load_field(a.field_name);
   std::vector<CalibrationFrame> frames;
   for (std::size_t i = 0; i < images.size(); ++i) {
     CalibrationFrame f;
-    if (!poses.empty()) f = poses[poses.size() == 1 ? 0 : i];
-    else f.position_cm = field.centre_cm();
+    if (!poses.empty())
+      f = poses[poses.size() == 1 ? 0 : i];
+    else
+      f.position_cm = field.centre_cm();
     f.name = images[i];
     f.image = cv::imread(images[i], cv::IMREAD_COLOR);
     if (f.image.empty()) {
       std::fprintf(stderr, "omniloc calibrate: error: cannot read image '%s'\n", images[i].c_str());
       return 1;
     }
-    std::printf("%s: %d x %d, robot at (%.1f, %.1f) cm, heading %s\n", f.name.c_str(), f.image.cols, f.image.rows,
-                f.position_cm.x(), f.position_cm.y(), f.yaw_deg ? std::to_string(*f.yaw_deg).c_str() : "unknown");
+    std::printf("%s: %d x %d, robot at (%.1f, %.1f) cm, heading %s\n", f.name.c_str(), f.image.cols,
+                f.image.rows, f.position_cm.x(), f.position_cm.y(),
+                f.yaw_deg ? std::to_string(*f.yaw_deg).c_str() : "unknown");
     frames.push_back(std::move(f));
   }
   const auto t0 = std::chrono::steady_clock::now();
@@ -194,9 +206,8 @@ int run_calibrate(const CalibrateArgs& a) {
   if (!a.debug_dir.empty()) {
     debug = std::make_shared<DebugPictures>(a.debug_dir);
     if (!debug->create()) return 1;
-    opt.step_pictures = [debug](const std::string& frame, const std::string& step, const cv::Mat& picture) {
-      debug->write(frame, step, picture);
-    };
+    opt.step_pictures = [debug](const std::string& frame, const std::string& step,
+                                const cv::Mat& picture) { debug->write(frame, step, picture); };
   }
   CalibrationResult r;
   try {
@@ -205,7 +216,8 @@ int run_calibrate(const CalibrateArgs& a) {
     if (debug) debug->report();  // the pictures of the steps reached: where to look for the cause
     throw;
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   {
     std::ofstream f(out);
     f << calibrated_camera_json(r, frames);
@@ -216,27 +228,35 @@ int run_calibrate(const CalibrateArgs& a) {
   }
   (void)load_camera(out);  // read back with the project's reader
   const CameraModel& c = r.camera;
-  std::printf("centre (%.2f, %.2f) px (rim (%.2f, %.2f) r %.1f px on %d/360 rays)\n", c.center_px.x(), c.center_px.y(),
-              r.rim.centre_px.x(), r.rim.centre_px.y(), r.rim.radius_px, r.rim.rays_on_circle);
+  std::printf("centre (%.2f, %.2f) px (rim (%.2f, %.2f) r %.1f px on %d/360 rays)\n",
+              c.center_px.x(), c.center_px.y(), r.rim.centre_px.x(), r.rim.centre_px.y(),
+              r.rim.radius_px, r.rim.rays_on_circle);
   const RadialModel& m = r.radial;
   if (m.rational()) {
-    std::printf("radial model (rational) d(r) = %.6g x / (1 %+.6g x^2 %+.6g x^3 %+.6g x^4) cm", m.a[0], m.e[0], m.e[1], m.e[2]);
+    std::printf("radial model (rational) d(r) = %.6g x / (1 %+.6g x^2 %+.6g x^3 %+.6g x^4) cm",
+                m.a[0], m.e[0], m.e[1], m.e[2]);
   } else {
-    std::printf("radial model (quartic) d(r) = %.6g x %+.6g x^2 %+.6g x^3 %+.6g x^4 cm", m.a[0], m.a[1], m.a[2], m.a[3]);
+    std::printf("radial model (quartic) d(r) = %.6g x %+.6g x^2 %+.6g x^3 %+.6g x^4 cm", m.a[0],
+                m.a[1], m.a[2], m.a[3]);
   }
-  std::printf(", x = r / %.1f px; d(50) %.1f, d(100) %.1f, d(view) %.1f cm\n", m.scale_px, m.ground_cm(50), m.ground_cm(100),
-              m.ground_cm(r.view_radius_px));
+  std::printf(", x = r / %.1f px; d(50) %.1f, d(100) %.1f, d(view) %.1f cm\n", m.scale_px,
+              m.ground_cm(50), m.ground_cm(100), m.ground_cm(r.view_radius_px));
   std::printf("yaw offset %.2f deg%s, mirrored %s (%s)%s\n", c.yaw_offset_deg,
-              r.yaw_offset_ambiguous ? " (or 180 deg more: the view is symmetric; add a frame off the centre to tell)" : "",
+              r.yaw_offset_ambiguous
+                  ? " (or 180 deg more: the view is symmetric; add a frame off the centre to tell)"
+                  : "",
               c.mirrored ? "yes" : "no", r.handedness_from.c_str(),
               r.mirrored_ambiguous ? " (ambiguous: the other handedness fits as well)" : "");
-  std::printf("view radius %.1f px, body radius %.1f px, %zu mast(s):", r.view_radius_px, c.body_radius_px, c.masts.size());
+  std::printf("view radius %.1f px, body radius %.1f px, %zu mast(s):", r.view_radius_px,
+              c.body_radius_px, c.masts.size());
   for (const auto& m : c.masts) std::printf(" %.1f+-%.1f deg", m.bearing_deg, m.half_width_deg);
   std::printf("\n");
-  for (const auto& [name, g] : {std::pair{"blue", &r.goals.blue}, std::pair{"yellow", &r.goals.yellow}}) {
+  for (const auto& [name, g] :
+       {std::pair{"blue", &r.goals.blue}, std::pair{"yellow", &r.goals.yellow}}) {
     if (*g) {
-      std::printf("%s goal: hue %.0f +- %.0f, S >= %.0f, V >= %.0f (%d px)\n", name, (*g)->colour.hue,
-                  (*g)->colour.hue_half_width, (*g)->colour.sat_min, (*g)->colour.val_min, (*g)->pixels);
+      std::printf("%s goal: hue %.0f +- %.0f, S >= %.0f, V >= %.0f (%d px)\n", name,
+                  (*g)->colour.hue, (*g)->colour.hue_half_width, (*g)->colour.sat_min,
+                  (*g)->colour.val_min, (*g)->pixels);
     } else {
       std::printf("%s goal: not seen\n", name);
     }
@@ -244,18 +264,26 @@ int run_calibrate(const CalibrateArgs& a) {
   std::printf("goal colour at x = max: %s\n", goal_colour_name(r.goal_colour_at_x_max));
   for (std::size_t i = 0; i < r.fits.size(); ++i) {
     const auto& f = r.fits[i];
-    std::printf("%s: heading %.2f deg%s, %d line pixels, %d within %.0f px: rms %.2f px (%.2f cm), median %.2f px\n",
-                frames[i].name.c_str(), f.yaw_deg, f.yaw_given ? " (given)" : " (found, yaw offset taken for heading 0)",
-                f.line_pixels, f.inliers, r.inlier_threshold_px, f.rms_px, f.rms_cm, f.median_px);
-    std::printf("%s: self-check: %.0f %% of the %d line points the camera puts on the carpet are seen as lines\n",
-                frames[i].name.c_str(), 100 * f.line_recall, f.recall_points);
+    std::printf(
+        "%s: heading %.2f deg%s, %d line pixels, %d within %.0f px: rms %.2f px (%.2f cm), median "
+        "%.2f px\n",
+        frames[i].name.c_str(), f.yaw_deg,
+        f.yaw_given ? " (given)" : " (found, yaw offset taken for heading 0)", f.line_pixels,
+        f.inliers, r.inlier_threshold_px, f.rms_px, f.rms_cm, f.median_px);
+    std::printf(
+        "%s: self-check: %.0f %% of the %d line points the camera puts on the carpet are seen as "
+        "lines\n",
+        frames[i].name.c_str(), 100 * f.line_recall, f.recall_points);
   }
   const auto& f0 = r.fits.front();
-  std::printf("%s: coarse score %.2f px at heading %.1f deg; best distinct heading %.1f deg scores %.2f px%s\n",
-              frames.front().name.c_str(), f0.score, f0.yaw_deg, f0.twin_yaw_deg, f0.twin_score,
-              f0.twin_score < 1.1 * f0.score ? " (a twin: the heading is not told apart)" : "");
-  std::printf("residual rms %.2f px (%.2f cm) over %.0f %% of the line pixels; wrote %s in %.2f s\n", r.rms_px, r.rms_cm,
-              100 * r.inlier_fraction, out.c_str(), seconds);
+  std::printf(
+      "%s: coarse score %.2f px at heading %.1f deg; best distinct heading %.1f deg scores %.2f "
+      "px%s\n",
+      frames.front().name.c_str(), f0.score, f0.yaw_deg, f0.twin_yaw_deg, f0.twin_score,
+      f0.twin_score < 1.1 * f0.score ? " (a twin: the heading is not told apart)" : "");
+  std::printf(
+      "residual rms %.2f px (%.2f cm) over %.0f %% of the line pixels; wrote %s in %.2f s\n",
+      r.rms_px, r.rms_cm, 100 * r.inlier_fraction, out.c_str(), seconds);
   if (!a.overlay.empty()) {
     for (std::size_t i = 0; i < frames.size(); ++i) {
       const std::string p = numbered(a.overlay, i);
@@ -279,31 +307,37 @@ Subcommand add_calibrate(CLI::App& program) {
   auto a = std::make_shared<CalibrateArgs>();
   app->add_option("IMAGE", a->images, "the frames (PNG, JPEG)")->required();
   app->add_option("--out", a->out, "the camera file to write (CAMERA.json)")->required();
-  app->add_option("--pose", a->poses,
-                  "where the robot stood (field frame, cm; YAW deg if known), one per image in order,\n"
-                  "or one for all")
+  app->add_option(
+         "--pose", a->poses,
+         "where the robot stood (field frame, cm; YAW deg if known), one per image in order,\n"
+         "or one for all")
       ->allow_extra_args(false)
       ->type_name("X,Y[,YAW]")
       ->check(CLI::Validator(pose_problem, ""))
       ->default_str("the field centre, heading unknown (searched, twins included)");
-  app->add_option("--field", a->field_name, "geometry file or name in common/fields/")->capture_default_str();
-  app->add_option("--overlay", a->overlay,
-                  "PNG of the frame with the detected line pixels and the field model at the fitted pose\n"
-                  "(frames after the first: OUT-2.png, OUT-3.png, ...)");
-  app->add_option("--debug-dir", a->debug_dir,
-                  "directory (created) for each step's picture per frame, STEM = the image's name without\n"
-                  "extension: STEM-1-disc.png, -2-carpet, -3-lines, -4-polar, -5-coarse (first frame),\n"
-                  "-6-residuals; written up to a failed step too")
+  app->add_option("--field", a->field_name, "geometry file or name in common/fields/")
+      ->capture_default_str();
+  app->add_option(
+      "--overlay", a->overlay,
+      "PNG of the frame with the detected line pixels and the field model at the fitted pose\n"
+      "(frames after the first: OUT-2.png, OUT-3.png, ...)");
+  app->add_option(
+         "--debug-dir", a->debug_dir,
+         "directory (created) for each step's picture per frame, STEM = the image's name without\n"
+         "extension: STEM-1-disc.png, -2-carpet, -3-lines, -4-polar, -5-coarse (first frame),\n"
+         "-6-residuals; written up to a failed step too")
       ->type_name("DIR");
   app->add_option("--carpet-at", a->carpet_at,
                   "a pixel that is carpet: its colour is the carpet's (when the carpet step fails)")
       ->type_name("X,Y");
-  app->add_option("--center", a->centre, "the mirror's centre in px (with --rim-radius: replaces the rim search)")
+  app->add_option("--center", a->centre,
+                  "the mirror's centre in px (with --rim-radius: replaces the rim search)")
       ->type_name("X,Y");
   app->add_option("--rim-radius", a->rim_radius_px, "the mirror's rim radius in px (with --center)")
       ->type_name("PX")
       ->check(CLI::Range(16.0, 1e5));
-  app->add_option("--mirrored", a->mirrored, "the camera's handedness, when the frames do not tell it")
+  app->add_option("--mirrored", a->mirrored,
+                  "the camera's handedness, when the frames do not tell it")
       ->check(CLI::IsMember({"yes", "no"}));
   return {app, [a] { return run_calibrate(*a); }};
 }

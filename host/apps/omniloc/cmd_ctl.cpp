@@ -30,7 +30,8 @@ constexpr const char* kCommands =
     "  set_side blue|yellow        the colour of the goal the team defends\n"
     "  relocalize                  forget the fix: global search on the next frames\n"
     "  record start DIR | stop     start or stop a recording\n"
-    "Prints the reply (JSON); exit 0 for \"ok\": true, 1 for an error reply or no reply, 2 for bad usage.";
+    "Prints the reply (JSON); exit 0 for \"ok\": true, 1 for an error reply or no reply, 2 for bad "
+    "usage.";
 
 struct CtlArgs {
   int port = 5601;
@@ -49,13 +50,15 @@ nlohmann::json request_of(const std::vector<std::string>& words) {
   nlohmann::json request = {{"id", static_cast<std::int64_t>(::getpid())}, {"cmd", words[0]}};
   const auto arity = [&](std::size_t n) {
     if (words.size() != n + 1)
-      throw UsageError(words[0] + " takes " + std::to_string(n) + " argument(s), got " + std::to_string(words.size() - 1));
+      throw UsageError(words[0] + " takes " + std::to_string(n) + " argument(s), got " +
+                       std::to_string(words.size() - 1));
   };
   if (words[0] == "status" || words[0] == "relocalize") {
     arity(0);
   } else if (words[0] == "set_pose") {
     arity(3);
-    // Any finite number goes to the daemon, which checks it against the field (its reply says why not).
+    // Any finite number goes to the daemon, which checks it against the field (its reply says why
+    // not).
     request["x_cm"] = parse_double(words[1], "set_pose X_CM", -1e9, 1e9);
     request["y_cm"] = parse_double(words[2], "set_pose Y_CM", -1e9, 1e9);
     request["yaw_deg"] = parse_double(words[3], "set_pose YAW_DEG", -1e9, 1e9);
@@ -99,7 +102,9 @@ int send_request(const CtlArgs& a, const nlohmann::json& request) {
   if (::poll(&p, 1, a.timeout_ms) > 0) n = ::recv(fd, buf, sizeof buf, 0);
   ::close(fd);
   if (n < 0) {
-    std::fprintf(stderr, "omniloc ctl: no reply from 127.0.0.1:%d within %d ms (is omnilocd running, with control_port %d?)\n",
+    std::fprintf(stderr,
+                 "omniloc ctl: no reply from 127.0.0.1:%d within %d ms (is omnilocd running, with "
+                 "control_port %d?)\n",
                  a.port, a.timeout_ms, a.port);
     return 1;
   }
@@ -124,11 +129,13 @@ int run_ctl(const CtlArgs& a) {
 
 Subcommand add_ctl(CLI::App& program) {
   CLI::App* app = program.add_subcommand(
-      "ctl", "talk to a running omnilocd: status, set_pose, set_side, relocalize, record start|stop");
+      "ctl",
+      "talk to a running omnilocd: status, set_pose, set_side, relocalize, record start|stop");
   auto a = std::make_shared<CtlArgs>();
   app->add_option("COMMAND", a->words, "the request and its arguments (below)")->required();
   add_number_option(*app, "--port", a->port, "the daemon's control_port, on 127.0.0.1", 1, 65535);
-  add_number_option(*app, "--timeout-ms", a->timeout_ms, "how long to wait for the reply", 1, 600'000);
+  add_number_option(*app, "--timeout-ms", a->timeout_ms, "how long to wait for the reply", 1,
+                    600'000);
   app->footer(kCommands);
   return {app, [a] { return run_ctl(*a); }};
 }

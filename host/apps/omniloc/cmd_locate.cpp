@@ -16,8 +16,8 @@
 #include "omniloc/field.hpp"
 #include "omniloc/goals.hpp"
 #include "omniloc/locate.hpp"
-#include "omniloc/vision.hpp"
 #include "omniloc/recording.hpp"
+#include "omniloc/vision.hpp"
 
 namespace omniloc::cli {
 
@@ -29,17 +29,22 @@ struct LocateArgs {
   bool json = false;
 };
 
-FeatureDb feature_db_for(const LocateArgs& a, const FieldGeometry& field, const CameraModel& camera) {
+FeatureDb feature_db_for(const LocateArgs& a, const FieldGeometry& field,
+                         const CameraModel& camera) {
   auto log = [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); };
   if (!a.db.empty()) return load_or_build_feature_db(field, camera, a.db, log);
-  const GridSpec grid = GridSpec::covering(field, 10.0);  // the grid load_or_build_feature_db builds
+  const GridSpec grid =
+      GridSpec::covering(field, 10.0);  // the grid load_or_build_feature_db builds
   return build_feature_db(field, camera, grid, [](int done, int total) {
-    std::fprintf(stderr, "\rbuilding the feature database: %5d / %d grid points (%3d %%)", done, total, 100 * done / total);
+    std::fprintf(stderr, "\rbuilding the feature database: %5d / %d grid points (%3d %%)", done,
+                 total, 100 * done / total);
     if (done == total) std::fprintf(stderr, "\n");
   });
 }
 
-nlohmann::ordered_json number_or_null(double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); }
+nlohmann::ordered_json number_or_null(double v) {
+  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
+}
 
 nlohmann::ordered_json result_json(const SingleFrameResult& r, double time_ms) {
   nlohmann::ordered_json out = nlohmann::ordered_json::object();
@@ -51,7 +56,9 @@ nlohmann::ordered_json result_json(const SingleFrameResult& r, double time_ms) {
   out["accepted"] = r.accepted;
   out["ambiguous"] = r.ambiguous;
   out["heading_ambiguous"] = r.heading_ambiguous;
-  out["twin"] = r.twin ? nlohmann::ordered_json{{"x_cm", r.twin->x_cm}, {"y_cm", r.twin->y_cm}, {"yaw_deg", r.twin->yaw_deg}}
+  out["twin"] = r.twin ? nlohmann::ordered_json{{"x_cm", r.twin->x_cm},
+                                                {"y_cm", r.twin->y_cm},
+                                                {"yaw_deg", r.twin->yaw_deg}}
                        : nlohmann::ordered_json(nullptr);
   out["rays_used"] = r.match.rays_used;
   out["time_ms"] = time_ms;
@@ -64,12 +71,16 @@ void print_text(const SingleFrameResult& r, double e_th, double time_ms) {
     std::printf("no match (no ray seen anything)\n");
     return;
   }
-  std::printf("pose (%.1f, %.1f) cm, yaw %.1f deg%s; match error %.2f (E_TH %.2f) on %d rays: %s\n", r.pose.x_cm,
-              r.pose.y_cm, r.pose.yaw_deg, r.yaw_searched ? " (found)" : " (given)", r.match.error, e_th,
-              r.match.rays_used, r.accepted ? "accepted" : r.ambiguous && r.match.error < e_th ? "refused (ambiguous)" : "not accepted");
+  std::printf("pose (%.1f, %.1f) cm, yaw %.1f deg%s; match error %.2f (E_TH %.2f) on %d rays: %s\n",
+              r.pose.x_cm, r.pose.y_cm, r.pose.yaw_deg, r.yaw_searched ? " (found)" : " (given)",
+              r.match.error, e_th, r.match.rays_used,
+              r.accepted                            ? "accepted"
+              : r.ambiguous && r.match.error < e_th ? "refused (ambiguous)"
+                                                    : "not accepted");
   if (r.twin)
-    std::printf("twin (%.1f, %.1f) cm, yaw %.1f deg, error %.2f: %s\n", r.twin->x_cm, r.twin->y_cm, r.twin->yaw_deg,
-                r.twin_error, r.ambiguous ? "not told apart" : "ruled out by the goal colours");
+    std::printf("twin (%.1f, %.1f) cm, yaw %.1f deg, error %.2f: %s\n", r.twin->x_cm, r.twin->y_cm,
+                r.twin->yaw_deg, r.twin_error,
+                r.ambiguous ? "not told apart" : "ruled out by the goal colours");
   std::printf("goal colours: %s\n", r.goal_choice.reason.c_str());
   std::printf("located in %.1f ms\n", time_ms);
 }
@@ -86,8 +97,11 @@ int run_locate(const LocateArgs& a) {
   } cam{load_camera(a.camera), {}};
   cam.goals = goal_colour_models(cam.camera.vision);
   if (bgr.cols != cam.camera.width_px || bgr.rows != cam.camera.height_px) {
-    std::fprintf(stderr, "omniloc locate: error: image '%s' is %d x %d px but camera '%s' is for %d x %d px\n",
-                 a.image.c_str(), bgr.cols, bgr.rows, a.camera.c_str(), cam.camera.width_px, cam.camera.height_px);
+    std::fprintf(
+        stderr,
+        "omniloc locate: error: image '%s' is %d x %d px but camera '%s' is for %d x %d px\n",
+        a.image.c_str(), bgr.cols, bgr.rows, a.camera.c_str(), cam.camera.width_px,
+        cam.camera.height_px);
     return 1;
   }
   const FieldGeometry field = load_field(a.field);
@@ -102,8 +116,10 @@ int run_locate(const LocateArgs& a) {
   const BearingScan bearings = extractor.extract(bgr, config.scan_rays_per_degree, &extraction);
   const GoalObservation goals = observe_goals(bgr, cam.camera, field, cam.goals);
   SingleFrameResult r;
-  if (extraction.usable) r = locate_frame(config, field, cam.camera, db, bearings, a.yaw_deg, &goals);
-  const double time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (extraction.usable)
+    r = locate_frame(config, field, cam.camera, db, bearings, a.yaw_deg, &goals);
+  const double time_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 
   if (a.json) {
     nlohmann::ordered_json j = result_json(r, time_ms);
@@ -129,29 +145,39 @@ int run_locate(const LocateArgs& a) {
 
 Subcommand add_locate(CLI::App& program) {
   CLI::App* app = program.add_subcommand(
-      "locate", "one frame to a pose: the localizer's global search and acceptance, JSON and overlay");
+      "locate",
+      "one frame to a pose: the localizer's global search and acceptance, JSON and overlay");
   auto a = std::make_shared<LocateArgs>();
   app->add_option("IMAGE", a->image, "the frame (PNG, JPEG)")->required();
-  app->add_option("--camera", a->camera,
-                  "camera file or name in common/cameras/ (its size must be the image's); its optional\n"
-                  "\"vision\" block's goal colours tell a pose from its twin")
+  app->add_option(
+         "--camera", a->camera,
+         "camera file or name in common/cameras/ (its size must be the image's); its optional\n"
+         "\"vision\" block's goal colours tell a pose from its twin")
       ->required();
-  app->add_option("--field", a->field, "geometry file or name in common/fields/")->capture_default_str();
+  app->add_option("--field", a->field, "geometry file or name in common/fields/")
+      ->capture_default_str();
   add_number_callback<double>(
-      *app, "--yaw-deg", [a](double v) { a->yaw_deg = v; }, "the robot's heading if known (field frame, deg)", -360.0,
-      360.0)
+      *app, "--yaw-deg", [a](double v) { a->yaw_deg = v; },
+      "the robot's heading if known (field frame, deg)", -360.0, 360.0)
       ->default_str("unknown: every heading searched");
   app->add_option("--db", a->db,
-                  "feature database file: used if it matches the field and camera, else built and written there")
+                  "feature database file: used if it matches the field and camera, else built and "
+                  "written there")
       ->default_str("built in memory, progress on stderr");
   app->add_option("--config", a->config,
-                  "localizer config (E_TH, refinement, ambiguity refusal), name in common/localizer/ or path")
+                  "localizer config (E_TH, refinement, ambiguity refusal), name in "
+                  "common/localizer/ or path")
       ->capture_default_str();
-  app->add_option("--overlay", a->overlay, "PNG of the frame with the rays, crossings, ray ends and the field model at the pose");
-  app->add_flag("--json", a->json,
-                "print one JSON object: x_cm, y_cm, yaw_deg, match_error, accepted, ambiguous, twin,\n"
-                "rays_used, time_ms (and goal_cue: the goal colours' verdict)");
-  app->footer("Exit 0 with a pose (accepted or not), 1 for an unreadable image or a camera of another size, 2 usage.");
+  app->add_option(
+      "--overlay", a->overlay,
+      "PNG of the frame with the rays, crossings, ray ends and the field model at the pose");
+  app->add_flag(
+      "--json", a->json,
+      "print one JSON object: x_cm, y_cm, yaw_deg, match_error, accepted, ambiguous, twin,\n"
+      "rays_used, time_ms (and goal_cue: the goal colours' verdict)");
+  app->footer(
+      "Exit 0 with a pose (accepted or not), 1 for an unreadable image or a camera of another "
+      "size, 2 usage.");
   return {app, [a] { return run_locate(*a); }};
 }
 

@@ -1,5 +1,5 @@
-// `omniloc probe`: finds omniloc boards on USB, prints ID, version, status and the gyro's state, then a live table of
-// window counts and link errors (or one snapshot with --once).
+// `omniloc probe`: finds omniloc boards on USB, prints ID, version, status and the gyro's state,
+// then a live table of window counts and link errors (or one snapshot with --once).
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -18,7 +18,9 @@ namespace {
 // SIGINT ends the live table cleanly (CONTROL restored). A signal handler can only reach a
 // process-wide flag; nothing else in the program touches it.
 std::atomic<bool> g_interrupted{false};
-extern "C" void on_sigint(int) { g_interrupted = true; }
+extern "C" void on_sigint(int) {
+  g_interrupted = true;
+}
 
 struct ProbeArgs {
   bool once = false;
@@ -27,19 +29,21 @@ struct ProbeArgs {
   UsbTransportOptions opt;
 };
 
-void print_row(const protocol::Window& w, const protocol::DecoderCounters& dc, const TransportCounters& tc,
-               std::uint64_t retries) {
-  std::printf("%10u %11d %11d %11d %11d  0x%X  0x%02X %7llu %7llu %7llu %7llu %7llu\n", w.seq, w.count[0], w.count[1],
-              w.count[2], w.count[3], w.dir, w.status, static_cast<unsigned long long>(dc.telemetry_lost),
+void print_row(const protocol::Window& w, const protocol::DecoderCounters& dc,
+               const TransportCounters& tc, std::uint64_t retries) {
+  std::printf("%10u %11d %11d %11d %11d  0x%X  0x%02X %7llu %7llu %7llu %7llu %7llu\n", w.seq,
+              w.count[0], w.count[1], w.count[2], w.count[3], w.dir, w.status,
+              static_cast<unsigned long long>(dc.telemetry_lost),
               static_cast<unsigned long long>(dc.bad_crc + dc.bad_length + dc.unknown_type),
               static_cast<unsigned long long>(dc.resync_bytes),
-              static_cast<unsigned long long>(tc.line_framing + tc.line_overrun + tc.line_parity + tc.line_break),
+              static_cast<unsigned long long>(tc.line_framing + tc.line_overrun + tc.line_parity +
+                                              tc.line_break),
               static_cast<unsigned long long>(retries));
 }
 
 void print_header() {
-  std::printf("%10s %11s %11s %11s %11s  %3s  %4s %7s %7s %7s %7s %7s\n", "seq", "count0", "count1", "count2",
-              "count3", "dir", "stat", "lost", "badfrm", "resync", "lineerr", "retries");
+  std::printf("%10s %11s %11s %11s %11s  %3s  %4s %7s %7s %7s %7s %7s\n", "seq", "count0", "count1",
+              "count2", "count3", "dir", "stat", "lost", "badfrm", "resync", "lineerr", "retries");
 }
 
 int run_probe(const ProbeArgs& a) {
@@ -49,17 +53,19 @@ int run_probe(const ProbeArgs& a) {
   const auto boards = find_usb_boards(opt.product);
   int found = 0;
   for (const auto& b : boards) {
-    std::printf("FT2232H %03d/%03d  product '%s'  serial '%s'%s%s\n", b.bus, b.address, b.product.c_str(),
-                b.serial.c_str(), b.is_omniloc ? "  <- omniloc board" : "",
+    std::printf("FT2232H %03d/%03d  product '%s'  serial '%s'%s%s\n", b.bus, b.address,
+                b.product.c_str(), b.serial.c_str(), b.is_omniloc ? "  <- omniloc board" : "",
                 b.error.empty() ? "" : ("  (" + b.error + ")").c_str());
     found += b.is_omniloc ? 1 : 0;
   }
   if (found == 0) {
-    std::fprintf(stderr,
-                 "omniloc probe: no omniloc board found: no FT2232H (0403:6010) with product \"%s\" on USB "
-                 "(%zu other FT2232H seen). Is the board plugged in, its EEPROM written (firmware/), and the "
-                 "USB device readable by this user?\n",
-                 opt.product.c_str(), boards.size());
+    std::fprintf(
+        stderr,
+        "omniloc probe: no omniloc board found: no FT2232H (0403:6010) with product \"%s\" on USB "
+        "(%zu other FT2232H seen). Is the board plugged in, its EEPROM written (firmware/), and "
+        "the "
+        "USB device readable by this user?\n",
+        opt.product.c_str(), boards.size());
     return 1;
   }
 
@@ -77,15 +83,18 @@ int run_probe(const ProbeArgs& a) {
   const std::uint32_t status = client.read_register(r::kRegStatus);
   const std::uint32_t link = client.read_register(r::kRegLinkErrors);
   std::printf("%s\n", usb.status().description.c_str());
-  std::printf("ID 0x%08X  register map %u.%u.%u (host speaks %u.%u.%u)\n", id, r::kVersionMajor.get(version),
-              r::kVersionMinor.get(version), r::kVersionPatch.get(version), r::kVersionMajor.get(r::kVersionValue),
+  std::printf("ID 0x%08X  register map %u.%u.%u (host speaks %u.%u.%u)\n", id,
+              r::kVersionMajor.get(version), r::kVersionMinor.get(version),
+              r::kVersionPatch.get(version), r::kVersionMajor.get(r::kVersionValue),
               r::kVersionMinor.get(r::kVersionValue), r::kVersionPatch.get(r::kVersionValue));
-  std::printf("CONFIG channels %d (the bitstream counts %d wheels)\n", ident.channels, ident.channels);
-  std::printf("CONTROL 0x%08X (ENABLE %u, DECODE %u, STREAM %u)  PERIOD %u cycles  STATUS 0x%08X "
-              "(ILLEGAL 0x%X, OVERRUN %u, BAD_WRITE %u)\n",
-              control, r::kControlEnable.get(control), r::kControlDecode.get(control), r::kControlStream.get(control),
-              period, status, r::kStatusIllegal.get(status), r::kStatusOverrun.get(status),
-              r::kStatusBadWrite.get(status));
+  std::printf("CONFIG channels %d (the bitstream counts %d wheels)\n", ident.channels,
+              ident.channels);
+  std::printf(
+      "CONTROL 0x%08X (ENABLE %u, DECODE %u, STREAM %u)  PERIOD %u cycles  STATUS 0x%08X "
+      "(ILLEGAL 0x%X, OVERRUN %u, BAD_WRITE %u)\n",
+      control, r::kControlEnable.get(control), r::kControlDecode.get(control),
+      r::kControlStream.get(control), period, status, r::kStatusIllegal.get(status),
+      r::kStatusOverrun.get(status), r::kStatusBadWrite.get(status));
   std::printf("LINK_ERRORS framing %u overrun %u  ERROR_COUNT", r::kLinkErrorsFraming.get(link),
               r::kLinkErrorsOverrun.get(link));
   for (int ch = 0; ch < r::kChannels; ++ch) {
@@ -96,8 +105,9 @@ int run_probe(const ProbeArgs& a) {
   std::printf("GYRO_STATE running %u absent %u faults %u (%s)\n", r::kGyroStateRunning.get(gyro),
               r::kGyroStateAbsent.get(gyro), r::kGyroStateFaults.get(gyro),
               r::kGyroStateRunning.get(gyro) ? "the ICM-42688-P is read"
-              : r::kGyroStateAbsent.get(gyro) ? "no gyro answers on PMOD1B: the heading comes from the wheels"
-                                              : "the gyro is starting");
+              : r::kGyroStateAbsent.get(gyro)
+                  ? "no gyro answers on PMOD1B: the heading comes from the wheels"
+                  : "the gyro is starting");
   if (version_differs(ident)) {
     std::fprintf(stderr, "warning: the board's register map differs from the host's\n");
   }
@@ -111,15 +121,19 @@ int run_probe(const ProbeArgs& a) {
 
   if (!r::kControlEnable.get(control)) {
     if (!enable) {
-      std::fprintf(stderr, "CONTROL.ENABLE is 0: the board captures no windows; run with --enable to set it\n");
+      std::fprintf(
+          stderr,
+          "CONTROL.ENABLE is 0: the board captures no windows; run with --enable to set it\n");
       return 1;
     }
     client.write_register(r::kRegControl, r::kControlEnable.put(control, 1));
   }
   std::signal(SIGINT, on_sigint);
-  client.set_streaming(true);  // streaming on here, not in BoardSession: probe keeps the board's DECODE
+  client.set_streaming(
+      true);  // streaming on here, not in BoardSession: probe keeps the board's DECODE
   print_header();
-  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(static_cast<std::int64_t>(seconds));
+  const auto until =
+      std::chrono::steady_clock::now() + std::chrono::seconds(static_cast<std::int64_t>(seconds));
   try {
     while (!g_interrupted && (seconds == 0 || std::chrono::steady_clock::now() < until)) {
       const auto w = client.poll_telemetry(std::chrono::milliseconds(500));
@@ -144,17 +158,21 @@ int run_probe(const ProbeArgs& a) {
 }  // namespace
 
 Subcommand add_probe(CLI::App& program) {
-  CLI::App* app = program.add_subcommand("probe", "find omniloc boards on USB, print ID/version/status and live counts");
+  CLI::App* app = program.add_subcommand(
+      "probe", "find omniloc boards on USB, print ID/version/status and live counts");
   auto a = std::make_shared<ProbeArgs>();
   app->add_flag("--once", a->once, "one snapshot, then exit");
-  app->add_option("--serial", a->opt.serial, "the board's USB serial")->default_str("the first omniloc board");
+  app->add_option("--serial", a->opt.serial, "the board's USB serial")
+      ->default_str("the first omniloc board");
   add_number_option(*app, "--baud", a->opt.baud, "the board's UART rate", 1u, 12'000'000u);
   app->add_flag("--enable", a->enable, "set CONTROL.ENABLE if it is off (it is restored on exit)");
-  add_number_option(*app, "--seconds", a->seconds, "stream this long; 0: until Ctrl-C", std::uint64_t{0},
-                    std::uint64_t{31'536'000});
+  add_number_option(*app, "--seconds", a->seconds, "stream this long; 0: until Ctrl-C",
+                    std::uint64_t{0}, std::uint64_t{31'536'000});
   app->footer(
-      "Finds omniloc encoder boards (FT2232H 0403:6010, product \"omniloc encoder board\"), prints ID, version\n"
-      "and status, then streams windows and prints a table of counts and errors every 10 windows until Ctrl-C\n"
+      "Finds omniloc encoder boards (FT2232H 0403:6010, product \"omniloc encoder board\"), prints "
+      "ID, version\n"
+      "and status, then streams windows and prints a table of counts and errors every 10 windows "
+      "until Ctrl-C\n"
       "(or --seconds N). Exit status: 0 success, 1 no board or link failure, 2 bad usage.");
   return {app, [a] { return run_probe(*a); }};
 }

@@ -1,7 +1,8 @@
 // omnilocd: the localization daemon on the robot. All the work is in the daemon library
-// (omniloc/daemon.hpp); this file parses the command line (CLI11, daemon_cli.hpp), wires the board (USB) and the camera
-// the config names (V4L2 device or video file, or none) and turns SIGINT/SIGTERM into a clean stop.
-// It links no simulator: the simulated robot is its own program, `omnilocd-sim` (sim/apps/).
+// (omniloc/daemon.hpp); this file parses the command line (CLI11, daemon_cli.hpp), wires the board
+// (USB) and the camera the config names (V4L2 device or video file, or none) and turns
+// SIGINT/SIGTERM into a clean stop. It links no simulator: the simulated robot is its own program,
+// `omnilocd-sim` (sim/apps/).
 #include <csignal>
 #include <cstdio>
 #include <memory>
@@ -9,17 +10,17 @@
 #include <utility>
 #include <vector>
 
-#include "omniloc/daemon.hpp"
-#include "omniloc/daemon_camera.hpp"
 #include "daemon_cli.hpp"
 #include "live_view_attach.hpp"
-#include "subcommand_cli.hpp"
-#include "ros2_attach.hpp"
+#include "omniloc/daemon.hpp"
+#include "omniloc/daemon_camera.hpp"
 #include "omniloc/daemon_config.hpp"
 #include "omniloc/service_notify.hpp"
 #include "omniloc/usb_transport.hpp"
 #include "omniloc/version.hpp"
+#include "ros2_attach.hpp"
 #include "stop_signal.hpp"
+#include "subcommand_cli.hpp"
 
 namespace {
 
@@ -37,10 +38,13 @@ int run(const omniloc::daemon::DaemonConfig& config, const omniloc::Logger& log)
   io.clock = &wall;
   UsbTransportOptions usb;
   usb.serial = config.board_serial;
-  io.open_board = [usb]() -> std::unique_ptr<Transport> { return std::make_unique<UsbTransport>(usb); };
+  io.open_board = [usb]() -> std::unique_ptr<Transport> {
+    return std::make_unique<UsbTransport>(usb);
+  };
   io.heading = &heading;
   std::unique_ptr<FrameSource> camera;
-  if (config.camera != "none") camera = std::make_unique<OpenCvCamera>(config.camera, config.camera_fps, wall);
+  if (config.camera != "none")
+    camera = std::make_unique<OpenCvCamera>(config.camera, config.camera_fps, wall);
   io.camera = camera.get();
   say("publishing poses to udp://" + config.udp_address + ":" + std::to_string(config.udp_port) +
       (config.record_dir.empty() ? "" : ", recording to " + config.record_dir));
@@ -67,9 +71,10 @@ int run(const omniloc::daemon::DaemonConfig& config, const omniloc::Logger& log)
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"The robot's localization daemon: USB board + camera -> localizer -> UDP poses.\n"
-               "Flags override the config file (JSON, docs/DAEMON.md).",
-               "omnilocd"};
+  CLI::App app{
+      "The robot's localization daemon: USB board + camera -> localizer -> UDP poses.\n"
+      "Flags override the config file (JSON, docs/DAEMON.md).",
+      "omnilocd"};
   app.set_version_flag("--version", omniloc::version_line("omnilocd"));
   app.failure_message(omniloc::cli::failure_message_with_path);  // "omnilocd: error: ..."
   app.footer("SIGINT / SIGTERM stop it cleanly (recording closed, board streaming switched off).");

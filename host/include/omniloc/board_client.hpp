@@ -1,5 +1,5 @@
-// Talks to the omniloc encoder board through any Transport: register reads and writes, snapshots and
-// streamed telemetry, with timeouts and retries. One request is outstanding at a time.
+// Talks to the omniloc encoder board through any Transport: register reads and writes, snapshots
+// and streamed telemetry, with timeouts and retries. One request is outstanding at a time.
 #pragma once
 
 #include <chrono>
@@ -14,8 +14,8 @@
 
 namespace omniloc {
 
-/// The board answered a request with an ERROR frame that retrying cannot fix (BAD_ADDRESS, READ_ONLY,
-/// BAD_VALUE), or it never answered within all retries.
+/// The board answered a request with an ERROR frame that retrying cannot fix (BAD_ADDRESS,
+/// READ_ONLY, BAD_VALUE), or it never answered within all retries.
 class BoardError : public std::runtime_error {
  public:
   BoardError(std::string what, std::uint8_t error_code, std::uint8_t addr)
@@ -33,17 +33,18 @@ struct BoardClientOptions {
   /// Time to wait for a response before resending. A request and its response take < 0.5 ms on the
   /// wire at 1 Mbaud; the bridge's latency timer (1 ms) and USB scheduling dominate.
   std::chrono::milliseconds response_timeout{50};
-  int attempts = 4;                    ///< sends per request before giving up
-  std::size_t telemetry_queue = 1024;  ///< telemetry frames kept while nobody polls (oldest dropped)
+  int attempts = 4;  ///< sends per request before giving up
+  std::size_t telemetry_queue =
+      1024;  ///< telemetry frames kept while nobody polls (oldest dropped)
 };
 
 struct BoardClientCounters {
   std::uint64_t requests = 0;
-  std::uint64_t retries = 0;             ///< resends after a timeout or a BAD_CRC / MALFORMED answer
-  std::uint64_t timeouts = 0;            ///< response timeouts (each followed by a retry or a failure)
-  std::uint64_t board_rejected = 0;      ///< BAD_CRC / MALFORMED answers: our request arrived damaged
-  std::uint64_t unexpected_frames = 0;   ///< well-formed frames that answer nothing outstanding
-  std::uint64_t telemetry_dropped = 0;   ///< telemetry dropped because the queue was full
+  std::uint64_t retries = 0;         ///< resends after a timeout or a BAD_CRC / MALFORMED answer
+  std::uint64_t timeouts = 0;        ///< response timeouts (each followed by a retry or a failure)
+  std::uint64_t board_rejected = 0;  ///< BAD_CRC / MALFORMED answers: our request arrived damaged
+  std::uint64_t unexpected_frames = 0;  ///< well-formed frames that answer nothing outstanding
+  std::uint64_t telemetry_dropped = 0;  ///< telemetry dropped because the queue was full
 };
 
 class BoardClient {
@@ -56,10 +57,13 @@ class BoardClient {
   [[nodiscard]] protocol::Window snapshot();
   /// Sets or clears CONTROL.STREAM with a read-modify-write of CONTROL.
   void set_streaming(bool on);
-  /// The next telemetry window, waiting up to timeout (0: only what has already arrived); nullopt on timeout.
+  /// The next telemetry window, waiting up to timeout (0: only what has already arrived); nullopt
+  /// on timeout.
   [[nodiscard]] std::optional<protocol::Window> poll_telemetry(std::chrono::milliseconds timeout);
 
-  [[nodiscard]] const protocol::DecoderCounters& decoder_counters() const { return decoder_.counters(); }
+  [[nodiscard]] const protocol::DecoderCounters& decoder_counters() const {
+    return decoder_.counters();
+  }
   [[nodiscard]] const BoardClientCounters& counters() const { return counters_; }
   [[nodiscard]] Transport& transport() { return transport_; }
 

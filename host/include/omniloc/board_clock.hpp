@@ -7,9 +7,9 @@
 // of (arrival - board) per bucket of board time (1 s), over a sliding span (60 s), and fits a line
 // through those minima robustly (Theil-Sen: the median of the pairwise slopes, then the median
 // intercept), so a burst that spoils a few buckets does not move it. A board reset (board time goes
-// back, or every window for 0.5 s of host time arrives far off the line) starts a new epoch; a reconnect does
-// not (the board's time runs on, and the line with it). Behaviour and figures: docs/DAEMON.md
-// "Board clock". A value type: no threads, no global state.
+// back, or every window for 0.5 s of host time arrives far off the line) starts a new epoch; a
+// reconnect does not (the board's time runs on, and the line with it). Behaviour and figures:
+// docs/DAEMON.md "Board clock". A value type: no threads, no global state.
 #pragma once
 
 #include <cstdint>
@@ -20,16 +20,16 @@
 namespace omniloc {
 
 struct BoardClockConfig {
-  double bucket_ms = 1000.0;       ///< board time per bucket (one minimum each)
-  int span_buckets = 60;           ///< buckets the fit spans (sliding)
-  int min_fit_buckets = 3;         ///< fewer: offset only (drift 0), flagged not converged
-  int converged_buckets = 5;       ///< this many: converged
-  double reset_back_ms = 1.0;      ///< board time going back by more than this: a reset
-  double jump_ms = 100.0;          ///< every arrival this far off the line ...
-  double jump_hold_ms = 500.0;     ///< ... for this long (host time): re-anchor (new epoch). A queue
-                                   ///< of stale windows read at once after a reconnect is far above
-                                   ///< the line too, but arrives within milliseconds
-  double max_drift_ppm = 1000.0;   ///< a fitted drift beyond this is clamped (a crystal is < 100)
+  double bucket_ms = 1000.0;      ///< board time per bucket (one minimum each)
+  int span_buckets = 60;          ///< buckets the fit spans (sliding)
+  int min_fit_buckets = 3;        ///< fewer: offset only (drift 0), flagged not converged
+  int converged_buckets = 5;      ///< this many: converged
+  double reset_back_ms = 1.0;     ///< board time going back by more than this: a reset
+  double jump_ms = 100.0;         ///< every arrival this far off the line ...
+  double jump_hold_ms = 500.0;    ///< ... for this long (host time): re-anchor (new epoch). A queue
+                                  ///< of stale windows read at once after a reconnect is far above
+                                  ///< the line too, but arrives within milliseconds
+  double max_drift_ppm = 1000.0;  ///< a fitted drift beyond this is clamped (a crystal is < 100)
   double min_uncertainty_ms = 0.05;  ///< floor of the stated uncertainty once converged
   /// Throws std::invalid_argument naming the field and the value.
   void validate() const;
@@ -72,7 +72,9 @@ class BoardClockModel {
   };
   void reanchor(double board_ms);
   void refit();
-  [[nodiscard]] double line_d(double board_ms) const { return intercept_ms_ + slope_ * (board_ms - ref_board_ms_); }
+  [[nodiscard]] double line_d(double board_ms) const {
+    return intercept_ms_ + slope_ * (board_ms - ref_board_ms_);
+  }
 
   BoardClockConfig config_;
   std::deque<Bucket> buckets_;  // closed and the open one (last)
@@ -103,7 +105,8 @@ struct BoardTimeMark {
 /// advance disagrees with the host time by more than 100 ms + 0.2 % (the board restarted its
 /// counter while the link was down) or the clock differs (another board). A session's own board
 /// times (BoardSession) start at 0, so the daemon keeps one scale with this.
-[[nodiscard]] std::optional<double> continued_board_ms(const BoardTimeMark& last, std::uint32_t raw_cycles,
-                                                       double clock_hz, double arrival_ms);
+[[nodiscard]] std::optional<double> continued_board_ms(const BoardTimeMark& last,
+                                                       std::uint32_t raw_cycles, double clock_hz,
+                                                       double arrival_ms);
 
 }  // namespace omniloc

@@ -1,8 +1,8 @@
 // One session with the omniloc encoder board over any Transport: identify it (ID and register-map
-// version), configure it for the robot (CONTROL: enable, the robot's quadrature decoding, streaming),
-// learn its clock from PERIOD, and hand out streamed windows with unwrapped timestamps. The daemon,
-// the simulated robot and `omniloc probe` all talk to the board through this one class, so there is
-// one place that knows the order of that conversation.
+// version), configure it for the robot (CONTROL: enable, the robot's quadrature decoding,
+// streaming), learn its clock from PERIOD, and hand out streamed windows with unwrapped timestamps.
+// The daemon, the simulated robot and `omniloc probe` all talk to the board through this one class,
+// so there is one place that knows the order of that conversation.
 #pragma once
 
 #include <chrono>
@@ -30,20 +30,22 @@ class BoardIdentityError : public std::runtime_error {
 /// What the board says about itself, read once at the start of a session.
 struct BoardIdentity {
   std::uint32_t id = 0;
-  std::uint32_t version = 0;  ///< register-map version, regmap::kVersion* fields
-  std::uint32_t control = 0;  ///< CONTROL as found (before the session configured it)
+  std::uint32_t version = 0;        ///< register-map version, regmap::kVersion* fields
+  std::uint32_t control = 0;        ///< CONTROL as found (before the session configured it)
   std::uint32_t period_cycles = 0;  ///< PERIOD: board cycles per window
-  double clock_hz = 0.0;      ///< board clock derived from PERIOD and the robot's window period
-  int channels = regmap::kChannels;  ///< CONFIG.CHANNELS: encoder channels the board counts (3 or 4)
+  double clock_hz = 0.0;  ///< board clock derived from PERIOD and the robot's window period
+  int channels =
+      regmap::kChannels;  ///< CONFIG.CHANNELS: encoder channels the board counts (3 or 4)
 
   [[nodiscard]] std::string version_text() const;  ///< "1.0.0"
 };
 
-/// Reads ID, VERSION, CONFIG, CONTROL and PERIOD; throws BoardIdentityError naming the transport and both
-/// versions when the ID is wrong or the register map is not version_compatible with the host's (a
-/// patch difference, or a minor one from 1.0 on, is accepted: the host checks `version_differs()` to warn),
-/// or when CONFIG.CHANNELS is not 3 or 4.
-[[nodiscard]] BoardIdentity identify_board(BoardClient& client, double window_period_ms, const std::string& where);
+/// Reads ID, VERSION, CONFIG, CONTROL and PERIOD; throws BoardIdentityError naming the transport
+/// and both versions when the ID is wrong or the register map is not version_compatible with the
+/// host's (a patch difference, or a minor one from 1.0 on, is accepted: the host checks
+/// `version_differs()` to warn), or when CONFIG.CHANNELS is not 3 or 4.
+[[nodiscard]] BoardIdentity identify_board(BoardClient& client, double window_period_ms,
+                                           const std::string& where);
 
 /// True if a board of register-map version `board` can serve a host of version `host`: the same
 /// major version and, before 1.0 (where every minor version may change the layout), the same minor.
@@ -52,14 +54,15 @@ struct BoardIdentity {
 /// True if the board's register-map version is not exactly the host's (any field).
 [[nodiscard]] bool version_differs(const BoardIdentity& identity);
 
-/// regmap CONTROL.DECODE value for a decoding multiplier 1, 2 or 4; throws std::invalid_argument otherwise.
+/// regmap CONTROL.DECODE value for a decoding multiplier 1, 2 or 4; throws std::invalid_argument
+/// otherwise.
 [[nodiscard]] std::uint32_t control_decode_for(int decoding);
 
 struct BoardSessionOptions {
-  int decoding = 4;                 ///< the robot's quadrature decoding (robot config)
-  double window_period_ms = 10.0;   ///< the robot's window period, to turn PERIOD into the clock
-  bool configure = true;            ///< write CONTROL (enable, decoding, streaming) at open
-  int wheels = 0;                   ///< the robot's wheel count (wheel_count); 0 = not checked
+  int decoding = 4;                ///< the robot's quadrature decoding (robot config)
+  double window_period_ms = 10.0;  ///< the robot's window period, to turn PERIOD into the clock
+  bool configure = true;           ///< write CONTROL (enable, decoding, streaming) at open
+  int wheels = 0;                  ///< the robot's wheel count (wheel_count); 0 = not checked
   BoardClientOptions client;
 };
 

@@ -45,7 +45,7 @@ struct CalibrationFrame {
 /// meets the floor at H r / z(r)), whose pole is the horizon that a hyperbolic or spherical mirror
 /// approaches as its floor distance climbs steeply towards the rim.
 struct RadialModel {
-  double scale_px = 1.0;                       ///< r is normalised by it (the view radius)
+  double scale_px = 1.0;                        ///< r is normalised by it (the view radius)
   std::array<double, 4> a{0.0, 0.0, 0.0, 0.0};  ///< numerator a1..a4 (cm)
   std::array<double, 3> e{0.0, 0.0, 0.0};       ///< denominator e2..e4 (dimensionless)
   [[nodiscard]] bool rational() const { return e != std::array<double, 3>{0.0, 0.0, 0.0}; }
@@ -69,11 +69,12 @@ struct RimCircle {
 struct FrameAnalysis {
   RimCircle rim;
   CarpetColour carpet;
-  cv::Mat carpet_mask;             // CV_8U, 255 = carpet colour
-  cv::Mat line_mask;               // CV_8U, 255 = line pixel
-  double body_radius_px = 0.0;     // inside: the robot itself
-  double view_radius_px = 0.0;     // carpet seen all round up to here (10th percentile of the carpet's end)
-  std::vector<MastSector> masts_image;  // sectors in *image* angle (deg, about the rim centre)
+  cv::Mat carpet_mask;          // CV_8U, 255 = carpet colour
+  cv::Mat line_mask;            // CV_8U, 255 = line pixel
+  double body_radius_px = 0.0;  // inside: the robot itself
+  double view_radius_px =
+      0.0;  // carpet seen all round up to here (10th percentile of the carpet's end)
+  std::vector<MastSector> masts_image;       // sectors in *image* angle (deg, about the rim centre)
   std::vector<Eigen::Vector2d> line_pixels;  // used for the fit (inside the ring, outside masts)
 };
 
@@ -85,7 +86,7 @@ struct HsvClass {
 
 /// The largest region of one goal colour in a frame.
 struct GoalRegion {
-  HsvClass colour;             // measured from the region's own pixels
+  HsvClass colour;  // measured from the region's own pixels
   Eigen::Vector2d centroid_px{0.0, 0.0};
   int pixels = 0;
   cv::Mat mask;  // CV_8U, 255 = the region's pixels (for checks against hand-drawn goals)
@@ -111,10 +112,10 @@ struct GoalColourOptions {
 
 struct FrameFit {
   double image_angle_of_field_x_deg = 0.0;  // alpha: image angle = field angle + alpha
-  double yaw_deg = 0.0;                     // robot heading used (given, or found with yaw_offset 0)
+  double yaw_deg = 0.0;  // robot heading used (given, or found with yaw_offset 0)
   bool yaw_given = false;
-  double twin_yaw_deg = 0.0;                // best distinct heading (>= 30 deg away) and its score
-  double score = 0.0, twin_score = 0.0;     // coarse truncated mean residual (px)
+  double twin_yaw_deg = 0.0;             // best distinct heading (>= 30 deg away) and its score
+  double score = 0.0, twin_score = 0.0;  // coarse truncated mean residual (px)
   int line_pixels = 0, inliers = 0;
   double rms_px = 0.0, rms_cm = 0.0, median_px = 0.0;
   // Self-check: of the field's line points the camera puts on the frame's carpet (`recall_points`),
@@ -133,7 +134,7 @@ struct CalibrationResult {
   // polynomial is extrapolated outside (towards the body when no line crosses there).
   double measured_min_px = 0.0, measured_max_px = 0.0;
   bool mirrored_ambiguous = false;  // the other handedness fits as well (symmetric view)
-  std::string handedness_from;      // what decided it: "given (--mirrored)" or "the lines: <frame> ..."
+  std::string handedness_from;  // what decided it: "given (--mirrored)" or "the lines: <frame> ..."
   // Every frame was taken within the ambiguity separation (50 cm) of the centre of the
   // point-symmetric field: the yaw offset 180 deg away fits as well, so the offset is known only up
   // to 180 deg, and so is which goal is where (no goal_colour_at_x_max is written).
@@ -149,15 +150,16 @@ struct CalibrationResult {
   GoalColour goal_colour_at_x_max = GoalColour::kUnknown;
 };
 
-
-
-/// What a team can tell the analysis when a step fails on its frames (`omniloc calibrate --carpet-at`).
+/// What a team can tell the analysis when a step fails on its frames (`omniloc calibrate
+/// --carpet-at`).
 struct AnalysisHints {
-  std::optional<Eigen::Vector2d> carpet_at_px;  ///< a pixel that is carpet: its colour cluster is the carpet
+  std::optional<Eigen::Vector2d>
+      carpet_at_px;  ///< a pixel that is carpet: its colour cluster is the carpet
   /// The mirror's disc (`--center` with `--rim-radius`): replaces the rim search.
   std::optional<Eigen::Vector2d> centre_px;
   std::optional<double> rim_radius_px;
-  std::optional<bool> mirrored;  ///< the handedness (`--mirrored yes|no`) when the lines do not tell it
+  std::optional<bool>
+      mirrored;  ///< the handedness (`--mirrored yes|no`) when the lines do not tell it
 };
 
 /// Receives one step's picture (`omniloc calibrate --debug-dir`; docs/CALIBRATION.md, "Step
@@ -166,7 +168,8 @@ struct AnalysisHints {
 /// ends and, for a step that refuses after measuring (polar statistics), just before the refusal
 /// is thrown: a failed run has the pictures of the steps it reached, which is when a team needs
 /// them. The library writes no file: the caller decides where pictures go.
-using StepPictureSink = std::function<void(const std::string& frame_name, const std::string& step, const cv::Mat& picture)>;
+using StepPictureSink = std::function<void(const std::string& frame_name, const std::string& step,
+                                           const cv::Mat& picture)>;
 
 struct CalibrationOptions {
   std::function<void(const std::string&)> progress;  // stage messages for a long run
@@ -176,9 +179,10 @@ struct CalibrationOptions {
 };
 
 /// The goal colours of one analysed frame: pixels inside the rim and outside the body that are
-/// not carpet (nor of the carpet's hue within twice its half width) and lie in a colour name's band, opened 3 x 3, largest connected region; its colour
-/// class from the region's pixels (median hue, 3 robust sigmas at least 4 units; S and V from the
-/// 5th percentile less a fifth). A pure function of the image and its analysis.
+/// not carpet (nor of the carpet's hue within twice its half width) and lie in a colour name's
+/// band, opened 3 x 3, largest connected region; its colour class from the region's pixels (median
+/// hue, 3 robust sigmas at least 4 units; S and V from the 5th percentile less a fifth). A pure
+/// function of the image and its analysis.
 [[nodiscard]] GoalColours measure_goal_colours(const cv::Mat& bgr, const FrameAnalysis& analysis,
                                                const GoalColourOptions& options = {});
 
@@ -195,12 +199,14 @@ struct CalibrationOptions {
 /// Rim, carpet colour, line pixels, body, masts, view radius of one frame. Throws when the frame
 /// shows no carpet or no lines.
 /// Pictures 1-4 (disc, carpet, lines, polar) go to `pictures` when given.
-[[nodiscard]] FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& context, const AnalysisHints& hints = {},
+[[nodiscard]] FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& context,
+                                          const AnalysisHints& hints = {},
                                           const StepPictureSink& pictures = {});
 
 /// The whole calibration (all frames share one camera). Throws std::runtime_error with the frame's
 /// name and the reason when nothing fits.
-[[nodiscard]] CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, const FieldGeometry& field,
+[[nodiscard]] CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames,
+                                                 const FieldGeometry& field,
                                                  const CalibrationOptions& options = {});
 
 /// The camera file (today's keys, a "calibration" block the reader ignores, and the "vision" colour
@@ -211,8 +217,9 @@ struct CalibrationOptions {
 
 /// The frame with the detected line pixels, the field model projected at the fitted pose, the
 /// rim, body and view circles and the masts.
-[[nodiscard]] cv::Mat calibration_overlay(const CalibrationFrame& frame, const FrameAnalysis& analysis,
-                                          const FrameFit& fit, const CalibrationResult& result,
+[[nodiscard]] cv::Mat calibration_overlay(const CalibrationFrame& frame,
+                                          const FrameAnalysis& analysis, const FrameFit& fit,
+                                          const CalibrationResult& result,
                                           const FieldGeometry& field);
 
 }  // namespace omniloc

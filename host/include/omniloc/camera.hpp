@@ -56,7 +56,8 @@ struct CameraModel {
   [[nodiscard]] double view_radius_px() const;
   /// Pixels between a ray's samples: 1 while the view fits in kMaxScanSample px, else the view
   /// divided into kMaxScanSample samples, so that a camera of any size scans its whole view (a
-  /// 1280 x 1024 one as if its image were halved: the feature's resolution, not its reach, is capped).
+  /// 1280 x 1024 one as if its image were halved: the feature's resolution, not its reach, is
+  /// capped).
   [[nodiscard]] double scan_step_px() const;
   /// The first and last sample index of a ray (ceil(min_radius / step), floor(view / step)).
   [[nodiscard]] int first_scan_sample() const;
@@ -68,19 +69,24 @@ struct CameraModel {
   /// Pixel radius of a ground distance (inverse of the table); NaN outside the table.
   [[nodiscard]] double radius_px_at_ground(double ground_cm) const;
   /// Image pixel of a floor point given in the robot frame (cm); nullopt if it is out of the table.
-  [[nodiscard]] std::optional<Eigen::Vector2d> pixel_of_robot_point(const Eigen::Vector2d& p_robot_cm) const;
+  [[nodiscard]] std::optional<Eigen::Vector2d> pixel_of_robot_point(
+      const Eigen::Vector2d& p_robot_cm) const;
   /// Floor point (robot frame, cm) seen at pixel (u, v); nullopt outside the calibrated ring.
-  [[nodiscard]] std::optional<Eigen::Vector2d> robot_point_of_pixel(const Eigen::Vector2d& px) const;
+  [[nodiscard]] std::optional<Eigen::Vector2d> robot_point_of_pixel(
+      const Eigen::Vector2d& px) const;
   /// Image angle (deg) of a robot-frame bearing, and back.
-  [[nodiscard]] double image_angle_deg(double bearing_deg) const { return bearing_deg + yaw_offset_deg; }
+  [[nodiscard]] double image_angle_deg(double bearing_deg) const {
+    return bearing_deg + yaw_offset_deg;
+  }
   /// True when the bearing (robot frame, deg) lies in a mast sector.
   [[nodiscard]] bool bearing_hidden(double bearing_deg) const;
   /// Hash of everything that changes where the floor appears (for database headers).
   [[nodiscard]] std::uint64_t fingerprint() const;
 
   /// Throws ConfigError "<at>.<field>: <why> (got <value>)": size not in 1..16384, centre outside
-  /// the image, fewer than two table rows, a bad "vision" block, a table not strictly increasing in both columns or with
-  /// negative values, a mast half width outside [0, 90), no visible floor ring.
+  /// the image, fewer than two table rows, a bad "vision" block, a table not strictly increasing in
+  /// both columns or with negative values, a mast half width outside [0, 90), no visible floor
+  /// ring.
   void validate(const config::Origin& at) const;
   bool operator==(const CameraModel&) const = default;
 };

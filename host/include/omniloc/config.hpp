@@ -31,7 +31,8 @@ struct Key;
 /// Where a value came from: a source (a file, "command line") and a field path inside it.
 class Origin {
  public:
-  Origin(std::string source, std::string path = {}) : source_(std::move(source)), path_(std::move(path)) {}
+  Origin(std::string source, std::string path = {})
+      : source_(std::move(source)), path_(std::move(path)) {}
   Origin(const char* source) : source_(source) {}
 
   /// The member `key` of this object ("a" / "b" -> "a.b").
@@ -70,7 +71,8 @@ void require(bool ok, const Origin& at, std::string_view why, std::string_view g
 /// up in $OMNILOC_DATA_DIR, then in `common/` of the current directory and its parents, then of the
 /// executable's directory and its parents. Throws ConfigError naming the places searched when
 /// nothing matches, or saying so when the path is a directory.
-[[nodiscard]] std::filesystem::path resolve_data_file(const std::string& kind, const std::string& name_or_path);
+[[nodiscard]] std::filesystem::path resolve_data_file(const std::string& kind,
+                                                      const std::string& name_or_path);
 
 }  // namespace config
 

@@ -102,14 +102,14 @@ struct Codec<double> {
 };
 
 template <class I>
-  requires(std::is_integral_v<I> && !std::is_same_v<I, bool>)
-struct Codec<I> {
+requires(std::is_integral_v<I> && !std::is_same_v<I, bool>) struct Codec<I> {
   static constexpr Kind kKind = Kind::kNumber;
   static I read(const Node& n) {
     if constexpr (std::is_unsigned_v<I> && sizeof(I) == 8) {
       return n.unsigned_integer();
     } else {
-      return static_cast<I>(n.integer(std::numeric_limits<I>::min(), static_cast<std::int64_t>(std::numeric_limits<I>::max())));
+      return static_cast<I>(n.integer(std::numeric_limits<I>::min(),
+                                      static_cast<std::int64_t>(std::numeric_limits<I>::max())));
     }
   }
   static Json write(I v) { return v; }
@@ -216,30 +216,42 @@ using KeyTable = std::vector<Key<T>>;
 /// A key read into `member` with its type's Codec.
 template <class T, class M>
 Key<T> key(std::string name, M T::*member, Need need = Need::kOptional, std::string help = {}) {
-  return Key<T>{std::move(name), need, Codec<M>::kKind,
-                [member](const Node& n, T& out) { out.*member = Codec<M>::read(n); },
-                [member](const T& in) -> std::optional<Json> { return Codec<M>::write(in.*member); },
-                std::move(help)};
+  return Key<T>{
+      std::move(name),
+      need,
+      Codec<M>::kKind,
+      [member](const Node& n, T& out) { out.*member = Codec<M>::read(n); },
+      [member](const T& in) -> std::optional<Json> { return Codec<M>::write(in.*member); },
+      std::move(help)};
 }
 
 /// An integer key with its own range [lo, hi]: a value outside it (also one beyond the member's
 /// type) is refused as "out of range: must be in [lo, hi]", not with the type's limits.
 template <class T, class M>
-  requires(std::is_integral_v<M> && !std::is_same_v<M, bool>)
-Key<T> ranged(std::string name, M T::*member, std::int64_t lo, std::int64_t hi, Need need = Need::kOptional,
-              std::string help = {}) {
-  return Key<T>{std::move(name), need, Kind::kNumber,
-                [member, lo, hi](const Node& n, T& out) { out.*member = static_cast<M>(n.integer(lo, hi)); },
-                [member](const T& in) -> std::optional<Json> { return Codec<M>::write(in.*member); },
-                std::move(help)};
+requires(std::is_integral_v<M> &&
+         !std::is_same_v<M, bool>) Key<T> ranged(std::string name, M T::*member, std::int64_t lo,
+                                                 std::int64_t hi, Need need = Need::kOptional,
+                                                 std::string help = {}) {
+  return Key<T>{
+      std::move(name),
+      need,
+      Kind::kNumber,
+      [member, lo, hi](const Node& n, T& out) { out.*member = static_cast<M>(n.integer(lo, hi)); },
+      [member](const T& in) -> std::optional<Json> { return Codec<M>::write(in.*member); },
+      std::move(help)};
 }
 
 /// A key whose value is one of a few names (an enum member, or a restricted string).
 template <class T, class M>
-Key<T> choice(std::string name, M T::*member, Choices<M> choices, Need need = Need::kOptional, std::string help = {}) {
-  return Key<T>{std::move(name), need, Kind::kText,
+Key<T> choice(std::string name, M T::*member, Choices<M> choices, Need need = Need::kOptional,
+              std::string help = {}) {
+  return Key<T>{std::move(name),
+                need,
+                Kind::kText,
                 [member, choices](const Node& n, T& out) { out.*member = read_choice(n, choices); },
-                [member, choices](const T& in) -> std::optional<Json> { return choice_name(in.*member, choices); },
+                [member, choices](const T& in) -> std::optional<Json> {
+                  return choice_name(in.*member, choices);
+                },
                 std::move(help)};
 }
 
@@ -247,23 +259,36 @@ Key<T> choice(std::string name, M T::*member, Choices<M> choices, Need need = Ne
 template <class T>
 Key<T> custom(std::string name, Need need, std::function<void(const Node&, T&)> read,
               std::function<Json(const T&)> write) {
-  return Key<T>{std::move(name), need, Kind::kOther, std::move(read),
-                [write = std::move(write)](const T& in) -> std::optional<Json> { return write(in); }, {}};
+  return Key<T>{
+      std::move(name),
+      need,
+      Kind::kOther,
+      std::move(read),
+      [write = std::move(write)](const T& in) -> std::optional<Json> { return write(in); },
+      {}};
 }
 
 /// A free-text note for people reading the file ("description"): must be a string, is not kept.
 template <class T>
 Key<T> note(std::string name) {
-  return Key<T>{std::move(name), Need::kOptional, Kind::kText, [](const Node& n, T&) { (void)n.text(); },
-                [](const T&) -> std::optional<Json> { return std::nullopt; }, {}};
+  return Key<T>{std::move(name),
+                Need::kOptional,
+                Kind::kText,
+                [](const Node& n, T&) { (void)n.text(); },
+                [](const T&) -> std::optional<Json> { return std::nullopt; },
+                {}};
 }
 
 /// An optional object kept for the record and not read into the struct (e.g. how a camera file was
 /// made: `omniloc calibrate`'s fit report). It must be an object; what is inside is not checked.
 template <class T>
 Key<T> record(std::string name) {
-  return Key<T>{std::move(name), Need::kOptional, Kind::kOther, [](const Node& n, T&) { n.expect_object(); },
-                [](const T&) -> std::optional<Json> { return std::nullopt; }, {}};
+  return Key<T>{std::move(name),
+                Need::kOptional,
+                Kind::kOther,
+                [](const Node& n, T&) { n.expect_object(); },
+                [](const T&) -> std::optional<Json> { return std::nullopt; },
+                {}};
 }
 
 template <class T>
@@ -287,7 +312,8 @@ template <class T>
 void read_keys(const Node& object, const KeyTable<T>& table, T& out) {
   object.expect_object();
   for (auto it = object.json().begin(); it != object.json().end(); ++it) {
-    if (!find_key(table, it.key())) (object / it.key()).fail("unknown key (known keys: " + key_names(table) + ")");
+    if (!find_key(table, it.key()))
+      (object / it.key()).fail("unknown key (known keys: " + key_names(table) + ")");
   }
   for (const auto& k : table) {
     if (object.has(k.name))
@@ -312,16 +338,24 @@ Json write_keys(const T& in, const KeyTable<T>& table, Need which = Need::kOptio
 /// "mask" {body_radius_px, masts}).
 template <class T>
 Key<T> group(std::string name, KeyTable<T> sub, Need need = Need::kOptional) {
-  return Key<T>{std::move(name), need, Kind::kOther, [sub](const Node& n, T& out) { read_keys(n, sub, out); },
-                [sub](const T& in) -> std::optional<Json> { return write_keys(in, sub); }, {}};
+  return Key<T>{std::move(name),
+                need,
+                Kind::kOther,
+                [sub](const Node& n, T& out) { read_keys(n, sub, out); },
+                [sub](const T& in) -> std::optional<Json> { return write_keys(in, sub); },
+                {}};
 }
 
 /// A key holding a nested struct S with its own table.
 template <class T, class S>
 Key<T> nested(std::string name, S T::*member, KeyTable<S> sub, Need need = Need::kOptional) {
-  return Key<T>{std::move(name), need, Kind::kOther,
-                [member, sub](const Node& n, T& out) { read_keys(n, sub, out.*member); },
-                [member, sub](const T& in) -> std::optional<Json> { return write_keys(in.*member, sub); }, {}};
+  return Key<T>{
+      std::move(name),
+      need,
+      Kind::kOther,
+      [member, sub](const Node& n, T& out) { read_keys(n, sub, out.*member); },
+      [member, sub](const T& in) -> std::optional<Json> { return write_keys(in.*member, sub); },
+      {}};
 }
 
 /// A Codec for a struct described by a table (an array element such as a camera's mast sector).

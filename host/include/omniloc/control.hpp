@@ -52,7 +52,8 @@ struct Request {
 /// a readable one. what() is the text of the error reply.
 class ControlError : public std::runtime_error {
  public:
-  ControlError(std::optional<std::int64_t> id, const std::string& what) : std::runtime_error(what), id_(id) {}
+  ControlError(std::optional<std::int64_t> id, const std::string& what)
+      : std::runtime_error(what), id_(id) {}
   [[nodiscard]] std::optional<std::int64_t> id() const { return id_; }
 
  private:
@@ -68,7 +69,8 @@ class ControlError : public std::runtime_error {
 [[nodiscard]] std::string_view command_name(const Command& command);
 
 /// {"id": id, "ok": true, <fields>} on one line (fields must be an object; may be empty).
-[[nodiscard]] std::string ok_reply(std::optional<std::int64_t> id, const nlohmann::json& fields = nlohmann::json::object());
+[[nodiscard]] std::string ok_reply(std::optional<std::int64_t> id,
+                                   const nlohmann::json& fields = nlohmann::json::object());
 /// {"id": id, "ok": false, "error": error} on one line.
 [[nodiscard]] std::string error_reply(std::optional<std::int64_t> id, std::string_view error);
 
@@ -83,8 +85,8 @@ class ControlSocket {
 
   struct Datagram {
     std::string text;
-    std::size_t size = 0;    ///< the datagram's real size
-    bool truncated = false;  ///< longer than kMaxRequestBytes (the text is cut there)
+    std::size_t size = 0;         ///< the datagram's real size
+    bool truncated = false;       ///< longer than kMaxRequestBytes (the text is cut there)
     unsigned char from[16] = {};  ///< sockaddr_in of the sender, for the reply
   };
   /// The next waiting datagram, or nullopt at once when there is none.

@@ -12,8 +12,12 @@ namespace omniloc {
 
 inline constexpr double kPi = 3.14159265358979323846;
 
-[[nodiscard]] constexpr double deg_to_rad(double deg) { return deg * kPi / 180.0; }
-[[nodiscard]] constexpr double rad_to_deg(double rad) { return rad * 180.0 / kPi; }
+[[nodiscard]] constexpr double deg_to_rad(double deg) {
+  return deg * kPi / 180.0;
+}
+[[nodiscard]] constexpr double rad_to_deg(double rad) {
+  return rad * 180.0 / kPi;
+}
 
 /// Wraps an angle into (-180, 180] degrees.
 [[nodiscard]] double wrap_deg(double angle_deg);
@@ -45,7 +49,9 @@ struct Pose2 {
 };
 
 /// a * b (see Pose2::operator*).
-[[nodiscard]] inline Pose2 compose(const Pose2& a, const Pose2& b) { return a * b; }
+[[nodiscard]] inline Pose2 compose(const Pose2& a, const Pose2& b) {
+  return a * b;
+}
 
 /// The pose a fraction f of the way from a to b: the position linearly, the yaw along the shorter
 /// arc (from 170 to -170 through 180, not through 0). f = 0 gives a, f = 1 gives b (yaw wrapped).

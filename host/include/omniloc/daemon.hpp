@@ -1,9 +1,10 @@
 // The core of the robot daemon `omnilocd`, free of processes and signals so that tests drive it
 // in-process: it opens the board through a factory (USB on the robot; the simulated robot in sim/
-// passes its Verilated board), talks to it through one BoardSession, streams encoder windows into the Localizer together with camera frames, publishes
-// one pose per window over UDP, records the session (REC_DIR contract, recording.hpp), prints a
-// status line once a second, and keeps going when the board is unplugged (reconnect loop) or the
-// camera stops (odometry only, flagged). Behaviour and formats: docs/DAEMON.md.
+// passes its Verilated board), talks to it through one BoardSession, streams encoder windows into
+// the Localizer together with camera frames, publishes one pose per window over UDP, records the
+// session (REC_DIR contract, recording.hpp), prints a status line once a second, and keeps going
+// when the board is unplugged (reconnect loop) or the camera stops (odometry only, flagged).
+// Behaviour and formats: docs/DAEMON.md.
 #pragma once
 
 #include <csignal>
@@ -95,14 +96,14 @@ struct DaemonModels {
 /// Loads field, camera, robot and localizer configs and loads or builds the database, as the
 /// config says (a `database` path that does not exist yet is built and saved there). `progress`
 /// receives human-readable lines.
-[[nodiscard]] DaemonModels load_models(const DaemonConfig& config,
-                                       const std::function<void(const std::string&)>& progress = {});
+[[nodiscard]] DaemonModels load_models(
+    const DaemonConfig& config, const std::function<void(const std::string&)>& progress = {});
 
 /// What happened in one window, for observers (tests, the demo, the simulated robot's truth log).
 struct PoseEvent {
-  PoseMessage message;              ///< as published
-  LocalizedPose localized;          ///< the localizer's full answer (source kNone while degraded)
-  bool from_window = true;          ///< false: a degraded pose published while the board is gone
+  PoseMessage message;      ///< as published
+  LocalizedPose localized;  ///< the localizer's full answer (source kNone while degraded)
+  bool from_window = true;  ///< false: a degraded pose published while the board is gone
 };
 
 /// Watches the daemon without steering it: each callback is optional and runs on the daemon's
@@ -111,22 +112,22 @@ struct DaemonObserver {
   std::function<void(const EncoderWindow&)> on_window;  ///< every window, with its heading
   std::function<void(const CameraFrame&)> on_frame;     ///< every frame given to the localizer
   std::function<void(const PoseEvent&)> on_pose;        ///< every datagram published
-  std::function<void(double now_ms)> on_loop;           ///< every turn of the main loop (board or not)
-  std::function<void(const std::string&)> on_status;    ///< every status line, as logged
+  std::function<void(double now_ms)> on_loop;  ///< every turn of the main loop (board or not)
+  std::function<void(const std::string&)> on_status;  ///< every status line, as logged
 };
 
 struct DaemonReport {
-  std::uint64_t windows = 0;         ///< encoder windows given to the localizer
-  std::uint64_t frames = 0;          ///< camera frames given to the localizer
-  std::uint64_t published = 0;       ///< datagrams sent
+  std::uint64_t windows = 0;    ///< encoder windows given to the localizer
+  std::uint64_t frames = 0;     ///< camera frames given to the localizer
+  std::uint64_t published = 0;  ///< datagrams sent
   std::uint64_t send_failed = 0;
-  std::uint64_t board_losses = 0;    ///< times the board went away
-  std::uint64_t reconnects = 0;      ///< times it came back
-  std::uint64_t camera_losses = 0;   ///< times the camera stopped delivering
-  std::uint64_t bad_crc = 0;         ///< frames from the board with a bad CRC (all sessions)
-  std::uint64_t telemetry_gaps = 0;  ///< gaps in the telemetry sequence (all sessions)
-  double run_ms = 0.0;               ///< daemon time from start to stop
-  std::string stop_reason;           ///< "signal", "duration"
+  std::uint64_t board_losses = 0;        ///< times the board went away
+  std::uint64_t reconnects = 0;          ///< times it came back
+  std::uint64_t camera_losses = 0;       ///< times the camera stopped delivering
+  std::uint64_t bad_crc = 0;             ///< frames from the board with a bad CRC (all sessions)
+  std::uint64_t telemetry_gaps = 0;      ///< gaps in the telemetry sequence (all sessions)
+  double run_ms = 0.0;                   ///< daemon time from start to stop
+  std::string stop_reason;               ///< "signal", "duration"
   std::uint64_t recording_failures = 0;  ///< write errors (each stops the recording; poses go on)
   std::string recording_error;           ///< the last one, naming the file and the reason
   LocalizerStats localizer;
@@ -137,12 +138,12 @@ struct DaemonReport {
 
 /// Everything the daemon talks to.
 struct DaemonIo {
-  DaemonClock* clock = nullptr;        ///< required
-  TransportFactory open_board;         ///< required
-  FrameSource* camera = nullptr;       ///< null: no camera (odometry only)
-  HeadingSource* heading = nullptr;    ///< required (GyroHeading: the board's gyro, else the wheels)
-  DaemonObserver observer;             ///< optional
-  Logger logger;                       ///< status lines and events (default: info and above to stderr)
+  DaemonClock* clock = nullptr;      ///< required
+  TransportFactory open_board;       ///< required
+  FrameSource* camera = nullptr;     ///< null: no camera (odometry only)
+  HeadingSource* heading = nullptr;  ///< required (GyroHeading: the board's gyro, else the wheels)
+  DaemonObserver observer;           ///< optional
+  Logger logger;  ///< status lines and events (default: info and above to stderr)
 };
 
 class Daemon {

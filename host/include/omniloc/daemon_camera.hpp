@@ -20,9 +20,9 @@ namespace omniloc::daemon {
 
 class OpenCvCamera final : public FrameSource {
  public:
-  /// `spec`: all digits -> V4L2 device index; otherwise a device path or video file. `clock` must be
-  /// safe to read from another thread (SteadyClock is). Throws std::runtime_error naming `spec` when
-  /// it cannot be opened.
+  /// `spec`: all digits -> V4L2 device index; otherwise a device path or video file. `clock` must
+  /// be safe to read from another thread (SteadyClock is). Throws std::runtime_error naming `spec`
+  /// when it cannot be opened.
   OpenCvCamera(const std::string& spec, double fps, DaemonClock& clock);
   ~OpenCvCamera() override;
   OpenCvCamera(const OpenCvCamera&) = delete;

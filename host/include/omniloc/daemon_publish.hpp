@@ -11,39 +11,42 @@ namespace omniloc::daemon {
 
 /// The daemon's health, most severe last.
 enum class DaemonStatus {
-  kStarting,     ///< no pose yet (before the first global search succeeded)
-  kOk,           ///< board and camera delivering, pose from the localizer
-  kOdometryOnly, ///< the camera stopped delivering: the pose is dead reckoning, flagged
-  kLost,         ///< the localizer does not know where it is (searching globally)
-  kDegraded,     ///< the board is gone (unplugged): pose frozen at the last estimate, reconnecting
-  kNoBoard,      ///< no board since start-up: no pose at all (zeros, source none), trying to connect
+  kStarting,      ///< no pose yet (before the first global search succeeded)
+  kOk,            ///< board and camera delivering, pose from the localizer
+  kOdometryOnly,  ///< the camera stopped delivering: the pose is dead reckoning, flagged
+  kLost,          ///< the localizer does not know where it is (searching globally)
+  kDegraded,      ///< the board is gone (unplugged): pose frozen at the last estimate, reconnecting
+  kNoBoard,  ///< no board since start-up: no pose at all (zeros, source none), trying to connect
 };
 
 [[nodiscard]] std::string_view to_string(DaemonStatus status);
 
 /// One published pose.
 struct PoseMessage {
-  std::uint64_t seq = 0;       ///< datagram counter (gaps at the receiver = lost datagrams)
-  double t_ms = 0.0;           ///< daemon time of the pose (board time of the encoder window)
-  std::optional<double> t_uncertainty_ms;  ///< 1-sigma of t_ms from the board-clock fit; none: no board window (key omitted)
+  std::uint64_t seq = 0;  ///< datagram counter (gaps at the receiver = lost datagrams)
+  double t_ms = 0.0;      ///< daemon time of the pose (board time of the encoder window)
+  std::optional<double> t_uncertainty_ms;  ///< 1-sigma of t_ms from the board-clock fit; none: no
+                                           ///< board window (key omitted)
   double x_cm = 0.0;
   double y_cm = 0.0;
   double yaw_deg = 0.0;
-  std::string source;          ///< the localizer's source of this pose ("image", "odometry", ...)
-  double match_error = -1.0;   ///< normalised match error of the last image result used; < 0: none (key omitted)
-  double search_range_cm = -1; ///< search range of that image result; < 0: none (key omitted)
-  double uncertainty_cm = 0.0; ///< 1-sigma position uncertainty
+  std::string source;  ///< the localizer's source of this pose ("image", "odometry", ...)
+  double match_error =
+      -1.0;  ///< normalised match error of the last image result used; < 0: none (key omitted)
+  double search_range_cm = -1;  ///< search range of that image result; < 0: none (key omitted)
+  double uncertainty_cm = 0.0;  ///< 1-sigma position uncertainty
   double uncertainty_yaw_deg = 0.0;
-  double vx_cm_s = 0.0;        ///< robot-frame velocity (+x forward, +y left) from the odometry
+  double vx_cm_s = 0.0;  ///< robot-frame velocity (+x forward, +y left) from the odometry
   double vy_cm_s = 0.0;
-  double omega_deg_s = 0.0;    ///< yaw rate, counter-clockwise positive
-  double mono_ms = 0.0;        ///< CLOCK_MONOTONIC (steady_clock) of the host when sent, ms
-  double wall_ms = 0.0;        ///< the host's wall clock (Unix time) when sent, ms
+  double omega_deg_s = 0.0;  ///< yaw rate, counter-clockwise positive
+  double mono_ms = 0.0;      ///< CLOCK_MONOTONIC (steady_clock) of the host when sent, ms
+  double wall_ms = 0.0;      ///< the host's wall clock (Unix time) when sent, ms
   DaemonStatus status = DaemonStatus::kStarting;
 };
 
-/// The datagram: a single-line JSON object, keys in the order of PoseMessage. Optional values that are
-/// "none" are left out; a non-finite number (never expected) is written as null (JSON has no NaN).
+/// The datagram: a single-line JSON object, keys in the order of PoseMessage. Optional values that
+/// are "none" are left out; a non-finite number (never expected) is written as null (JSON has no
+/// NaN).
 [[nodiscard]] std::string pose_json(const PoseMessage& message);
 
 /// Sends datagrams to one IPv4 address and port. Sending never blocks the daemon: a full socket
@@ -67,7 +70,8 @@ class UdpPublisher {
   std::uint64_t sent_ = 0;
   std::uint64_t failed_ = 0;
   std::string last_error_;
-  unsigned char addr_[16] = {};  // sockaddr_in, kept opaque to keep <netinet/in.h> out of the header
+  unsigned char addr_[16] =
+      {};  // sockaddr_in, kept opaque to keep <netinet/in.h> out of the header
 };
 
 /// Everything the once-a-second status line shows.
@@ -79,18 +83,19 @@ struct StatusSnapshot {
   double match_error = -1.0;
   double uncertainty_cm = 0.0;
   double gyro_drift_deg_per_s = 0.0;  ///< drift correction the localizer learnt from the images
-  double windows_per_s = 0.0;   ///< encoder windows received over the last period
-  double frames_per_s = 0.0;    ///< camera frames used over the last period
+  double windows_per_s = 0.0;         ///< encoder windows received over the last period
+  double frames_per_s = 0.0;          ///< camera frames used over the last period
   std::uint64_t published = 0;
   std::uint64_t send_failed = 0;
   std::string send_error;  ///< why the last failed send failed (shown when sends fail)
   std::uint64_t reconnects = 0;
-  std::string recording;                 ///< "" (none), "on" or "stopped" (a write failed: disk full...)
+  std::string recording;  ///< "" (none), "on" or "stopped" (a write failed: disk full...)
   std::uint64_t recording_failures = 0;  ///< write errors that stopped the recording
 };
 
 /// One line, no newline, e.g.
-/// "t=12.0s ok pose=(375.2,275.1,90.0) src=integrated err=3.1 sigma=1.2cm drift=+0.004deg/s win=100/s cam=60/s sent=1200".
+/// "t=12.0s ok pose=(375.2,275.1,90.0) src=integrated err=3.1 sigma=1.2cm drift=+0.004deg/s
+/// win=100/s cam=60/s sent=1200".
 [[nodiscard]] std::string status_line(const StatusSnapshot& s);
 
 }  // namespace omniloc::daemon

@@ -1,8 +1,9 @@
 // Feature database: for every point of a grid over the field and its border, the expected scan
-// (360 rays x 4 crossings, uint8 sample indices, field frame) by ray casting the field model through the camera's
-// radius table. Stored as a versioned binary file whose header carries the grid and the field and
-// camera fingerprints, and a checksum; loading refuses a file that is truncated, corrupt, or was
-// built for another field or camera. Databases are generated (`omniloc builddb`), never committed.
+// (360 rays x 4 crossings, uint8 sample indices, field frame) by ray casting the field model
+// through the camera's radius table. Stored as a versioned binary file whose header carries the
+// grid and the field and camera fingerprints, and a checksum; loading refuses a file that is
+// truncated, corrupt, or was built for another field or camera. Databases are generated (`omniloc
+// builddb`), never committed.
 #pragma once
 
 #include <cstddef>
@@ -28,7 +29,9 @@ struct GridSpec {
   int ny = 55;
 
   [[nodiscard]] int cells() const { return nx * ny; }
-  [[nodiscard]] Eigen::Vector2d position(int i, int j) const { return {x0_cm + i * step_cm, y0_cm + j * step_cm}; }
+  [[nodiscard]] Eigen::Vector2d position(int i, int j) const {
+    return {x0_cm + i * step_cm, y0_cm + j * step_cm};
+  }
   [[nodiscard]] Eigen::Vector2d position(int cell) const { return position(cell % nx, cell / nx); }
   /// Cell centres over the whole carpet: step/2, 3 step/2, ... (75 x 55 for FIRA at 10 cm).
   [[nodiscard]] static GridSpec covering(const FieldGeometry& field, double step_cm);
@@ -38,7 +41,7 @@ struct FeatureDb {
   GridSpec grid;
   std::uint64_t field_fingerprint = 0;
   std::uint64_t camera_fingerprint = 0;
-  double radius_step_px = 1.0;  // the features' radius unit (CameraModel::scan_step_px)
+  double radius_step_px = 1.0;         // the features' radius unit (CameraModel::scan_step_px)
   std::vector<std::uint8_t> features;  // cells() * kFeatureBytes, cell-major
 
   [[nodiscard]] const std::uint8_t* cell_features(int cell) const {
@@ -51,8 +54,9 @@ struct FeatureDb {
 using BuildProgress = std::function<void(int done, int total)>;
 
 /// Builds the database, using `threads` worker threads (0: one per core).
-[[nodiscard]] FeatureDb build_feature_db(const FieldGeometry& field, const CameraModel& camera, const GridSpec& grid,
-                                         const BuildProgress& progress = {}, unsigned threads = 0);
+[[nodiscard]] FeatureDb build_feature_db(const FieldGeometry& field, const CameraModel& camera,
+                                         const GridSpec& grid, const BuildProgress& progress = {},
+                                         unsigned threads = 0);
 
 /// 2: radii are sample indices, the header says the step (a view beyond 254 px; 1 had px only).
 inline constexpr std::uint32_t kFeatureDbVersion = 2;
@@ -66,6 +70,7 @@ void save_feature_db(const FeatureDb& db, const std::string& path);
 
 /// Reads and checks a file against the field and camera in use; throws std::runtime_error naming
 /// the path and the problem (not a database, version, truncated, checksum, fingerprint mismatch).
-[[nodiscard]] FeatureDb load_feature_db(const std::string& path, const FieldGeometry& field, const CameraModel& camera);
+[[nodiscard]] FeatureDb load_feature_db(const std::string& path, const FieldGeometry& field,
+                                        const CameraModel& camera);
 
 }  // namespace omniloc

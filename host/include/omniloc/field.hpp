@@ -92,7 +92,7 @@ struct FieldDisc {
 
 struct FieldGeometry {
   std::string name;
-  std::string source;  // file it was read from, for error messages
+  std::string source;            // file it was read from, for error messages
   double field_length_cm = 0.0;  // playing area, along field x
   double field_width_cm = 0.0;   // playing area, along field y
   double border_cm = 0.0;        // carpet around the playing area
@@ -108,7 +108,9 @@ struct FieldGeometry {
   /// Extent of the carpet (playing area plus border): the field frame spans [0, total].
   [[nodiscard]] double total_x_cm() const { return field_length_cm + 2.0 * border_cm; }
   [[nodiscard]] double total_y_cm() const { return field_width_cm + 2.0 * border_cm; }
-  [[nodiscard]] Eigen::Vector2d centre_cm() const { return {total_x_cm() / 2.0, total_y_cm() / 2.0}; }
+  [[nodiscard]] Eigen::Vector2d centre_cm() const {
+    return {total_x_cm() / 2.0, total_y_cm() / 2.0};
+  }
   /// Hash of everything that changes the lines (not the name or source), for database headers.
   [[nodiscard]] std::uint64_t fingerprint() const;
 };
@@ -125,7 +127,8 @@ struct FieldGeometry {
 
 /// Calls `f` with points along the centre line of every segment and arc of the field, `step_cm`
 /// apart along each (both ends included); the discs (marks) are the caller's.
-void for_each_line_point(const FieldGeometry& field, double step_cm, const std::function<void(const Eigen::Vector2d&)>& f);
+void for_each_line_point(const FieldGeometry& field, double step_cm,
+                         const std::function<void(const Eigen::Vector2d&)>& f);
 
 /// True when the floor point p (field frame, cm) is on a white line.
 [[nodiscard]] bool is_white(const FieldGeometry& field, const Eigen::Vector2d& p_cm);
@@ -141,8 +144,9 @@ class WhiteLineIndex {
   FieldGeometry field_;
   double cell_cm_ = 10.0;
   int nx_ = 0, ny_ = 0;
-  std::vector<std::uint32_t> offsets_;  // bucket b's lines are items_[offsets_[b] .. offsets_[b + 1])
-  std::vector<std::uint16_t> items_;    // segment i, then arc nseg + i, then disc nseg + narc + i
+  std::vector<std::uint32_t>
+      offsets_;                       // bucket b's lines are items_[offsets_[b] .. offsets_[b + 1])
+  std::vector<std::uint16_t> items_;  // segment i, then arc nseg + i, then disc nseg + narc + i
 };
 
 /// True when p lies on the carpet (playing area or border).
@@ -166,8 +170,8 @@ struct WhiteInterval {
 class RayCaster {
  public:
   explicit RayCaster(const FieldGeometry& field);
-  void intervals(const Eigen::Vector2d& origin_cm, const Eigen::Vector2d& dir, double t_min_cm, double t_max_cm,
-                 std::vector<WhiteInterval>& out) const;
+  void intervals(const Eigen::Vector2d& origin_cm, const Eigen::Vector2d& dir, double t_min_cm,
+                 double t_max_cm, std::vector<WhiteInterval>& out) const;
 
  private:
   struct Seg {

@@ -39,12 +39,14 @@ struct FuzzyConfig {
   double speed_max_cm_per_s = 300.0;
   /// VL, L, H, VH (Fig. 12). The robot's top speed is ~300 cm/s; most play happens below 150 cm/s.
   std::array<Trapezoid, kFuzzyTerms> speed_terms{
-      Trapezoid{0, 0, 20, 50}, Trapezoid{20, 50, 80, 120}, Trapezoid{80, 120, 150, 200}, Trapezoid{150, 200, 300, 300}};
+      Trapezoid{0, 0, 20, 50}, Trapezoid{20, 50, 80, 120}, Trapezoid{80, 120, 150, 200},
+      Trapezoid{150, 200, 300, 300}};
   /// Output universe: search range A (cm), [0, range_max_cm].
   double range_max_cm = 30.0;
   /// VL, L, H, VH (Fig. 13): each term's core sits on (or against) one database range 0/10/20/30.
-  std::array<Trapezoid, kFuzzyTerms> range_terms{
-      Trapezoid{0, 0, 3, 8}, Trapezoid{3, 8, 12, 17}, Trapezoid{12, 17, 22, 27}, Trapezoid{22, 27, 30, 30}};
+  std::array<Trapezoid, kFuzzyTerms> range_terms{Trapezoid{0, 0, 3, 8}, Trapezoid{3, 8, 12, 17},
+                                                 Trapezoid{12, 17, 22, 27},
+                                                 Trapezoid{22, 27, 30, 30}};
   /// rules[i] = output term for input term i; the paper's four rules are the identity
   /// (speed very low -> range very low, ..., very high -> very high).
   std::array<FuzzyTerm, kFuzzyTerms> rules{FuzzyTerm::kVeryLow, FuzzyTerm::kLow, FuzzyTerm::kHigh,
@@ -66,7 +68,8 @@ struct FuzzyConfig {
 
 struct FuzzyResult {
   std::array<double, kFuzzyTerms> speed_degrees{};  ///< membership of the input in VL, L, H, VH
-  std::array<double, kFuzzyTerms> output_clip{};    ///< clip level of each output term (max over rules)
+  std::array<double, kFuzzyTerms>
+      output_clip{};        ///< clip level of each output term (max over rules)
   double crisp_cm = 0.0;    ///< centroid of the aggregated output
   double snapped_cm = 0.0;  ///< nearest of snap_ranges_cm
 };

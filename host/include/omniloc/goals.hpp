@@ -19,14 +19,12 @@
 #include <opencv2/core/mat.hpp>
 
 #include "omniloc/camera.hpp"
-#include "omniloc/vision.hpp"
 #include "omniloc/config.hpp"
 #include "omniloc/conventions.hpp"
 #include "omniloc/field.hpp"
+#include "omniloc/vision.hpp"
 
 namespace omniloc {
-
-
 
 /// The goal colour models a camera carries: either colour may be unknown (not learnt).
 struct GoalColourModels {
@@ -41,7 +39,8 @@ struct GoalColourModels {
 [[nodiscard]] GoalColourModels goal_colour_models(const VisionModel& vision);
 
 /// Which colour stands at x = max: the field file's if it says, else the camera's learnt one.
-[[nodiscard]] GoalColour goal_colour_at_x_max(const FieldGeometry& field, const GoalColourModels& models);
+[[nodiscard]] GoalColour goal_colour_at_x_max(const FieldGeometry& field,
+                                              const GoalColourModels& models);
 
 /// A goal-coloured pixel: robot-frame bearing and floor distance (infinity beyond the radius
 /// table: a goal wall seen above the floor's last calibrated ring is "far").
@@ -54,7 +53,8 @@ struct GoalPixel {
 
 /// One frame's goal-coloured pixels and what is needed to judge them.
 struct GoalObservation {
-  /// False when there is nothing to compare: no colour model, or which colour is at x = max unknown.
+  /// False when there is nothing to compare: no colour model, or which colour is at x = max
+  /// unknown.
   bool colours_known = false;
   GoalColour colour_at_x_max = GoalColour::kUnknown;
   GoalCueConfig cue;
@@ -63,7 +63,8 @@ struct GoalObservation {
 
 /// Collects the goal-coloured pixels of a BGR frame (outside the body, not in a mast sector).
 /// Throws std::invalid_argument when the image does not have the camera's size.
-[[nodiscard]] GoalObservation observe_goals(const cv::Mat& bgr, const CameraModel& camera, const FieldGeometry& field,
+[[nodiscard]] GoalObservation observe_goals(const cv::Mat& bgr, const CameraModel& camera,
+                                            const FieldGeometry& field,
                                             const GoalColourModels& models);
 
 /// Pixels beyond a goal line inside its mouth's wedge as seen from `pose`: of the colour the pose
@@ -74,7 +75,8 @@ struct GoalEvidence {
   [[nodiscard]] int considered() const { return agreeing + contrary; }
   [[nodiscard]] int score() const { return agreeing - contrary; }
 };
-[[nodiscard]] GoalEvidence goal_evidence(const FieldGeometry& field, const Pose2& pose, const GoalObservation& obs);
+[[nodiscard]] GoalEvidence goal_evidence(const FieldGeometry& field, const Pose2& pose,
+                                         const GoalObservation& obs);
 
 enum class TwinDecision { kFirst, kSecond, kUndecided };
 struct TwinChoice {
@@ -85,7 +87,7 @@ struct TwinChoice {
   std::string reason;   ///< why (for the command's output and logs)
 };
 /// Picks between two candidate poses by the goal colours, or says why it cannot.
-[[nodiscard]] TwinChoice choose_by_goals(const FieldGeometry& field, const Pose2& first, const Pose2& second,
-                                         const GoalObservation& obs);
+[[nodiscard]] TwinChoice choose_by_goals(const FieldGeometry& field, const Pose2& first,
+                                         const Pose2& second, const GoalObservation& obs);
 
 }  // namespace omniloc

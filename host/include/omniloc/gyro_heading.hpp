@@ -40,11 +40,15 @@ class HeadingSource {
   /// True if gyro_yaw_deg is aligned with the field from the start (the simulator's gyro).
   [[nodiscard]] virtual bool is_absolute() const = 0;
   /// How far the last answer can be trusted (it may change window to window: a gyro fault).
-  [[nodiscard]] virtual HeadingTrust trust() const { return is_absolute() ? HeadingTrust::kAbsolute : HeadingTrust::kNone; }
+  [[nodiscard]] virtual HeadingTrust trust() const {
+    return is_absolute() ? HeadingTrust::kAbsolute : HeadingTrust::kNone;
+  }
   /// One phrase for people: "gyro (bias +0.012 deg/s)", "wheels (no gyro on the board)", ...
   [[nodiscard]] virtual std::string describe() const { return status_token(); }
   /// One word for the status line's heading= field: gyro, wheels, absolute, or wheels-gyro-fault.
-  [[nodiscard]] virtual std::string status_token() const { return is_absolute() ? "absolute" : "wheels"; }
+  [[nodiscard]] virtual std::string status_token() const {
+    return is_absolute() ? "absolute" : "wheels";
+  }
 };
 
 /// Without a gyro: the heading integrated from the wheels (eq. (9) least squares), starting at 0.
@@ -67,7 +71,8 @@ class WheelYawHeading final : public HeadingSource {
 struct GyroScale {
   double lsb_per_dps = 0.0;  ///< sensitivity at the configured full scale, LSB per deg/s
   double odr_hz = 0.0;       ///< output data rate: each sample stands for 1 / odr_hz seconds
-  /// The board's part and settings (common/regmap.json "constants" GYRO_*: ICM-42688-P, +-2000 dps, 1 kHz).
+  /// The board's part and settings (common/regmap.json "constants" GYRO_*: ICM-42688-P, +-2000 dps,
+  /// 1 kHz).
   [[nodiscard]] static GyroScale of_board();
   /// Degrees turned by `samples` samples summing to sum_lsb at a bias of bias_lsb per sample.
   [[nodiscard]] double degrees(double sum_lsb, double samples, double bias_lsb) const {
@@ -79,7 +84,7 @@ struct GyroHeadingConfig {
   int standstill_max_counts = 0;       ///< a window is still when every wheel's |count| <= this
   double standstill_min_s = 0.2;       ///< ... and the wheels have been still this long
   double bias_time_constant_s = 60.0;  ///< older standstill counts for exp(-age / this) of the bias
-  int recover_windows = 10;            ///< clean windows in a row after a fault before it is trusted
+  int recover_windows = 10;  ///< clean windows in a row after a fault before it is trusted
 };
 
 enum class GyroState {
@@ -92,12 +97,14 @@ enum class GyroState {
   kMissing,       ///< the board has its gyro reader but no part answers (flag ABSENT): the wheels
 };
 
-/// The names of a window's gyro flags (regmap GYRO_FLAG_*), "none" for 0: "stuck value, not running".
+/// The names of a window's gyro flags (regmap GYRO_FLAG_*), "none" for 0: "stuck value, not
+/// running".
 [[nodiscard]] std::string gyro_flag_names(std::uint8_t flags);
 
 class GyroHeading final : public HeadingSource {
  public:
-  GyroHeading(const RobotConfig& robot, const GyroScale& scale, const GyroHeadingConfig& config = {});
+  GyroHeading(const RobotConfig& robot, const GyroScale& scale,
+              const GyroHeadingConfig& config = {});
   double gyro_yaw_deg(const EncoderWindow& window) override;
   [[nodiscard]] bool is_absolute() const override { return false; }
   [[nodiscard]] HeadingTrust trust() const override;
@@ -123,10 +130,10 @@ class GyroHeading final : public HeadingSource {
   double still_since_ms_ = -1.0;  ///< board time the wheels stopped (< 0: moving)
   double bias_sum_lsb_ = 0.0;     ///< decayed sums of the standstill samples
   double bias_samples_ = 0.0;
-  int clean_run_ = 0;             ///< clean windows in a row since the last fault
-  std::uint8_t last_flags_ = 0;   ///< the last fault's flags (0: no sample at all)
+  int clean_run_ = 0;            ///< clean windows in a row since the last fault
+  std::uint8_t last_flags_ = 0;  ///< the last fault's flags (0: no sample at all)
   std::uint64_t fault_windows_ = 0;
-  bool ever_ran_ = false;         ///< a clean window with samples has been seen
+  bool ever_ran_ = false;  ///< a clean window with samples has been seen
 };
 
 }  // namespace omniloc

@@ -2,9 +2,10 @@
 // the radii (from the image centre) of the first four white-line crossings, where a crossing is
 // the entry edge of a white run. A radius is a sample index, uint8 (0..254): sample k lies
 // k * CameraModel::scan_step_px() px out (1 px up to a 254 px view, so radius = px there; a larger
-// view is divided into 254 samples). kNoCrossing marks "no further crossing within view". Each ray also records where its view ends (ray_end_px): the mast hides a
-// ray entirely (end 0), an obstacle ends it where it begins, keeping the crossings before it, and a
-// database crossing at or beyond the end is unknown rather than missing, so the matcher leaves it out.
+// view is divided into 254 samples). kNoCrossing marks "no further crossing within view". Each ray
+// also records where its view ends (ray_end_px): the mast hides a ray entirely (end 0), an obstacle
+// ends it where it begins, keeping the crossings before it, and a database crossing at or beyond
+// the end is unknown rather than missing, so the matcher leaves it out.
 //
 // Sampling (shared by the image scan and the geometric scan so that they agree): along each ray,
 // samples k = CameraModel::first_scan_sample() .. last_scan_sample(), each read at the pixel
@@ -43,7 +44,9 @@ struct Scan {
   /// Where ray k's view ends (px from the image centre, exclusive): its crossings are the ones
   /// below it. kRayHidden: nothing seen; kRayToViewEnd: seen to the end of the view.
   std::array<std::uint8_t, kScanRays> ray_end_px{};
-  [[nodiscard]] bool ray_seen(int k) const { return ray_end_px[static_cast<std::size_t>(k)] != kRayHidden; }
+  [[nodiscard]] bool ray_seen(int k) const {
+    return ray_end_px[static_cast<std::size_t>(k)] != kRayHidden;
+  }
   /// Rays that saw anything (ray_end_px > 0).
   [[nodiscard]] int rays_valid() const;
 };
@@ -61,20 +64,21 @@ struct ScanParams {
 };
 
 /// Scans a BGR 8-bit image taken at robot heading yaw_deg into field-frame rays. Classifies only
-/// the pixels on the rays. Throws std::invalid_argument for an image that does not match the camera.
+/// the pixels on the rays. Throws std::invalid_argument for an image that does not match the
+/// camera.
 [[nodiscard]] Scan scan_image(const cv::Mat& bgr, const CameraModel& camera, double yaw_deg,
                               const ScanParams& params = {});
 
 /// The straightforward version: OpenCV cvtColor + inRange masks of the whole image, then the same
 /// rays. Same result as scan_image; kept as its reference and benchmark baseline.
-[[nodiscard]] Scan scan_image_reference(const cv::Mat& bgr, const CameraModel& camera, double yaw_deg,
-                                        const ScanParams& params = {});
+[[nodiscard]] Scan scan_image_reference(const cv::Mat& bgr, const CameraModel& camera,
+                                        double yaw_deg, const ScanParams& params = {});
 
 /// Scan in the robot frame at a finer angular step, for estimating the yaw: ray j has bearing
 /// j / rays_per_degree. rotate_to_field() picks, for each field direction, the nearest ray.
 struct BearingScan {
   int rays_per_degree = 4;
-  std::vector<std::uint8_t> radii_px;   // 360 * rays_per_degree * 4
+  std::vector<std::uint8_t> radii_px;    // 360 * rays_per_degree * 4
   std::vector<std::uint8_t> ray_end_px;  // 360 * rays_per_degree, as Scan::ray_end_px
 };
 [[nodiscard]] BearingScan scan_image_bearings(const cv::Mat& bgr, const CameraModel& camera,
@@ -82,7 +86,8 @@ struct BearingScan {
 [[nodiscard]] Scan rotate_to_field(const BearingScan& scan, double yaw_deg);
 
 /// The scan a robot at `position_cm` would see, by casting rays through the field model and the
-/// camera's radius table (no obstacles, no mast: every ray seen to the end). This is a database entry.
+/// camera's radius table (no obstacles, no mast: every ray seen to the end). This is a database
+/// entry.
 [[nodiscard]] Scan expected_scan(const FieldGeometry& field, const CameraModel& camera,
                                  const Eigen::Vector2d& position_cm);
 
@@ -92,7 +97,8 @@ struct BearingScan {
 /// rule above). Writes 4 radii, kNoCrossing-padded. Shared by expected_features and the matcher's
 /// linearised ray caster, so that both turn runs into crossings exactly as the image scan does.
 template <class Runs, class RadiiPx>
-void crossings_of_runs(int k0, int k1, int min_gap_px, const Runs& runs, RadiiPx radii_px, std::uint8_t* out) {
+void crossings_of_runs(int k0, int k1, int min_gap_px, const Runs& runs, RadiiPx radii_px,
+                       std::uint8_t* out) {
   std::fill(out, out + kCrossingsPerRay, kNoCrossing);
   int found = 0;
   int last_white = k0 - 1;  // as if white just before the first sample: it cannot be an entry
@@ -101,16 +107,19 @@ void crossings_of_runs(int k0, int k1, int min_gap_px, const Runs& runs, RadiiPx
     const int ka = std::max(static_cast<int>(std::ceil(enter_px - 1e-9)), k0);
     const int kb = std::min(static_cast<int>(std::floor(exit_px + 1e-9)), k1);
     if (ka > kb) continue;
-    if (ka - last_white - 1 >= min_gap_px && found < kCrossingsPerRay) out[found++] = static_cast<std::uint8_t>(ka);
+    if (ka - last_white - 1 >= min_gap_px && found < kCrossingsPerRay)
+      out[found++] = static_cast<std::uint8_t>(ka);
     last_white = kb;
   }
 }
 
 /// As expected_scan, writing the 1440 radii to `out`; `scratch` is reused between calls. Ray k is
 /// cast at field bearing k + bearing_offset_deg (a scan rotated from the robot frame at a step of
-/// 1 / rays_per_degree sees its rays that far from the whole degrees: FieldScan::bearing_offset_deg).
-void expected_features(const FieldGeometry& field, const CameraModel& camera, const Eigen::Vector2d& position_cm,
-                       std::uint8_t* out, std::vector<WhiteInterval>& scratch, int min_gap_px = ScanParams{}.min_gap_px,
-                       double bearing_offset_deg = 0.0);
+/// 1 / rays_per_degree sees its rays that far from the whole degrees:
+/// FieldScan::bearing_offset_deg).
+void expected_features(const FieldGeometry& field, const CameraModel& camera,
+                       const Eigen::Vector2d& position_cm, std::uint8_t* out,
+                       std::vector<WhiteInterval>& scratch,
+                       int min_gap_px = ScanParams{}.min_gap_px, double bearing_offset_deg = 0.0);
 
 }  // namespace omniloc

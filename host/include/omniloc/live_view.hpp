@@ -5,21 +5,22 @@
 // `omniloc locate --overlay` makes); the match error over time; and the status line. The page polls
 // JSON endpoints and the frame.
 //
-// LiveState is fed by the daemon's observer callbacks (attach() chains onto a DaemonObserver, as the
-// ROS 2 attachment does) and read by the server's threads: a mutex guards a small snapshot, the
-// callbacks only copy (a frame at most every 100 ms), and the costly part (line extraction, overlay,
-// encoding) runs in the server's thread when the frame is asked for, at most once per
+// LiveState is fed by the daemon's observer callbacks (attach() chains onto a DaemonObserver, as
+// the ROS 2 attachment does) and read by the server's threads: a mutex guards a small snapshot, the
+// callbacks only copy (a frame at most every 100 ms), and the costly part (line extraction,
+// overlay, encoding) runs in the server's thread when the frame is asked for, at most once per
 // frame_min_period_ms (5 Hz): requests in between get the last image again.
 //
-// LiveViewServer is the HTTP server (cpp-httplib) in its own thread, four worker threads. In a build
-// without cpp-httplib it throws at construction, saying so.
+// LiveViewServer is the HTTP server (cpp-httplib) in its own thread, four worker threads. In a
+// build without cpp-httplib it throws at construction, saying so.
 //
 //   GET /            the page (text/html)
 //   GET /pose.json   the last pose datagram, exactly as sent over UDP (503 before the first)
 //   GET /status.json {"line": last status line, "poses": datagrams seen, "frames": frames seen}
 //   GET /state.json  what the page polls: pose, path, match errors, status line, frame info, e_th
 //   GET /field.json  the field model: carpet size, segments, arcs, discs, goals (cm)
-//   GET /frame.jpg   the latest camera frame with the overlay, JPEG (what the page shows; 503 before
+//   GET /frame.jpg   the latest camera frame with the overlay, JPEG (what the page shows; 503
+//   before
 //                    the first frame)
 //   GET /frame.png   the same, PNG (lossless: the overlay's exact colours)
 #pragma once
@@ -41,13 +42,14 @@ namespace omniloc::live {
 
 struct LiveViewOptions {
   std::string address = "127.0.0.1";  ///< dotted IPv4 address to listen on
-  int port = 0;                        ///< TCP port; 0: any free port (LiveViewServer::port() says which)
+  int port = 0;  ///< TCP port; 0: any free port (LiveViewServer::port() says which)
   double frame_min_period_ms = 200.0;  ///< the overlay image is made at most this often (wall time)
-  double frame_keep_period_ms = 100.0; ///< a camera frame is copied at most this often (daemon time)
-  double path_s = 20.0;                ///< the path shown: this many seconds of daemon time ...
-  double path_step_ms = 50.0;          ///< ... a point every this many ms
-  double error_history_s = 30.0;       ///< match errors shown: this many seconds, ...
-  double error_step_ms = 100.0;        ///< ... one every this many ms
+  double frame_keep_period_ms =
+      100.0;                      ///< a camera frame is copied at most this often (daemon time)
+  double path_s = 20.0;           ///< the path shown: this many seconds of daemon time ...
+  double path_step_ms = 50.0;     ///< ... a point every this many ms
+  double error_history_s = 30.0;  ///< match errors shown: this many seconds, ...
+  double error_step_ms = 100.0;   ///< ... one every this many ms
 };
 
 /// What the page shows; every method is thread-safe.
@@ -101,11 +103,11 @@ class LiveState {
   std::deque<PathPoint> path_;
   std::deque<ErrorPoint> errors_;
   std::string status_line_;
-  std::uint64_t frames_ = 0;       // frames seen
-  cv::Mat frame_;                  // the last frame kept (a copy; never written after it is kept)
+  std::uint64_t frames_ = 0;  // frames seen
+  cv::Mat frame_;             // the last frame kept (a copy; never written after it is kept)
   double frame_t_ms_ = -1e300;
-  std::uint64_t frame_seq_ = 0;    // frames kept
-  daemon::PoseMessage frame_pose_; // the pose when it was kept
+  std::uint64_t frame_seq_ = 0;     // frames kept
+  daemon::PoseMessage frame_pose_;  // the pose when it was kept
   bool frame_has_pose_ = false;
   // The last overlay, what it was made from, and its encodings (made on demand).
   cv::Mat overlay_;
@@ -115,7 +117,7 @@ class LiveState {
   ExtractionReport overlay_report_;
   double overlay_t_ms_ = 0.0;
   std::shared_ptr<const std::vector<unsigned char>> png_, jpeg_;
-  std::mutex encode_mutex_;        // one overlay and encoding at a time (the extractor has state)
+  std::mutex encode_mutex_;  // one overlay and encoding at a time (the extractor has state)
   /// Under encode_mutex_: draws the overlay again if due; false before the first frame.
   bool refresh_overlay();
   std::shared_ptr<const std::vector<unsigned char>> encoded(bool png);

@@ -13,10 +13,11 @@
 // Frames may be given before the windows that cover their time (replay): they wait.
 //
 // Beyond the paper (LocalizerMode::kFull): sub-grid refinement, a minimum search range, refusal
-// of ambiguous matches (unless the goal colours tell a pose from its twin), a cross-check by global search that detects being lost (a run of bad
-// matches, or image and odometry disagreeing beyond their uncertainty as after a kidnapping) and
-// recovers, and an uncertainty on every pose. LocalizerMode::kPaper does exactly what the paper
-// describes (no refinement, no lost detection) for side-by-side figures.
+// of ambiguous matches (unless the goal colours tell a pose from its twin), a cross-check by global
+// search that detects being lost (a run of bad matches, or image and odometry disagreeing beyond
+// their uncertainty as after a kidnapping) and recovers, and an uncertainty on every pose.
+// LocalizerMode::kPaper does exactly what the paper describes (no refinement, no lost detection)
+// for side-by-side figures.
 //
 // Every global search is locate_frame (locate.hpp), which `omniloc locate` runs on one frame.
 // One class serves omnilocd (live), `omniloc replay` and the demo. Not thread-safe: call it from
@@ -62,26 +63,31 @@ enum class LocalizerMode {
 struct LocalizerConfig {
   LocalizerMode mode = LocalizerMode::kFull;
   FuzzyConfig fuzzy;
-  /// The match error (docs/VISION.md "Match error"); kPaper uses kPaperSad with the paper's E_TH 20.
+  /// The match error (docs/VISION.md "Match error"); kPaper uses kPaperSad with the paper's
+  /// E_TH 20.
   MatchCost match_cost = MatchOptions{}.cost;
   int crossing_cap_px = MatchOptions{}.crossing_cap_px;  ///< kBounded: cap C of one crossing's cost
-  double e_th = 8.0;               ///< match threshold on the normalised error (kBounded: px per crossing; paper: 20)
-  double ambiguity_ratio = MatchOptions{}.ambiguity_ratio;  ///< ambiguous when 2nd error <= ratio * best
-  double reset_period_ms = 125.0;  ///< odometry origin reset period (paper: 125 ms)
-  double history_ms = 1000.0;      ///< odometry history kept for late frames; older frames are dropped
-  int scan_rays_per_degree = 2;    ///< on_image(): robot-frame scan step (for re-rotating by yaw)
+  double e_th =
+      8.0;  ///< match threshold on the normalised error (kBounded: px per crossing; paper: 20)
+  double ambiguity_ratio =
+      MatchOptions{}.ambiguity_ratio;  ///< ambiguous when 2nd error <= ratio * best
+  double reset_period_ms = 125.0;      ///< odometry origin reset period (paper: 125 ms)
+  double history_ms = 1000.0;  ///< odometry history kept for late frames; older frames are dropped
+  int scan_rays_per_degree = 2;  ///< on_image(): robot-frame scan step (for re-rotating by yaw)
   // --- kFull only ---
   Refinement refinement = Refinement::kRayCast;  ///< kRayCast: E_TH judged at the refined position
-  double min_range_cm = 10.0;      ///< local search at least this wide (0 would pin to one grid point)
-  bool refuse_ambiguous = true;    ///< a global result flagged ambiguous is never accepted
-  double image_sigma_cm = 2.0;     ///< a fix's position uncertainty when its match gives none (MatchResult::sigma_cm)
+  double min_range_cm = 10.0;  ///< local search at least this wide (0 would pin to one grid point)
+  bool refuse_ambiguous = true;  ///< a global result flagged ambiguous is never accepted
+  double image_sigma_cm =
+      2.0;  ///< a fix's position uncertainty when its match gives none (MatchResult::sigma_cm)
   double image_sigma_yaw_deg = 0.5;
   int lost_after_bad_frames = 30;  ///< this many bad results in a row -> lost (0.5 s at 60 Hz)
-  double check_period_ms = 100.0;  ///< cross-check by global search at least this often while tracking
-  double disagree_min_cm = 30.0;   ///< global vs tracked pose farther than max(this, k sigma) ...
-  double disagree_sigmas = 4.0;    ///< ... (k) with the global result clearly better ...
+  double check_period_ms =
+      100.0;  ///< cross-check by global search at least this often while tracking
+  double disagree_min_cm = 30.0;  ///< global vs tracked pose farther than max(this, k sigma) ...
+  double disagree_sigmas = 4.0;   ///< ... (k) with the global result clearly better ...
   double disagree_error_ratio = 0.7;  ///< ... (global error < ratio * local error) ...
-  int disagree_frames = 3;         ///< ... this many frames in a row -> relocalize there
+  int disagree_frames = 3;            ///< ... this many frames in a row -> relocalize there
   /// The cross-check's global search runs on a worker thread, off the frame's path to its pose: it
   /// is started with the frame it checks and judged when the next frame is processed (waiting for
   /// it there if it is not done, so the outcome never depends on timing). A disagreement it finds
@@ -89,7 +95,7 @@ struct LocalizerConfig {
   /// relocalization is applied at the checked frame's time, one frame later. false: the search runs
   /// inline on the frame that triggers it (the reference for the latency bench).
   bool cross_check_worker = true;
-  bool gyro_yaw_known = true;      ///< false: recover with global_search_any_yaw (no trusted heading)
+  bool gyro_yaw_known = true;  ///< false: recover with global_search_any_yaw (no trusted heading)
   // Heading from the image (kFull): a MEMS gyro's bias drifts (tenths of a degree a minute, more
   // after a bad start-up calibration) and over a match the scan would no longer line up with the
   // database. At each origin reset the yaw is also estimated from the scan (estimate_yaw within
@@ -128,17 +134,19 @@ void validate_localizer_config(const LocalizerConfig& config, const std::string&
 /// else it silently searches fewer cells than it says (at a 20 cm step a 10 cm range searches
 /// the centre point only). Throws ConfigError naming `source`, the field, the range and the step.
 /// The Localizer calls it at construction.
-void validate_search_ranges(const LocalizerConfig& config, const GridSpec& grid, const std::string& source);
+void validate_search_ranges(const LocalizerConfig& config, const GridSpec& grid,
+                            const std::string& source);
 
 /// What LocalizerMode changes, decided once from the config: kPaper is Fig. 15 as printed, kFull
 /// adds the rest. The Localizer's steps consult this instead of the mode.
 struct LocalizerPolicy {
-  bool search_any_yaw = false;         ///< global searches try every heading (kFull, gyro_yaw_known false)
-  double min_range_cm = 0.0;           ///< the local search is at least this wide (kFull: min_range_cm)
-  bool cross_check = false;            ///< a global search checks the tracked pose (lost detection)
-  bool correct_yaw = false;            ///< the image heading filter at origin resets (kFull, yaw_correction)
-  bool keep_anchor_on_reject = false;  ///< a bad result keeps the last good image (paper: P_IL <- P_E)
-  bool detect_lost = false;            ///< lost_after_bad_frames bad results in a row -> lost
+  bool search_any_yaw = false;  ///< global searches try every heading (kFull, gyro_yaw_known false)
+  double min_range_cm = 0.0;    ///< the local search is at least this wide (kFull: min_range_cm)
+  bool cross_check = false;     ///< a global search checks the tracked pose (lost detection)
+  bool correct_yaw = false;  ///< the image heading filter at origin resets (kFull, yaw_correction)
+  bool keep_anchor_on_reject =
+      false;                 ///< a bad result keeps the last good image (paper: P_IL <- P_E)
+  bool detect_lost = false;  ///< lost_after_bad_frames bad results in a row -> lost
   [[nodiscard]] static LocalizerPolicy of(const LocalizerConfig& config);
 };
 
@@ -156,36 +164,36 @@ enum class PoseSource {
 
 /// The localizer's answer for one encoder window.
 struct LocalizedPose {
-  double t_ms = 0.0;          ///< the window's end time
+  double t_ms = 0.0;  ///< the window's end time
   std::uint32_t seq = 0;
   Pose2 pose;
   PoseSource source = PoseSource::kNone;
-  double match_error = kNoError;   ///< last image result's normalised error (inf: none yet)
-  double search_range_cm = 0.0;    ///< range of the last local search (-1 after a global search)
-  double sigma_xy_cm = 0.0;        ///< 1-sigma position uncertainty
+  double match_error = kNoError;  ///< last image result's normalised error (inf: none yet)
+  double search_range_cm = 0.0;   ///< range of the last local search (-1 after a global search)
+  double sigma_xy_cm = 0.0;       ///< 1-sigma position uncertainty
   double sigma_yaw_deg = 0.0;
-  double image_age_ms = 0.0;       ///< t_ms minus the time of the last image applied (inf: none)
-  bool slip = false;               ///< the odometry saw a wheel slip in this window
-  double vx_cm_s = 0.0;            ///< robot-frame velocity from the odometry's last window
+  double image_age_ms = 0.0;  ///< t_ms minus the time of the last image applied (inf: none)
+  bool slip = false;          ///< the odometry saw a wheel slip in this window
+  double vx_cm_s = 0.0;       ///< robot-frame velocity from the odometry's last window
   double vy_cm_s = 0.0;
-  double omega_deg_s = 0.0;        ///< yaw rate over the last window (the gyro's)
+  double omega_deg_s = 0.0;  ///< yaw rate over the last window (the gyro's)
 };
 
 /// What happened to one frame.
 enum class FrameOutcome {
-  kPending,       ///< waiting for the windows that cover its time
-  kDropped,       ///< older than the history, or no window before it
-  kAccepted,      ///< good result applied
-  kRejected,      ///< error >= E_TH: odometry stands
-  kAmbiguous,     ///< refused: ambiguous global result
-  kRelocalized,   ///< a global search (start, lost or disagreement) set the pose
+  kPending,      ///< waiting for the windows that cover its time
+  kDropped,      ///< older than the history, or no window before it
+  kAccepted,     ///< good result applied
+  kRejected,     ///< error >= E_TH: odometry stands
+  kAmbiguous,    ///< refused: ambiguous global result
+  kRelocalized,  ///< a global search (start, lost or disagreement) set the pose
 };
 [[nodiscard]] const char* frame_outcome_name(FrameOutcome outcome);
 
 struct FrameReport {
   double t_ms = 0.0;
   FrameOutcome outcome = FrameOutcome::kPending;
-  bool global = false;           ///< a global search decided this frame
+  bool global = false;  ///< a global search decided this frame
   Eigen::Vector2d position_cm{0.0, 0.0};
   double yaw_deg = 0.0;
   double error = kNoError;
@@ -209,14 +217,16 @@ struct LocalizerStats {
   int lost_events = 0;
   int yaw_corrections = 0;
   int decided_by_side = 0;  ///< ambiguous global results decided by the kick-off rule (set_side)
-  int heading_alignments_dropped = 0;  ///< a relative gyro's alignment forgotten after failed searches
+  int heading_alignments_dropped =
+      0;  ///< a relative gyro's alignment forgotten after failed searches
 };
 
 class Localizer {
  public:
   /// The references must outlive the localizer (the database is large and shared).
   Localizer(const LocalizerConfig& config, const RobotConfig& robot, const FieldGeometry& field,
-            const CameraModel& camera, const FeatureDb& db, std::optional<Pose2> initial_pose = std::nullopt);
+            const CameraModel& camera, const FeatureDb& db,
+            std::optional<Pose2> initial_pose = std::nullopt);
   ~Localizer();  // joins the cross-check worker (cross_check_worker)
   Localizer(const Localizer&) = delete;
   Localizer& operator=(const Localizer&) = delete;
@@ -226,12 +236,14 @@ class Localizer {
   LocalizedPose on_window(const EncoderWindow& window);
 
   /// A camera frame taken at t_ms (same time base as the windows). Its lines are extracted now
-  /// (LineExtractor); a frame with no measurement is reported kRejected at once, not matched. Processed now if a window at
-  /// or after t_ms has been seen, else kept until one arrives (the report then says kPending).
+  /// (LineExtractor); a frame with no measurement is reported kRejected at once, not matched.
+  /// Processed now if a window at or after t_ms has been seen, else kept until one arrives (the
+  /// report then says kPending).
   FrameReport on_image(double t_ms, const cv::Mat& bgr);
   /// Same with a robot-frame scan already made (scan_image_bearings); `goals` is the frame's goal
   /// observation (observe_goals), if any, for telling a global result from its twin.
-  FrameReport on_bearings(double t_ms, BearingScan bearings, std::optional<GoalObservation> goals = std::nullopt);
+  FrameReport on_bearings(double t_ms, BearingScan bearings,
+                          std::optional<GoalObservation> goals = std::nullopt);
 
   /// The goal colour models on_image() observes the goals with (interim: until the camera carries
   /// them, camera.vision.goals; see goals.hpp). Without them a twin stays ambiguous.
@@ -257,8 +269,8 @@ class Localizer {
   /// std::invalid_argument when neither the field nor the camera's vision block says which goal is
   /// which colour (goal_colour_at_x_max), or for GoalColour::kUnknown.
   void set_side(GoalColour defended);
-  /// How far the windows' heading is trusted now (the last window's heading_trust, docs/LOCALIZER.md
-  /// "Heading"); gyro_yaw_known false in the config: always kNone.
+  /// How far the windows' heading is trusted now (the last window's heading_trust,
+  /// docs/LOCALIZER.md "Heading"); gyro_yaw_known false in the config: always kNone.
   [[nodiscard]] HeadingTrust heading_trust() const { return trust_; }
   /// True when a global search now takes the window heading as known.
   [[nodiscard]] bool heading_known() const;
@@ -294,7 +306,7 @@ class Localizer {
     BearingScan bearings;
     std::optional<GoalObservation> goals;
   };
-  struct Anchor {      // last good image result, carried forward by odometry
+  struct Anchor {  // last good image result, carried forward by odometry
     bool valid = false;
     double t_ms = 0.0;
     Pose2 pose;
@@ -310,11 +322,11 @@ class Localizer {
     double t_ms = 0.0;
     const BearingScan* bearings = nullptr;
     const GoalObservation* goals = nullptr;  // null: none observed
-    Pose2 odometry;              // odometry pose at t_ms; its yaw is the gyro heading
+    Pose2 odometry;                          // odometry pose at t_ms; its yaw is the gyro heading
     double speed_cm_per_s = 0.0;
-    Pose2 predicted;             // the anchor carried to t_ms, else the odometry pose
+    Pose2 predicted;  // the anchor carried to t_ms, else the odometry pose
     double predicted_sigma_cm = 0.0;
-    FieldScan scan;              // the bearings in the field frame at the gyro heading (rotated once)
+    FieldScan scan;  // the bearings in the field frame at the gyro heading (rotated once)
   };
   enum class CrossCheck { kNotRun, kStarted, kAgrees, kContradicts, kRelocalized };
   /// What judging a cross-check needs of the frame it checked.
@@ -328,7 +340,8 @@ class Localizer {
 
   // --- the steps of one frame (process) ---
   FrameReport process(double t_ms, const BearingScan& bearings, const GoalObservation* goals);
-  [[nodiscard]] Frame frame_at(double t_ms, const BearingScan& bearings, const GoalObservation* goals) const;
+  [[nodiscard]] Frame frame_at(double t_ms, const BearingScan& bearings,
+                               const GoalObservation* goals) const;
   /// Searching or lost: a global search; relocalizes on a good, unambiguous result.
   void search(const Frame& frame, FrameReport& rep);
   /// Tracking: a local search around the prediction in the fuzzy range, the cross-check, then
@@ -338,8 +351,10 @@ class Localizer {
   /// from the prediction (a kidnapping) relocalizes there after disagree_frames frames. With the
   /// worker the search is only started here (kStarted) and judged by judge_started_check.
   CrossCheck cross_check(const Frame& frame, const MatchResult& local, FrameReport& rep);
-  CrossCheck judge_check(const CheckContext& checked, const SingleFrameResult& global, FrameReport& rep);
-  /// The worker's check of an earlier frame, judged now (before the frame `rep` reports is matched).
+  CrossCheck judge_check(const CheckContext& checked, const SingleFrameResult& global,
+                         FrameReport& rep);
+  /// The worker's check of an earlier frame, judged now (before the frame `rep` reports is
+  /// matched).
   CrossCheck judge_started_check(FrameReport& rep);
   /// Forgets a check still running (the pose was set or the time base restarted).
   void discard_started_check();
@@ -359,7 +374,8 @@ class Localizer {
 
   // --- odometry history ---
   [[nodiscard]] bool covered(double t_ms) const;
-  [[nodiscard]] Pose2 odometry_pose_at(double t_ms, double* speed_cm_per_s, double* sigma_xy_cm) const;
+  [[nodiscard]] Pose2 odometry_pose_at(double t_ms, double* speed_cm_per_s,
+                                       double* sigma_xy_cm) const;
   void reset_origin_at(double t_ms, const Pose2& pose, double sigma_xy_cm, double sigma_yaw_deg);
   void set_anchor(double t_ms, const Pose2& pose, double error, double sigma_cm);
   /// A fix's position uncertainty: the match's own (MatchResult::sigma_cm, from its error
@@ -370,8 +386,8 @@ class Localizer {
   void trim_history();
   /// The heading to reset the odometry with, from the image through the heading filter; nullopt
   /// when the scan gives no usable estimate.
-  std::optional<double> corrected_yaw(double t_ms, const BearingScan& bearings, const Eigen::Vector2d& position_cm,
-                                      double gyro_yaw_deg);
+  std::optional<double> corrected_yaw(double t_ms, const BearingScan& bearings,
+                                      const Eigen::Vector2d& position_cm, double gyro_yaw_deg);
 
   LocalizerConfig config_;
   LocalizerPolicy policy_;
@@ -382,13 +398,15 @@ class Localizer {
   MatchOptions match_options_;
   GoalColourModels goal_colours_;
   std::optional<GoalColour> side_;  ///< the defended goal's colour (set_side)
-  HeadingTrust trust_ = HeadingTrust::kAbsolute;  ///< set_heading_trust (gyro_yaw_known false: kNone)
+  HeadingTrust trust_ =
+      HeadingTrust::kAbsolute;    ///< set_heading_trust (gyro_yaw_known false: kNone)
   bool heading_aligned_ = false;  ///< kRelative: a fix has aligned the gyro with the field since
   int bad_aligned_searches_ = 0;  ///< failed global searches in a row at the aligned heading
-  bool kickoff_pending_ = false;     ///< set_side given and no fix since: the kick-off rule applies
+  bool kickoff_pending_ = false;  ///< set_side given and no fix since: the kick-off rule applies
   /// The candidate of an ambiguous global result that the kick-off rule picks, as an accepted
   /// result; nullopt when the rule does not apply or cannot decide.
-  [[nodiscard]] std::optional<SingleFrameResult> choose_by_side(const SingleFrameResult& global) const;
+  [[nodiscard]] std::optional<SingleFrameResult> choose_by_side(
+      const SingleFrameResult& global) const;
   Odometry odometry_;
   LineExtractor extractor_;  ///< on_image(): this camera's line extraction (adapts frame to frame)
   std::deque<HistoryEntry> history_;
@@ -403,13 +421,13 @@ class Localizer {
   double last_range_cm_ = 0.0;
   bool last_good_ = false;
   bool applied_this_window_ = false;
-  bool trimmed_ = false;       // history has lost its first windows: older frames are dropped
+  bool trimmed_ = false;  // history has lost its first windows: older frames are dropped
   static constexpr std::size_t kMaxPending = 120;  // 2 s at 60 Hz: windows have stopped coming
   int bad_run_ = 0;
   int disagree_run_ = 0;
   Eigen::Vector2d disagree_position_cm_{0.0, 0.0};
   HeadingFilter heading_filter_;
-  std::unique_ptr<CheckWorker> worker_;     ///< cross_check_worker: started on the first check
+  std::unique_ptr<CheckWorker> worker_;        ///< cross_check_worker: started on the first check
   std::optional<CheckContext> started_check_;  ///< a check running on the worker, to be judged
   LocalizedPose last_pose_;
   LocalizerStats stats_;

@@ -40,7 +40,9 @@ class Logger {
   [[nodiscard]] static Logger silent();
 
   [[nodiscard]] LogLevel threshold() const { return threshold_; }
-  [[nodiscard]] bool enabled(LogLevel level) const { return static_cast<int>(level) <= static_cast<int>(threshold_); }
+  [[nodiscard]] bool enabled(LogLevel level) const {
+    return static_cast<int>(level) <= static_cast<int>(threshold_);
+  }
 
   void log(LogLevel level, std::string_view message) const;
   void error(std::string_view message) const { log(LogLevel::kError, message); }
@@ -54,6 +56,7 @@ class Logger {
 };
 
 /// "PROGRAM: warning: MESSAGE" (no level tag for info): the line the stderr sink writes.
-[[nodiscard]] std::string format_log_line(std::string_view program, LogLevel level, std::string_view message);
+[[nodiscard]] std::string format_log_line(std::string_view program, LogLevel level,
+                                          std::string_view message);
 
 }  // namespace omniloc

@@ -1,6 +1,7 @@
 // Encoder + gyroscope odometry (paper section 2.4, equations (10)-(15)), in two variants:
 //
-//  * PaperOdometry: equations (10)-(15) exactly as printed, kept to show what they do. Equation (13)
+//  * PaperOdometry: equations (10)-(15) exactly as printed, kept to show what they do. Equation
+//  (13)
 //    gives every wheel the same signs, so for any pure translation the four terms cancel
 //    (sum of eq. (9)'s first two columns is zero) and only rotation is "seen"; equation (11) uses
 //    R/2 where the arc of a wheel on radius R is R * angle. docs/ODOMETRY.md measures the result.
@@ -28,10 +29,10 @@ namespace omniloc {
 /// The scale (LSB per deg/s) and the output rate come from the part's configuration
 /// (GyroScale in gyro_heading.hpp), not from here.
 struct WindowGyro {
-  bool present = false;         ///< false: the board has no gyro (or a board of before v0.2)
-  std::int64_t sum_lsb = 0;     ///< sum of the accepted Z-rate samples (two's complement LSB)
-  std::uint32_t samples = 0;    ///< samples summed
-  std::uint8_t flags = 0;       ///< fault kinds seen in this window (0: none); see regmap.json
+  bool present = false;       ///< false: the board has no gyro (or a board of before v0.2)
+  std::int64_t sum_lsb = 0;   ///< sum of the accepted Z-rate samples (two's complement LSB)
+  std::uint32_t samples = 0;  ///< samples summed
+  std::uint8_t flags = 0;     ///< fault kinds seen in this window (0: none); see regmap.json
 };
 
 /// How far a window's gyro_yaw_deg can be trusted, as the heading source says (gyro_heading.hpp):
@@ -40,7 +41,8 @@ struct WindowGyro {
 ///             given the field heading, the gyro keeps it and global searches may use it;
 ///  kNone      the wheels' own rotation (slip turns it): every global search tries every heading.
 enum class HeadingTrust { kAbsolute, kRelative, kNone };
-[[nodiscard]] const char* heading_trust_name(HeadingTrust trust);  ///< "absolute", "relative", "none"
+[[nodiscard]] const char* heading_trust_name(
+    HeadingTrust trust);  ///< "absolute", "relative", "none"
 /// The inverse of heading_trust_name; nullopt for any other text.
 [[nodiscard]] std::optional<HeadingTrust> parse_heading_trust(const std::string& name);
 
@@ -51,34 +53,36 @@ struct EncoderWindow {
   std::array<std::int32_t, 4> counts{};  ///< wheel 1..4 counts in this window (eq. (9) signs); a
                                          ///< three-wheel robot leaves counts[3] unused (ignored)
   double gyro_yaw_deg = 0.0;             ///< gyro's integrated yaw, field frame, at t_end_ms
-  WindowGyro gyro;                       ///< the board's raw gyro window (present only on a v0.2 board)
+  WindowGyro gyro;  ///< the board's raw gyro window (present only on a v0.2 board)
   HeadingTrust heading_trust = HeadingTrust::kAbsolute;  ///< how far gyro_yaw_deg can be trusted
 };
 
 /// Per-wheel slip finding for one window.
 struct SlipReport {
   bool detected = false;
-  int wheel = 0;                  ///< 1..wheel count when detected, else 0
-  double magnitude_cm = 0.0;      ///< wheel travel not explained by the robot's motion (signed)
+  int wheel = 0;              ///< 1..wheel count when detected, else 0
+  double magnitude_cm = 0.0;  ///< wheel travel not explained by the robot's motion (signed)
   double magnitude_cm_per_s = 0.0;
-  double residual_cm_per_s = 0.0; ///< norm of the wheels' LS residual with the gyro's rotation, per second
+  double residual_cm_per_s =
+      0.0;  ///< norm of the wheels' LS residual with the gyro's rotation, per second
   double threshold_cm_per_s = 0.0;  ///< what the residual was compared with in this window
   /// Wheel-only rotation rate (LS, no gyro) minus the gyro's yaw rate. With three wheels this is
-  /// all the check has: the residual is |n . J_theta| times it (n: the normal of the translation columns).
+  /// all the check has: the residual is |n . J_theta| times it (n: the normal of the translation
+  /// columns).
   double wheel_minus_gyro_deg_per_s = 0.0;
 };
 
 struct OdometryEstimate {
   double t_ms = 0.0;
   Pose2 pose;
-  double sigma_xy_cm = 0.0;       ///< 1-sigma position uncertainty (isotropic)
+  double sigma_xy_cm = 0.0;  ///< 1-sigma position uncertainty (isotropic)
   double sigma_yaw_deg = 0.0;
-  double speed_cm_per_s = 0.0;    ///< over the last window
+  double speed_cm_per_s = 0.0;  ///< over the last window
   double yaw_rate_deg_per_s = 0.0;
-  double vx_cm_per_s = 0.0;       ///< robot-frame velocity over the last window (+x forward)
-  double vy_cm_per_s = 0.0;       ///< (+y to the left)
-  double distance_cm = 0.0;       ///< path length since the last origin reset
-  double wheel_yaw_deg = 0.0;     ///< heading integrated from the wheels alone (cross-check)
+  double vx_cm_per_s = 0.0;    ///< robot-frame velocity over the last window (+x forward)
+  double vy_cm_per_s = 0.0;    ///< (+y to the left)
+  double distance_cm = 0.0;    ///< path length since the last origin reset
+  double wheel_yaw_deg = 0.0;  ///< heading integrated from the wheels alone (cross-check)
   SlipReport slip;
 };
 
@@ -119,8 +123,8 @@ class SlipDetector {
  public:
   explicit SlipDetector(const RobotConfig& config);
   /// `predicted_cm`: the body-frame translation the last velocity predicts for this window.
-  [[nodiscard]] SlipCheck check(const Eigen::Vector4d& travel_cm, double gyro_yaw_rate_deg_per_s, double dt_s,
-                                const Eigen::Vector2d& predicted_cm) const;
+  [[nodiscard]] SlipCheck check(const Eigen::Vector4d& travel_cm, double gyro_yaw_rate_deg_per_s,
+                                double dt_s, const Eigen::Vector2d& predicted_cm) const;
   [[nodiscard]] int wheels() const { return wheels_; }
 
  private:
@@ -133,9 +137,9 @@ class SlipDetector {
 
 /// Translation (cm) of one window with the rotation fixed, each wheel slot weighted by w (a zero
 /// weight drops the wheel); nullopt when the weighted wheels cannot determine it.
-[[nodiscard]] std::optional<Eigen::Vector2d> translation_with_rotation(const Eigen::Matrix<double, 4, 3>& jacobian,
-                                                                       const Eigen::Vector4d& travel_cm,
-                                                                       double rotation_rad, const Eigen::Vector4d& w);
+[[nodiscard]] std::optional<Eigen::Vector2d> translation_with_rotation(
+    const Eigen::Matrix<double, 4, 3>& jacobian, const Eigen::Vector4d& travel_cm,
+    double rotation_rad, const Eigen::Vector4d& w);
 
 class Odometry {
  public:
@@ -158,13 +162,13 @@ class Odometry {
   Eigen::Matrix<double, 4, 3> jacobian_;
   Eigen::Matrix<double, 3, 4> pinv_;
   SlipDetector slip_;
-  double mean_distance_cm_;                  // mean centre-to-wheel distance, for the uncertainty
+  double mean_distance_cm_;  // mean centre-to-wheel distance, for the uncertainty
   OdometryEstimate est_;
   bool have_window_ = false;
-  bool start_pose_pending_ = false;        // reset() before the first window: its yaw waits for the trust
+  bool start_pose_pending_ = false;  // reset() before the first window: its yaw waits for the trust
   double last_t_ms_ = 0.0;
   double last_gyro_deg_ = 0.0;
-  double yaw_offset_deg_ = 0.0;             // pose yaw = gyro yaw + offset
+  double yaw_offset_deg_ = 0.0;                    // pose yaw = gyro yaw + offset
   Eigen::Vector2d last_velocity_field_{0.0, 0.0};  // cm/s, for the motion prior
 };
 

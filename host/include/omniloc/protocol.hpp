@@ -1,8 +1,9 @@
-// The board link's frame protocol (docs/PROTOCOL.md), exactly as common/regmap.json "frames" defines it:
+// The board link's frame protocol (docs/PROTOCOL.md), exactly as common/regmap.json "frames"
+// defines it:
 //   SYNC, LEN (bytes of TYPE + body), TYPE, body (little-endian), CRC-16/CCITT-FALSE over LEN, TYPE
 //   and body, sent high byte first.
-// Encoders for every frame type, a streaming decoder that survives garbage, and the host's wrap-safe
-// reconstruction of the board's 32-bit position accumulators and clock-cycle timestamp.
+// Encoders for every frame type, a streaming decoder that survives garbage, and the host's
+// wrap-safe reconstruction of the board's 32-bit position accumulators and clock-cycle timestamp.
 #pragma once
 
 #include <array>
@@ -27,9 +28,9 @@ namespace omniloc::protocol {
                                         std::uint16_t crc = regmap::kCrcInit);
 
 // ---- Frame bodies (one struct per TYPE of regmap.json) ----
-// Each is the generated layout of its TYPE's body (frame_bodies.hpp: fields, offsets, pack and unpack),
-// as its own type so that the variant below tells the frames apart: READ_REQ and WRITE_ACK share the
-// REG_ADDR layout, READ_RESP and WRITE_REQ REG_VALUE, SNAPSHOT_RESP and TELEMETRY WINDOW.
+// Each is the generated layout of its TYPE's body (frame_bodies.hpp: fields, offsets, pack and
+// unpack), as its own type so that the variant below tells the frames apart: READ_REQ and WRITE_ACK
+// share the REG_ADDR layout, READ_RESP and WRITE_REQ REG_VALUE, SNAPSHOT_RESP and TELEMETRY WINDOW.
 struct ReadReq : regmap::FrameReadReqBody {
   friend bool operator==(const ReadReq&, const ReadReq&) = default;
 };
@@ -46,9 +47,11 @@ struct WriteAck : regmap::FrameWriteAckBody {
   friend bool operator==(const WriteAck&, const WriteAck&) = default;
 };
 /// One captured window: the body of SNAPSHOT_RESP and TELEMETRY (seq, timestamp_cycles, count[],
-/// dir: bit n = channel n counting down at the end of the window, status: low byte of STATUS at capture).
+/// dir: bit n = channel n counting down at the end of the window, status: low byte of STATUS at
+/// capture).
 using Window = regmap::FrameTelemetryBody;
-static_assert(std::is_same_v<regmap::FrameSnapshotRespBody, Window>, "SNAPSHOT_RESP and TELEMETRY carry one window");
+static_assert(std::is_same_v<regmap::FrameSnapshotRespBody, Window>,
+              "SNAPSHOT_RESP and TELEMETRY carry one window");
 struct SnapshotResp {
   Window window;
   friend bool operator==(const SnapshotResp&, const SnapshotResp&) = default;
@@ -63,10 +66,13 @@ struct ErrorResp : regmap::FrameErrorBody {
   friend bool operator==(const ErrorResp&, const ErrorResp&) = default;
 };
 
-using Frame = std::variant<ReadReq, WriteReq, SnapshotReq, ReadResp, WriteAck, SnapshotResp, Telemetry, ErrorResp>;
+using Frame = std::variant<ReadReq, WriteReq, SnapshotReq, ReadResp, WriteAck, SnapshotResp,
+                           Telemetry, ErrorResp>;
 
 /// Bytes on the wire for a frame with body of n bytes: SYNC + LEN + TYPE + body + 2 CRC.
-[[nodiscard]] constexpr std::size_t frame_bytes(std::size_t body_bytes) { return body_bytes + 5; }
+[[nodiscard]] constexpr std::size_t frame_bytes(std::size_t body_bytes) {
+  return body_bytes + 5;
+}
 
 /// Body size of a frame TYPE, or nullopt for a code regmap.json does not define.
 [[nodiscard]] std::optional<std::size_t> body_bytes(std::uint8_t type);
@@ -92,14 +98,16 @@ void encode_into(const Frame& frame, std::vector<std::uint8_t>& out);
 /// under the first reason it failed. Invariant: every byte fed is either part of an accepted frame
 /// (frames_ok), counted in resync_bytes, or still pending.
 struct DecoderCounters {
-  std::uint64_t frames_ok = 0;        ///< frames accepted (CRC and length good)
-  std::uint64_t bad_crc = 0;          ///< candidates whose CRC did not match
-  std::uint64_t bad_length = 0;       ///< candidates whose LEN did not match their TYPE's body size
-  std::uint64_t unknown_type = 0;     ///< candidates with a TYPE regmap.json does not define
-  std::uint64_t resync_bytes = 0;     ///< bytes discarded: garbage before a SYNC and the SYNC of each rejected candidate
-  std::uint64_t telemetry_gaps = 0;   ///< times the telemetry sequence skipped forward
-  std::uint64_t telemetry_lost = 0;   ///< telemetry frames missing in those gaps
-  std::uint64_t telemetry_stale = 0;  ///< telemetry frames older than or equal to the last one (dropped)
+  std::uint64_t frames_ok = 0;     ///< frames accepted (CRC and length good)
+  std::uint64_t bad_crc = 0;       ///< candidates whose CRC did not match
+  std::uint64_t bad_length = 0;    ///< candidates whose LEN did not match their TYPE's body size
+  std::uint64_t unknown_type = 0;  ///< candidates with a TYPE regmap.json does not define
+  std::uint64_t resync_bytes =
+      0;  ///< bytes discarded: garbage before a SYNC and the SYNC of each rejected candidate
+  std::uint64_t telemetry_gaps = 0;  ///< times the telemetry sequence skipped forward
+  std::uint64_t telemetry_lost = 0;  ///< telemetry frames missing in those gaps
+  std::uint64_t telemetry_stale =
+      0;  ///< telemetry frames older than or equal to the last one (dropped)
   friend bool operator==(const DecoderCounters&, const DecoderCounters&) = default;
 };
 
@@ -119,11 +127,11 @@ class SequenceTracker {
   std::optional<std::uint32_t> last_;
 };
 
-/// Turns a byte stream cut into arbitrary chunks into frames. Never accepts a frame whose CRC fails or
-/// whose LEN differs from its TYPE's body size; after a rejected candidate it searches for the next
-/// SYNC from the byte after the rejected SYNC, so a good frame that follows garbage or a truncated
-/// frame is found. Telemetry frames go through a SequenceTracker: gaps are counted, stale frames
-/// (sequence not newer than the last) are counted and dropped.
+/// Turns a byte stream cut into arbitrary chunks into frames. Never accepts a frame whose CRC fails
+/// or whose LEN differs from its TYPE's body size; after a rejected candidate it searches for the
+/// next SYNC from the byte after the rejected SYNC, so a good frame that follows garbage or a
+/// truncated frame is found. Telemetry frames go through a SequenceTracker: gaps are counted, stale
+/// frames (sequence not newer than the last) are counted and dropped.
 class FrameDecoder {
  public:
   void feed(std::span<const std::uint8_t> bytes);
@@ -162,9 +170,9 @@ class PositionUnwrapper {
   std::int64_t value_ = 0;
 };
 
-/// Reconstructs a 64-bit clock-cycle count from the board's 32-bit free-running TIMESTAMP (wraps every
-/// 358 s at the board's 12 MHz, regmap::kBoardClockHz). Correct as long as observations are less than
-/// 2^32 cycles apart.
+/// Reconstructs a 64-bit clock-cycle count from the board's 32-bit free-running TIMESTAMP (wraps
+/// every 358 s at the board's 12 MHz, regmap::kBoardClockHz). Correct as long as observations are
+/// less than 2^32 cycles apart.
 class TimestampUnwrapper {
  public:
   explicit TimestampUnwrapper(double clk_hz);

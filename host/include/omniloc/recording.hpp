@@ -1,13 +1,14 @@
 // Recordings: the REC_DIR contract of issue 7, read and written exactly.
 //
-//   meta.json    {"field": name or path, "field_geometry": {...geometry file...} (optional; written by
+//   meta.json    {"field": name or path, "field_geometry": {...geometry file...} (optional; written
+//   by
 //                 every writer since issue 16, so that a recording replays without the field file),
 //                 "camera": {...camera block...}, "robot": {...robot block...},
 //                 "initial_pose": {"x_cm", "y_cm", "yaw_deg"} (optional)}
 //   encoders.csv t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg      one row per encoder window
-//   camera.csv   t_ms,file                              file: image (JPEG or PNG) relative to REC_DIR
-//   truth.csv    t_ms,x_cm,y_cm,yaw_deg                 optional
-//   poses.csv    t_ms,x_cm,y_cm,yaw_deg,source,match_error,search_range_cm   (output of replay)
+//   camera.csv   t_ms,file                              file: image (JPEG or PNG) relative to
+//   REC_DIR truth.csv    t_ms,x_cm,y_cm,yaw_deg                 optional poses.csv
+//   t_ms,x_cm,y_cm,yaw_deg,source,match_error,search_range_cm   (output of replay)
 //
 // Every error (RecordingError) names the file and, for CSV files, the line (1-based, header = 1).
 #pragma once
@@ -15,8 +16,8 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
-#include <memory>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -25,9 +26,9 @@
 #include <opencv2/core/mat.hpp>
 
 #include "omniloc/camera.hpp"
+#include "omniloc/conventions.hpp"
 #include "omniloc/feature_db.hpp"
 #include "omniloc/field.hpp"
-#include "omniloc/conventions.hpp"
 #include "omniloc/localizer.hpp"
 #include "omniloc/odometry.hpp"
 #include "omniloc/robot_config.hpp"
@@ -40,7 +41,7 @@ class RecordingError : public std::runtime_error {
 };
 
 struct RecordingMeta {
-  std::string field = "fira-robosot";  ///< geometry name or path, as written in meta.json
+  std::string field = "fira-robosot";       ///< geometry name or path, as written in meta.json
   std::optional<FieldSpec> field_geometry;  ///< the geometry itself (replay uses it before `field`)
   CameraModel camera;
   RobotConfig robot;
@@ -124,7 +125,7 @@ class CsvFile {
  private:
   std::filesystem::path path_;
   int fd_ = -1;
-  long long bytes_ = 0;    // whole rows written so far
+  long long bytes_ = 0;  // whole rows written so far
   double last_sync_s_ = 0.0;
 };
 
@@ -149,7 +150,8 @@ class TruthCsvWriter {
 /// offset, drift, uncertainty and epoch then. Replay does not read it (old recordings have none).
 struct ClockRow {
   std::uint32_t seq = 0;
-  double board_ms = 0.0, arrival_ms = 0.0, t_ms = 0.0, offset_ms = 0.0, drift_ppm = 0.0, uncertainty_ms = 0.0;
+  double board_ms = 0.0, arrival_ms = 0.0, t_ms = 0.0, offset_ms = 0.0, drift_ppm = 0.0,
+         uncertainty_ms = 0.0;
   std::uint32_t epoch = 0;
 };
 
@@ -182,8 +184,8 @@ class RecordingWriter {
   /// Writes frames/NNNNNN.jpg (or .png) and the camera.csv row.
   void add_frame(double t_ms, const cv::Mat& bgr);
   void add_truth(double t_ms, const Pose2& pose);
-  /// clock.csv (`seq,board_ms,arrival_ms,t_ms,offset_ms,drift_ppm,uncertainty_ms,epoch`), created at
-  /// the first row.
+  /// clock.csv (`seq,board_ms,arrival_ms,t_ms,offset_ms,drift_ppm,uncertainty_ms,epoch`), created
+  /// at the first row.
   void add_clock(const ClockRow& row);
   /// frame_times.csv (`t_ms,source,handover_ms`), created at the first row.
   void add_frame_time(const FrameTimeRow& row);
@@ -224,11 +226,13 @@ class PosesCsvWriter {
 
 /// The database for a field and camera from `cache_path` if it holds the right one, else built
 /// (10 cm grid) and saved there (the folder is created). `log` gets one line on what was done.
-[[nodiscard]] FeatureDb load_or_build_feature_db(const FieldGeometry& field, const CameraModel& camera,
-                                                 const std::filesystem::path& cache_path,
-                                                 const std::function<void(const std::string&)>& log = {});
-/// A cache file name for a field and camera: featuredb-<field fingerprint>-<camera fingerprint>.bin.
-[[nodiscard]] std::string feature_db_cache_name(const FieldGeometry& field, const CameraModel& camera);
+[[nodiscard]] FeatureDb load_or_build_feature_db(
+    const FieldGeometry& field, const CameraModel& camera, const std::filesystem::path& cache_path,
+    const std::function<void(const std::string&)>& log = {});
+/// A cache file name for a field and camera: featuredb-<field fingerprint>-<camera
+/// fingerprint>.bin.
+[[nodiscard]] std::string feature_db_cache_name(const FieldGeometry& field,
+                                                const CameraModel& camera);
 
 /// Mean, median, 95th percentile (nearest rank) and maximum of a set of errors.
 struct ErrorSummary {
@@ -244,7 +248,7 @@ struct ErrorSummary {
 struct ReplayResult {
   std::vector<LocalizedPose> poses;  ///< one per encoder window
   LocalizerStats stats;
-  std::size_t poses_without_fix = 0;  ///< source "none" (left out of the error figures)
+  std::size_t poses_without_fix = 0;              ///< source "none" (left out of the error figures)
   std::optional<ErrorSummary> position_error_cm;  ///< with truth.csv, over poses that have a fix
   std::optional<ErrorSummary> yaw_error_deg;
   /// Board time from the first window to the first pose with a fix (nullopt: never fixed; 0 with a
@@ -267,9 +271,9 @@ struct ReplaySettings {
 /// window that covers it), one pose per window; errors against truth.csv when present.
 /// `progress(done, total)` is called now and then with events processed. Throws
 /// std::invalid_argument for a side the field and camera cannot place (Localizer::set_side).
-[[nodiscard]] ReplayResult replay_recording(const Recording& recording, const LocalizerConfig& config,
-                                            const FieldGeometry& field, const FeatureDb& db,
-                                            const std::function<void(std::size_t, std::size_t)>& progress = {},
-                                            const ReplaySettings& settings = {});
+[[nodiscard]] ReplayResult replay_recording(
+    const Recording& recording, const LocalizerConfig& config, const FieldGeometry& field,
+    const FeatureDb& db, const std::function<void(std::size_t, std::size_t)>& progress = {},
+    const ReplaySettings& settings = {});
 
 }  // namespace omniloc

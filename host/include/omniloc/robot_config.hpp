@@ -30,13 +30,15 @@ inline constexpr int kMaxWheels = 4;  ///< EncoderWindow::counts has this many s
 /// Its encoder measures the speed of the robot's point under the wheel along the drive direction:
 /// V = u . (v + omega x p), p = distance (cos mount, sin mount), u = (cos drive, sin drive).
 struct WheelConfig {
-  double mount_angle_deg = 0.0;   ///< where the wheel sits: direction of its contact point from the centre
-  double distance_cm = 0.0;       ///< centre to contact point
-  double drive_angle_deg = 90.0;  ///< direction the contact point moves for a positive count (tangential
-                                  ///< wheels: mount + 90 turning the robot counter-clockwise, mount - 90 reversed)
+  double mount_angle_deg =
+      0.0;  ///< where the wheel sits: direction of its contact point from the centre
+  double distance_cm = 0.0;  ///< centre to contact point
+  double drive_angle_deg =
+      90.0;  ///< direction the contact point moves for a positive count (tangential
+             ///< wheels: mount + 90 turning the robot counter-clockwise, mount - 90 reversed)
   double wheel_radius_cm = 5.0;
-  double gear_ratio = 19.0;       ///< motor turns per wheel turn
-  int counts_per_rev = 500;       ///< encoder cycles (lines) per motor turn
+  double gear_ratio = 19.0;  ///< motor turns per wheel turn
+  int counts_per_rev = 500;  ///< encoder cycles (lines) per motor turn
   bool operator==(const WheelConfig&) const = default;
 };
 
@@ -44,23 +46,25 @@ struct WheelConfig {
 /// common/robots/default.json.
 struct RobotConfig {
   // --- required (recording contract) ---
-  double wheel_radius_cm = 5.0;     ///< r of equation (7)
-  double center_to_wheel_cm = 20.0; ///< R of equation (9)
-  double motor_angle_deg = 45.0;    ///< theta_m of equation (9)
-  double gear_ratio = 19.0;         ///< N of equation (10): motor turns per wheel turn
-  int counts_per_rev = 500;         ///< encoder cycles (lines) per motor turn
-  int decoding = 4;                 ///< quadrature decoding multiplier: 1, 2 or 4
+  double wheel_radius_cm = 5.0;      ///< r of equation (7)
+  double center_to_wheel_cm = 20.0;  ///< R of equation (9)
+  double motor_angle_deg = 45.0;     ///< theta_m of equation (9)
+  double gear_ratio = 19.0;          ///< N of equation (10): motor turns per wheel turn
+  int counts_per_rev = 500;          ///< encoder cycles (lines) per motor turn
+  int decoding = 4;                  ///< quadrature decoding multiplier: 1, 2 or 4
 
   /// The wheels one by one; empty = the symmetric shorthand above (four wheels of eq. (9)). When
   /// given, the five shorthand geometry members above are not used (and not read or written).
   std::vector<WheelConfig> wheels;
 
   // --- optional ---
-  double window_period_ms = 10.0;   ///< nominal board window (100 Hz); odometry uses timestamps
-  double clock_hz = 40.0e6;         ///< board clock (timestamps count its cycles)
-  double slip_threshold_cm_per_s = 5.0;  ///< LS residual rate above which a wheel is called slipping
-  double wheel_noise_cm_per_sqrt_cm = 0.01;  ///< random wheel travel noise; the threshold is at least 6 sigma
-  double max_accel_cm_per_s2 = 400.0;    ///< motion prior used to tell diagonal wheels apart
+  double window_period_ms = 10.0;  ///< nominal board window (100 Hz); odometry uses timestamps
+  double clock_hz = 40.0e6;        ///< board clock (timestamps count its cycles)
+  double slip_threshold_cm_per_s =
+      5.0;  ///< LS residual rate above which a wheel is called slipping
+  double wheel_noise_cm_per_sqrt_cm =
+      0.01;  ///< random wheel travel noise; the threshold is at least 6 sigma
+  double max_accel_cm_per_s2 = 400.0;      ///< motion prior used to tell diagonal wheels apart
   double odometry_noise_fraction = 0.005;  ///< 1-sigma position uncertainty growth per cm driven
   double gyro_arw_deg_per_sqrt_s = 0.01;   ///< gyro angle random walk, for yaw uncertainty
 
@@ -96,7 +100,8 @@ struct RobotConfig {
 
 /// Why a board with `board_channels` encoder channels cannot serve a robot with `robot_wheels`
 /// wheels (wheel_count), or nullopt when it can (the numbers are equal).
-[[nodiscard]] std::optional<std::string> board_channel_mismatch(int board_channels, int robot_wheels);
+[[nodiscard]] std::optional<std::string> board_channel_mismatch(int board_channels,
+                                                                int robot_wheels);
 
 /// config.validate(source).
 void validate_robot_config(const RobotConfig& config, const std::string& source);

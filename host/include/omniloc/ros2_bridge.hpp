@@ -47,7 +47,8 @@ struct QuaternionZ {
 
 /// A 6 x 6 row-major covariance over (x, y, z, roll, pitch, yaw) in m^2, m rad, rad^2, as ROS 2
 /// messages carry it, for a ground robot: sigma_xy_cm is the radial RMS (the datagram's
-/// `uncertainty_cm`), so x and y get sigma_xy^2 / 2 each; yaw sigma_yaw_deg; uncorrelated; z, roll and pitch fixed (0) as AMCL reports them.
+/// `uncertainty_cm`), so x and y get sigma_xy^2 / 2 each; yaw sigma_yaw_deg; uncorrelated; z, roll
+/// and pitch fixed (0) as AMCL reports them.
 [[nodiscard]] std::array<double, 36> planar_covariance(double sigma_xy_cm, double sigma_yaw_deg);
 
 /// builtin_interfaces/Time from milliseconds since the Unix epoch (sec may be negative; nanosec

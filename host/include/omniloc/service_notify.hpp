@@ -1,7 +1,8 @@
-// The daemon as a systemd service (Type=notify, packaging/systemd/omnilocd.service): READY=1 once it
-// runs, WATCHDOG=1 from its main loop at half the unit's WatchdogSec (so a hung loop is restarted,
-// while a robot with no board keeps its daemon), STATUS= the latest status line, STOPPING=1 at the
-// end. Through libsystemd's sd_notify; outside systemd (no NOTIFY_SOCKET) every call does nothing.
+// The daemon as a systemd service (Type=notify, packaging/systemd/omnilocd.service): READY=1 once
+// it runs, WATCHDOG=1 from its main loop at half the unit's WatchdogSec (so a hung loop is
+// restarted, while a robot with no board keeps its daemon), STATUS= the latest status line,
+// STOPPING=1 at the end. Through libsystemd's sd_notify; outside systemd (no NOTIFY_SOCKET) every
+// call does nothing.
 #pragma once
 
 #include <cstdint>

@@ -26,9 +26,9 @@ class NumberError : public std::invalid_argument {
 
 /// A whole decimal integer in [min, max] over the full unsigned 64-bit range; "-1" is refused,
 /// never wrapped.
-[[nodiscard]] std::uint64_t parse_uint(std::string_view text, std::string_view what,
-                                       std::uint64_t min = 0,
-                                       std::uint64_t max = std::numeric_limits<std::uint64_t>::max());
+[[nodiscard]] std::uint64_t parse_uint(
+    std::string_view text, std::string_view what, std::uint64_t min = 0,
+    std::uint64_t max = std::numeric_limits<std::uint64_t>::max());
 
 /// A whole finite decimal number in [min, max] ("12", "-3.5", "1e2"; not "inf", "nan", "1,5").
 [[nodiscard]] double parse_double(std::string_view text, std::string_view what,

@@ -23,7 +23,8 @@ enum class TransportErrorKind {
 
 class TransportError : public std::runtime_error {
  public:
-  TransportError(TransportErrorKind kind, const std::string& what) : std::runtime_error(what), kind_(kind) {}
+  TransportError(TransportErrorKind kind, const std::string& what)
+      : std::runtime_error(what), kind_(kind) {}
   [[nodiscard]] TransportErrorKind kind() const { return kind_; }
 
  private:
@@ -34,12 +35,12 @@ class TransportError : public std::runtime_error {
 struct TransportCounters {
   std::uint64_t bytes_written = 0;
   std::uint64_t bytes_read = 0;
-  std::uint64_t packets_in = 0;       ///< bridge packets received (USB: 512-byte bulk packets)
-  std::uint64_t line_overrun = 0;     ///< packets flagged OE (bridge's receive buffer overran)
-  std::uint64_t line_parity = 0;      ///< packets flagged PE
-  std::uint64_t line_framing = 0;     ///< packets flagged FE
-  std::uint64_t line_break = 0;       ///< packets flagged BI
-  std::uint64_t rx_dropped_bytes = 0; ///< bytes dropped because the host's receive buffer was full
+  std::uint64_t packets_in = 0;        ///< bridge packets received (USB: 512-byte bulk packets)
+  std::uint64_t line_overrun = 0;      ///< packets flagged OE (bridge's receive buffer overran)
+  std::uint64_t line_parity = 0;       ///< packets flagged PE
+  std::uint64_t line_framing = 0;      ///< packets flagged FE
+  std::uint64_t line_break = 0;        ///< packets flagged BI
+  std::uint64_t rx_dropped_bytes = 0;  ///< bytes dropped because the host's receive buffer was full
   std::uint64_t write_timeouts = 0;
 };
 
@@ -64,10 +65,12 @@ class Transport {
   virtual std::size_t read(std::span<std::uint8_t> out, std::chrono::milliseconds timeout) = 0;
   [[nodiscard]] virtual TransportStatus status() const = 0;
 
-  /// The clock that read() timeouts are measured in, and that BoardClient's deadlines use: wall time
-  /// for real hardware; a simulated board's own time for a simulated one (so that a board simulated
-  /// slower than real time never makes the host time out).
-  [[nodiscard]] virtual std::chrono::steady_clock::time_point now() const { return std::chrono::steady_clock::now(); }
+  /// The clock that read() timeouts are measured in, and that BoardClient's deadlines use: wall
+  /// time for real hardware; a simulated board's own time for a simulated one (so that a board
+  /// simulated slower than real time never makes the host time out).
+  [[nodiscard]] virtual std::chrono::steady_clock::time_point now() const {
+    return std::chrono::steady_clock::now();
+  }
 };
 
 }  // namespace omniloc

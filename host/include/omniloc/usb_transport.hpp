@@ -1,9 +1,10 @@
 // The board's USB bridge on the robot: FT2232H channel B as a UART, driven with libusb-1.0 directly
 // (docs/PROTOCOL.md explains why not libftdi1). Finds the board by VID/PID and product string (and
 // serial), configures the channel like libftdi would (reset, purge, H-series baud divisor, 8N1, no
-// flow control, 1 ms latency timer), writes with bulk OUT and reads with asynchronous bulk IN, removing
-// the two status bytes at the start of every packet and counting the line errors they report. An
-// unplug (LIBUSB_ERROR_NO_DEVICE) surfaces as TransportError kDeviceGone so the caller can reconnect.
+// flow control, 1 ms latency timer), writes with bulk OUT and reads with asynchronous bulk IN,
+// removing the two status bytes at the start of every packet and counting the line errors they
+// report. An unplug (LIBUSB_ERROR_NO_DEVICE) surfaces as TransportError kDeviceGone so the caller
+// can reconnect.
 #pragma once
 
 #include <chrono>
@@ -20,8 +21,8 @@ namespace omniloc {
 namespace ftdi {
 inline constexpr std::uint16_t kVid = 0x0403;
 inline constexpr std::uint16_t kPidFt2232h = 0x6010;
-inline constexpr int kInterfaceB = 1;          ///< USB interface number of channel B
-inline constexpr std::uint16_t kPortB = 2;     ///< channel B's index in wIndex of vendor requests
+inline constexpr int kInterfaceB = 1;       ///< USB interface number of channel B
+inline constexpr std::uint16_t kPortB = 2;  ///< channel B's index in wIndex of vendor requests
 inline constexpr std::uint8_t kEpOutB = 0x04;
 inline constexpr std::uint8_t kEpInB = 0x83;
 // Vendor requests (bmRequestType 0x40: vendor, device, host to device).
@@ -65,23 +66,26 @@ struct UsbBoardInfo {
   std::string manufacturer;
   std::string product;
   std::string serial;
-  bool is_omniloc = false;  ///< product string matches the one the EEPROM of an omniloc board carries
-  std::string error;        ///< why its strings could not be read (e.g. LIBUSB_ERROR_ACCESS), else empty
+  bool is_omniloc =
+      false;          ///< product string matches the one the EEPROM of an omniloc board carries
+  std::string error;  ///< why its strings could not be read (e.g. LIBUSB_ERROR_ACCESS), else empty
 };
 
 struct UsbTransportOptions {
   std::string product = "omniloc encoder board";
-  std::string serial;  ///< empty: the first board found
+  std::string serial;                      ///< empty: the first board found
   std::uint32_t baud = regmap::kUartBaud;  ///< the board's UART rate (common/regmap.json "link")
   std::uint8_t latency_ms = 1;
   std::chrono::milliseconds io_timeout{500};  ///< control and bulk-OUT transfers
-  int in_transfers = 4;                        ///< bulk-IN transfers kept in flight
-  int in_transfer_bytes = 4096;                ///< several 512-byte packets per transfer
-  std::size_t rx_buffer_bytes = 1 << 20;       ///< host-side buffer; beyond it bytes are dropped and counted
+  int in_transfers = 4;                       ///< bulk-IN transfers kept in flight
+  int in_transfer_bytes = 4096;               ///< several 512-byte packets per transfer
+  std::size_t rx_buffer_bytes =
+      1 << 20;  ///< host-side buffer; beyond it bytes are dropped and counted
 };
 
 /// Lists every FT2232H (0403:6010) on the bus, omniloc boards flagged.
-[[nodiscard]] std::vector<UsbBoardInfo> find_usb_boards(const std::string& product = UsbTransportOptions{}.product);
+[[nodiscard]] std::vector<UsbBoardInfo> find_usb_boards(
+    const std::string& product = UsbTransportOptions{}.product);
 
 class UsbTransport final : public Transport {
  public:

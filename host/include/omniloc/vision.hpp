@@ -2,17 +2,18 @@
 // (VisionModel, every key optional with its default here) and the LineExtractor that turns a BGR
 // frame into a robot-frame BearingScan plus an ExtractionReport.
 //
-// Extraction (docs/VISION.md, "Extraction"): the carpet colour comes from vision.carpet_hsv (written
-// by `omniloc calibrate`) or, when absent, from the frame (dominant colour next to the robot, the
-// calibration's own estimate). Each ray is walked over every pixel it touches (a 4-connected
-// traversal precomputed per camera, so a 1 px line cannot fall between samples), binned by integer
-// radius. A bin is "line" when one of its pixels is brighter by line_contrast.val_step AND less
-// saturated by line_contrast.sat_step than the carpet just before it on the ray (a running mean of
-// the carpet bins), "carpet" when a pixel has the carpet colour (value window following the light
-// per sector, frame to frame), else "other". A run of extraction.end_run_px "other" bins ends the
-// ray at its first bin, keeping the crossings before it: an obstacle when the carpet resumes behind
-// it, the carpet's end (walls, black floor) when it does not. Crossings use the database's gap rule
-// (line_scan.hpp). A frame with too little carpet, too few rays or crossings is "no measurement".
+// Extraction (docs/VISION.md, "Extraction"): the carpet colour comes from vision.carpet_hsv
+// (written by `omniloc calibrate`) or, when absent, from the frame (dominant colour next to the
+// robot, the calibration's own estimate). Each ray is walked over every pixel it touches (a
+// 4-connected traversal precomputed per camera, so a 1 px line cannot fall between samples), binned
+// by integer radius. A bin is "line" when one of its pixels is brighter by line_contrast.val_step
+// AND less saturated by line_contrast.sat_step than the carpet just before it on the ray (a running
+// mean of the carpet bins), "carpet" when a pixel has the carpet colour (value window following the
+// light per sector, frame to frame), else "other". A run of extraction.end_run_px "other" bins ends
+// the ray at its first bin, keeping the crossings before it: an obstacle when the carpet resumes
+// behind it, the carpet's end (walls, black floor) when it does not. Crossings use the database's
+// gap rule (line_scan.hpp). A frame with too little carpet, too few rays or crossings is "no
+// measurement".
 #pragma once
 
 #include <array>
@@ -42,7 +43,8 @@ struct CarpetHsv {
   bool operator==(const CarpetHsv&) const = default;
 };
 
-/// A line pixel is at least val_step brighter and sat_step less saturated than the carpet around it.
+/// A line pixel is at least val_step brighter and sat_step less saturated than the carpet around
+/// it.
 struct LineContrast {
   double val_step = 12.0;
   double sat_step = 8.0;
@@ -62,23 +64,27 @@ struct GoalHsv {
 
 /// The extraction's own thresholds ("vision": {"extraction": {...}}).
 struct ExtractionParams {
-  int end_run_px = 4;             ///< this many "other" bins in a row end the ray (a line's fringe is 1-2 px)
-  int carpet_resume_px = 4;       ///< carpet bins in a row behind an end: an obstacle, not the carpet's end
-  int resume_within_px = 40;      ///< ... looked for this far behind the end (a ball, a low robot)
+  int end_run_px = 4;  ///< this many "other" bins in a row end the ray (a line's fringe is 1-2 px)
+  int carpet_resume_px =
+      4;  ///< carpet bins in a row behind an end: an obstacle, not the carpet's end
+  int resume_within_px = 40;  ///< ... looked for this far behind the end (a ball, a low robot)
   double obstacle_window_deg = 30.0;  ///< an end this far inside the median end of the rays within
-  int obstacle_step_px = 8;           ///< +- window is an obstacle (a tall one hides the carpet behind it)
-  double edge_fraction = 0.5;     ///< a line's edge: where it first reaches this fraction from carpet to peak
-  int carpet_mean_px = 8;         ///< length (px) of the running carpet mean along a ray
-  int sectors = 16;               ///< light-following sectors around the image centre
-  double light_follow = 0.5;      ///< per frame, each sector's level moves this fraction towards what it saw
-  double light_range = 2.0;       ///< a sector's level stays within [ref / range, ref * range]
-  double val_sigmas = 4.0;        ///< estimated val_step = this many robust sigmas of the carpet's brightness
-  double sat_sigmas = 2.0;        ///< estimated sat_step = this many robust sigmas of its saturation
-  double min_val_step = 6.0;      ///< floors of the estimated steps (8-bit quantisation and noise)
+  int obstacle_step_px = 8;  ///< +- window is an obstacle (a tall one hides the carpet behind it)
+  double edge_fraction =
+      0.5;  ///< a line's edge: where it first reaches this fraction from carpet to peak
+  int carpet_mean_px = 8;  ///< length (px) of the running carpet mean along a ray
+  int sectors = 16;        ///< light-following sectors around the image centre
+  double light_follow =
+      0.5;  ///< per frame, each sector's level moves this fraction towards what it saw
+  double light_range = 2.0;  ///< a sector's level stays within [ref / range, ref * range]
+  double val_sigmas =
+      4.0;  ///< estimated val_step = this many robust sigmas of the carpet's brightness
+  double sat_sigmas = 2.0;    ///< estimated sat_step = this many robust sigmas of its saturation
+  double min_val_step = 6.0;  ///< floors of the estimated steps (8-bit quantisation and noise)
   double min_sat_step = 4.0;
   double min_carpet_fraction = 0.15;  ///< usable: this fraction of the visited bins is carpet ...
-  double min_rays_seen = 0.25;        ///< ... this fraction of the rays sees carpet beyond the body ...
-  int min_crossings = 20;             ///< ... and at least this many crossings (all rays)
+  double min_rays_seen = 0.25;  ///< ... this fraction of the rays sees carpet beyond the body ...
+  int min_crossings = 20;       ///< ... and at least this many crossings (all rays)
   bool operator==(const ExtractionParams&) const = default;
 };
 
@@ -99,8 +105,8 @@ struct GoalCueConfig {
   bool operator==(const GoalCueConfig&) const = default;
 };
 
-/// A camera's "vision" block. Absent keys keep these defaults; absent carpet_hsv / line_contrast are
-/// estimated from the frames.
+/// A camera's "vision" block. Absent keys keep these defaults; absent carpet_hsv / line_contrast
+/// are estimated from the frames.
 struct VisionModel {
   std::optional<CarpetHsv> carpet_hsv;
   std::optional<LineContrast> line_contrast;
@@ -122,7 +128,8 @@ struct CarpetColour {
   double hue = 0.0, hue_half_width = 0.0;
   double sat_min = 0.0, val_min = 0.0, val_max = 255.0;
   double median_sat = 0.0, median_val = 0.0;
-  double line_val_step = 0.0;  // a line pixel is at least this much brighter than the carpet around it
+  double line_val_step =
+      0.0;  // a line pixel is at least this much brighter than the carpet around it
   double line_sat_step = 0.0;  // ... and at least this much less saturated
 };
 
@@ -132,11 +139,13 @@ struct CarpetColour {
 /// the median; value 0.5 to 1.5 times the median.
 /// With allow_grey a dominant grey (median saturation below 20) is a carpet of brightness alone:
 /// every hue, no saturation floor (a carpet chosen by its structure, estimate_carpet_colour).
-[[nodiscard]] std::optional<CarpetColour> carpet_colour_from_samples(const std::vector<cv::Vec3b>& hsv, std::string* why,
-                                                                     bool allow_grey = false);
+[[nodiscard]] std::optional<CarpetColour> carpet_colour_from_samples(
+    const std::vector<cv::Vec3b>& hsv, std::string* why, bool allow_grey = false);
 
 /// True for a carpet window of brightness alone (a grey carpet: every hue, no saturation floor).
-[[nodiscard]] inline bool is_grey_carpet(double hue_half_width) { return hue_half_width >= 90.0; }
+[[nodiscard]] inline bool is_grey_carpet(double hue_half_width) {
+  return hue_half_width >= 90.0;
+}
 
 /// Where estimate_carpet_colour looks: the ring [inner_px, outer_px] about centre_px (inner 0: the
 /// robot's body is not known and the run from the centre is taken as the robot), pixels where
@@ -154,7 +163,8 @@ struct CarpetSearch {
 /// vote (lines as wide as a fortieth of the ring bridged); the winner must be seen on 40 % of the
 /// bearings; its window from its own pixels (carpet_colour_from_samples, grey allowed). nullopt
 /// with `why` ("no carpet: ...") when no colour qualifies.
-[[nodiscard]] std::optional<CarpetColour> estimate_carpet_colour(const cv::Mat& bgr, const CarpetSearch& search,
+[[nodiscard]] std::optional<CarpetColour> estimate_carpet_colour(const cv::Mat& bgr,
+                                                                 const CarpetSearch& search,
                                                                  std::string* why);
 
 /// The q-quantile (0..1) and the robust sigma (1.4826 MAD) of samples.
@@ -164,23 +174,24 @@ struct CarpetSearch {
 /// One end of a ray that is not the carpet's end: a blob on the carpet (robot, person, ball).
 struct ObstacleBlob {
   int first_ray = 0, last_ray = 0;  ///< bearing-scan ray indices (last may wrap below first)
-  int near_radius_px = 0;           ///< the smallest end radius among its rays (a sample index, line_scan.hpp)
+  int near_radius_px =
+      0;  ///< the smallest end radius among its rays (a sample index, line_scan.hpp)
 };
 
 struct ExtractionReport {
   bool usable = false;
-  std::string reason;          ///< why not usable ("" when usable)
-  int rays = 0;                ///< rays walked (not hidden)
-  int rays_seen = 0;           ///< rays that saw carpet beyond the body
+  std::string reason;  ///< why not usable ("" when usable)
+  int rays = 0;        ///< rays walked (not hidden)
+  int rays_seen = 0;   ///< rays that saw carpet beyond the body
   int crossings = 0;
   int rays_ended_at_carpet_edge = 0, rays_ended_at_obstacle = 0;
   double carpet_fraction = 0.0;  ///< carpet bins / bins visited
-  /// Per ray: where the carpet ends (sample index as the scan's radii, line_scan.hpp; 0 hidden, 255 not reached: carpet to the end of the view
-  /// or the walk stopped after four crossings).
+  /// Per ray: where the carpet ends (sample index as the scan's radii, line_scan.hpp; 0 hidden, 255
+  /// not reached: carpet to the end of the view or the walk stopped after four crossings).
   std::vector<std::uint8_t> carpet_end_px;
   std::vector<ObstacleBlob> obstacles;
-  CarpetHsv carpet;            ///< the carpet window used (estimated or from the camera)
-  LineContrast contrast;       ///< the steps used
+  CarpetHsv carpet;       ///< the carpet window used (estimated or from the camera)
+  LineContrast contrast;  ///< the steps used
   bool carpet_estimated = false;
 };
 
@@ -191,15 +202,19 @@ class LineExtractor {
   explicit LineExtractor(const CameraModel& camera);
   /// Throws std::invalid_argument for an image that does not match the camera, or rays_per_degree
   /// outside 1..20.
-  [[nodiscard]] BearingScan extract(const cv::Mat& bgr, int rays_per_degree, ExtractionReport* report = nullptr);
+  [[nodiscard]] BearingScan extract(const cv::Mat& bgr, int rays_per_degree,
+                                    ExtractionReport* report = nullptr);
   /// The straightforward walk (every pixel's H, S, V computed on every ray that touches it): the
   /// reference extract() must equal byte for byte (tests) and is measured against (bench_vision).
-  [[nodiscard]] BearingScan extract_reference(const cv::Mat& bgr, int rays_per_degree, ExtractionReport* report = nullptr);
+  [[nodiscard]] BearingScan extract_reference(const cv::Mat& bgr, int rays_per_degree,
+                                              ExtractionReport* report = nullptr);
 
   /// The ways of walking the rays; all give the same bytes (scan and report, frame after frame).
   enum class Walk {
-    kFast,       ///< extract(): the code plane converted 8 pixels at a time (AVX2) and 8 rays walked in lockstep
-    kBinWalk,    ///< the scalar code plane and the scalar bin-by-bin walk (extract() before the lockstep walk)
+    kFast,  ///< extract(): the code plane converted 8 pixels at a time (AVX2) and 8 rays walked in
+            ///< lockstep
+    kBinWalk,    ///< the scalar code plane and the scalar bin-by-bin walk (extract() before the
+                 ///< lockstep walk)
     kReference,  ///< extract_reference()
   };
   [[nodiscard]] BearingScan extract_with(Walk how, const cv::Mat& bgr, int rays_per_degree,
@@ -217,14 +232,15 @@ class LineExtractor {
     std::vector<std::int32_t> pixel;
     std::vector<std::int32_t> row_u0, row_u1;
     // ... and bin by bin: ray j's bins are [bin_begin[j], bin_begin[j + 1]), the first numbered
-    // first_bin[j] and the others following; a bin's pixels are bin_pixel and bin_pixel + bin_second.
+    // first_bin[j] and the others following; a bin's pixels are bin_pixel and bin_pixel +
+    // bin_second.
     bool bins_ok = false;
     std::vector<std::int32_t> bin_begin, bin_pixel;
     std::vector<std::int16_t> bin_second;  // 0, +-1 or +-width: a 4-connected neighbour
     std::vector<std::uint8_t> first_bin;
-    // Where along the ray each pixel's centre lies (in samples: px / scan_step_px), and per bin its outer pixel's (a bin b
-    // holds the centres in (b - 1, b] and reports its brighter pixel, the outer one on a rising
-    // edge): where a line's edge is placed between two bins.
+    // Where along the ray each pixel's centre lies (in samples: px / scan_step_px), and per bin its
+    // outer pixel's (a bin b holds the centres in (b - 1, b] and reports its brighter pixel, the
+    // outer one on a rising edge): where a line's edge is placed between two bins.
     std::vector<float> along, bin_centre;
     // The lockstep walk's layout: the rays that are not hidden, 8 to a group (one per lane, the
     // last group padded with empty lanes). Group g's steps are [lock_begin[g], lock_begin[g + 1]);
@@ -237,11 +253,15 @@ class LineExtractor {
   struct Frame;
   const RayTable& table(int rays_per_degree, std::size_t step_bytes);
   bool ensure_carpet(const cv::Mat& bgr, std::string* why);
-  BearingScan extract_impl(const cv::Mat& bgr, int rays_per_degree, ExtractionReport* report, Walk how);
-  BearingScan extract_once(const cv::Mat& bgr, int rays_per_degree, ExtractionReport* report, Walk how);
+  BearingScan extract_impl(const cv::Mat& bgr, int rays_per_degree, ExtractionReport* report,
+                           Walk how);
+  BearingScan extract_once(const cv::Mat& bgr, int rays_per_degree, ExtractionReport* report,
+                           Walk how);
   template <class Pixel>
-  void walk_rays(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr, Pixel px) const;
-  void walk(const cv::Mat& bgr, const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const;
+  void walk_rays(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr,
+                 Pixel px) const;
+  void walk(const cv::Mat& bgr, const RayTable& t, BearingScan& scan, ExtractionReport& rep,
+            Frame& fr) const;
   void bin_layout(RayTable& t, int n) const;
   void code_pixels(const cv::Mat& bgr, const RayTable& t, int sat_min);
   bool code_pixels_avx2(const cv::Mat& bgr, const RayTable& t, int sat_min);

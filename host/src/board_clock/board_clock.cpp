@@ -19,28 +19,34 @@ double median(std::vector<double>& v) {
 }
 
 void require(bool ok, const char* field, double value) {
-  if (!ok) throw std::invalid_argument(std::string("board clock config: ") + field + " out of range (got " +
-                                       std::to_string(value) + ")");
+  if (!ok)
+    throw std::invalid_argument(std::string("board clock config: ") + field +
+                                " out of range (got " + std::to_string(value) + ")");
 }
 
 }  // namespace
 
 void BoardClockConfig::validate() const {
-  require(std::isfinite(bucket_ms) && bucket_ms >= 10.0 && bucket_ms <= 60'000.0, "bucket_ms (10 .. 60000)", bucket_ms);
+  require(std::isfinite(bucket_ms) && bucket_ms >= 10.0 && bucket_ms <= 60'000.0,
+          "bucket_ms (10 .. 60000)", bucket_ms);
   require(span_buckets >= 3 && span_buckets <= 10'000, "span_buckets (3 .. 10000)", span_buckets);
-  require(min_fit_buckets >= 2 && min_fit_buckets <= span_buckets, "min_fit_buckets (2 .. span_buckets)", min_fit_buckets);
+  require(min_fit_buckets >= 2 && min_fit_buckets <= span_buckets,
+          "min_fit_buckets (2 .. span_buckets)", min_fit_buckets);
   require(converged_buckets >= min_fit_buckets && converged_buckets <= span_buckets,
           "converged_buckets (min_fit_buckets .. span_buckets)", converged_buckets);
-  require(std::isfinite(reset_back_ms) && reset_back_ms >= 0.0, "reset_back_ms (>= 0)", reset_back_ms);
+  require(std::isfinite(reset_back_ms) && reset_back_ms >= 0.0, "reset_back_ms (>= 0)",
+          reset_back_ms);
   require(std::isfinite(jump_ms) && jump_ms > 0.0, "jump_ms (> 0)", jump_ms);
   require(std::isfinite(jump_hold_ms) && jump_hold_ms >= 0.0, "jump_hold_ms (>= 0)", jump_hold_ms);
-  require(std::isfinite(max_drift_ppm) && max_drift_ppm > 0.0 && max_drift_ppm <= 1e5, "max_drift_ppm (0 .. 1e5]",
-          max_drift_ppm);
-  require(std::isfinite(min_uncertainty_ms) && min_uncertainty_ms >= 0.0, "min_uncertainty_ms (>= 0)",
-          min_uncertainty_ms);
+  require(std::isfinite(max_drift_ppm) && max_drift_ppm > 0.0 && max_drift_ppm <= 1e5,
+          "max_drift_ppm (0 .. 1e5]", max_drift_ppm);
+  require(std::isfinite(min_uncertainty_ms) && min_uncertainty_ms >= 0.0,
+          "min_uncertainty_ms (>= 0)", min_uncertainty_ms);
 }
 
-BoardClockModel::BoardClockModel(const BoardClockConfig& config) : config_(config) { config_.validate(); }
+BoardClockModel::BoardClockModel(const BoardClockConfig& config) : config_(config) {
+  config_.validate();
+}
 
 void BoardClockModel::reanchor(double board_ms) {
   ++epoch_;
@@ -62,7 +68,8 @@ void BoardClockModel::refit() {
   slopes.reserve(n * (n - 1) / 2);
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t j = i + 1; j < n; ++j)
-      slopes.push_back((buckets_[j].min_d_ms - buckets_[i].min_d_ms) / (buckets_[j].board_ms - buckets_[i].board_ms));
+      slopes.push_back((buckets_[j].min_d_ms - buckets_[i].min_d_ms) /
+                       (buckets_[j].board_ms - buckets_[i].board_ms));
   const double max_slope = config_.max_drift_ppm * 1e-6;
   slope_ = std::clamp(median(slopes), -max_slope, max_slope);
   ref_board_ms_ = buckets_[n - 1].board_ms;
@@ -79,7 +86,8 @@ void BoardClockModel::refit() {
   scatter_ms_ = 1.4826 * mad;
   const double mb = sum_b / static_cast<double>(n);
   double var_b = 0.0;
-  for (std::size_t i = 0; i < n; ++i) var_b += (buckets_[i].board_ms - mb) * (buckets_[i].board_ms - mb);
+  for (std::size_t i = 0; i < n; ++i)
+    var_b += (buckets_[i].board_ms - mb) * (buckets_[i].board_ms - mb);
   var_b /= static_cast<double>(n);
   // Medians are ~1.25 times less efficient than means on normal scatter.
   slope_sigma_ = var_b > 0 ? 1.25 * scatter_ms_ / std::sqrt(static_cast<double>(n) * var_b) : 0.0;
@@ -110,7 +118,8 @@ BoardClockEstimate BoardClockModel::map(double board_ms) const {
 }
 
 BoardClockEstimate BoardClockModel::add(double board_ms, double arrival_host_ms) {
-  if (epoch_ == 0 || restart_ || board_ms < last_board_ms_ - config_.reset_back_ms) reanchor(board_ms);
+  if (epoch_ == 0 || restart_ || board_ms < last_board_ms_ - config_.reset_back_ms)
+    reanchor(board_ms);
   restart_ = false;
   const double d = arrival_host_ms - board_ms;
   if (fit_buckets_ >= config_.min_fit_buckets) {  // before: the minimum is still being found
@@ -147,15 +156,19 @@ BoardClockEstimate BoardClockModel::add(double board_ms, double arrival_host_ms)
     ref_board_ms_ = board_ms;
   }
   last_ = map(board_ms);
-  last_.host_ms = std::min(last_.host_ms, arrival_host_ms);  // a window cannot have ended after it arrived
+  last_.host_ms =
+      std::min(last_.host_ms, arrival_host_ms);  // a window cannot have ended after it arrived
   return last_;
 }
 
-std::optional<double> continued_board_ms(const BoardTimeMark& last, std::uint32_t raw_cycles, double clock_hz,
-                                         double arrival_ms) {
-  if (!(clock_hz > 0.0) || std::abs(clock_hz - last.clock_hz) > 1e-9 * clock_hz) return std::nullopt;
+std::optional<double> continued_board_ms(const BoardTimeMark& last, std::uint32_t raw_cycles,
+                                         double clock_hz, double arrival_ms) {
+  if (!(clock_hz > 0.0) || std::abs(clock_hz - last.clock_hz) > 1e-9 * clock_hz)
+    return std::nullopt;
   const double wrap_ms = 4294967296.0 / clock_hz * 1000.0;
-  const double advance_ms = static_cast<double>(static_cast<std::uint32_t>(raw_cycles - last.raw_cycles)) / clock_hz * 1000.0;
+  const double advance_ms =
+      static_cast<double>(static_cast<std::uint32_t>(raw_cycles - last.raw_cycles)) / clock_hz *
+      1000.0;
   const double gap_ms = arrival_ms - last.arrival_ms;
   const double wraps = std::max(0.0, std::round((gap_ms - advance_ms) / wrap_ms));
   const double elapsed_ms = advance_ms + wraps * wrap_ms;
@@ -165,8 +178,8 @@ std::optional<double> continued_board_ms(const BoardTimeMark& last, std::uint32_
 
 std::string BoardClockModel::describe() const {
   char buf[96];
-  std::snprintf(buf, sizeof buf, "offset %+.3f ms, drift %+.1f ppm, +-%.2f ms%s", last_.offset_ms, last_.drift_ppm,
-                last_.uncertainty_ms, last_.converged ? "" : " (settling)");
+  std::snprintf(buf, sizeof buf, "offset %+.3f ms, drift %+.1f ppm, +-%.2f ms%s", last_.offset_ms,
+                last_.drift_ppm, last_.uncertainty_ms, last_.converged ? "" : " (settling)");
   return buf;
 }
 

@@ -9,15 +9,15 @@
 #include <stdexcept>
 
 #include <ceres/ceres.h>
-#include <nlohmann/json.hpp>
 #include <Eigen/Dense>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "handedness.hpp"
 #include "omniloc/calibration.hpp"
+#include "omniloc/conventions.hpp"
 #include "omniloc/line_scan.hpp"
 #include "omniloc/matcher.hpp"
-#include "omniloc/conventions.hpp"
-#include "handedness.hpp"
 #include "self_check.hpp"
 #include "step_pictures.hpp"
 
@@ -25,7 +25,8 @@ namespace omniloc {
 
 namespace detail {
 // RadialModel's numerator n(x) = a1 x + a2 x^2 + a3 x^3 + a4 x^4 and denominator q(x) = 1 + e2 x^2
-// + e3 x^3 + e4 x^4 with their derivatives, for doubles and Ceres jets alike (p = {a1..a4, e2..e4}).
+// + e3 x^3 + e4 x^4 with their derivatives, for doubles and Ceres jets alike (p = {a1..a4,
+// e2..e4}).
 template <class T>
 T radial_n(const T* p, const T& x) {
   return x * (p[0] + x * (p[1] + x * (p[2] + x * p[3])));
@@ -58,13 +59,15 @@ double RadialModel::ground_cm(double r) const {
 double RadialModel::slope_cm_per_px(double r) const {
   const auto p = params_of(*this);
   const double x = r / scale_px, q = detail::radial_q(p.data(), x);
-  return (detail::radial_dn(p.data(), x) * q - detail::radial_n(p.data(), x) * detail::radial_dq(p.data(), x)) / (q * q) /
-         scale_px;
+  return (detail::radial_dn(p.data(), x) * q -
+          detail::radial_n(p.data(), x) * detail::radial_dq(p.data(), x)) /
+         (q * q) / scale_px;
 }
 bool RadialModel::monotonic_up_to(double r_max) const {
   const auto p = params_of(*this);
   for (double r = 0.0; r <= r_max; r += 0.5)
-    if (!(detail::radial_q(p.data(), r / scale_px) > 0.0) || !(slope_cm_per_px(r) > 0.0)) return false;
+    if (!(detail::radial_q(p.data(), r / scale_px) > 0.0) || !(slope_cm_per_px(r) > 0.0))
+      return false;
   return true;
 }
 
@@ -84,11 +87,14 @@ class FieldDistance {
         if (lines.is_white(cell_centre(i, j))) src(j, i) = 0;
     cv::Mat labels;
     cv::distanceTransform(src, dist_, labels, cv::DIST_L2, 5, cv::DIST_LABEL_PIXEL);
-    label_xy_.assign(static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_) + 1, Eigen::Vector2f::Zero());
+    label_xy_.assign(static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_) + 1,
+                     Eigen::Vector2f::Zero());
     nearest_.create(ny_, nx_);
     for (int j = 0; j < ny_; ++j)
       for (int i = 0; i < nx_; ++i)
-        if (src(j, i) == 0) label_xy_[static_cast<std::size_t>(labels.at<int>(j, i))] = cell_centre(i, j).cast<float>();
+        if (src(j, i) == 0)
+          label_xy_[static_cast<std::size_t>(labels.at<int>(j, i))] =
+              cell_centre(i, j).cast<float>();
     for (int j = 0; j < ny_; ++j)
       for (int i = 0; i < nx_; ++i) nearest_(j, i) = labels.at<int>(j, i);
     // The coarse search's copy: 2 cm cells, whole cm, 255 = far (a quarter of the memory, so
@@ -96,10 +102,12 @@ class FieldDistance {
     coarse_.create((ny_ + 1) / 2, (nx_ + 1) / 2);
     for (int j = 0; j < coarse_.rows; ++j)
       for (int i = 0; i < coarse_.cols; ++i)
-        coarse_(j, i) = static_cast<std::uint8_t>(std::min(255.0f, std::round(dist_(std::min(2 * j, ny_ - 1), std::min(2 * i, nx_ - 1)))));
+        coarse_(j, i) = static_cast<std::uint8_t>(std::min(
+            255.0f, std::round(dist_(std::min(2 * j, ny_ - 1), std::min(2 * i, nx_ - 1)))));
   }
   [[nodiscard]] double coarse_distance_cm(double x, double y) const {
-    const double fx = (x + kMarginCm) * 0.5, fy = (y + kMarginCm) * 0.5;  // NaN (beyond a horizon) is far too
+    const double fx = (x + kMarginCm) * 0.5,
+                 fy = (y + kMarginCm) * 0.5;  // NaN (beyond a horizon) is far too
     if (!(fx >= 0.0 && fy >= 0.0 && fx < coarse_.cols && fy < coarse_.rows)) return 1e4;
     return coarse_(static_cast<int>(fy), static_cast<int>(fx));
   }
@@ -120,7 +128,9 @@ class FieldDistance {
 
  private:
   static constexpr double kMarginCm = 150.0;
-  [[nodiscard]] static Eigen::Vector2d cell_centre(int i, int j) { return {i - kMarginCm + 0.5, j - kMarginCm + 0.5}; }
+  [[nodiscard]] static Eigen::Vector2d cell_centre(int i, int j) {
+    return {i - kMarginCm + 0.5, j - kMarginCm + 0.5};
+  }
   int nx_ = 0, ny_ = 0;
   cv::Mat1f dist_;
   cv::Mat1i nearest_;
@@ -133,10 +143,11 @@ struct PolarPixel {
   double r, phi;  // px, rad
 };
 
-std::vector<PolarPixel> to_polar(const std::vector<Eigen::Vector2d>& px, const Eigen::Vector2d& c, bool mirrored,
-                                 std::size_t max_count) {
+std::vector<PolarPixel> to_polar(const std::vector<Eigen::Vector2d>& px, const Eigen::Vector2d& c,
+                                 bool mirrored, std::size_t max_count) {
   std::vector<PolarPixel> out;
-  const std::size_t stride = std::max<std::size_t>(1, px.size() / std::max<std::size_t>(1, max_count));
+  const std::size_t stride =
+      std::max<std::size_t>(1, px.size() / std::max<std::size_t>(1, max_count));
   for (std::size_t i = 0; i < px.size(); i += stride) {
     const double du = (px[i].x() - c.x()) * (mirrored ? -1.0 : 1.0), dv = c.y() - px[i].y();
     out.push_back({std::hypot(du, dv), std::atan2(dv, du)});
@@ -145,12 +156,13 @@ std::vector<PolarPixel> to_polar(const std::vector<Eigen::Vector2d>& px, const E
 }
 
 // Image residual (px) of one line pixel against the nearest line point q, as the fit measures it:
-// the ground error split radially (through 1 / d') and tangentially (through r / d). b = RadialModel's
-// {a1..a4, e2..e4}. False beyond the model's horizon or where it turns over (no distance there):
-// Ceres then takes a shorter step.
+// the ground error split radially (through 1 / d') and tangentially (through r / d). b =
+// RadialModel's {a1..a4, e2..e4}. False beyond the model's horizon or where it turns over (no
+// distance there): Ceres then takes a shorter step.
 template <class T>
-bool pixel_residual(const T* c, const T* b, const T* alpha, double u, double v, double sign, double inv_scale,
-                    const Eigen::Vector2d& pos, const Eigen::Vector2d& q, T* res) {
+bool pixel_residual(const T* c, const T* b, const T* alpha, double u, double v, double sign,
+                    double inv_scale, const Eigen::Vector2d& pos, const Eigen::Vector2d& q,
+                    T* res) {
   const T du = sign * (T(u) - c[0]), dv = c[1] - T(v);
   const T r = ceres::sqrt(du * du + dv * dv);
   const T x = r * inv_scale;
@@ -197,8 +209,9 @@ struct FrameState {
   double yaw_rad = 0.0;    // known heading (0 when unknown)
 };
 
-double residual_px(const FitState& s, double alpha, const Eigen::Vector2d& pos, const Eigen::Vector2d& px,
-                   const FieldDistance& fd, Eigen::Vector2d* ground_err_cm) {
+double residual_px(const FitState& s, double alpha, const Eigen::Vector2d& pos,
+                   const Eigen::Vector2d& px, const FieldDistance& fd,
+                   Eigen::Vector2d* ground_err_cm) {
   const double sign = s.mirrored ? -1.0 : 1.0;
   const double du = sign * (px.x() - s.c[0]), dv = s.c[1] - px.y();
   const double r = std::hypot(du, dv), th = std::atan2(dv, du) - alpha;
@@ -207,7 +220,9 @@ double residual_px(const FitState& s, double alpha, const Eigen::Vector2d& pos, 
   const Eigen::Vector2d q = fd.nearest(g);
   if (ground_err_cm != nullptr) *ground_err_cm = g - q;
   double res[2];
-  if (!std::isfinite(d) || !pixel_residual(s.c, s.b, &alpha, px.x(), px.y(), sign, 1.0 / s.scale, pos, q, res)) return 1e9;
+  if (!std::isfinite(d) ||
+      !pixel_residual(s.c, s.b, &alpha, px.x(), px.y(), sign, 1.0 / s.scale, pos, q, res))
+    return 1e9;
   const double e = std::hypot(res[0], res[1]);
   return std::isfinite(e) ? e : 1e9;
 }
@@ -230,14 +245,16 @@ struct CoarseHit {
 
 // Truncated mean image distance of the pixels to the lines for a mapping and every heading.
 // Fills scores[a] for alpha = a * step.
-void score_yaws(const std::vector<PolarPixel>& pp, const CoarseMap& m, double rv, const Eigen::Vector2d& pos,
-                const FieldDistance& fd, double step_rad, double trunc_px, std::vector<double>& scores) {
+void score_yaws(const std::vector<PolarPixel>& pp, const CoarseMap& m, double rv,
+                const Eigen::Vector2d& pos, const FieldDistance& fd, double step_rad,
+                double trunc_px, std::vector<double>& scores) {
   const std::size_t n = pp.size();
   std::vector<double> d(n), k(n);
   for (std::size_t i = 0; i < n; ++i) {
     d[i] = coarse_d(m, pp[i].r, rv);
     const double eps = 0.5;
-    const double slope = (coarse_d(m, pp[i].r + eps, rv) - coarse_d(m, pp[i].r - eps, rv)) / (2 * eps);
+    const double slope =
+        (coarse_d(m, pp[i].r + eps, rv) - coarse_d(m, pp[i].r - eps, rv)) / (2 * eps);
     k[i] = std::sqrt((1.0 / slope) * (pp[i].r / d[i]));
   }
   std::vector<double> cp(n), sp(n);
@@ -246,11 +263,13 @@ void score_yaws(const std::vector<PolarPixel>& pp, const CoarseMap& m, double rv
     sp[i] = std::sin(pp[i].phi);
   }
   for (std::size_t a = 0; a < scores.size(); ++a) {
-    const double alpha = static_cast<double>(a) * step_rad, ca = std::cos(alpha), sa = std::sin(alpha);
+    const double alpha = static_cast<double>(a) * step_rad, ca = std::cos(alpha),
+                 sa = std::sin(alpha);
     double s = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
       // cos / sin of (phi - alpha) by the angle-difference formulas: no trigonometry per pixel.
-      const double gx = pos.x() + d[i] * (cp[i] * ca + sp[i] * sa), gy = pos.y() + d[i] * (sp[i] * ca - cp[i] * sa);
+      const double gx = pos.x() + d[i] * (cp[i] * ca + sp[i] * sa),
+                   gy = pos.y() + d[i] * (sp[i] * ca - cp[i] * sa);
       s += std::min(fd.coarse_distance_cm(gx, gy) * k[i], trunc_px);
     }
     scores[a] = s / static_cast<double>(n);
@@ -264,13 +283,15 @@ void check_frames(const std::vector<CalibrationFrame>& frames, const FieldGeomet
     if (f.image.empty()) throw std::runtime_error(f.name + ": empty image");
     if (f.image.size() != size) {
       throw std::runtime_error(f.name + ": image is " + std::to_string(f.image.cols) + " x " +
-                               std::to_string(f.image.rows) + ", but " + frames.front().name + " is " +
-                               std::to_string(size.width) + " x " + std::to_string(size.height) +
+                               std::to_string(f.image.rows) + ", but " + frames.front().name +
+                               " is " + std::to_string(size.width) + " x " +
+                               std::to_string(size.height) +
                                ": all frames of one camera have one size");
     }
     if (!on_carpet(field, f.position_cm)) {
       throw std::runtime_error(f.name + ": pose (" + std::to_string(f.position_cm.x()) + ", " +
-                               std::to_string(f.position_cm.y()) + ") cm is not on the carpet of " + field.name);
+                               std::to_string(f.position_cm.y()) + ") cm is not on the carpet of " +
+                               field.name);
     }
   }
 }
@@ -287,7 +308,8 @@ struct CoarseResult {
 
 // Brute force on one frame (centre = rim centre): 7 shapes x 51 scales x 120 headings per
 // handedness, then 0.5 deg, 1 % scale and +-0.1 shape around the best.
-CoarseResult coarse_search(const FrameAnalysis& a, const CalibrationFrame& f, const FieldDistance& fd,
+CoarseResult coarse_search(const FrameAnalysis& a, const CalibrationFrame& f,
+                           const FieldDistance& fd,
                            const std::function<void(const std::string&)>& say) {
   const double rv = a.view_radius_px;
   const std::vector<double> shapes{0.01, 0.3, 0.5, 0.65, 0.8, 0.9, 0.95};
@@ -298,7 +320,8 @@ CoarseResult coarse_search(const FrameAnalysis& a, const CalibrationFrame& f, co
     cv::Mat1f& grid = out.grid.score_px[mir];
     grid.create(detail::CoarseGrid::kScales, kCoarseHeadings);
     grid.setTo(1e9f);
-    say(std::string("coarse search (") + (mir ? "mirrored" : "not mirrored") + "): 7 shapes x 51 scales x 120 headings");
+    say(std::string("coarse search (") + (mir ? "mirrored" : "not mirrored") +
+        "): 7 shapes x 51 scales x 120 headings");
     CoarseHit& best = out.best[mir];
     const auto pp = to_polar(a.line_pixels, a.rim.centre_px, mir == 1, 1000);
     for (double x : shapes) {
@@ -306,7 +329,8 @@ CoarseResult coarse_search(const FrameAnalysis& a, const CalibrationFrame& f, co
         const CoarseMap m{detail::CoarseGrid::view_cm(si), x};
         score_yaws(pp, m, rv, f.position_cm, fd, 2 * kPi / kCoarseHeadings, kCoarseTruncPx, scores);
         for (int k = 0; k < kCoarseHeadings; ++k) {
-          grid(si, k) = std::min(grid(si, k), static_cast<float>(scores[static_cast<std::size_t>(k)]));  // best shape
+          grid(si, k) = std::min(
+              grid(si, k), static_cast<float>(scores[static_cast<std::size_t>(k)]));  // best shape
           if (scores[static_cast<std::size_t>(k)] < best.score) {
             best = {scores[static_cast<std::size_t>(k)], m, k * 2 * kPi / kCoarseHeadings};
             out.heading_scores[mir] = scores;
@@ -345,8 +369,10 @@ void initial_model(const CoarseHit& hit, FitState& st) {
   for (int i = 0; i < 100; ++i) {
     const double x = std::min((i + 1) / 100.0 * 1.1, 0.999 / hit.map.x);
     const double d = coarse_d(hit.map, x * st.scale, st.scale);
-    if (rational) A.row(i) << x, -d * x * x, -d * x * x * x, -d * x * x * x * x;
-    else A.row(i) << x, x * x, x * x * x, x * x * x * x;
+    if (rational)
+      A.row(i) << x, -d * x * x, -d * x * x * x, -d * x * x * x * x;
+    else
+      A.row(i) << x, x * x, x * x * x, x * x * x * x;
     y(i) = d;
   }
   const Eigen::Vector4d b = A.colPivHouseholderQr().solve(y);
@@ -358,11 +384,12 @@ void initial_model(const CoarseHit& hit, FitState& st) {
 // Robust refinement: Huber (1 px) on the image residual, pixels beyond a shrinking truncation
 // dropped, nearest line points re-associated between solves. Frames with a known heading share
 // one yaw offset (`shared_angle`); the others have their own heading term.
-void refine(FitState& st, std::vector<FrameState>& fs, double& shared_angle, const FieldDistance& fd,
-            const std::function<void(const std::string&)>& say) {
+void refine(FitState& st, std::vector<FrameState>& fs, double& shared_angle,
+            const FieldDistance& fd, const std::function<void(const std::string&)>& say) {
   const double trunc_schedule[] = {8.0, 6.0, 4.0, 3.0, 3.0, 3.0, 3.0, 3.0, 3.0, 3.0, 3.0, 3.0};
   auto ring_of = [&](const Eigen::Vector2d& p) {
-    return static_cast<std::size_t>(std::min(63.0, std::hypot(p.x() - st.c[0], p.y() - st.c[1]) / 10.0));
+    return static_cast<std::size_t>(
+        std::min(63.0, std::hypot(p.x() - st.c[0], p.y() - st.c[1]) / 10.0));
   };
   for (std::size_t it = 0; it < std::size(trunc_schedule); ++it) {
     // Every 10 px ring of radii weighs alike (square root of the inverse pixel count, 1/3..3):
@@ -384,39 +411,47 @@ void refine(FitState& st, std::vector<FrameState>& fs, double& shared_angle, con
       const std::size_t stride = std::max<std::size_t>(1, lp.size() / 6000);
       const double sign = st.mirrored ? -1.0 : 1.0;
       for (std::size_t j = 0; j < lp.size(); j += stride) {
-        if (residual_px(st, alpha, s.frame->position_cm, lp[j], fd, nullptr) > trunc_schedule[it]) continue;
+        if (residual_px(st, alpha, s.frame->position_cm, lp[j], fd, nullptr) > trunc_schedule[it])
+          continue;
         const double du = sign * (lp[j].x() - st.c[0]), dv = st.c[1] - lp[j].y();
         const double d = st.model().ground_cm(std::hypot(du, dv));
         const double th = std::atan2(dv, du) - alpha;
-        const Eigen::Vector2d g = s.frame->position_cm + d * Eigen::Vector2d(std::cos(th), std::sin(th));
+        const Eigen::Vector2d g =
+            s.frame->position_cm + d * Eigen::Vector2d(std::cos(th), std::sin(th));
         auto* cost = new ceres::AutoDiffCostFunction<PixelCost, 2, 2, 7, 1>(
-            new PixelCost{lp[j].x(), lp[j].y(), sign, 1.0 / st.scale, s.yaw_rad, s.frame->position_cm, fd.nearest(g)});
-        const double w = std::clamp(
-            std::sqrt(static_cast<double>(ring_total) / std::max(1, rings) / std::max(1, ring[ring_of(lp[j])])), 1.0 / 3.0, 3.0);
-        problem.AddResidualBlock(cost, new ceres::ScaledLoss(new ceres::HuberLoss(1.0), w * w, ceres::TAKE_OWNERSHIP), st.c,
-                                 st.b, angle);
+            new PixelCost{lp[j].x(), lp[j].y(), sign, 1.0 / st.scale, s.yaw_rad,
+                          s.frame->position_cm, fd.nearest(g)});
+        const double w = std::clamp(std::sqrt(static_cast<double>(ring_total) / std::max(1, rings) /
+                                              std::max(1, ring[ring_of(lp[j])])),
+                                    1.0 / 3.0, 3.0);
+        problem.AddResidualBlock(
+            cost, new ceres::ScaledLoss(new ceres::HuberLoss(1.0), w * w, ceres::TAKE_OWNERSHIP),
+            st.c, st.b, angle);
         ++used;
       }
     }
     if (used < 50) {
-      throw std::runtime_error(fs.front().frame->name + ": nothing fits: only " + std::to_string(used) +
+      throw std::runtime_error(fs.front().frame->name + ": nothing fits: only " +
+                               std::to_string(used) +
                                " line pixels lie near the field model at the best coarse camera");
     }
     // The form's fixed terms: the quartic's denominator, the rational form's a2..a4.
-    problem.SetManifold(st.b, new ceres::SubsetManifold(7, st.form == RadialForm::kQuartic ? std::vector<int>{4, 5, 6}
-                                                                                           : std::vector<int>{1, 2, 3}));
+    problem.SetManifold(st.b, new ceres::SubsetManifold(7, st.form == RadialForm::kQuartic
+                                                               ? std::vector<int>{4, 5, 6}
+                                                               : std::vector<int>{1, 2, 3}));
     ceres::Solver::Options so;
     so.linear_solver_type = ceres::DENSE_QR;
     so.max_num_iterations = 50;
-    // Quiet: a step past the rational form's horizon fails to evaluate by design (PixelCost says so)
-    // and Ceres would warn about each on stderr; the progress callback reports the refinement.
+    // Quiet: a step past the rational form's horizon fails to evaluate by design (PixelCost says
+    // so) and Ceres would warn about each on stderr; the progress callback reports the refinement.
     so.logging_type = ceres::SILENT;
     so.num_threads = 1;
     ceres::Solver::Summary sum;
     ceres::Solve(so, &problem, &sum);
-    say("refinement " + std::to_string(it + 1) + "/" + std::to_string(std::size(trunc_schedule)) + ": " +
-        std::to_string(used) + " pixels within " + std::to_string(trunc_schedule[it]) + " px, centre (" +
-        std::to_string(st.c[0]) + ", " + std::to_string(st.c[1]) + "), cost " + std::to_string(sum.final_cost));
+    say("refinement " + std::to_string(it + 1) + "/" + std::to_string(std::size(trunc_schedule)) +
+        ": " + std::to_string(used) + " pixels within " + std::to_string(trunc_schedule[it]) +
+        " px, centre (" + std::to_string(st.c[0]) + ", " + std::to_string(st.c[1]) + "), cost " +
+        std::to_string(sum.final_cost));
   }
   for (auto& s : fs)
     if (s.frame->yaw_deg) s.angle_rad = shared_angle;
@@ -428,15 +463,17 @@ void show_residuals(const FitState& st, const std::vector<FrameState>& fs, const
   for (const auto& s : fs) {
     const double alpha = s.angle_rad - s.yaw_rad;
     std::vector<double> e_px;
-    for (const auto& p : s.analysis->line_pixels) e_px.push_back(residual_px(st, alpha, s.frame->position_cm, p, fd, nullptr));
+    for (const auto& p : s.analysis->line_pixels)
+      e_px.push_back(residual_px(st, alpha, s.frame->position_cm, p, fd, nullptr));
     pictures(s.frame->name, "6-residuals",
-             detail::residuals_picture(s.frame->image, s.analysis->line_pixels, e_px, inlier_threshold_px));
+             detail::residuals_picture(s.frame->image, s.analysis->line_pixels, e_px,
+                                       inlier_threshold_px));
   }
 }
 
 // Residuals per frame over every line pixel, and the totals.
-void measure_residuals(const FitState& st, const std::vector<FrameState>& fs, const FieldDistance& fd,
-                       CalibrationResult& res) {
+void measure_residuals(const FitState& st, const std::vector<FrameState>& fs,
+                       const FieldDistance& fd, CalibrationResult& res) {
   std::vector<double> all_px;
   double sum_px2 = 0.0, sum_cm2 = 0.0;
   int inl_total = 0;
@@ -461,17 +498,20 @@ void measure_residuals(const FitState& st, const std::vector<FrameState>& fs, co
     ff.line_pixels = static_cast<int>(e_px.size());
     ff.rms_px = std::sqrt(s2 / std::max(1, ff.inliers));
     ff.rms_cm = std::sqrt(c2 / std::max(1, ff.inliers));
-    std::nth_element(e_px.begin(), e_px.begin() + static_cast<std::ptrdiff_t>(e_px.size() / 2), e_px.end());
+    std::nth_element(e_px.begin(), e_px.begin() + static_cast<std::ptrdiff_t>(e_px.size() / 2),
+                     e_px.end());
     ff.median_px = e_px[e_px.size() / 2];
     sum_px2 += s2;
     sum_cm2 += c2;
     inl_total += ff.inliers;
     res.fits.push_back(ff);
   }
-  res.inlier_fraction = static_cast<double>(inl_total) / std::max<double>(1.0, static_cast<double>(all_px.size()));
+  res.inlier_fraction =
+      static_cast<double>(inl_total) / std::max<double>(1.0, static_cast<double>(all_px.size()));
   res.rms_px = std::sqrt(sum_px2 / std::max(1, inl_total));
   res.rms_cm = std::sqrt(sum_cm2 / std::max(1, inl_total));
-  std::nth_element(all_px.begin(), all_px.begin() + static_cast<std::ptrdiff_t>(all_px.size() / 2), all_px.end());
+  std::nth_element(all_px.begin(), all_px.begin() + static_cast<std::ptrdiff_t>(all_px.size() / 2),
+                   all_px.end());
   res.median_px = all_px[all_px.size() / 2];
 }
 
@@ -489,7 +529,8 @@ void measured_radii(const FitState& st, const std::vector<FrameState>& fs, const
       for (double sgn : {-1.0, 1.0}) {
         for (int k = 1; k <= 20; ++k) {
           const Eigen::Vector2d q = p + sgn * k * dir;
-          const int u = static_cast<int>(std::lround(q.x())), v = static_cast<int>(std::lround(q.y()));
+          const int u = static_cast<int>(std::lround(q.x())),
+                    v = static_cast<int>(std::lround(q.y()));
           if (u < 0 || v < 0 || u >= lm.cols || v >= lm.rows || !lm.at<std::uint8_t>(v, u)) break;
           ++n;
         }
@@ -497,14 +538,16 @@ void measured_radii(const FitState& st, const std::vector<FrameState>& fs, const
       return n;
     };
     for (const auto& p : s.analysis->line_pixels) {
-      if (residual_px(st, alpha, s.frame->position_cm, p, fd, nullptr) > res.inlier_threshold_px) continue;
+      if (residual_px(st, alpha, s.frame->position_cm, p, fd, nullptr) > res.inlier_threshold_px)
+        continue;
       const Eigen::Vector2d radial = (p - c).normalized(), tangential(-radial.y(), radial.x());
       if (run(p, radial) < run(p, tangential)) crossing_r.push_back((p - c).norm());
     }
   }
   if (crossing_r.size() < 20) {
-    throw std::runtime_error(fs.front().frame->name +
-                             ": nothing fits: no line seen crossing the rays, the mapping is not measured");
+    throw std::runtime_error(
+        fs.front().frame->name +
+        ": nothing fits: no line seen crossing the rays, the mapping is not measured");
   }
   std::sort(crossing_r.begin(), crossing_r.end());
   res.measured_min_px = crossing_r[crossing_r.size() / 20];
@@ -514,8 +557,8 @@ void measured_radii(const FitState& st, const std::vector<FrameState>& fs, const
 // The camera in the project's model. Unknown headings: the offset is the image angle of the
 // robot's x axis with the robot facing field x (heading 0); the twin (180 deg away) fits the
 // symmetric field equally.
-void build_camera(const FitState& st, const std::vector<FrameState>& fs, double yaw_offset_rad, const cv::Size& size,
-                  CalibrationResult& res) {
+void build_camera(const FitState& st, const std::vector<FrameState>& fs, double yaw_offset_rad,
+                  const cv::Size& size, CalibrationResult& res) {
   const FrameAnalysis& a0 = res.analyses.front();
   CameraModel& cam = res.camera;
   cam.width_px = size.width;
@@ -525,15 +568,19 @@ void build_camera(const FitState& st, const std::vector<FrameState>& fs, double 
   cam.yaw_offset_deg = wrap_deg(rad_to_deg(yaw_offset_rad));
   for (std::size_t i = 0; i < fs.size(); ++i) {
     FrameFit& ff = res.fits[i];
-    ff.yaw_deg = fs[i].frame->yaw_deg ? *fs[i].frame->yaw_deg : wrap_deg(cam.yaw_offset_deg - ff.image_angle_of_field_x_deg);
+    ff.yaw_deg = fs[i].frame->yaw_deg
+                     ? *fs[i].frame->yaw_deg
+                     : wrap_deg(cam.yaw_offset_deg - ff.image_angle_of_field_x_deg);
   }
   // The table reaches as far as the lines measured the mapping, not only to where the carpet ends
-  // all round: the line extraction ends each ray at the carpet's edge or an obstacle frame by frame,
-  // so a robot or a goal near the calibration spot no longer shrinks the view of every later frame.
-  // (Any length: the scan samples a long view more coarsely, CameraModel::scan_step_px.)
+  // all round: the line extraction ends each ray at the carpet's edge or an obstacle frame by
+  // frame, so a robot or a goal near the calibration spot no longer shrinks the view of every later
+  // frame. (Any length: the scan samples a long view more coarsely, CameraModel::scan_step_px.)
   const double lut_end =
-      std::max(res.view_radius_px, res.radial.monotonic_up_to(res.measured_max_px) ? res.measured_max_px : 0.0);
-  for (double r = 0.0; r < lut_end; r += 4.0) cam.radius_lut.push_back({r, res.radial.ground_cm(r)});
+      std::max(res.view_radius_px,
+               res.radial.monotonic_up_to(res.measured_max_px) ? res.measured_max_px : 0.0);
+  for (double r = 0.0; r < lut_end; r += 4.0)
+    cam.radius_lut.push_back({r, res.radial.ground_cm(r)});
   cam.radius_lut.push_back({lut_end, res.radial.ground_cm(lut_end)});
   cam.body_radius_px = a0.body_radius_px;
   for (const auto& m : a0.masts_image) {
@@ -551,13 +598,16 @@ namespace {
 void measure_venue_goals(const std::vector<CalibrationFrame>& frames, const FieldGeometry& field,
                          const GoalColourOptions& options, CalibrationResult& res) {
   GoalColour at_max = GoalColour::kUnknown;
-  bool conflict = res.yaw_offset_ambiguous;  // the offset may be the twin's: the ends cannot be told
+  bool conflict =
+      res.yaw_offset_ambiguous;  // the offset may be the twin's: the ends cannot be told
   for (std::size_t i = 0; i < frames.size(); ++i) {
     const GoalColours g = measure_goal_colours(frames[i].image, res.analyses[i], options);
-    for (const auto& [mine, best] : {std::pair{&g.blue, &res.goals.blue}, std::pair{&g.yellow, &res.goals.yellow}})
+    for (const auto& [mine, best] :
+         {std::pair{&g.blue, &res.goals.blue}, std::pair{&g.yellow, &res.goals.yellow}})
       if (*mine && (!*best || (*mine)->pixels > (*best)->pixels)) *best = *mine;
     if (!frames[i].yaw_deg) continue;
-    const GoalColour c = goal_colour_at_x_max(g, res.camera, frames[i].position_cm, *frames[i].yaw_deg, field);
+    const GoalColour c =
+        goal_colour_at_x_max(g, res.camera, frames[i].position_cm, *frames[i].yaw_deg, field);
     if (c == GoalColour::kUnknown) continue;
     conflict = conflict || (at_max != GoalColour::kUnknown && at_max != c);
     at_max = c;
@@ -576,11 +626,13 @@ namespace {
 constexpr double kMinLineRecall = 0.4;
 constexpr int kMinRecallPoints = 100;
 
-void self_check(const std::vector<CalibrationFrame>& frames, const FieldGeometry& field, CalibrationResult& res) {
+void self_check(const std::vector<CalibrationFrame>& frames, const FieldGeometry& field,
+                CalibrationResult& res) {
   for (std::size_t i = 0; i < frames.size(); ++i) {
     FrameFit& ff = res.fits[i];
     const Pose2 pose{frames[i].position_cm.x(), frames[i].position_cm.y(), ff.yaw_deg};
-    const detail::LineRecall lr = detail::model_line_recall(res.camera, res.analyses[i], pose, field);
+    const detail::LineRecall lr =
+        detail::model_line_recall(res.camera, res.analyses[i], pose, field);
     ff.line_recall = lr.fraction();
     ff.recall_points = lr.expected;
   }
@@ -588,10 +640,13 @@ void self_check(const std::vector<CalibrationFrame>& frames, const FieldGeometry
     const FrameFit& ff = res.fits[i];
     if (ff.recall_points < kMinRecallPoints || ff.line_recall >= kMinLineRecall) continue;
     throw std::runtime_error(
-        frames[i].name + ": self-check failed: only " + std::to_string(static_cast<int>(100 * ff.line_recall)) +
-        " % of the " + std::to_string(ff.recall_points) + " line points the fitted camera puts on the carpet are seen as lines (at least " +
+        frames[i].name + ": self-check failed: only " +
+        std::to_string(static_cast<int>(100 * ff.line_recall)) + " % of the " +
+        std::to_string(ff.recall_points) +
+        " line points the fitted camera puts on the carpet are seen as lines (at least " +
         std::to_string(static_cast<int>(100 * kMinLineRecall)) +
-        " %): the camera is wrong (see --debug-dir's residuals; check the pose and field, give --center with --rim-radius, "
+        " %): the camera is wrong (see --debug-dir's residuals; check the pose and field, give "
+        "--center with --rim-radius, "
         "or add a frame at another spot)");
   }
 }
@@ -599,21 +654,23 @@ void self_check(const std::vector<CalibrationFrame>& frames, const FieldGeometry
 // What decides the handedness: the team's --mirrored, or frames that can tell it (then the lines'
 // scores decide); with neither, the handedness is unknown and no camera is written, since the
 // lines' choice would be a guess (wrong in 13 of 19 centre-spot trials of issue [1/4]).
-std::string decide_handedness(const std::vector<CalibrationFrame>& frames, const FieldGeometry& field,
-                              const std::optional<bool>& given) {
+std::string decide_handedness(const std::vector<CalibrationFrame>& frames,
+                              const FieldGeometry& field, const std::optional<bool>& given) {
   if (given) return "given (--mirrored)";
   const double separation_cm = MatchOptions{}.ambiguity_separation_cm;
-  if (auto evidence = detail::handedness_evidence(frames, field, separation_cm)) return "the lines: " + *evidence;
+  if (auto evidence = detail::handedness_evidence(frames, field, separation_cm))
+    return "the lines: " + *evidence;
   throw std::runtime_error(
-      frames.front().name + ": handedness unknown: every frame stands on a mirror axis of " + field.name +
-      "'s lines (within " + std::to_string(static_cast<int>(separation_cm / 2)) +
-      " cm), where a mirrored camera sees what an unmirrored one sees: give --mirrored yes|no, or add a frame at a "
+      frames.front().name + ": handedness unknown: every frame stands on a mirror axis of " +
+      field.name + "'s lines (within " + std::to_string(static_cast<int>(separation_cm / 2)) +
+      " cm), where a mirrored camera sees what an unmirrored one sees: give --mirrored yes|no, or "
+      "add a frame at a "
       "known spot off the axes (or two frames whose known headings differ)");
 }
 }  // namespace
 
-CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, const FieldGeometry& field,
-                                   const CalibrationOptions& options) {
+CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames,
+                                   const FieldGeometry& field, const CalibrationOptions& options) {
   const std::function<void(const std::string&)> say = [&](const std::string& m) {
     if (options.progress) options.progress(m);
   };
@@ -623,8 +680,9 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, 
     say(f.name + ": finding the mirror rim, carpet, lines, body and masts");
     res.analyses.push_back(analyse_frame(f.image, f.name, options.hints, options.step_pictures));
     const auto& a = res.analyses.back();
-    say(f.name + ": rim (" + std::to_string(a.rim.centre_px.x()) + ", " + std::to_string(a.rim.centre_px.y()) +
-        ") r " + std::to_string(a.rim.radius_px) + " px, " + std::to_string(a.line_pixels.size()) + " line pixels");
+    say(f.name + ": rim (" + std::to_string(a.rim.centre_px.x()) + ", " +
+        std::to_string(a.rim.centre_px.y()) + ") r " + std::to_string(a.rim.radius_px) + " px, " +
+        std::to_string(a.line_pixels.size()) + " line pixels");
   }
   res.handedness_from = decide_handedness(frames, field, options.hints.mirrored);
   say("building the field's distance transform");
@@ -634,7 +692,8 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, 
 
   const CoarseResult coarse = coarse_search(a0, frames.front(), fd, say);
   if (options.step_pictures)
-    options.step_pictures(frames.front().name, "5-coarse", detail::coarse_picture(coarse.grid, kCoarseTruncPx));
+    options.step_pictures(frames.front().name, "5-coarse",
+                          detail::coarse_picture(coarse.grid, kCoarseTruncPx));
   res.unmirrored_score = coarse.best[0].score;
   res.mirrored_score = coarse.best[1].score;
   // Within 3 %: the lines seen do not tell the handedness (a view symmetric about the robot); the
@@ -646,9 +705,10 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, 
   if (options.hints.mirrored) res.mirrored_ambiguous = false;
   const CoarseHit& hit = coarse.best[mir];
   say("coarse best: " + std::string(mir ? "mirrored" : "not mirrored") + ", heading term " +
-      std::to_string(rad_to_deg(hit.alpha)) + " deg, d(" + std::to_string(rv) + " px) = " +
-      std::to_string(hit.map.dv_cm) + " cm, shape " + std::to_string(hit.map.x) + ", truncated mean " +
-      std::to_string(hit.score) + " px" + (res.mirrored_ambiguous ? " (handedness ambiguous)" : ""));
+      std::to_string(rad_to_deg(hit.alpha)) + " deg, d(" + std::to_string(rv) +
+      " px) = " + std::to_string(hit.map.dv_cm) + " cm, shape " + std::to_string(hit.map.x) +
+      ", truncated mean " + std::to_string(hit.score) + " px" +
+      (res.mirrored_ambiguous ? " (handedness ambiguous)" : ""));
 
   FitState st{};
   st.c[0] = a0.rim.centre_px.x();
@@ -680,25 +740,29 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, 
   res.inlier_threshold_px = 3.0;  // a 5 cm line far away is 1-2 px: 3 px is one line width off
   // The view: where the carpet ends all round in every frame.
   res.view_radius_px = rv;
-  for (const auto& a : res.analyses) res.view_radius_px = std::min(res.view_radius_px, a.view_radius_px);
+  for (const auto& a : res.analyses)
+    res.view_radius_px = std::min(res.view_radius_px, a.view_radius_px);
   std::vector<double> line_r;
   const auto monotonic = [&] {
     line_r.clear();
     for (const auto& a : res.analyses)
-      for (const auto& p : a.line_pixels) line_r.push_back(std::hypot(p.x() - st.c[0], p.y() - st.c[1]));
+      for (const auto& p : a.line_pixels)
+        line_r.push_back(std::hypot(p.x() - st.c[0], p.y() - st.c[1]));
     std::sort(line_r.begin(), line_r.end());
     const RadialModel m = st.model();
     return m.monotonic_up_to(std::max(line_r.empty() ? 0.0 : line_r.back(), res.view_radius_px)) &&
            m.ground_cm(res.view_radius_px) > 0;
   };
   // The quartic first; where it turns over within the lines' reach (a mirror whose floor distance
-  // climbs towards its horizon, which no polynomial follows), the rational form from the same start.
+  // climbs towards its horizon, which no polynomial follows), the rational form from the same
+  // start.
   const FitState start = st;
   const std::vector<FrameState> fs_start = fs;
   const double shared_start = shared_angle;
   refine(st, fs, shared_angle, fd, say);
   if (!monotonic()) {
-    say("the quartic turns over within the lines' reach: fitting the rational form (the mirror's horizon)");
+    say("the quartic turns over within the lines' reach: fitting the rational form (the mirror's "
+        "horizon)");
     st = start;
     st.form = RadialForm::kRational;
     fs = fs_start;
@@ -706,27 +770,38 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, 
     initial_model(hit, st);
     refine(st, fs, shared_angle, fd, say);
   }
-  // Before the refusals below (non-monotonic model, too few inliers): their cause is in this picture.
-  if (options.step_pictures) show_residuals(st, fs, fd, res.inlier_threshold_px, options.step_pictures);
+  // Before the refusals below (non-monotonic model, too few inliers): their cause is in this
+  // picture.
+  if (options.step_pictures)
+    show_residuals(st, fs, fd, res.inlier_threshold_px, options.step_pictures);
   res.radial = st.model();
   if (!monotonic()) {
     const double r_used = line_r.empty() ? 0.0 : line_r.back();
     // Say where the lines were: a band of radii measures the mapping only there.
-    const auto pct = [&](double q) { return static_cast<int>(line_r[static_cast<std::size_t>(q * static_cast<double>(line_r.size() - 1))]); };
-    throw std::runtime_error(frames.front().name + ": nothing fits: neither the quartic nor the rational radial model is monotonic over the " +
-                             std::to_string(static_cast<int>(r_used)) + " px the lines span (90 % of the line pixels lie between " +
-                             std::to_string(pct(0.05)) + " and " + std::to_string(pct(0.95)) +
-                             " px from the centre: add a frame where lines cross the view at other distances)");
+    const auto pct = [&](double q) {
+      return static_cast<int>(
+          line_r[static_cast<std::size_t>(q * static_cast<double>(line_r.size() - 1))]);
+    };
+    throw std::runtime_error(
+        frames.front().name +
+        ": nothing fits: neither the quartic nor the rational radial model is monotonic over the " +
+        std::to_string(static_cast<int>(r_used)) +
+        " px the lines span (90 % of the line pixels lie between " + std::to_string(pct(0.05)) +
+        " and " + std::to_string(pct(0.95)) +
+        " px from the centre: add a frame where lines cross the view at other distances)");
   }
   measure_residuals(st, fs, fd, res);
   // Most line pixels must lie on the model: otherwise the pose, the field or the frame is wrong.
   if (res.inlier_fraction < 0.4) {
     throw std::runtime_error(frames.front().name + ": nothing fits: only " +
-                             std::to_string(static_cast<int>(100 * res.inlier_fraction)) + " % of the line pixels lie within " +
-                             std::to_string(res.inlier_threshold_px) + " px of the field model at the best camera (wrong pose or field?)");
+                             std::to_string(static_cast<int>(100 * res.inlier_fraction)) +
+                             " % of the line pixels lie within " +
+                             std::to_string(res.inlier_threshold_px) +
+                             " px of the field model at the best camera (wrong pose or field?)");
   }
   measured_radii(st, fs, fd, res);
-  build_camera(st, fs, any_known ? shared_angle : fs.front().angle_rad, frames.front().image.size(), res);
+  build_camera(st, fs, any_known ? shared_angle : fs.front().angle_rad, frames.front().image.size(),
+               res);
   self_check(frames, field, res);
   // Twin of the first frame: its best coarse heading term at least 30 deg from the fitted one.
   FrameFit& f0 = res.fits.front();
@@ -735,7 +810,8 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, 
   const auto& sc = coarse.heading_scores[mir];
   for (int k = 0; k < kCoarseHeadings; ++k) {
     const double a_deg = k * 360.0 / kCoarseHeadings;
-    if (std::abs(angle_diff_deg(a_deg, rad_to_deg(hit.alpha))) < 30.0 || !(sc[static_cast<std::size_t>(k)] < f0.twin_score))
+    if (std::abs(angle_diff_deg(a_deg, rad_to_deg(hit.alpha))) < 30.0 ||
+        !(sc[static_cast<std::size_t>(k)] < f0.twin_score))
       continue;
     f0.twin_score = sc[static_cast<std::size_t>(k)];
     f0.twin_yaw_deg = wrap_deg(f0.yaw_deg + f0.image_angle_of_field_x_deg - a_deg);
@@ -743,9 +819,10 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames, 
   // The field is point-symmetric about its centre: from there (within the localizer's ambiguity
   // separation) the lines look the same at the offset 180 deg away, whatever the scores say. One
   // frame elsewhere tells them apart (the offset is shared).
-  res.yaw_offset_ambiguous = std::all_of(frames.begin(), frames.end(), [&](const CalibrationFrame& f) {
-    return (f.position_cm - field.centre_cm()).norm() < MatchOptions{}.ambiguity_separation_cm;
-  });
+  res.yaw_offset_ambiguous =
+      std::all_of(frames.begin(), frames.end(), [&](const CalibrationFrame& f) {
+        return (f.position_cm - field.centre_cm()).norm() < MatchOptions{}.ambiguity_separation_cm;
+      });
   res.rim = a0.rim;
   res.carpet = a0.carpet;
   measure_venue_goals(frames, field, options.goal_colours, res);
@@ -756,60 +833,84 @@ namespace {
 // The venue's colour model (schema in docs/CALIBRATION.md; read by the vision configuration).
 nlohmann::ordered_json vision_json(const CalibrationResult& r) {
   nlohmann::ordered_json v;
-  v["carpet_hsv"] = {{"hue", r.carpet.hue}, {"hue_half_width", r.carpet.hue_half_width}, {"sat_min", r.carpet.sat_min},
-                     {"val_min", r.carpet.val_min}, {"val_max", r.carpet.val_max}};
+  v["carpet_hsv"] = {{"hue", r.carpet.hue},
+                     {"hue_half_width", r.carpet.hue_half_width},
+                     {"sat_min", r.carpet.sat_min},
+                     {"val_min", r.carpet.val_min},
+                     {"val_max", r.carpet.val_max}};
   v["line_contrast"] = {{"val_step", r.carpet.line_val_step}, {"sat_step", r.carpet.line_sat_step}};
   nlohmann::ordered_json goals = nlohmann::ordered_json::object();
-  for (const auto& [name, g] : {std::pair{"blue", &r.goals.blue}, std::pair{"yellow", &r.goals.yellow}}) {
+  for (const auto& [name, g] :
+       {std::pair{"blue", &r.goals.blue}, std::pair{"yellow", &r.goals.yellow}}) {
     if (!*g) continue;
     const HsvClass& c = (*g)->colour;
-    goals[name] = {{"hue", c.hue}, {"hue_half_width", c.hue_half_width}, {"sat_min", c.sat_min}, {"val_min", c.val_min}};
+    goals[name] = {{"hue", c.hue},
+                   {"hue_half_width", c.hue_half_width},
+                   {"sat_min", c.sat_min},
+                   {"val_min", c.val_min}};
   }
   v["goals"] = goals;
-  if (r.goal_colour_at_x_max != GoalColour::kUnknown) v["goal_colour_at_x_max"] = goal_colour_name(r.goal_colour_at_x_max);
+  if (r.goal_colour_at_x_max != GoalColour::kUnknown)
+    v["goal_colour_at_x_max"] = goal_colour_name(r.goal_colour_at_x_max);
   return v;
 }
 }  // namespace
 
-std::string calibrated_camera_json(const CalibrationResult& r, const std::vector<CalibrationFrame>& frames) {
+std::string calibrated_camera_json(const CalibrationResult& r,
+                                   const std::vector<CalibrationFrame>& frames) {
   nlohmann::ordered_json j;
   const CameraModel& c = r.camera;
   j["description"] = "Calibrated by `omniloc calibrate` from " + std::to_string(frames.size()) +
-                     " frame(s); radius_lut samples the fitted radial model every 4 px and ends at the view radius "
-                     "(where the carpet ends all round). The \"calibration\" block records how; the camera reader ignores it.";
+                     " frame(s); radius_lut samples the fitted radial model every 4 px and ends at "
+                     "the view radius "
+                     "(where the carpet ends all round). The \"calibration\" block records how; "
+                     "the camera reader ignores it.";
   j["width"] = c.width_px;
   j["height"] = c.height_px;
   j["center_px"] = {c.center_px.x(), c.center_px.y()};
   nlohmann::ordered_json lut = nlohmann::ordered_json::array();
-  for (const auto& m : c.radius_lut) lut.push_back({std::round(m.radius_px * 1000) / 1000, std::round(m.ground_cm * 1000) / 1000});
+  for (const auto& m : c.radius_lut)
+    lut.push_back({std::round(m.radius_px * 1000) / 1000, std::round(m.ground_cm * 1000) / 1000});
   j["radius_lut"] = lut;
   j["yaw_offset_deg"] = c.yaw_offset_deg;
   j["mirrored"] = c.mirrored;
   nlohmann::ordered_json masts = nlohmann::ordered_json::array();
-  for (const auto& m : c.masts) masts.push_back({{"bearing_deg", m.bearing_deg}, {"half_width_deg", m.half_width_deg}});
+  for (const auto& m : c.masts)
+    masts.push_back({{"bearing_deg", m.bearing_deg}, {"half_width_deg", m.half_width_deg}});
   j["mask"] = {{"body_radius_px", c.body_radius_px}, {"masts", masts}};
   nlohmann::ordered_json cal;
-  cal["radial_model"] = {{"form", r.radial.rational() ? "rational: ground_cm = a1 x / (1 + e2 x^2 + e3 x^3 + e4 x^4)"
-                                                       : "quartic: ground_cm = a1 x + a2 x^2 + a3 x^3 + a4 x^4"},
-                         {"x", "r / scale_px, r in px from center_px"},
-                         {"scale_px", r.radial.scale_px},
-                         {"a", r.radial.a},
-                         {"e", r.radial.e},
-                         {"note", "measured between measured_radii_px (5-95 % of the inlier pixels on lines crossing "
-                                  "their ray); extrapolated outside"}};
+  cal["radial_model"] = {
+      {"form", r.radial.rational() ? "rational: ground_cm = a1 x / (1 + e2 x^2 + e3 x^3 + e4 x^4)"
+                                   : "quartic: ground_cm = a1 x + a2 x^2 + a3 x^3 + a4 x^4"},
+      {"x", "r / scale_px, r in px from center_px"},
+      {"scale_px", r.radial.scale_px},
+      {"a", r.radial.a},
+      {"e", r.radial.e},
+      {"note",
+       "measured between measured_radii_px (5-95 % of the inlier pixels on lines crossing "
+       "their ray); extrapolated outside"}};
   cal["view_radius_px"] = r.view_radius_px;
   cal["measured_radii_px"] = {r.measured_min_px, r.measured_max_px};
-  cal["rim"] = {{"center_px", {r.rim.centre_px.x(), r.rim.centre_px.y()}}, {"radius_px", r.rim.radius_px},
+  cal["rim"] = {{"center_px", {r.rim.centre_px.x(), r.rim.centre_px.y()}},
+                {"radius_px", r.rim.radius_px},
                 {"rays_on_circle", r.rim.rays_on_circle}};
-  cal["carpet_hsv"] = {{"hue", r.carpet.hue}, {"hue_half_width", r.carpet.hue_half_width},
-                       {"sat_min", r.carpet.sat_min}, {"val_min", r.carpet.val_min}, {"val_max", r.carpet.val_max},
-                       {"median_sat", r.carpet.median_sat}, {"median_val", r.carpet.median_val},
-                       {"line_val_step", r.carpet.line_val_step}, {"line_sat_step", r.carpet.line_sat_step}};
+  cal["carpet_hsv"] = {{"hue", r.carpet.hue},
+                       {"hue_half_width", r.carpet.hue_half_width},
+                       {"sat_min", r.carpet.sat_min},
+                       {"val_min", r.carpet.val_min},
+                       {"val_max", r.carpet.val_max},
+                       {"median_sat", r.carpet.median_sat},
+                       {"median_val", r.carpet.median_val},
+                       {"line_val_step", r.carpet.line_val_step},
+                       {"line_sat_step", r.carpet.line_sat_step}};
   cal["mirrored_ambiguous"] = r.mirrored_ambiguous;
   cal["handedness_from"] = r.handedness_from;
   cal["yaw_offset_ambiguous"] = r.yaw_offset_ambiguous;
-  cal["residual"] = {{"rms_px", r.rms_px}, {"rms_cm", r.rms_cm}, {"median_px", r.median_px},
-                     {"inlier_fraction", r.inlier_fraction}, {"inlier_threshold_px", r.inlier_threshold_px}};
+  cal["residual"] = {{"rms_px", r.rms_px},
+                     {"rms_cm", r.rms_cm},
+                     {"median_px", r.median_px},
+                     {"inlier_fraction", r.inlier_fraction},
+                     {"inlier_threshold_px", r.inlier_threshold_px}};
   nlohmann::ordered_json fr = nlohmann::ordered_json::array();
   for (std::size_t i = 0; i < frames.size() && i < r.fits.size(); ++i) {
     const auto& f = r.fits[i];
@@ -829,11 +930,13 @@ std::string calibrated_camera_json(const CalibrationResult& r, const std::vector
   return j.dump(2) + "\n";
 }
 
-cv::Mat calibration_overlay(const CalibrationFrame& frame, const FrameAnalysis& a, const FrameFit& fit,
-                            const CalibrationResult& r, const FieldGeometry& field) {
+cv::Mat calibration_overlay(const CalibrationFrame& frame, const FrameAnalysis& a,
+                            const FrameFit& fit, const CalibrationResult& r,
+                            const FieldGeometry& field) {
   cv::Mat out = frame.image.clone();
   const CameraModel& cam = r.camera;
-  for (const auto& p : a.line_pixels) out.at<cv::Vec3b>(static_cast<int>(p.y()), static_cast<int>(p.x())) = {255, 0, 255};
+  for (const auto& p : a.line_pixels)
+    out.at<cv::Vec3b>(static_cast<int>(p.y()), static_cast<int>(p.x())) = {255, 0, 255};
   // Field model: ground distance -> radius by bisection in the fitted model (beyond the LUT's
   // view radius too, up to the rim, so the whole seen field is drawn).
   const double r_max = r.rim.radius_px;
@@ -842,7 +945,8 @@ cv::Mat calibration_overlay(const CalibrationFrame& frame, const FrameAnalysis& 
     double lo = 0.0, hi = r_max;
     if (!monotonic_to_rim || !(r.radial.ground_cm(hi) >= d)) hi = r.view_radius_px;
     if (r.radial.ground_cm(hi) < d) return -1.0;
-    for (int i = 0; i < 40; ++i) ((r.radial.ground_cm(0.5 * (lo + hi)) < d) ? lo : hi) = 0.5 * (lo + hi);
+    for (int i = 0; i < 40; ++i)
+      ((r.radial.ground_cm(0.5 * (lo + hi)) < d) ? lo : hi) = 0.5 * (lo + hi);
     return 0.5 * (lo + hi);
   };
   const Eigen::Vector2d pos = frame.position_cm;
@@ -858,16 +962,22 @@ cv::Mat calibration_overlay(const CalibrationFrame& frame, const FrameAnalysis& 
   };
   for_each_line_point(field, 0.5, draw);
   for (const auto& d : field.discs) draw(d.centre_cm);
-  const cv::Point c(static_cast<int>(std::lround(cam.center_px.x())), static_cast<int>(std::lround(cam.center_px.y())));
+  const cv::Point c(static_cast<int>(std::lround(cam.center_px.x())),
+                    static_cast<int>(std::lround(cam.center_px.y())));
   cv::circle(out, c, static_cast<int>(std::lround(r.rim.radius_px)), {255, 128, 0}, 1, cv::LINE_AA);
-  cv::circle(out, c, static_cast<int>(std::lround(cam.body_radius_px)), {0, 0, 255}, 1, cv::LINE_AA);
+  cv::circle(out, c, static_cast<int>(std::lround(cam.body_radius_px)), {0, 0, 255}, 1,
+             cv::LINE_AA);
   cv::circle(out, c, static_cast<int>(std::lround(r.view_radius_px)), {0, 255, 0}, 1, cv::LINE_AA);
   for (const auto& m : cam.masts) {
     for (double sgn : {-1.0, 1.0}) {
       const double phi = deg_to_rad(m.bearing_deg + sgn * m.half_width_deg + cam.yaw_offset_deg);
       const double ux = std::cos(phi) * (cam.mirrored ? -1.0 : 1.0), vy = -std::sin(phi);
-      cv::line(out, c + cv::Point(static_cast<int>(cam.body_radius_px * ux), static_cast<int>(cam.body_radius_px * vy)),
-               c + cv::Point(static_cast<int>(r.view_radius_px * ux), static_cast<int>(r.view_radius_px * vy)), {0, 0, 255}, 1);
+      cv::line(out,
+               c + cv::Point(static_cast<int>(cam.body_radius_px * ux),
+                             static_cast<int>(cam.body_radius_px * vy)),
+               c + cv::Point(static_cast<int>(r.view_radius_px * ux),
+                             static_cast<int>(r.view_radius_px * vy)),
+               {0, 0, 255}, 1);
     }
   }
   return out;

@@ -13,15 +13,17 @@ namespace omniloc {
 
 namespace {
 
-
 // Largest opened connected region of `band` pixels, and its colour class.
-std::optional<GoalRegion> largest_region(const cv::Mat& hsv, const cv::Mat& band, double min_pixels) {
+std::optional<GoalRegion> largest_region(const cv::Mat& hsv, const cv::Mat& band,
+                                         double min_pixels) {
   cv::Mat opened, labels, stats, centroids;
-  cv::morphologyEx(band, opened, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3)));
+  cv::morphologyEx(band, opened, cv::MORPH_OPEN,
+                   cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3)));
   const int n = cv::connectedComponentsWithStats(opened, labels, stats, centroids, 8, CV_32S);
   int best = 0;
   for (int k = 1; k < n; ++k)
-    if (best == 0 || stats.at<int>(k, cv::CC_STAT_AREA) > stats.at<int>(best, cv::CC_STAT_AREA)) best = k;
+    if (best == 0 || stats.at<int>(k, cv::CC_STAT_AREA) > stats.at<int>(best, cv::CC_STAT_AREA))
+      best = k;
   if (best == 0 || stats.at<int>(best, cv::CC_STAT_AREA) < min_pixels) return std::nullopt;
   std::vector<double> hs, ss, vs;
   for (int v = 0; v < labels.rows; ++v)
@@ -46,7 +48,8 @@ std::optional<GoalRegion> largest_region(const cv::Mat& hsv, const cv::Mat& band
 
 }  // namespace
 
-GoalColours measure_goal_colours(const cv::Mat& bgr, const FrameAnalysis& a, const GoalColourOptions& o) {
+GoalColours measure_goal_colours(const cv::Mat& bgr, const FrameAnalysis& a,
+                                 const GoalColourOptions& o) {
   cv::Mat hsv;
   cv::cvtColor(bgr, hsv, cv::COLOR_BGR2HSV);
   cv::Mat blue = cv::Mat::zeros(bgr.size(), CV_8U), yellow = cv::Mat::zeros(bgr.size(), CV_8U);
@@ -70,8 +73,9 @@ GoalColours measure_goal_colours(const cv::Mat& bgr, const FrameAnalysis& a, con
   return {largest_region(hsv, blue, min_pixels), largest_region(hsv, yellow, min_pixels)};
 }
 
-GoalColour goal_colour_at_x_max(const GoalColours& goals, const CameraModel& cam, const Eigen::Vector2d& pos,
-                                double yaw_deg, const FieldGeometry& field) {
+GoalColour goal_colour_at_x_max(const GoalColours& goals, const CameraModel& cam,
+                                const Eigen::Vector2d& pos, double yaw_deg,
+                                const FieldGeometry& field) {
   const Eigen::Vector2d g_max(field.border_cm + field.field_length_cm, field.centre_cm().y());
   const Eigen::Vector2d g_min(field.border_cm, field.centre_cm().y());
   const double to_max = rad_to_deg(std::atan2(g_max.y() - pos.y(), g_max.x() - pos.x()));
@@ -82,7 +86,10 @@ GoalColour goal_colour_at_x_max(const GoalColours& goals, const CameraModel& cam
     const double du = (g->centroid_px.x() - cam.center_px.x()) * (cam.mirrored ? -1.0 : 1.0);
     const double phi = rad_to_deg(std::atan2(cam.center_px.y() - g->centroid_px.y(), du));
     const double field_angle = phi - cam.yaw_offset_deg + yaw_deg;
-    return std::abs(angle_diff_deg(field_angle, to_max)) < std::abs(angle_diff_deg(field_angle, to_min)) ? 1 : -1;
+    return std::abs(angle_diff_deg(field_angle, to_max)) <
+                   std::abs(angle_diff_deg(field_angle, to_min))
+               ? 1
+               : -1;
   };
   const int b = side(goals.blue), y = side(goals.yellow);
   if (b != 0 && y != 0 && b == y) return GoalColour::kUnknown;  // both on one side: do not guess

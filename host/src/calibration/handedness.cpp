@@ -32,16 +32,19 @@ std::optional<std::string> handedness_evidence(const std::vector<CalibrationFram
   const MirrorAxes axes = field_mirror_axes(field);
   const Eigen::Vector2d c = field.centre_cm();
   for (const auto& f : frames) {
-    const bool long_twin = axes.long_axis && 2.0 * std::abs(f.position_cm.y() - c.y()) < separation_cm;
-    const bool halfway_twin = axes.halfway_line && 2.0 * std::abs(f.position_cm.x() - c.x()) < separation_cm;
+    const bool long_twin =
+        axes.long_axis && 2.0 * std::abs(f.position_cm.y() - c.y()) < separation_cm;
+    const bool halfway_twin =
+        axes.halfway_line && 2.0 * std::abs(f.position_cm.x() - c.x()) < separation_cm;
     if (!long_twin && !halfway_twin) return f.name + " stands off the field's mirror axes";
   }
   for (std::size_t i = 0; i < frames.size(); ++i) {
     for (std::size_t j = i + 1; j < frames.size(); ++j) {
       if (!frames[i].yaw_deg || !frames[j].yaw_deg) continue;
       const double d = std::abs(wrap_deg(*frames[j].yaw_deg - *frames[i].yaw_deg));
-      if (d > 10.0 && d < 170.0) return frames[i].name + " and " + frames[j].name + " have known headings " +
-                                        std::to_string(static_cast<int>(std::lround(d))) + " deg apart";
+      if (d > 10.0 && d < 170.0)
+        return frames[i].name + " and " + frames[j].name + " have known headings " +
+               std::to_string(static_cast<int>(std::lround(d))) + " deg apart";
     }
   }
   return std::nullopt;

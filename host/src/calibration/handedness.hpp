@@ -1,4 +1,5 @@
-// Whether the frames of a calibration can tell the camera's handedness (internal to the calibration).
+// Whether the frames of a calibration can tell the camera's handedness (internal to the
+// calibration).
 #pragma once
 
 #include <optional>
@@ -15,8 +16,8 @@ namespace omniloc::detail {
 /// tells only when it stands far enough off every such axis that the two spots are `separation_cm`
 /// apart. The heading of one frame does not tell (the yaw offset absorbs it), but two frames whose
 /// known headings differ by other than 0 or 180 deg do: the reflection reverses the difference.
-[[nodiscard]] std::optional<std::string> handedness_evidence(const std::vector<CalibrationFrame>& frames,
-                                                            const FieldGeometry& field, double separation_cm);
+[[nodiscard]] std::optional<std::string> handedness_evidence(
+    const std::vector<CalibrationFrame>& frames, const FieldGeometry& field, double separation_cm);
 
 /// The field's mirror axes through its centre that map its lines onto themselves: the line
 /// y = centre (the long axis) and the line x = centre (the halfway line). Measured on the lines,

@@ -27,12 +27,15 @@ float bilinear(const cv::Mat1f& img, double x, double y) {
   const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
   const float* r0 = img.ptr<float>(y0);
   const float* r1 = img.ptr<float>(y0 + 1);
-  return (1 - fy) * ((1 - fx) * r0[x0] + fx * r0[x0 + 1]) + fy * ((1 - fx) * r1[x0] + fx * r1[x0 + 1]);
+  return (1 - fy) * ((1 - fx) * r0[x0] + fx * r0[x0 + 1]) +
+         fy * ((1 - fx) * r1[x0] + fx * r1[x0 + 1]);
 }
 
 // Window of the rim's step test: wider than the widest line in the image (a 5 cm line is ~6 px
 // at 480 px near the robot), so that a line's edge scores at most width/window of its contrast.
-int rim_window_px(const cv::Mat& img) { return std::clamp(static_cast<int>(std::lround(std::min(img.cols, img.rows) / 60.0)), 4, 16); }
+int rim_window_px(const cv::Mat& img) {
+  return std::clamp(static_cast<int>(std::lround(std::min(img.cols, img.rows) / 60.0)), 4, 16);
+}
 
 struct EdgeCandidate {
   int ray;
@@ -43,8 +46,8 @@ struct EdgeCandidate {
 // Steps along 360 rays from `origin`: local maxima of polarity x (mean(inside window) -
 // mean(outside window)) above `min_contrast`, sub-pixel by a parabola (polarity +1: bright to dark
 // outwards, the usual rim against a dark housing; -1: dark to bright, a light housing).
-std::vector<EdgeCandidate> rim_candidates(const cv::Mat1f& gray, const Eigen::Vector2d& origin, int w, double min_contrast,
-                                          double polarity) {
+std::vector<EdgeCandidate> rim_candidates(const cv::Mat1f& gray, const Eigen::Vector2d& origin,
+                                          int w, double min_contrast, double polarity) {
   std::vector<EdgeCandidate> out;
   const double rmax = std::hypot(gray.cols, gray.rows);
   std::vector<double> prof, pre;
@@ -59,10 +62,14 @@ std::vector<EdgeCandidate> rim_candidates(const cv::Mat1f& gray, const Eigen::Ve
     const int n = static_cast<int>(prof.size());
     if (n < 2 * w + 3) continue;
     pre.assign(static_cast<std::size_t>(n) + 1, 0.0);
-    for (int i = 0; i < n; ++i) pre[static_cast<std::size_t>(i) + 1] = pre[static_cast<std::size_t>(i)] + prof[static_cast<std::size_t>(i)];
+    for (int i = 0; i < n; ++i)
+      pre[static_cast<std::size_t>(i) + 1] =
+          pre[static_cast<std::size_t>(i)] + prof[static_cast<std::size_t>(i)];
     auto contrast = [&](int r) {
-      return polarity * ((pre[static_cast<std::size_t>(r)] - pre[static_cast<std::size_t>(r - w)]) / w -
-                         (pre[static_cast<std::size_t>(r + w + 1)] - pre[static_cast<std::size_t>(r + 1)]) / w);
+      return polarity *
+             ((pre[static_cast<std::size_t>(r)] - pre[static_cast<std::size_t>(r - w)]) / w -
+              (pre[static_cast<std::size_t>(r + w + 1)] - pre[static_cast<std::size_t>(r + 1)]) /
+                  w);
     };
     for (int r = w + 1; r + w + 2 < n; ++r) {
       const double c0 = contrast(r);
@@ -77,9 +84,10 @@ std::vector<EdgeCandidate> rim_candidates(const cv::Mat1f& gray, const Eigen::Ve
   return out;
 }
 
-bool circle_through(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c, Eigen::Vector2d& centre,
-                    double& radius) {
-  const double d = 2 * (a.x() * (b.y() - c.y()) + b.x() * (c.y() - a.y()) + c.x() * (a.y() - b.y()));
+bool circle_through(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,
+                    Eigen::Vector2d& centre, double& radius) {
+  const double d =
+      2 * (a.x() * (b.y() - c.y()) + b.x() * (c.y() - a.y()) + c.x() * (a.y() - b.y()));
   if (std::abs(d) < 1e-9) return false;
   const double a2 = a.squaredNorm(), b2 = b.squaredNorm(), c2 = c.squaredNorm();
   centre = {(a2 * (b.y() - c.y()) + b2 * (c.y() - a.y()) + c2 * (a.y() - b.y())) / d,
@@ -107,8 +115,9 @@ bool fit_circle(const std::vector<Eigen::Vector2d>& pts, Eigen::Vector2d& centre
 }
 
 // Per ray, the strongest candidate within `tol` of the circle; their contrast sum and points.
-double circle_support(const std::vector<std::vector<int>>& by_ray, const std::vector<EdgeCandidate>& cand,
-                      const Eigen::Vector2d& centre, double radius, double tol, std::vector<Eigen::Vector2d>* pts) {
+double circle_support(const std::vector<std::vector<int>>& by_ray,
+                      const std::vector<EdgeCandidate>& cand, const Eigen::Vector2d& centre,
+                      double radius, double tol, std::vector<Eigen::Vector2d>* pts) {
   double score = 0.0;
   for (const auto& ray : by_ray) {
     double best = 0.0;
@@ -127,10 +136,10 @@ double circle_support(const std::vector<std::vector<int>>& by_ray, const std::ve
 }
 
 // Fraction of a circle's circumference inside the image. The rim is seen round much of its
-// circumference (a frame may crop it, but keeps at least 40 % of it); a large circle centred near the image's edge
-// that passes along one arc of the rim and through stray steps elsewhere is not (on rendered
-// frames with dark walls at the rim such circles got half the rim's support and, being larger,
-// were taken as the rim).
+// circumference (a frame may crop it, but keeps at least 40 % of it); a large circle centred near
+// the image's edge that passes along one arc of the rim and through stray steps elsewhere is not
+// (on rendered frames with dark walls at the rim such circles got half the rim's support and, being
+// larger, were taken as the rim).
 double inside_fraction(const Eigen::Vector2d& c, double r, const cv::Size& size) {
   int in = 0;
   constexpr int kSamples = 72;
@@ -144,11 +153,12 @@ double inside_fraction(const Eigen::Vector2d& c, double r, const cv::Size& size)
 
 // One RANSAC pass: among circles supported by at least half the best support, the outermost (the
 // rim is outside every line and the centre circle, which may also be concentric with the image).
-bool ransac_rim(const std::vector<EdgeCandidate>& cand, const cv::Size& size, Eigen::Vector2d& centre, double& radius,
-                int& rays) {
+bool ransac_rim(const std::vector<EdgeCandidate>& cand, const cv::Size& size,
+                Eigen::Vector2d& centre, double& radius, int& rays) {
   if (cand.size() < 3) return false;
   std::vector<std::vector<int>> by_ray(kRimRays);
-  for (std::size_t i = 0; i < cand.size(); ++i) by_ray[static_cast<std::size_t>(cand[i].ray)].push_back(static_cast<int>(i));
+  for (std::size_t i = 0; i < cand.size(); ++i)
+    by_ray[static_cast<std::size_t>(cand[i].ray)].push_back(static_cast<int>(i));
   std::mt19937 rng(1);  // fixed: the calibration is deterministic
   std::uniform_int_distribution<std::size_t> pick(0, cand.size() - 1);
   struct Hyp {
@@ -191,8 +201,8 @@ bool ransac_rim(const std::vector<EdgeCandidate>& cand, const cv::Size& size, Ei
 // The rim from steps of one polarity: RANSAC from the image centre, then again from the circle's
 // centre (its rays cross the rim squarely). A quarter of the rays on which the circle lies inside
 // the image must see it: the masts hide some, and where the rim leaves the image none are seen.
-std::optional<RimCircle> rim_of_polarity(const cv::Mat1f& gray, const cv::Size& size, int w, double min_contrast,
-                                         double polarity, std::string* why) {
+std::optional<RimCircle> rim_of_polarity(const cv::Mat1f& gray, const cv::Size& size, int w,
+                                         double min_contrast, double polarity, std::string* why) {
   Eigen::Vector2d origin(0.5 * (size.width - 1), 0.5 * (size.height - 1));
   double radius = 0.0;
   int rays = 0;
@@ -205,10 +215,11 @@ std::optional<RimCircle> rim_of_polarity(const cv::Mat1f& gray, const cv::Size& 
     }
     origin = c;
   }
-  const int inside = static_cast<int>(std::lround(kRimRays * inside_fraction(origin, radius, size)));
+  const int inside =
+      static_cast<int>(std::lround(kRimRays * inside_fraction(origin, radius, size)));
   if (rays < inside / 4 || rays < kRimRays / 8) {
-    *why = "the best circle is seen on only " + std::to_string(rays) + " of the " + std::to_string(inside) +
-           " rays on which it lies inside the image";
+    *why = "the best circle is seen on only " + std::to_string(rays) + " of the " +
+           std::to_string(inside) + " rays on which it lies inside the image";
     return std::nullopt;
   }
   RimCircle rim;
@@ -221,9 +232,11 @@ std::optional<RimCircle> rim_of_polarity(const cv::Mat1f& gray, const cv::Size& 
 }  // namespace
 
 RimCircle find_mirror_rim(const cv::Mat& bgr, const std::string& ctx) {
-  if (bgr.empty() || bgr.type() != CV_8UC3) throw std::runtime_error(ctx + ": expected a non-empty 8-bit colour image");
+  if (bgr.empty() || bgr.type() != CV_8UC3)
+    throw std::runtime_error(ctx + ": expected a non-empty 8-bit colour image");
   if (std::min(bgr.cols, bgr.rows) < 64) {
-    throw std::runtime_error(ctx + ": image " + std::to_string(bgr.cols) + " x " + std::to_string(bgr.rows) +
+    throw std::runtime_error(ctx + ": image " + std::to_string(bgr.cols) + " x " +
+                             std::to_string(bgr.rows) +
                              " is too small for an omni frame (at least 64 px a side)");
   }
   cv::Mat gray8;
@@ -239,7 +252,8 @@ RimCircle find_mirror_rim(const cv::Mat& bgr, const std::string& ctx) {
   // dimming) to the black beyond the mirror: 15 % of the image's range keeps it and drops noise.
   const double min_contrast = 0.15 * range;
   if (range < 20.0) {
-    throw std::runtime_error(ctx + ": no mirror rim: the image has no contrast (1-99 % grey range " +
+    throw std::runtime_error(ctx +
+                             ": no mirror rim: the image has no contrast (1-99 % grey range " +
                              std::to_string(static_cast<int>(range)) + " levels)");
   }
   const int w = rim_window_px(bgr);
@@ -248,7 +262,8 @@ RimCircle find_mirror_rim(const cv::Mat& bgr, const std::string& ctx) {
   // the other way.
   std::string why;
   for (const double polarity : {1.0, -1.0}) {
-    if (const auto rim = rim_of_polarity(gray, bgr.size(), w, min_contrast, polarity, &why)) return *rim;
+    if (const auto rim = rim_of_polarity(gray, bgr.size(), w, min_contrast, polarity, &why))
+      return *rim;
   }
   throw std::runtime_error(ctx + ": no mirror rim: " + why);
 }
@@ -259,11 +274,13 @@ namespace {
 // estimate_carpet_colour), searched over the whole disc: no ring, hue or fraction of the rim is
 // assumed, so a large body, a person next to the robot or a light floor beyond the carpet does not
 // decide it.
-CarpetColour carpet_colour(const cv::Mat& bgr, const RimCircle& rim, const AnalysisHints& hints, const std::string& ctx) {
+CarpetColour carpet_colour(const cv::Mat& bgr, const RimCircle& rim, const AnalysisHints& hints,
+                           const std::string& ctx) {
   CarpetSearch search;
   search.centre_px = {rim.centre_px.x(), rim.centre_px.y()};
   search.outer_px = rim.radius_px;
-  if (hints.carpet_at_px) search.carpet_at = cv::Point2d(hints.carpet_at_px->x(), hints.carpet_at_px->y());
+  if (hints.carpet_at_px)
+    search.carpet_at = cv::Point2d(hints.carpet_at_px->x(), hints.carpet_at_px->y());
   std::string why;
   const auto c = estimate_carpet_colour(bgr, search, &why);
   if (!c) throw std::runtime_error(ctx + ": " + why);
@@ -287,13 +304,16 @@ RimCircle rim_of(const cv::Mat& bgr, const AnalysisHints& hints, const std::stri
   const Eigen::Vector2d c = *hints.centre_px;
   const double r = *hints.rim_radius_px;
   if (c.x() < 0 || c.y() < 0 || c.x() >= bgr.cols || c.y() >= bgr.rows) {
-    throw std::runtime_error(ctx + ": the centre given (" + std::to_string(c.x()) + ", " + std::to_string(c.y()) +
-                             ") is outside the " + std::to_string(bgr.cols) + " x " + std::to_string(bgr.rows) + " image");
+    throw std::runtime_error(ctx + ": the centre given (" + std::to_string(c.x()) + ", " +
+                             std::to_string(c.y()) + ") is outside the " +
+                             std::to_string(bgr.cols) + " x " + std::to_string(bgr.rows) +
+                             " image");
   }
   const double max_r = std::hypot(bgr.cols, bgr.rows);
   if (!(r >= 16.0 && r <= max_r)) {
-    throw std::runtime_error(ctx + ": the rim radius given (" + std::to_string(r) + " px) must be 16 to " +
-                             std::to_string(static_cast<int>(max_r)) + " px");
+    throw std::runtime_error(ctx + ": the rim radius given (" + std::to_string(r) +
+                             " px) must be 16 to " + std::to_string(static_cast<int>(max_r)) +
+                             " px");
   }
   RimCircle rim;
   rim.centre_px = c;
@@ -334,8 +354,8 @@ FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx, const An
     for (int u = 0; u < bgr.cols; ++u) {
       if (std::hypot(u - rim.centre_px.x(), v - rim.centre_px.y()) > rim.radius_px) continue;
       const double dh = std::abs(hue(v, u) - cc.hue);
-      if (std::min(dh, 180 - dh) <= cc.hue_half_width && sat(v, u) >= cc.sat_min && val(v, u) >= cc.val_min &&
-          val(v, u) <= cc.val_max) {
+      if (std::min(dh, 180 - dh) <= cc.hue_half_width && sat(v, u) >= cc.sat_min &&
+          val(v, u) >= cc.val_min && val(v, u) <= cc.val_max) {
         carpet(v, u) = 1.0f;
         fa.carpet_mask.at<std::uint8_t>(v, u) = 255;
       }
@@ -358,7 +378,8 @@ FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx, const An
   // Four robust sigmas of the carpet's own spread (at least 2 levels: 8-bit quantisation).
   cc.line_val_step = std::max(4.0 * robust_sigma(ev), 2.0);
   // A grey carpet's saturation is noise: its lines are told by brightness alone.
-  cc.line_sat_step = is_grey_carpet(cc.hue_half_width) ? 0.0 : std::max(2.0 * robust_sigma(es), 2.0);
+  cc.line_sat_step =
+      is_grey_carpet(cc.hue_half_width) ? 0.0 : std::max(2.0 * robust_sigma(es), 2.0);
   fa.line_mask = cv::Mat::zeros(bgr.size(), CV_8U);
   for (int v = 0; v < bgr.rows; ++v) {
     for (int u = 0; u < bgr.cols; ++u) {
@@ -376,11 +397,15 @@ FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx, const An
   detail::PolarClasses polar{kPolarAngles, nr, {}};
   std::vector<std::uint8_t>& cls = polar.cls;
   cls.assign(static_cast<std::size_t>(kPolarAngles) * static_cast<std::size_t>(nr), 0);
-  auto at = [&](int k, int r) -> std::uint8_t& { return cls[static_cast<std::size_t>(k) * static_cast<std::size_t>(nr) + static_cast<std::size_t>(r)]; };
+  auto at = [&](int k, int r) -> std::uint8_t& {
+    return cls[static_cast<std::size_t>(k) * static_cast<std::size_t>(nr) +
+               static_cast<std::size_t>(r)];
+  };
   std::vector<bool> mast(kPolarAngles, false);
   // Picture 4 with what was measured: on a refusal below too (body, view or masts then 0 / none).
   const auto show_polar = [&] {
-    show("4-polar", [&] { return detail::polar_picture(polar, fa.body_radius_px, fa.view_radius_px, mast); });
+    show("4-polar",
+         [&] { return detail::polar_picture(polar, fa.body_radius_px, fa.view_radius_px, mast); });
   };
   try {
     for (int k = 0; k < kPolarAngles; ++k) {
@@ -399,7 +424,9 @@ FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx, const An
       floor_frac[static_cast<std::size_t>(r)] = static_cast<double>(n) / kPolarAngles;
     }
     const double fmax = *std::max_element(floor_frac.begin(), floor_frac.end());
-    if (fmax < 0.25) throw std::runtime_error(ctx + ": no carpet: at no radius is a quarter of the circle carpet or line");
+    if (fmax < 0.25)
+      throw std::runtime_error(
+          ctx + ": no carpet: at no radius is a quarter of the circle carpet or line");
     // Body: inside the first radius where the floor is seen on 80 % as many angles as anywhere.
     int body = 0;
     while (body < nr && floor_frac[static_cast<std::size_t>(body)] < 0.8 * fmax) ++body;
@@ -426,18 +453,24 @@ FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx, const An
       other[static_cast<std::size_t>(k)] = static_cast<double>(n) / (r1 - r0);
     }
     for (int k = 0; k < kPolarAngles; ++k) {
-      const double s = (other[static_cast<std::size_t>((k + kPolarAngles - 1) % kPolarAngles)] + other[static_cast<std::size_t>(k)] +
-                        other[static_cast<std::size_t>((k + 1) % kPolarAngles)]) / 3.0;
+      const double s = (other[static_cast<std::size_t>((k + kPolarAngles - 1) % kPolarAngles)] +
+                        other[static_cast<std::size_t>(k)] +
+                        other[static_cast<std::size_t>((k + 1) % kPolarAngles)]) /
+                       3.0;
       mast[static_cast<std::size_t>(k)] = s >= 0.6;
     }
     if (std::all_of(mast.begin(), mast.end(), [](bool b) { return b; })) {
-      throw std::runtime_error(ctx + ": no carpet: every direction is hidden between the body and the end of the carpet");
+      throw std::runtime_error(
+          ctx +
+          ": no carpet: every direction is hidden between the body and the end of the carpet");
     }
     int start = 0;
     while (mast[static_cast<std::size_t>(start)]) ++start;  // begin the sweep outside a sector
     for (int i = 0; i < kPolarAngles; ++i) {
       const int k = (start + i) % kPolarAngles;
-      if (!mast[static_cast<std::size_t>(k)] || mast[static_cast<std::size_t>((k + kPolarAngles - 1) % kPolarAngles)]) continue;
+      if (!mast[static_cast<std::size_t>(k)] ||
+          mast[static_cast<std::size_t>((k + kPolarAngles - 1) % kPolarAngles)])
+        continue;
       int len = 0;
       while (mast[static_cast<std::size_t>((k + len) % kPolarAngles)]) ++len;
       const double step = 360.0 / kPolarAngles;
@@ -450,10 +483,12 @@ FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx, const An
     // The 10th percentile: the ball or a robot on a few rays does not pull the view in.
     fa.view_radius_px = percentile(open_end, 0.1);
     if (fa.view_radius_px <= fa.body_radius_px + 2 * w) {
-      throw std::runtime_error(ctx + ": no carpet ring: the carpet ends at " + std::to_string(fa.view_radius_px) +
-                               " px, at the robot's body (" + std::to_string(fa.body_radius_px) + " px)");
+      throw std::runtime_error(ctx + ": no carpet ring: the carpet ends at " +
+                               std::to_string(fa.view_radius_px) + " px, at the robot's body (" +
+                               std::to_string(fa.body_radius_px) + " px)");
     }
-    // Line pixels for the fit: outside the body, before the carpet ends on their ray, not on a mast.
+    // Line pixels for the fit: outside the body, before the carpet ends on their ray, not on a
+    // mast.
     for (int v = 0; v < bgr.rows; ++v) {
       for (int u = 0; u < bgr.cols; ++u) {
         if (!fa.line_mask.at<std::uint8_t>(v, u)) continue;
@@ -462,7 +497,8 @@ FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx, const An
         if (r < fa.body_radius_px + 1.0) continue;
         double a = rad_to_deg(std::atan2(dv, du));
         if (a < 0) a += 360.0;
-        const auto k = static_cast<std::size_t>(std::min(kPolarAngles - 1, static_cast<int>(a * kPolarAngles / 360.0)));
+        const auto k = static_cast<std::size_t>(
+            std::min(kPolarAngles - 1, static_cast<int>(a * kPolarAngles / 360.0)));
         if (mast[k] || r > end[k]) continue;
         fa.line_pixels.emplace_back(u, v);
       }

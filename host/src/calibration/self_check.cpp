@@ -11,11 +11,11 @@
 
 namespace omniloc::detail {
 
-
-LineRecall model_line_recall(const CameraModel& camera, const FrameAnalysis& analysis, const Pose2& pose,
-                             const FieldGeometry& field) {
+LineRecall model_line_recall(const CameraModel& camera, const FrameAnalysis& analysis,
+                             const Pose2& pose, const FieldGeometry& field) {
   // A line point is expected where carpet lies within 4 px of it (the painted strip itself is not
-  // carpet), and seen where a line pixel lies within 3 px (the line's width and the fit's residual).
+  // carpet), and seen where a line pixel lies within 3 px (the line's width and the fit's
+  // residual).
   cv::Mat near_carpet, near_line;
   cv::dilate(analysis.carpet_mask, near_carpet, cv::getStructuringElement(cv::MORPH_RECT, {9, 9}));
   cv::dilate(analysis.line_mask, near_line, cv::getStructuringElement(cv::MORPH_RECT, {7, 7}));
@@ -29,8 +29,11 @@ LineRecall model_line_recall(const CameraModel& camera, const FrameAnalysis& ana
     if (!px) return;
     const double r = (*px - camera.center_px).norm();
     if (r < r_min || r > r_max) return;
-    const int u = static_cast<int>(std::lround(px->x())), v = static_cast<int>(std::lround(px->y()));
-    if (u < 0 || v < 0 || u >= near_carpet.cols || v >= near_carpet.rows || !near_carpet.at<std::uint8_t>(v, u)) return;
+    const int u = static_cast<int>(std::lround(px->x())),
+              v = static_cast<int>(std::lround(px->y()));
+    if (u < 0 || v < 0 || u >= near_carpet.cols || v >= near_carpet.rows ||
+        !near_carpet.at<std::uint8_t>(v, u))
+      return;
     ++out.expected;
     out.seen += near_line.at<std::uint8_t>(v, u) != 0;
   });

@@ -21,7 +21,8 @@ struct PolarClasses {
   int angle_bins = 0, radii_px = 0;
   std::vector<std::uint8_t> cls;
   [[nodiscard]] std::uint8_t at(int bin, int r_px) const {
-    return cls[static_cast<std::size_t>(bin) * static_cast<std::size_t>(radii_px) + static_cast<std::size_t>(r_px)];
+    return cls[static_cast<std::size_t>(bin) * static_cast<std::size_t>(radii_px) +
+               static_cast<std::size_t>(r_px)];
   }
 };
 
@@ -41,8 +42,8 @@ inline const cv::Vec3b kRimColour{255, 0, 255};
 inline const cv::Vec3b kLineColour{255, 255, 255};
 inline const cv::Vec3b kPolarCarpet{0, 160, 0}, kPolarLine{255, 255, 255}, kPolarOther{70, 70, 70};
 inline const cv::Vec3b kBodyMark{0, 0, 255}, kViewMark{0, 255, 255};
-inline const cv::Vec3b kResidualGood{0, 255, 0}, kResidualInlier{0, 255, 255}, kResidualNear{0, 128, 255},
-    kResidualFar{0, 0, 255};
+inline const cv::Vec3b kResidualGood{0, 255, 0}, kResidualInlier{0, 255, 255},
+    kResidualNear{0, 128, 255}, kResidualFar{0, 0, 255};
 
 /// Step pictures' layout: each coarse cell is drawn kCoarseCellPx square; each handedness panel
 /// has a caption strip above it.
@@ -55,14 +56,16 @@ constexpr int kCoarseCellPx = 4, kCoarseCaptionPx = 24, kCoarseFooterPx = 20;
 /// 4: the polar classes unwrapped, rows = bearing 0..359 deg (one per degree), cols = radius px;
 /// body (radius < body) tinted red, mast bearings tinted blue, body and view radii marked as
 /// columns. A radius of 0 (not measured: the step refused before) is not marked.
-[[nodiscard]] cv::Mat polar_picture(const PolarClasses& polar, double body_radius_px, double view_radius_px,
-                                    const std::vector<bool>& mast_bins);
+[[nodiscard]] cv::Mat polar_picture(const PolarClasses& polar, double body_radius_px,
+                                    double view_radius_px, const std::vector<bool>& mast_bins);
 /// 5: the coarse score as a heat map per handedness (hot = low score = good fit), heading term
 /// along x, scale along y (small at the bottom), the best cell framed white.
 [[nodiscard]] cv::Mat coarse_picture(const CoarseGrid& grid, double trunc_px);
 /// 6: the frame dimmed to 40 % with each line pixel coloured by its residual: <= 1 px green,
 /// <= the inlier threshold yellow, <= 8 px orange, beyond red.
-[[nodiscard]] cv::Mat residuals_picture(const cv::Mat& bgr, const std::vector<Eigen::Vector2d>& pixels,
-                                        const std::vector<double>& residuals_px, double inlier_threshold_px);
+[[nodiscard]] cv::Mat residuals_picture(const cv::Mat& bgr,
+                                        const std::vector<Eigen::Vector2d>& pixels,
+                                        const std::vector<double>& residuals_px,
+                                        double inlier_threshold_px);
 
 }  // namespace omniloc::detail

@@ -11,9 +11,13 @@ double wrap_deg(double angle_deg) {
   return wrapped;
 }
 
-double angle_diff_deg(double a_deg, double b_deg) { return wrap_deg(a_deg - b_deg); }
+double angle_diff_deg(double a_deg, double b_deg) {
+  return wrap_deg(a_deg - b_deg);
+}
 
-double interpolate_deg(double a_deg, double b_deg, double f) { return wrap_deg(a_deg + f * angle_diff_deg(b_deg, a_deg)); }
+double interpolate_deg(double a_deg, double b_deg, double f) {
+  return wrap_deg(a_deg + f * angle_diff_deg(b_deg, a_deg));
+}
 
 Eigen::Vector2d robot_to_field(const Eigen::Vector2d& v_robot, double yaw_deg) {
   const double c = std::cos(deg_to_rad(yaw_deg));
@@ -41,12 +45,17 @@ Pose2 Pose2::inverse() const {
 }
 
 Pose2 interpolate(const Pose2& a, const Pose2& b, double f) {
-  return {a.x_cm + f * (b.x_cm - a.x_cm), a.y_cm + f * (b.y_cm - a.y_cm), interpolate_deg(a.yaw_deg, b.yaw_deg, f)};
+  return {a.x_cm + f * (b.x_cm - a.x_cm), a.y_cm + f * (b.y_cm - a.y_cm),
+          interpolate_deg(a.yaw_deg, b.yaw_deg, f)};
 }
 
-double distance_cm(const Pose2& a, const Pose2& b) { return (a.position_cm() - b.position_cm()).norm(); }
+double distance_cm(const Pose2& a, const Pose2& b) {
+  return (a.position_cm() - b.position_cm()).norm();
+}
 
-double yaw_difference_deg(const Pose2& a, const Pose2& b) { return angle_diff_deg(a.yaw_deg, b.yaw_deg); }
+double yaw_difference_deg(const Pose2& a, const Pose2& b) {
+  return angle_diff_deg(a.yaw_deg, b.yaw_deg);
+}
 
 Eigen::Matrix<double, 4, 3> wheel_jacobian(double motor_angle_deg, double center_to_wheel_cm) {
   const double s = std::sin(deg_to_rad(motor_angle_deg));

@@ -64,8 +64,8 @@ std::int64_t exact_int(double value, std::string_view what, std::int64_t min, st
   std::ostringstream got;
   got.precision(17);
   got << value;
-  if (!std::isfinite(value) || value != std::trunc(value) ||
-      value < static_cast<double>(min) || value > static_cast<double>(max)) {
+  if (!std::isfinite(value) || value != std::trunc(value) || value < static_cast<double>(min) ||
+      value > static_cast<double>(max)) {
     refuse(what, rule, got.str());
   }
   return static_cast<std::int64_t>(value);

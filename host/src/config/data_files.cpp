@@ -1,5 +1,5 @@
-// Locating the shared data files (common/<kind>/<name>.json) from a short name, so that programs and
-// tests run from any build directory and installed programs from any prefix. Searched in order:
+// Locating the shared data files (common/<kind>/<name>.json) from a short name, so that programs
+// and tests run from any build directory and installed programs from any prefix. Searched in order:
 // $OMNILOC_DATA_DIR, common/ in the working directory and its parents, <exe>/../share/omniloc (the
 // installed layout), common/ beside the executable and its parents.
 #include <algorithm>
@@ -31,9 +31,11 @@ fs::path resolve_data_file(const std::string& kind, const std::string& name_or_p
   if (fs::is_regular_file(name_or_path, ec)) return fs::path(name_or_path);
   if (name_or_path.find('/') != std::string::npos || name_or_path.ends_with(".json")) {
     // A path, not a name: it must be a file.
-    if (fs::is_directory(name_or_path, ec)) throw ConfigError(name_or_path + ": is a directory, not a JSON file");
+    if (fs::is_directory(name_or_path, ec))
+      throw ConfigError(name_or_path + ": is a directory, not a JSON file");
     if (fs::exists(name_or_path, ec))
-      throw ConfigError(name_or_path + ": not a regular file (a device or a pipe?), not a JSON file");
+      throw ConfigError(name_or_path +
+                        ": not a regular file (a device or a pipe?), not a JSON file");
     throw ConfigError(name_or_path + ": no such file");
   }
   std::vector<fs::path> roots;

@@ -14,9 +14,13 @@ Origin Origin::operator[](std::size_t index) const {
   return Origin(source_, path_ + "[" + std::to_string(index) + "]");
 }
 
-std::string Origin::str() const { return path_.empty() ? source_ : source_ + ":" + path_; }
+std::string Origin::str() const {
+  return path_.empty() ? source_ : source_ + ":" + path_;
+}
 
-void Origin::fail(std::string_view why) const { throw ConfigError(str() + ": " + std::string(why)); }
+void Origin::fail(std::string_view why) const {
+  throw ConfigError(str() + ": " + std::string(why));
+}
 
 void Origin::fail(std::string_view why, std::string_view got) const {
   throw ConfigError(str() + ": " + std::string(why) + " (got " + std::string(got) + ")");
@@ -28,8 +32,9 @@ std::string show(double value) {
   char buf[32];
   // Whole numbers in full (40000000, not 4e+07: clock rates and counts read as written).
   const bool whole = value == std::floor(value) && std::abs(value) < 1e15;
-  const auto [end, ec] = whole ? std::to_chars(buf, buf + sizeof buf, value, std::chars_format::fixed)
-                               : std::to_chars(buf, buf + sizeof buf, value);
+  const auto [end, ec] = whole
+                             ? std::to_chars(buf, buf + sizeof buf, value, std::chars_format::fixed)
+                             : std::to_chars(buf, buf + sizeof buf, value);
   return ec == std::errc() ? std::string(buf, end) : std::string("?");
 }
 

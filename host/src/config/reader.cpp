@@ -9,10 +9,13 @@ namespace omniloc::config {
 
 namespace {
 
-// nlohmann's what() starts with "[json.exception.parse_error.101] ": the bracket says nothing to a user.
+// nlohmann's what() starts with "[json.exception.parse_error.101] ": the bracket says nothing to a
+// user.
 std::string without_prefix(const std::string& what) {
   const auto close = what.find("] ");
-  return what.rfind("[json.exception.", 0) == 0 && close != std::string::npos ? what.substr(close + 2) : what;
+  return what.rfind("[json.exception.", 0) == 0 && close != std::string::npos
+             ? what.substr(close + 2)
+             : what;
 }
 
 // The token nlohmann quotes in "number overflow parsing '1e400'".
@@ -32,8 +35,12 @@ class PathTracker {
   bool on_event(Json::parse_event_t event, const Json& parsed) {
     using E = Json::parse_event_t;
     switch (event) {
-      case E::object_start: stack_.push_back({false, 0, {}, {}, child(true)}); break;
-      case E::array_start: stack_.push_back({true, 0, {}, {}, child(true)}); break;
+      case E::object_start:
+        stack_.push_back({false, 0, {}, {}, child(true)});
+        break;
+      case E::array_start:
+        stack_.push_back({true, 0, {}, {}, child(true)});
+        break;
       case E::object_end:
       case E::array_end:
         stack_.pop_back();
@@ -43,7 +50,8 @@ class PathTracker {
         Frame& f = stack_.back();
         std::string k = parsed.get<std::string>();
         if (!f.keys.insert(k).second)
-          (f.at / k).fail("duplicate key: an object may give a key only once", show(k) + " a second time");
+          (f.at / k).fail("duplicate key: an object may give a key only once",
+                          show(k) + " a second time");
         f.key = std::move(k);
         break;
       }
@@ -89,8 +97,10 @@ Document parse_json_text(std::string_view text, const std::string& source) {
   Document doc;
   doc.source = source;
   try {
-    doc.json = Json::parse(text.begin(), text.end(),
-                           [&](int, Json::parse_event_t event, Json& parsed) { return tracker.on_event(event, parsed); });
+    doc.json =
+        Json::parse(text.begin(), text.end(), [&](int, Json::parse_event_t event, Json& parsed) {
+          return tracker.on_event(event, parsed);
+        });
   } catch (const Json::out_of_range& e) {
     // 1e400 and the like: JSON has no infinity, and nlohmann refuses what a double cannot hold.
     tracker.here().fail("number out of range: beyond a double", quoted_token(e.what()));
@@ -112,7 +122,8 @@ Document parse_json_file(const std::filesystem::path& path) {
   return parse_json_text(text, path.string());
 }
 
-// --- Node -----------------------------------------------------------------------------------------
+// --- Node
+// -----------------------------------------------------------------------------------------
 
 std::string Node::shown() const {
   std::string s = json_->dump();
@@ -120,7 +131,9 @@ std::string Node::shown() const {
   return s;
 }
 
-void Node::fail(std::string_view why) const { origin_.fail(why, shown()); }
+void Node::fail(std::string_view why) const {
+  origin_.fail(why, shown());
+}
 
 namespace {
 const char* type_phrase(const Json& j) {
@@ -139,11 +152,14 @@ void Node::expect_object() const {
 
 std::size_t Node::expect_array(std::optional<std::size_t> size) const {
   if (!json_->is_array()) fail(std::string("must be an array, not ") + type_phrase(*json_));
-  if (size && json_->size() != *size) fail("must be an array of " + std::to_string(*size) + " elements");
+  if (size && json_->size() != *size)
+    fail("must be an array of " + std::to_string(*size) + " elements");
   return json_->size();
 }
 
-bool Node::has(std::string_view key) const { return json_->is_object() && json_->contains(key); }
+bool Node::has(std::string_view key) const {
+  return json_->is_object() && json_->contains(key);
+}
 
 Node Node::operator/(std::string_view key) const {
   expect_object();
@@ -166,18 +182,23 @@ double Node::number() const {
 }
 
 std::int64_t Node::integer(std::int64_t lo, std::int64_t hi) const {
-  if (json_->is_number_float()) fail("must be an integer (written without a decimal point or exponent)");
-  if (!json_->is_number_integer()) fail(std::string("must be an integer, not ") + type_phrase(*json_));
+  if (json_->is_number_float())
+    fail("must be an integer (written without a decimal point or exponent)");
+  if (!json_->is_number_integer())
+    fail(std::string("must be an integer, not ") + type_phrase(*json_));
   if (json_->is_number_unsigned() && json_->get<std::uint64_t>() > static_cast<std::uint64_t>(hi))
     fail("out of range: must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
   const std::int64_t v = json_->get<std::int64_t>();
-  if (v < lo || v > hi) fail("out of range: must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  if (v < lo || v > hi)
+    fail("out of range: must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
   return v;
 }
 
 std::uint64_t Node::unsigned_integer() const {
-  if (json_->is_number_float()) fail("must be an integer (written without a decimal point or exponent)");
-  if (!json_->is_number_integer()) fail(std::string("must be an integer, not ") + type_phrase(*json_));
+  if (json_->is_number_float())
+    fail("must be an integer (written without a decimal point or exponent)");
+  if (!json_->is_number_integer())
+    fail(std::string("must be an integer, not ") + type_phrase(*json_));
   if (!json_->is_number_unsigned()) fail("out of range: must be >= 0");
   return json_->get<std::uint64_t>();
 }

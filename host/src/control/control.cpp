@@ -46,17 +46,20 @@ struct Reader {
   double number(const char* key, double limit) const {
     if (!j.contains(key)) fail(std::string("missing field '") + key + "'");
     const json& v = j[key];
-    if (!v.is_number()) fail(std::string("field '") + key + "' must be a number (got " + v.dump() + ")");
+    if (!v.is_number())
+      fail(std::string("field '") + key + "' must be a number (got " + v.dump() + ")");
     const double d = v.get<double>();
     if (!std::isfinite(d) || std::fabs(d) > limit)
-      fail(std::string("field '") + key + "' must be within +-" + json(limit).dump() + " (got " + v.dump() + ")");
+      fail(std::string("field '") + key + "' must be within +-" + json(limit).dump() + " (got " +
+           v.dump() + ")");
     return d;
   }
 
   std::string text(const char* key) const {
     if (!j.contains(key)) fail(std::string("missing field '") + key + "'");
     const json& v = j[key];
-    if (!v.is_string()) fail(std::string("field '") + key + "' must be a string (got " + v.dump() + ")");
+    if (!v.is_string())
+      fail(std::string("field '") + key + "' must be a string (got " + v.dump() + ")");
     return v.get<std::string>();
   }
 };
@@ -64,7 +67,8 @@ struct Reader {
 std::optional<std::int64_t> read_id(const json& j) {
   if (!j.contains("id") || j["id"].is_null()) return std::nullopt;
   const json& v = j["id"];
-  if (!v.is_number_integer()) throw ControlError(std::nullopt, "field 'id' must be an integer (got " + v.dump() + ")");
+  if (!v.is_number_integer())
+    throw ControlError(std::nullopt, "field 'id' must be an integer (got " + v.dump() + ")");
   if (v.is_number_unsigned() && v.get<std::uint64_t>() > static_cast<std::uint64_t>(INT64_MAX))
     throw ControlError(std::nullopt, "field 'id' is out of range (got " + v.dump() + ")");
   return v.get<std::int64_t>();
@@ -74,7 +78,8 @@ std::optional<std::int64_t> read_id(const json& j) {
 
 Request parse_request(std::string_view datagram) {
   if (datagram.size() > kMaxRequestBytes)
-    throw ControlError(std::nullopt, "request of " + std::to_string(datagram.size()) + " bytes is larger than " +
+    throw ControlError(std::nullopt, "request of " + std::to_string(datagram.size()) +
+                                         " bytes is larger than " +
                                          std::to_string(kMaxRequestBytes));
   json j;
   try {
@@ -82,22 +87,29 @@ Request parse_request(std::string_view datagram) {
   } catch (const json::exception& e) {  // parse_error, and out_of_range for 1e999
     throw ControlError(std::nullopt, std::string("not valid JSON: ") + e.what());
   }
-  if (!j.is_object()) throw ControlError(std::nullopt, "a request must be a JSON object (got " + std::string(j.type_name()) + ")");
+  if (!j.is_object())
+    throw ControlError(std::nullopt,
+                       "a request must be a JSON object (got " + std::string(j.type_name()) + ")");
   Reader r{j, read_id(j), ""};
   if (!j.contains("cmd")) throw ControlError(r.id, "missing field 'cmd'");
-  if (!j["cmd"].is_string()) throw ControlError(r.id, "field 'cmd' must be a string (got " + j["cmd"].dump() + ")");
+  if (!j["cmd"].is_string())
+    throw ControlError(r.id, "field 'cmd' must be a string (got " + j["cmd"].dump() + ")");
   r.cmd = j["cmd"].get<std::string>();
   const auto command = commands().find(r.cmd);
-  if (command == commands().end()) throw ControlError(r.id, "unknown cmd '" + r.cmd + "' (" + command_list() + ")");
+  if (command == commands().end())
+    throw ControlError(r.id, "unknown cmd '" + r.cmd + "' (" + command_list() + ")");
   for (const auto& [key, value] : j.items())
-    if (key != "id" && key != "cmd" && !command->second.contains(key)) r.fail("unknown field '" + key + "'");
+    if (key != "id" && key != "cmd" && !command->second.contains(key))
+      r.fail("unknown field '" + key + "'");
 
   Request q{r.id, Status{}};
   if (r.cmd == "set_pose") {
-    q.command = SetPose{r.number("x_cm", 10000.0), r.number("y_cm", 10000.0), r.number("yaw_deg", 360.0)};
+    q.command =
+        SetPose{r.number("x_cm", 10000.0), r.number("y_cm", 10000.0), r.number("yaw_deg", 360.0)};
   } else if (r.cmd == "set_side") {
     const std::string side = r.text("side");
-    if (side != "blue" && side != "yellow") r.fail("field 'side' must be \"blue\" or \"yellow\" (got " + j["side"].dump() + ")");
+    if (side != "blue" && side != "yellow")
+      r.fail("field 'side' must be \"blue\" or \"yellow\" (got " + j["side"].dump() + ")");
     q.command = SetSide{side};
   } else if (r.cmd == "relocalize") {
     q.command = Relocalize{};
@@ -149,7 +161,8 @@ std::string error_reply(std::optional<std::int64_t> id, std::string_view error) 
 ControlSocket::ControlSocket(const std::string& ipv4_address, int port) {
   const std::string where = ipv4_address + ":" + std::to_string(port);
   fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-  if (fd_ < 0) throw std::runtime_error("control channel " + where + ": socket: " + std::strerror(errno));
+  if (fd_ < 0)
+    throw std::runtime_error("control channel " + where + ": socket: " + std::strerror(errno));
   sockaddr_in a{};
   a.sin_family = AF_INET;
   a.sin_port = htons(static_cast<std::uint16_t>(port));
@@ -160,8 +173,9 @@ ControlSocket::ControlSocket(const std::string& ipv4_address, int port) {
   if (::bind(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
     const int e = errno;
     ::close(fd_);
-    throw std::runtime_error("control channel " + where + ": bind: " + std::strerror(e) +
-                             (e == EADDRINUSE ? " (another omnilocd running? set control_port)" : ""));
+    throw std::runtime_error(
+        "control channel " + where + ": bind: " + std::strerror(e) +
+        (e == EADDRINUSE ? " (another omnilocd running? set control_port)" : ""));
   }
 }
 
@@ -174,8 +188,10 @@ std::optional<ControlSocket::Datagram> ControlSocket::receive() {
   char buf[kMaxRequestBytes + 1];
   sockaddr_in from{};
   socklen_t len = sizeof from;
-  const ssize_t n = ::recvfrom(fd_, buf, sizeof buf, MSG_TRUNC, reinterpret_cast<sockaddr*>(&from), &len);
-  if (n < 0) return std::nullopt;  // EAGAIN: nothing waiting (any other error: nothing to read either)
+  const ssize_t n =
+      ::recvfrom(fd_, buf, sizeof buf, MSG_TRUNC, reinterpret_cast<sockaddr*>(&from), &len);
+  if (n < 0)
+    return std::nullopt;  // EAGAIN: nothing waiting (any other error: nothing to read either)
   d.size = static_cast<std::size_t>(n);
   d.truncated = d.size > kMaxRequestBytes;
   d.text.assign(buf, std::min(d.size, kMaxRequestBytes));
@@ -187,7 +203,8 @@ std::optional<ControlSocket::Datagram> ControlSocket::receive() {
 void ControlSocket::reply(const Datagram& to, std::string_view reply) {
   sockaddr_in a{};
   std::memcpy(&a, to.from, sizeof a);
-  if (::sendto(fd_, reply.data(), reply.size(), MSG_DONTWAIT, reinterpret_cast<const sockaddr*>(&a), sizeof a) < 0)
+  if (::sendto(fd_, reply.data(), reply.size(), MSG_DONTWAIT, reinterpret_cast<const sockaddr*>(&a),
+               sizeof a) < 0)
     ++reply_failures_;
 }
 

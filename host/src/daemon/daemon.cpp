@@ -21,7 +21,8 @@ namespace {
 // A board that answers but stops streaming for this long is treated as gone (a USB bridge can stay
 // enumerated while the FPGA is reset or unpowered).
 constexpr double kBoardSilentMs = 250.0;
-// While the board is gone, a degraded pose goes out every window period, so consumers see the state.
+// While the board is gone, a degraded pose goes out every window period, so consumers see the
+// state.
 constexpr double kDegradedTickMs = 10.0;
 constexpr std::chrono::milliseconds kTelemetryWait{20};
 constexpr std::size_t kMaxQueuedAtOpen = 1024;  // the board client's telemetry queue
@@ -35,7 +36,8 @@ struct Daemon::Impl {
   UdpPublisher publisher;
   Localizer localizer;
   std::unique_ptr<RecordingWriter> recorder;
-  std::string record_dir;  // of the recording now open (config.record_dir, or one started by command)
+  std::string
+      record_dir;  // of the recording now open (config.record_dir, or one started by command)
   std::unique_ptr<control::ControlSocket> control_socket;
 
   // Board connection.
@@ -48,7 +50,7 @@ struct Daemon::Impl {
   // sessions, continued through a reconnect from the board's raw counter (continued_board_ms).
   double session_base_ms = 0.0;
   std::optional<BoardTimeMark> last_mark;  // the newest window of any session
-  double last_window_clock_ms = 0.0;  // clock time a window last arrived
+  double last_window_clock_ms = 0.0;       // clock time a window last arrived
   double next_attempt_ms = 0.0;
   bool ever_connected = false;
   bool board_gone = false;
@@ -73,7 +75,10 @@ struct Daemon::Impl {
   double status_from_ms = 0.0;
 
   Impl(const DaemonConfig& c, const DaemonModels& m, DaemonIo i)
-      : config(c), models(m), io(std::move(i)), publisher(c.udp_address, c.udp_port),
+      : config(c),
+        models(m),
+        io(std::move(i)),
+        publisher(c.udp_address, c.udp_port),
         localizer(m.localizer, m.robot, m.field, m.camera, m.db, m.initial_pose) {
     if (!io.clock || !io.open_board || !io.heading)
       throw std::invalid_argument("Daemon: clock, open_board and heading are required");
@@ -122,8 +127,6 @@ struct Daemon::Impl {
     recorder.reset();
   }
 
-
-
   // A recording that cannot be written (disk full, file size limit) stops; the pose stream goes on.
   template <class Write>
   void record(Write write) {
@@ -145,7 +148,8 @@ struct Daemon::Impl {
     if (!io.camera) return DaemonStatus::kOdometryOnly;
     if (!localizer.has_fix()) return DaemonStatus::kStarting;
     if (localizer.lost()) return DaemonStatus::kLost;
-    if (!io.camera || now_ms - last_frame_ms > config.camera_timeout_ms) return DaemonStatus::kOdometryOnly;
+    if (!io.camera || now_ms - last_frame_ms > config.camera_timeout_ms)
+      return DaemonStatus::kOdometryOnly;
     return DaemonStatus::kOk;
   }
 
@@ -190,7 +194,8 @@ struct Daemon::Impl {
       o.window_period_ms = models.robot.window_period_ms;
       client = std::make_unique<BoardSession>(io.open_board(), o);
       if (version_differs(client->identity()))
-        io.logger.warning("board register map " + client->identity().version_text() + " differs from the host's");
+        io.logger.warning("board register map " + client->identity().version_text() +
+                          " differs from the host's");
       session_started = false;
       last_window_clock_ms = io.clock->now_ms();
       if (ever_connected) {
@@ -204,7 +209,8 @@ struct Daemon::Impl {
       last_open_error.clear();
     } catch (const std::exception& e) {
       client.reset();
-      if (e.what() != last_open_error) io.logger.warning(std::string("board not available: ") + e.what());
+      if (e.what() != last_open_error)
+        io.logger.warning(std::string("board not available: ") + e.what());
       last_open_error = e.what();
     }
   }
@@ -221,7 +227,7 @@ struct Daemon::Impl {
     if (!board_gone) {
       ++report.board_losses;
       io.logger.warning("board lost (" + why + "): status degraded, reconnecting every " +
-          std::to_string(static_cast<int>(config.reconnect_period_ms)) + " ms");
+                        std::to_string(static_cast<int>(config.reconnect_period_ms)) + " ms");
     }
     board_gone = true;
     next_attempt_ms = io.clock->now_ms() + config.reconnect_period_ms;
@@ -235,13 +241,15 @@ struct Daemon::Impl {
       session_base_ms = 0.0;
       return;
     }
-    if (const auto b = continued_board_ms(*last_mark, newest.raw.timestamp_cycles, clock_hz, arrival_ms)) {
+    if (const auto b =
+            continued_board_ms(*last_mark, newest.raw.timestamp_cycles, clock_hz, arrival_ms)) {
       session_base_ms = *b - newest.board_ms;
       return;
     }
     board_clock.restart();
     session_base_ms = last_mark->board_ms + (arrival_ms - last_mark->arrival_ms) - newest.board_ms;
-    io.logger.info("board time does not continue from before the reconnect (board reset?): clock re-anchored");
+    io.logger.info(
+        "board time does not continue from before the reconnect (board reset?): clock re-anchored");
   }
 
   double scaled_board_ms(const SessionWindow& w) const { return session_base_ms + w.board_ms; }
@@ -267,7 +275,8 @@ struct Daemon::Impl {
     const double board_ms = scaled_board_ms(w);
     last_mark = BoardTimeMark{w.raw.timestamp_cycles, board_ms, now, client->identity().clock_hz};
     EncoderWindow ew = w.to_encoder_window(clock_at.host_ms - w.board_ms);
-    if (ew.t_end_ms <= last_window_t_ms) ew.t_end_ms = last_window_t_ms + 1e-3;  // the localizer needs increasing times
+    if (ew.t_end_ms <= last_window_t_ms)
+      ew.t_end_ms = last_window_t_ms + 1e-3;  // the localizer needs increasing times
     last_window_t_ms = ew.t_end_ms;
     ew.gyro_yaw_deg = io.heading->gyro_yaw_deg(ew);
     // How far the heading can be trusted is the heading source's to say, window by window: the
@@ -279,8 +288,8 @@ struct Daemon::Impl {
     last_localized = lp;
     record([&] {
       recorder->add_window(ew);
-      recorder->add_clock(ClockRow{ew.seq, board_ms, now, ew.t_end_ms, clock_at.offset_ms, clock_at.drift_ppm,
-                                   clock_at.uncertainty_ms, clock_at.epoch});
+      recorder->add_clock(ClockRow{ew.seq, board_ms, now, ew.t_end_ms, clock_at.offset_ms,
+                                   clock_at.drift_ppm, clock_at.uncertainty_ms, clock_at.epoch});
     });
     if (io.observer.on_window) io.observer.on_window(ew);
     publish(lp, status(now), ew.t_end_ms, true, clock_at.uncertainty_ms);
@@ -292,18 +301,21 @@ struct Daemon::Impl {
     if (!board_gone && client) {
       if (auto f = io.camera->poll(now_ms)) {
         if (f->time_source == "host") {
-          // Stamped at hand-over: the exposure was camera_latency_ms before (docs/DAEMON.md "Camera time").
+          // Stamped at hand-over: the exposure was camera_latency_ms before (docs/DAEMON.md "Camera
+          // time").
           if (f->handover_ms < 0) f->handover_ms = f->t_ms;
           f->t_ms -= config.camera_latency_ms;
           f->time_source = "latency";
         }
         const FrameReport fr = localizer.on_image(f->t_ms, f->bgr);
         if (io.logger.enabled(LogLevel::kDebug))
-          io.logger.debug("frame t=" + nlohmann::json(f->t_ms).dump() + " ms: " +
-                          (fr.no_measurement.empty() ? "queued" : "no measurement: " + fr.no_measurement));
+          io.logger.debug(
+              "frame t=" + nlohmann::json(f->t_ms).dump() + " ms: " +
+              (fr.no_measurement.empty() ? "queued" : "no measurement: " + fr.no_measurement));
         record([&] {
           recorder->add_frame(f->t_ms, f->bgr);
-          recorder->add_frame_time(FrameTimeRow{f->t_ms, f->time_source, f->handover_ms >= 0 ? f->handover_ms : now_ms});
+          recorder->add_frame_time(
+              FrameTimeRow{f->t_ms, f->time_source, f->handover_ms >= 0 ? f->handover_ms : now_ms});
         });
         if (io.observer.on_frame) io.observer.on_frame(*f);
         last_frame_ms = f->t_ms;
@@ -333,8 +345,10 @@ struct Daemon::Impl {
     s.match_error = last_message.match_error;
     s.uncertainty_cm = last_message.uncertainty_cm;
     s.gyro_drift_deg_per_s = localizer.yaw_drift_deg_per_s();
-    s.windows_per_s = span_s > 0 ? static_cast<double>(report.windows - windows_at_status) / span_s : 0.0;
-    s.frames_per_s = span_s > 0 ? static_cast<double>(report.frames - frames_at_status) / span_s : 0.0;
+    s.windows_per_s =
+        span_s > 0 ? static_cast<double>(report.windows - windows_at_status) / span_s : 0.0;
+    s.frames_per_s =
+        span_s > 0 ? static_cast<double>(report.frames - frames_at_status) / span_s : 0.0;
     s.published = publisher.sent();
     s.send_failed = publisher.failed();
     s.send_error = publisher.last_error();
@@ -342,11 +356,13 @@ struct Daemon::Impl {
     if (!record_dir.empty()) s.recording = recorder ? "on" : "stopped";
     s.recording_failures = report.recording_failures;
     std::string line = status_line(s);
-    line += " heading=" + io.heading->status_token() + (localizer.heading_known() ? " heading_known=yes" : " heading_known=no");
+    line += " heading=" + io.heading->status_token() +
+            (localizer.heading_known() ? " heading_known=yes" : " heading_known=no");
     if (board_clock.last().epoch > 0) {  // the board's clock against the daemon's (board_clock.hpp)
       char clk[160];
       const BoardClockEstimate& c = board_clock.last();
-      std::snprintf(clk, sizeof clk, " clk_offset=%+.3fms clk_drift=%+.1fppm clk_sigma=%.2fms%s clk_resets=%llu",
+      std::snprintf(clk, sizeof clk,
+                    " clk_offset=%+.3fms clk_drift=%+.1fppm clk_sigma=%.2fms%s clk_resets=%llu",
                     c.offset_ms, c.drift_ppm, c.uncertainty_ms, c.converged ? "" : " clk=settling",
                     static_cast<unsigned long long>(board_clock.resets()));
       line += clk;
@@ -363,21 +379,26 @@ struct Daemon::Impl {
   nlohmann::json apply(const control::Command& command) {
     using nlohmann::json;
     const auto fail = [&](const std::string& why) {
-      return control::ControlError(std::nullopt, std::string(control::command_name(command)) + ": " + why);
+      return control::ControlError(std::nullopt,
+                                   std::string(control::command_name(command)) + ": " + why);
     };
     if (std::holds_alternative<control::Status>(command)) return status_json();
     if (const auto* p = std::get_if<control::SetPose>(&command)) {
       const FieldGeometry& f = models.field;
-      if (!placeable(f, {p->x_cm, p->y_cm}))  // as for an initial pose: on the carpet, or just off it
-        throw fail("(" + json(p->x_cm).dump() + ", " + json(p->y_cm).dump() + ") cm is not on the carpet of field '" +
-                   f.name + "' (0 .. " + json(f.total_x_cm()).dump() + " x 0 .. " + json(f.total_y_cm()).dump() +
+      if (!placeable(f,
+                     {p->x_cm, p->y_cm}))  // as for an initial pose: on the carpet, or just off it
+        throw fail("(" + json(p->x_cm).dump() + ", " + json(p->y_cm).dump() +
+                   ") cm is not on the carpet of field '" + f.name + "' (0 .. " +
+                   json(f.total_x_cm()).dump() + " x 0 .. " + json(f.total_y_cm()).dump() +
                    " cm, 100 cm margin)");
       const Pose2 pose{p->x_cm, p->y_cm, wrap_deg(p->yaw_deg)};
-      localizer.set_pose(pose, models.localizer.image_sigma_cm, models.localizer.image_sigma_yaw_deg);
+      localizer.set_pose(pose, models.localizer.image_sigma_cm,
+                         models.localizer.image_sigma_yaw_deg);
       last_localized = localizer.pose();
-      io.logger.info("pose set by command to (" + json(pose.x_cm).dump() + ", " + json(pose.y_cm).dump() + ") cm, " +
-          json(pose.yaw_deg).dump() + " deg");
-      return {{"x_cm", pose.x_cm}, {"y_cm", pose.y_cm}, {"yaw_deg", pose.yaw_deg}, {"last_seq", seq}};
+      io.logger.info("pose set by command to (" + json(pose.x_cm).dump() + ", " +
+                     json(pose.y_cm).dump() + ") cm, " + json(pose.yaw_deg).dump() + " deg");
+      return {
+          {"x_cm", pose.x_cm}, {"y_cm", pose.y_cm}, {"yaw_deg", pose.yaw_deg}, {"last_seq", seq}};
     }
     if (const auto* s = std::get_if<control::SetSide>(&command)) {
       try {
@@ -385,7 +406,8 @@ struct Daemon::Impl {
       } catch (const std::invalid_argument& e) {
         throw fail(e.what());
       }
-      io.logger.info("side set by command: defending the " + s->side + " goal (decides the first fix's twin)");
+      io.logger.info("side set by command: defending the " + s->side +
+                     " goal (decides the first fix's twin)");
       return {{"side", s->side}, {"has_fix", localizer.has_fix()}, {"last_seq", seq}};
     }
     if (std::holds_alternative<control::Relocalize>(command)) {
@@ -421,7 +443,9 @@ struct Daemon::Impl {
                         {"windows", report.windows},
                         {"frames", report.frames},
                         {"published", publisher.sent()},
-                        {"recording", recorder ? "on" : record_dir.empty() ? "off" : "stopped"},
+                        {"recording", recorder             ? "on"
+                                      : record_dir.empty() ? "off"
+                                                           : "stopped"},
                         {"heading", io.heading->describe()},
                         {"heading_known", localizer.heading_known()}};
     if (!record_dir.empty()) j["record_dir"] = record_dir;
@@ -528,7 +552,8 @@ struct Daemon::Impl {
       status_tick(clock.now_ms(), start);
     }
     if (client) {
-      if (const auto err = client->stop_streaming()) io.logger.warning("could not switch streaming off: " + *err);
+      if (const auto err = client->stop_streaming())
+        io.logger.warning("could not switch streaming off: " + *err);
       count_link_errors();
     }
     close_recording();
@@ -542,15 +567,18 @@ struct Daemon::Impl {
 
 std::string report_line(const DaemonReport& r) {
   char buf[320];
-  std::snprintf(buf, sizeof buf,
-                "stopped (%s) after %.1f s: %llu windows, %llu frames, %llu poses sent (%llu failed), "
-                "board lost %llu x / back %llu x, camera lost %llu x, %llu bad CRC, %llu telemetry gaps%s",
-                r.stop_reason.c_str(), r.run_ms / 1000.0, static_cast<unsigned long long>(r.windows),
-                static_cast<unsigned long long>(r.frames), static_cast<unsigned long long>(r.published),
-                static_cast<unsigned long long>(r.send_failed), static_cast<unsigned long long>(r.board_losses),
-                static_cast<unsigned long long>(r.reconnects), static_cast<unsigned long long>(r.camera_losses),
-                static_cast<unsigned long long>(r.bad_crc), static_cast<unsigned long long>(r.telemetry_gaps),
-                r.recording_failures > 0 ? ", recording stopped on a write error" : "");
+  std::snprintf(
+      buf, sizeof buf,
+      "stopped (%s) after %.1f s: %llu windows, %llu frames, %llu poses sent (%llu failed), "
+      "board lost %llu x / back %llu x, camera lost %llu x, %llu bad CRC, %llu telemetry gaps%s",
+      r.stop_reason.c_str(), r.run_ms / 1000.0, static_cast<unsigned long long>(r.windows),
+      static_cast<unsigned long long>(r.frames), static_cast<unsigned long long>(r.published),
+      static_cast<unsigned long long>(r.send_failed),
+      static_cast<unsigned long long>(r.board_losses),
+      static_cast<unsigned long long>(r.reconnects),
+      static_cast<unsigned long long>(r.camera_losses), static_cast<unsigned long long>(r.bad_crc),
+      static_cast<unsigned long long>(r.telemetry_gaps),
+      r.recording_failures > 0 ? ", recording stopped on a write error" : "");
   return buf;
 }
 
@@ -561,10 +589,16 @@ Daemon::Daemon(const DaemonConfig& config, const DaemonModels& models, DaemonIo 
 
 Daemon::~Daemon() = default;
 
-DaemonReport Daemon::run(const volatile std::sig_atomic_t* stop) { return impl_->run(stop); }
+DaemonReport Daemon::run(const volatile std::sig_atomic_t* stop) {
+  return impl_->run(stop);
+}
 
-void Daemon::set_observer(DaemonObserver observer) { impl_->io.observer = std::move(observer); }
+void Daemon::set_observer(DaemonObserver observer) {
+  impl_->io.observer = std::move(observer);
+}
 
-nlohmann::json Daemon::apply(const control::Command& command) { return impl_->apply(command); }
+nlohmann::json Daemon::apply(const control::Command& command) {
+  return impl_->apply(command);
+}
 
 }  // namespace omniloc::daemon

@@ -17,12 +17,18 @@ namespace omniloc::daemon {
 
 std::string_view to_string(DaemonStatus status) {
   switch (status) {
-    case DaemonStatus::kStarting: return "starting";
-    case DaemonStatus::kOk: return "ok";
-    case DaemonStatus::kOdometryOnly: return "odometry_only";
-    case DaemonStatus::kLost: return "lost";
-    case DaemonStatus::kDegraded: return "degraded";
-    case DaemonStatus::kNoBoard: return "no_board";
+    case DaemonStatus::kStarting:
+      return "starting";
+    case DaemonStatus::kOk:
+      return "ok";
+    case DaemonStatus::kOdometryOnly:
+      return "odometry_only";
+    case DaemonStatus::kLost:
+      return "lost";
+    case DaemonStatus::kDegraded:
+      return "degraded";
+    case DaemonStatus::kNoBoard:
+      return "no_board";
   }
   return "unknown";
 }
@@ -40,7 +46,6 @@ void put_number(std::string& out, double v, int decimals) {
   out += buf;
 }
 
-
 void put_string(std::string& out, std::string_view s) {
   out += '"';
   for (char c : s) {
@@ -49,7 +54,8 @@ void put_string(std::string& out, std::string_view s) {
       out += c;
     } else if (static_cast<unsigned char>(c) < 0x20) {
       char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(c)));
+      std::snprintf(buf, sizeof buf, "\\u%04x",
+                    static_cast<unsigned>(static_cast<unsigned char>(c)));
       out += buf;
     } else {
       out += c;
@@ -113,12 +119,14 @@ UdpPublisher::UdpPublisher(const std::string& ipv4_address, int port) {
   a.sin_family = AF_INET;
   a.sin_port = htons(static_cast<std::uint16_t>(port));
   if (port < 1 || port > 65535 || inet_pton(AF_INET, ipv4_address.c_str(), &a.sin_addr) != 1)
-    throw std::runtime_error("UDP publisher: bad destination " + ipv4_address + ":" + std::to_string(port));
+    throw std::runtime_error("UDP publisher: bad destination " + ipv4_address + ":" +
+                             std::to_string(port));
   fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
   if (fd_ < 0)
     throw std::runtime_error("UDP publisher for " + ipv4_address + ":" + std::to_string(port) +
                              ": socket() failed: " + std::strerror(errno));
-  // Broadcast destinations (192.168.1.255, 255.255.255.255) are refused with EACCES unless asked for.
+  // Broadcast destinations (192.168.1.255, 255.255.255.255) are refused with EACCES unless asked
+  // for.
   const int on = 1;
   if (::setsockopt(fd_, SOL_SOCKET, SO_BROADCAST, &on, sizeof on) != 0) {
     const std::string why = std::strerror(errno);
@@ -134,8 +142,8 @@ UdpPublisher::~UdpPublisher() {
 }
 
 void UdpPublisher::send(std::string_view datagram) {
-  const ssize_t n = ::sendto(fd_, datagram.data(), datagram.size(), 0, reinterpret_cast<const sockaddr*>(addr_),
-                             sizeof(sockaddr_in));
+  const ssize_t n = ::sendto(fd_, datagram.data(), datagram.size(), 0,
+                             reinterpret_cast<const sockaddr*>(addr_), sizeof(sockaddr_in));
   // ECONNREFUSED (nobody listening yet) and EAGAIN are normal for a fire-and-forget stream.
   if (n == static_cast<ssize_t>(datagram.size())) {
     ++sent_;
@@ -148,16 +156,21 @@ void UdpPublisher::send(std::string_view datagram) {
 std::string status_line(const StatusSnapshot& s) {
   char buf[448];
   char err[32];
-  if (s.match_error < 0) std::snprintf(err, sizeof err, "-");
-  else std::snprintf(err, sizeof err, "%.1f", s.match_error);
-  std::snprintf(buf, sizeof buf,
-                "t=%.1fs %s pose=(%.1f,%.1f,%.1f) src=%s err=%s sigma=%.1fcm drift=%+.3fdeg/s win=%.0f/s cam=%.0f/s "
-                "sent=%llu dropped=%llu%s%s reconnects=%llu",
-                s.t_s, std::string(to_string(s.status)).c_str(), s.x_cm, s.y_cm, s.yaw_deg,
-                s.source.empty() ? "-" : s.source.c_str(), err, s.uncertainty_cm, s.gyro_drift_deg_per_s, s.windows_per_s, s.frames_per_s,
-                static_cast<unsigned long long>(s.published), static_cast<unsigned long long>(s.send_failed),
-                s.send_failed > 0 && !s.send_error.empty() ? " send_error=" : "",
-                s.send_failed > 0 ? s.send_error.c_str() : "", static_cast<unsigned long long>(s.reconnects));
+  if (s.match_error < 0)
+    std::snprintf(err, sizeof err, "-");
+  else
+    std::snprintf(err, sizeof err, "%.1f", s.match_error);
+  std::snprintf(
+      buf, sizeof buf,
+      "t=%.1fs %s pose=(%.1f,%.1f,%.1f) src=%s err=%s sigma=%.1fcm drift=%+.3fdeg/s win=%.0f/s "
+      "cam=%.0f/s "
+      "sent=%llu dropped=%llu%s%s reconnects=%llu",
+      s.t_s, std::string(to_string(s.status)).c_str(), s.x_cm, s.y_cm, s.yaw_deg,
+      s.source.empty() ? "-" : s.source.c_str(), err, s.uncertainty_cm, s.gyro_drift_deg_per_s,
+      s.windows_per_s, s.frames_per_s, static_cast<unsigned long long>(s.published),
+      static_cast<unsigned long long>(s.send_failed),
+      s.send_failed > 0 && !s.send_error.empty() ? " send_error=" : "",
+      s.send_failed > 0 ? s.send_error.c_str() : "", static_cast<unsigned long long>(s.reconnects));
   std::string line = buf;
   if (!s.recording.empty())
     line += " rec=" + s.recording + " rec_failures=" + std::to_string(s.recording_failures);

@@ -16,7 +16,8 @@ struct OpenCvCamera::Capture {
 
 OpenCvCamera::OpenCvCamera(const std::string& spec, double fps, DaemonClock& clock)
     : spec_(spec), fps_(fps), clock_(clock), capture_(std::make_unique<Capture>()) {
-  const bool index = !spec.empty() && std::all_of(spec.begin(), spec.end(), [](char c) { return c >= '0' && c <= '9'; });
+  const bool index = !spec.empty() && std::all_of(spec.begin(), spec.end(),
+                                                  [](char c) { return c >= '0' && c <= '9'; });
   bool ok = false;
   if (index) {
     ok = capture_->cap.open(std::stoi(spec), cv::CAP_V4L2);
@@ -26,7 +27,9 @@ OpenCvCamera::OpenCvCamera(const std::string& spec, double fps, DaemonClock& clo
   }
   if (!ok || !capture_->cap.isOpened())
     throw std::runtime_error("camera '" + spec + "': OpenCV VideoCapture cannot open it" +
-                             (index ? " (V4L2 device index)" : is_file_ ? " (video file)" : " (V4L2 device)"));
+                             (index      ? " (V4L2 device index)"
+                              : is_file_ ? " (video file)"
+                                         : " (V4L2 device)"));
   if (!is_file_) capture_->cap.set(cv::CAP_PROP_FPS, fps);
   thread_ = std::thread([this] { run(); });
 }
@@ -65,7 +68,8 @@ void OpenCvCamera::run() {
     CameraFrame f;
     f.bgr = frame;
     if (is_file_) {
-      const bool has_time = std::isfinite(pos_ms) && pos_ms >= 0.0 && (last_pos_ms < 0.0 ? true : pos_ms > last_pos_ms);
+      const bool has_time = std::isfinite(pos_ms) && pos_ms >= 0.0 &&
+                            (last_pos_ms < 0.0 ? true : pos_ms > last_pos_ms);
       if (file_times && !has_time) file_times = false;
       if (file_times) {
         if (first_pos_ms < 0.0) {

@@ -10,7 +10,9 @@ ServiceNotifier::ServiceNotifier() {
   if (sd_watchdog_enabled(0, &us) > 0) watchdog_us_ = us;
 }
 
-void ServiceNotifier::ready() { sd_notify(0, "READY=1"); }
+void ServiceNotifier::ready() {
+  sd_notify(0, "READY=1");
+}
 
 void ServiceNotifier::loop(double now_ms) {
   if (watchdog_us_ == 0) return;
@@ -20,8 +22,12 @@ void ServiceNotifier::loop(double now_ms) {
   sd_notify(0, "WATCHDOG=1");
 }
 
-void ServiceNotifier::status(const std::string& line) { sd_notifyf(0, "STATUS=%s", line.c_str()); }
+void ServiceNotifier::status(const std::string& line) {
+  sd_notifyf(0, "STATUS=%s", line.c_str());
+}
 
-void ServiceNotifier::stopping() { sd_notify(0, "STOPPING=1"); }
+void ServiceNotifier::stopping() {
+  sd_notify(0, "STOPPING=1");
+}
 
 }  // namespace omniloc

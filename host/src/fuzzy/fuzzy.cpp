@@ -21,15 +21,21 @@ double Trapezoid::degree(double x) const {
 
 const char* fuzzy_term_name(FuzzyTerm term) {
   switch (term) {
-    case FuzzyTerm::kVeryLow: return "VL";
-    case FuzzyTerm::kLow: return "L";
-    case FuzzyTerm::kHigh: return "H";
-    case FuzzyTerm::kVeryHigh: return "VH";
+    case FuzzyTerm::kVeryLow:
+      return "VL";
+    case FuzzyTerm::kLow:
+      return "L";
+    case FuzzyTerm::kHigh:
+      return "H";
+    case FuzzyTerm::kVeryHigh:
+      return "VH";
   }
   return "?";
 }
 
-FuzzyConfig FuzzyConfig::defaults() { return FuzzyConfig{}; }
+FuzzyConfig FuzzyConfig::defaults() {
+  return FuzzyConfig{};
+}
 
 double snap_to_ranges(double value_cm, const std::vector<double>& ranges_cm) {
   if (ranges_cm.empty()) throw std::invalid_argument("snap_to_ranges: no ranges");
@@ -47,18 +53,21 @@ FuzzyResult fuzzy_search_range(const FuzzyConfig& config, double speed_cm_per_s)
   const double v = std::clamp(speed_cm_per_s, 0.0, config.speed_max_cm_per_s);
   FuzzyResult r;
   for (int i = 0; i < kFuzzyTerms; ++i) r.speed_degrees[i] = config.speed_terms[i].degree(v);
-  // Rule i: IF speed is term i THEN range is rules[i]; several rules may share an output term (max).
+  // Rule i: IF speed is term i THEN range is rules[i]; several rules may share an output term
+  // (max).
   for (int i = 0; i < kFuzzyTerms; ++i) {
     const int out = static_cast<int>(config.rules[i]);
     r.output_clip[out] = std::max(r.output_clip[out], r.speed_degrees[i]);
   }
-  const int n = std::max(1, static_cast<int>(std::ceil(config.range_max_cm / config.resolution_cm)));
+  const int n =
+      std::max(1, static_cast<int>(std::ceil(config.range_max_cm / config.resolution_cm)));
   const double h = config.range_max_cm / n;
   double area = 0.0, moment = 0.0;
   for (int k = 0; k < n; ++k) {
     const double x = (k + 0.5) * h;  // midpoint rule
     double mu = 0.0;
-    for (int t = 0; t < kFuzzyTerms; ++t) mu = std::max(mu, std::min(r.output_clip[t], config.range_terms[t].degree(x)));
+    for (int t = 0; t < kFuzzyTerms; ++t)
+      mu = std::max(mu, std::min(r.output_clip[t], config.range_terms[t].degree(x)));
     area += mu;
     moment += mu * x;
   }
@@ -80,16 +89,18 @@ std::string show_term(const Trapezoid& t) {
   return config::show({t.a, t.b, t.c, t.d});
 }
 
-void check_terms(const std::array<Trapezoid, kFuzzyTerms>& terms, double max, const Origin& at, bool must_cover) {
+void check_terms(const std::array<Trapezoid, kFuzzyTerms>& terms, double max, const Origin& at,
+                 bool must_cover) {
   for (int i = 0; i < kFuzzyTerms; ++i) {
     const Trapezoid& t = terms[i];
     const Origin f = at / fuzzy_term_name(static_cast<FuzzyTerm>(i));
-    const bool finite = std::isfinite(t.a) && std::isfinite(t.b) && std::isfinite(t.c) && std::isfinite(t.d);
+    const bool finite =
+        std::isfinite(t.a) && std::isfinite(t.b) && std::isfinite(t.c) && std::isfinite(t.d);
     config::require(finite, f, "breakpoints must be finite", show_term(t));
-    config::require(t.a <= t.b && t.b <= t.c && t.c <= t.d, f, "breakpoints must satisfy a <= b <= c <= d",
-                    show_term(t));
-    config::require(t.a >= 0.0 && t.d <= max, f, "breakpoints must lie in [0, " + config::show(max) + "]",
-                    show_term(t));
+    config::require(t.a <= t.b && t.b <= t.c && t.c <= t.d, f,
+                    "breakpoints must satisfy a <= b <= c <= d", show_term(t));
+    config::require(t.a >= 0.0 && t.d <= max, f,
+                    "breakpoints must lie in [0, " + config::show(max) + "]", show_term(t));
   }
   if (!must_cover) return;
   // Every input must fire some rule: sample the universe finely (including each breakpoint).
@@ -101,22 +112,24 @@ void check_terms(const std::array<Trapezoid, kFuzzyTerms>& terms, double max, co
     if (x < 0.0 || x > max) continue;
     double mu = 0.0;
     for (const auto& t : terms) mu = std::max(mu, t.degree(x));
-    config::require(mu > 0.0, at, "the terms leave an input uncovered (no rule would fire) at speed", x);
+    config::require(mu > 0.0, at,
+                    "the terms leave an input uncovered (no rule would fire) at speed", x);
   }
 }
 
 }  // namespace
 
 void FuzzyConfig::validate(const Origin& at) const {
-  config::require(speed_max_cm_per_s > 0.0 && std::isfinite(speed_max_cm_per_s), at / "speed_max_cm_per_s",
-                  "must be a positive number", speed_max_cm_per_s);
-  config::require(range_max_cm > 0.0 && std::isfinite(range_max_cm), at / "range_max_cm", "must be a positive number",
-                  range_max_cm);
+  config::require(speed_max_cm_per_s > 0.0 && std::isfinite(speed_max_cm_per_s),
+                  at / "speed_max_cm_per_s", "must be a positive number", speed_max_cm_per_s);
+  config::require(range_max_cm > 0.0 && std::isfinite(range_max_cm), at / "range_max_cm",
+                  "must be a positive number", range_max_cm);
   check_terms(speed_terms, speed_max_cm_per_s, at / "speed_terms", true);
   check_terms(range_terms, range_max_cm, at / "range_terms", false);
   for (int i = 0; i < kFuzzyTerms; ++i) {
     const int o = static_cast<int>(rules[i]);
-    config::require(o >= 0 && o < kFuzzyTerms, at / "rules" / fuzzy_term_name(static_cast<FuzzyTerm>(i)),
+    config::require(o >= 0 && o < kFuzzyTerms,
+                    at / "rules" / fuzzy_term_name(static_cast<FuzzyTerm>(i)),
                     "output term out of range", o);
   }
   for (int i = 0; i < kFuzzyTerms; ++i) {
@@ -129,20 +142,26 @@ void FuzzyConfig::validate(const Origin& at) const {
   if (snap_ranges_cm.empty()) (at / "snap_ranges_cm").fail("must list at least one range", "[]");
   for (std::size_t i = 0; i < snap_ranges_cm.size(); ++i) {
     const double r = snap_ranges_cm[i];
-    config::require(std::isfinite(r) && r >= 0.0, (at / "snap_ranges_cm")[i], "ranges must be finite and >= 0", r);
+    config::require(std::isfinite(r) && r >= 0.0, (at / "snap_ranges_cm")[i],
+                    "ranges must be finite and >= 0", r);
     if (i > 0)
-      config::require(r > snap_ranges_cm[i - 1], (at / "snap_ranges_cm")[i],
-                      "must be strictly increasing (after " + config::show(snap_ranges_cm[i - 1]) + ")", r);
+      config::require(
+          r > snap_ranges_cm[i - 1], (at / "snap_ranges_cm")[i],
+          "must be strictly increasing (after " + config::show(snap_ranges_cm[i - 1]) + ")", r);
   }
 }
 
-void validate_fuzzy_config(const FuzzyConfig& c, const std::string& source) { c.validate(source); }
+void validate_fuzzy_config(const FuzzyConfig& c, const std::string& source) {
+  c.validate(source);
+}
 
 namespace {
 
 const config::Choices<FuzzyTerm>& term_choices() {
-  static const config::Choices<FuzzyTerm> choices = {
-      {"VL", FuzzyTerm::kVeryLow}, {"L", FuzzyTerm::kLow}, {"H", FuzzyTerm::kHigh}, {"VH", FuzzyTerm::kVeryHigh}};
+  static const config::Choices<FuzzyTerm> choices = {{"VL", FuzzyTerm::kVeryLow},
+                                                     {"L", FuzzyTerm::kLow},
+                                                     {"H", FuzzyTerm::kHigh},
+                                                     {"VH", FuzzyTerm::kVeryHigh}};
   return choices;
 }
 
@@ -163,7 +182,8 @@ std::array<V, kFuzzyTerms> read_per_term(const config::Node& n, ReadOne read_one
 template <class V, class WriteOne>
 config::Json write_per_term(const std::array<V, kFuzzyTerms>& values, WriteOne write_one) {
   config::Json out = config::Json::object();
-  for (const auto& [name, term] : term_choices()) out[name] = write_one(values[static_cast<int>(term)]);
+  for (const auto& [name, term] : term_choices())
+    out[name] = write_one(values[static_cast<int>(term)]);
   return out;
 }
 
@@ -172,12 +192,17 @@ Trapezoid read_trapezoid(const config::Node& n) {
   return {v[0], v[1], v[2], v[3]};
 }
 
-config::Json write_trapezoid(const Trapezoid& t) { return config::Json::array({t.a, t.b, t.c, t.d}); }
+config::Json write_trapezoid(const Trapezoid& t) {
+  return config::Json::array({t.a, t.b, t.c, t.d});
+}
 
-config::Key<FuzzyConfig> terms_key(std::string name, std::array<Trapezoid, kFuzzyTerms> FuzzyConfig::*member) {
+config::Key<FuzzyConfig> terms_key(std::string name,
+                                   std::array<Trapezoid, kFuzzyTerms> FuzzyConfig::*member) {
   return config::custom<FuzzyConfig>(
       std::move(name), config::Need::kRequired,
-      [member](const config::Node& n, FuzzyConfig& c) { c.*member = read_per_term<Trapezoid>(n, read_trapezoid); },
+      [member](const config::Node& n, FuzzyConfig& c) {
+        c.*member = read_per_term<Trapezoid>(n, read_trapezoid);
+      },
       [member](const FuzzyConfig& c) { return write_per_term(c.*member, write_trapezoid); });
 }
 
@@ -194,10 +219,12 @@ const config::KeyTable<FuzzyConfig>& fuzzy_config_keys() {
       config::custom<FuzzyConfig>(
           "rules", Need::kRequired,
           [](const config::Node& n, FuzzyConfig& c) {
-            c.rules = read_per_term<FuzzyTerm>(n, [](const config::Node& r) { return read_choice(r, term_choices()); });
+            c.rules = read_per_term<FuzzyTerm>(
+                n, [](const config::Node& r) { return read_choice(r, term_choices()); });
           },
           [](const FuzzyConfig& c) {
-            return write_per_term(c.rules, [](FuzzyTerm t) { return config::Json(fuzzy_term_name(t)); });
+            return write_per_term(c.rules,
+                                  [](FuzzyTerm t) { return config::Json(fuzzy_term_name(t)); });
           }),
       key("resolution_cm", &FuzzyConfig::resolution_cm, Need::kRequired),
       key("snap_ranges_cm", &FuzzyConfig::snap_ranges_cm, Need::kRequired),

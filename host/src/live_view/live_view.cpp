@@ -17,7 +17,9 @@ namespace omniloc::live {
 namespace {
 
 double steady_ms() {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
+  return std::chrono::duration<double, std::milli>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
 }
 
 bool has_pose(daemon::DaemonStatus s) {
@@ -29,12 +31,16 @@ nlohmann::ordered_json number(double v) {
   return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
 }
 
-double round_to(double v, double step) { return std::round(v / step) * step; }
+double round_to(double v, double step) {
+  return std::round(v / step) * step;
+}
 
 }  // namespace
 
 LiveState::LiveState(const daemon::DaemonModels& models, LiveViewOptions options)
-    : models_(models), options_(std::move(options)), extractor_(std::make_unique<LineExtractor>(models.camera)) {}
+    : models_(models),
+      options_(std::move(options)),
+      extractor_(std::make_unique<LineExtractor>(models.camera)) {}
 
 LiveState::~LiveState() = default;
 
@@ -61,13 +67,18 @@ void LiveState::on_pose(const daemon::PoseEvent& e) {
   have_pose_ = true;
   ++poses_;
   const double t = e.message.t_ms;
-  if (has_pose(e.message.status) && (path_.empty() || t - path_.back().t_ms >= options_.path_step_ms || t < path_.back().t_ms))
+  if (has_pose(e.message.status) &&
+      (path_.empty() || t - path_.back().t_ms >= options_.path_step_ms || t < path_.back().t_ms))
     path_.push_back({t, e.message.x_cm, e.message.y_cm});
-  while (!path_.empty() && (path_.front().t_ms < t - options_.path_s * 1000.0 || path_.front().t_ms > t)) path_.pop_front();
+  while (!path_.empty() &&
+         (path_.front().t_ms < t - options_.path_s * 1000.0 || path_.front().t_ms > t))
+    path_.pop_front();
   if (e.message.match_error >= 0 &&
-      (errors_.empty() || t - errors_.back().t_ms >= options_.error_step_ms || t < errors_.back().t_ms))
+      (errors_.empty() || t - errors_.back().t_ms >= options_.error_step_ms ||
+       t < errors_.back().t_ms))
     errors_.push_back({t, e.message.match_error});
-  while (!errors_.empty() && (errors_.front().t_ms < t - options_.error_history_s * 1000.0 || errors_.front().t_ms > t))
+  while (!errors_.empty() &&
+         (errors_.front().t_ms < t - options_.error_history_s * 1000.0 || errors_.front().t_ms > t))
     errors_.pop_front();
 }
 
@@ -75,7 +86,9 @@ void LiveState::on_frame(const daemon::CameraFrame& f) {
   {
     const std::lock_guard lock(mutex_);
     ++frames_;
-    if (f.bgr.empty() || (f.t_ms >= frame_t_ms_ && f.t_ms - frame_t_ms_ < options_.frame_keep_period_ms)) return;
+    if (f.bgr.empty() ||
+        (f.t_ms >= frame_t_ms_ && f.t_ms - frame_t_ms_ < options_.frame_keep_period_ms))
+      return;
   }
   cv::Mat copy = f.bgr.clone();  // outside the lock: the server may be reading the previous one
   const std::lock_guard lock(mutex_);
@@ -108,12 +121,15 @@ std::string LiveState::status_json() const {
 std::string LiveState::state_json() const {
   nlohmann::ordered_json j;
   const std::lock_guard lock(mutex_);
-  j["pose"] = have_pose_ ? nlohmann::ordered_json::parse(pose_text_) : nlohmann::ordered_json(nullptr);
+  j["pose"] =
+      have_pose_ ? nlohmann::ordered_json::parse(pose_text_) : nlohmann::ordered_json(nullptr);
   j["has_pose"] = have_pose_ && has_pose(pose_.status);
   auto& path = j["path"] = nlohmann::ordered_json::array();
-  for (const auto& p : path_) path.push_back({round_to(p.t_ms, 0.1), round_to(p.x_cm, 0.01), round_to(p.y_cm, 0.01)});
+  for (const auto& p : path_)
+    path.push_back({round_to(p.t_ms, 0.1), round_to(p.x_cm, 0.01), round_to(p.y_cm, 0.01)});
   auto& errors = j["errors"] = nlohmann::ordered_json::array();
-  for (const auto& e : errors_) errors.push_back({round_to(e.t_ms, 0.1), number(round_to(e.error, 0.001))});
+  for (const auto& e : errors_)
+    errors.push_back({round_to(e.t_ms, 0.1), number(round_to(e.error, 0.001))});
   j["e_th"] = models_.localizer.e_th;
   j["status_line"] = status_line_;
   j["poses"] = poses_;
@@ -143,7 +159,8 @@ std::string LiveState::field_json() const {
   auto& seg = j["segments"] = nlohmann::ordered_json::array();
   for (const auto& s : f.segments) seg.push_back({s.a_cm.x(), s.a_cm.y(), s.b_cm.x(), s.b_cm.y()});
   auto& arcs = j["arcs"] = nlohmann::ordered_json::array();
-  for (const auto& a : f.arcs) arcs.push_back({a.centre_cm.x(), a.centre_cm.y(), a.radius_cm, a.start_deg, a.end_deg});
+  for (const auto& a : f.arcs)
+    arcs.push_back({a.centre_cm.x(), a.centre_cm.y(), a.radius_cm, a.start_deg, a.end_deg});
   auto& discs = j["discs"] = nlohmann::ordered_json::array();
   for (const auto& d : f.discs) discs.push_back({d.centre_cm.x(), d.centre_cm.y(), d.radius_cm});
   // The goal boxes behind the goal lines, as locate_overlay draws them: [x of the goal line, x of
@@ -166,8 +183,8 @@ bool LiveState::refresh_overlay() {
   {
     const std::lock_guard lock(mutex_);
     if (frame_seq_ == 0) return false;
-    if (overlay_seq_ != 0 &&
-        (frame_seq_ == overlay_seq_ || steady_ms() - overlay_wall_ms_ < options_.frame_min_period_ms))
+    if (overlay_seq_ != 0 && (frame_seq_ == overlay_seq_ ||
+                              steady_ms() - overlay_wall_ms_ < options_.frame_min_period_ms))
       return true;
     bgr = frame_;  // shares the pixels; on_frame replaces frame_, never writes into it
     pose = frame_pose_;
@@ -185,7 +202,8 @@ bool LiveState::refresh_overlay() {
     report.usable = false;
     report.reason = e.what();
   }
-  const GoalObservation goals = observe_goals(bgr, models_.camera, models_.field, goal_colour_models(models_.camera.vision));
+  const GoalObservation goals =
+      observe_goals(bgr, models_.camera, models_.field, goal_colour_models(models_.camera.vision));
   SingleFrameResult result;
   if (with_pose) {
     result.pose = Pose2{pose.x_cm, pose.y_cm, pose.yaw_deg};
@@ -227,9 +245,13 @@ std::shared_ptr<const std::vector<unsigned char>> LiveState::encoded(bool png) {
   return bytes;
 }
 
-std::shared_ptr<const std::vector<unsigned char>> LiveState::frame_png() { return encoded(true); }
+std::shared_ptr<const std::vector<unsigned char>> LiveState::frame_png() {
+  return encoded(true);
+}
 
-std::shared_ptr<const std::vector<unsigned char>> LiveState::frame_jpeg() { return encoded(false); }
+std::shared_ptr<const std::vector<unsigned char>> LiveState::frame_jpeg() {
+  return encoded(false);
+}
 
 std::uint64_t LiveState::frames_encoded() const {
   const std::lock_guard lock(mutex_);

@@ -5,7 +5,8 @@
 // position circle and +-2-sigma heading wedge (yellow); the camera frame with the overlay
 // (/frame.jpg on a 640 x 480 canvas at 630, 40, drawn 1:1; a larger frame scaled down); the match
 // error over the last 5-30 s with E_TH (600 x 220 canvas at 10, 500); the pose and frame in
-// numbers. Colours are part of the contract with the screenshot test (tests/host/test_live_view.cpp).
+// numbers. Colours are part of the contract with the screenshot test
+// (tests/host/test_live_view.cpp).
 #include "omniloc/live_view.hpp"
 
 namespace omniloc::live {
@@ -212,6 +213,8 @@ loadFrame();
 
 }  // namespace
 
-std::string_view LiveState::page_html() { return kPage; }
+std::string_view LiveState::page_html() {
+  return kPage;
+}
 
 }  // namespace omniloc::live

@@ -26,11 +26,14 @@ struct LiveViewServer::Impl {
 
 namespace {
 
-void no_cache(httplib::Response& res) { res.set_header("Cache-Control", "no-store"); }
+void no_cache(httplib::Response& res) {
+  res.set_header("Cache-Control", "no-store");
+}
 
 }  // namespace
 
-LiveViewServer::LiveViewServer(LiveState& state, const LiveViewOptions& options) : impl_(std::make_unique<Impl>()) {
+LiveViewServer::LiveViewServer(LiveState& state, const LiveViewOptions& options)
+    : impl_(std::make_unique<Impl>()) {
   httplib::Server& s = impl_->server;
   s.new_task_queue = [] { return new httplib::ThreadPool(4); };
   s.set_keep_alive_max_count(1);
@@ -63,7 +66,8 @@ LiveViewServer::LiveViewServer(LiveState& state, const LiveViewOptions& options)
   s.Get("/status.json", json(&LiveState::status_json));
   s.Get("/state.json", json(&LiveState::state_json));
   s.Get("/field.json", json(&LiveState::field_json));
-  auto image = [&state](std::shared_ptr<const std::vector<unsigned char>> (LiveState::*get)(), const char* type) {
+  auto image = [&state](std::shared_ptr<const std::vector<unsigned char>> (LiveState::*get)(),
+                        const char* type) {
     return [&state, get, type](const httplib::Request&, httplib::Response& res) {
       no_cache(res);
       const auto bytes = (state.*get)();
@@ -77,13 +81,15 @@ LiveViewServer::LiveViewServer(LiveState& state, const LiveViewOptions& options)
   };
   s.Get("/frame.jpg", image(&LiveState::frame_jpeg, "image/jpeg"));
   s.Get("/frame.png", image(&LiveState::frame_png, "image/png"));
-  const std::string where = "live view: http://" + options.address + ":" + std::to_string(options.port) + "/";
+  const std::string where =
+      "live view: http://" + options.address + ":" + std::to_string(options.port) + "/";
   if (options.port == 0) {
     impl_->port = s.bind_to_any_port(options.address);
     if (impl_->port <= 0) throw std::runtime_error(where + ": cannot listen on " + options.address);
   } else {
     if (!s.bind_to_port(options.address, options.port))
-      throw std::runtime_error(where + ": cannot listen (port in use, or not an address of this host)");
+      throw std::runtime_error(where +
+                               ": cannot listen (port in use, or not an address of this host)");
     impl_->port = options.port;
   }
   impl_->thread = std::thread([this] {
@@ -100,8 +106,12 @@ LiveViewServer::~LiveViewServer() {
   if (impl_->thread.joinable()) impl_->thread.join();
 }
 
-int LiveViewServer::port() const { return impl_->port; }
+int LiveViewServer::port() const {
+  return impl_->port;
+}
 
-bool LiveViewServer::available() { return true; }
+bool LiveViewServer::available() {
+  return true;
+}
 
 }  // namespace omniloc::live

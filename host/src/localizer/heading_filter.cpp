@@ -21,7 +21,8 @@ double HeadingFilter::correct(double t_ms, double predicted_yaw_deg, double meas
   const double residual = angle_diff_deg(measured_yaw_deg, predicted_yaw_deg);
   if (const double dt_s = recent_gap_s(t_ms); dt_s > 0.0) {
     rate_deg_per_s_ += config_.rate_gain * residual / dt_s;
-    rate_deg_per_s_ = std::clamp(rate_deg_per_s_, -config_.rate_max_deg_per_s, config_.rate_max_deg_per_s);
+    rate_deg_per_s_ =
+        std::clamp(rate_deg_per_s_, -config_.rate_max_deg_per_s, config_.rate_max_deg_per_s);
   }
   last_fix_ms_ = t_ms;
   return wrap_deg(predicted_yaw_deg + config_.gain * residual);

@@ -110,24 +110,28 @@ HeadingFilterConfig heading_filter_config(const LocalizerConfig& c) {
 
 /// `range_cm` as the local search will use it on `grid`; throws unless it is 0 or a whole,
 /// non-zero multiple of the step (see validate_search_ranges).
-void check_range_on_grid(double range_cm, const GridSpec& grid, const std::string& source, const std::string& field) {
+void check_range_on_grid(double range_cm, const GridSpec& grid, const std::string& source,
+                         const std::string& field) {
   const int reach = local_search_reach_cells(range_cm, grid.step_cm);
   const double searched_cm = reach * grid.step_cm;
   if (std::abs(searched_cm - range_cm) <= 1e-6) return;
   std::ostringstream os;
   os << source << ":" << field << ": search range " << range_cm
      << " cm is not 0 or a whole multiple of the feature database's grid step " << grid.step_cm
-     << " cm: the local search would reach " << reach << " cell(s) each side, i.e. search " << searched_cm
-     << " cm (" << 2 * reach + 1 << " x " << 2 * reach + 1 << " points)";
+     << " cm: the local search would reach " << reach << " cell(s) each side, i.e. search "
+     << searched_cm << " cm (" << 2 * reach + 1 << " x " << 2 * reach + 1 << " points)";
   throw ConfigError(os.str());
 }
 
 }  // namespace
 
-void validate_search_ranges(const LocalizerConfig& config, const GridSpec& grid, const std::string& source) {
+void validate_search_ranges(const LocalizerConfig& config, const GridSpec& grid,
+                            const std::string& source) {
   for (std::size_t i = 0; i < config.fuzzy.snap_ranges_cm.size(); ++i)
-    check_range_on_grid(config.fuzzy.snap_ranges_cm[i], grid, source, "fuzzy.snap_ranges_cm[" + std::to_string(i) + "]");
-  if (LocalizerPolicy::of(config).min_range_cm > 0.0) check_range_on_grid(config.min_range_cm, grid, source, "min_range_cm");
+    check_range_on_grid(config.fuzzy.snap_ranges_cm[i], grid, source,
+                        "fuzzy.snap_ranges_cm[" + std::to_string(i) + "]");
+  if (LocalizerPolicy::of(config).min_range_cm > 0.0)
+    check_range_on_grid(config.min_range_cm, grid, source, "min_range_cm");
 }
 
 LocalizerPolicy LocalizerPolicy::of(const LocalizerConfig& c) {
@@ -143,12 +147,13 @@ LocalizerPolicy LocalizerPolicy::of(const LocalizerConfig& c) {
 }
 
 Pose2 Localizer::Anchor::carried_to(const Pose2& odometry_now) const {
-  return {pose.x_cm + (odometry_now.x_cm - odometry_at_t.x_cm), pose.y_cm + (odometry_now.y_cm - odometry_at_t.y_cm),
-          odometry_now.yaw_deg};
+  return {pose.x_cm + (odometry_now.x_cm - odometry_at_t.x_cm),
+          pose.y_cm + (odometry_now.y_cm - odometry_at_t.y_cm), odometry_now.yaw_deg};
 }
 
-Localizer::Localizer(const LocalizerConfig& config, const RobotConfig& robot, const FieldGeometry& field,
-                     const CameraModel& camera, const FeatureDb& db, std::optional<Pose2> initial_pose)
+Localizer::Localizer(const LocalizerConfig& config, const RobotConfig& robot,
+                     const FieldGeometry& field, const CameraModel& camera, const FeatureDb& db,
+                     std::optional<Pose2> initial_pose)
     : config_(config),
       policy_(LocalizerPolicy::of(config)),
       robot_(robot),
@@ -161,7 +166,8 @@ Localizer::Localizer(const LocalizerConfig& config, const RobotConfig& robot, co
       heading_filter_(heading_filter_config(config)) {
   validate_localizer_config(config_, "localizer config");
   if (db.field_fingerprint != field.fingerprint() || db.camera_fingerprint != camera.fingerprint())
-    throw std::invalid_argument("Localizer: the feature database was built for another field or camera");
+    throw std::invalid_argument(
+        "Localizer: the feature database was built for another field or camera");
   validate_search_ranges(config_, db.grid, "localizer config");
   match_options_ = match_options_of(config_);
   if (!config_.gyro_yaw_known) trust_ = HeadingTrust::kNone;
@@ -178,7 +184,9 @@ Localizer::Localizer(const LocalizerConfig& config, const RobotConfig& robot, co
 
 Localizer::~Localizer() = default;
 
-bool Localizer::covered(double t_ms) const { return !history_.empty() && history_.back().window.t_end_ms >= t_ms; }
+bool Localizer::covered(double t_ms) const {
+  return !history_.empty() && history_.back().window.t_end_ms >= t_ms;
+}
 
 Pose2 Localizer::odometry_pose_at(double t_ms, double* speed_cm_per_s, double* sigma_xy_cm) const {
   if (history_.empty()) {
@@ -188,8 +196,9 @@ Pose2 Localizer::odometry_pose_at(double t_ms, double* speed_cm_per_s, double* s
   }
   // Last entry at or before t (history is sorted by time); before the first window the odometry
   // stands at its origin, which the first window's start shares.
-  auto after = std::upper_bound(history_.begin(), history_.end(), t_ms,
-                                [](double t, const HistoryEntry& e) { return t < e.window.t_end_ms; });
+  auto after =
+      std::upper_bound(history_.begin(), history_.end(), t_ms,
+                       [](double t, const HistoryEntry& e) { return t < e.window.t_end_ms; });
   const OdometryEstimate* lo = nullptr;
   const OdometryEstimate* hi = nullptr;
   double t_lo = 0.0, t_hi = 0.0;
@@ -214,7 +223,8 @@ Pose2 Localizer::odometry_pose_at(double t_ms, double* speed_cm_per_s, double* s
   return interpolate(lo->pose, hi->pose, f);
 }
 
-void Localizer::reset_origin_at(double t_ms, const Pose2& pose, double sigma_xy_cm, double sigma_yaw_deg) {
+void Localizer::reset_origin_at(double t_ms, const Pose2& pose, double sigma_xy_cm,
+                                double sigma_yaw_deg) {
   ++stats_.origin_resets;
   last_reset_ms_ = t_ms;
   if (history_.empty()) {
@@ -223,8 +233,9 @@ void Localizer::reset_origin_at(double t_ms, const Pose2& pose, double sigma_xy_
   }
   // Reset at the last window k ending at or before t, shifted back by the odometry's own motion
   // from t_k to t, then re-integrate the windows after k: the result is applied at the image time.
-  auto after = std::upper_bound(history_.begin(), history_.end(), t_ms,
-                                [](double t, const HistoryEntry& e) { return t < e.window.t_end_ms; });
+  auto after =
+      std::upper_bound(history_.begin(), history_.end(), t_ms,
+                       [](double t, const HistoryEntry& e) { return t < e.window.t_end_ms; });
   auto k = after == history_.begin() ? history_.begin() : std::prev(after);
   const Pose2 at_t = odometry_pose_at(t_ms, nullptr, nullptr);
   const Pose2 at_k = k->odometry.estimate().pose;
@@ -262,8 +273,8 @@ LocalizedPose Localizer::on_window(const EncoderWindow& window) {
   if (!history_.empty() && !(window.t_end_ms > history_.back().window.t_end_ms)) {
     std::ostringstream os;
     os << "Localizer: encoder window seq " << window.seq << " at t=" << window.t_end_ms
-       << " ms does not come after the previous one (seq " << history_.back().window.seq << " at t="
-       << history_.back().window.t_end_ms << " ms)";
+       << " ms does not come after the previous one (seq " << history_.back().window.seq
+       << " at t=" << history_.back().window.t_end_ms << " ms)";
     throw std::invalid_argument(os.str());
   }
   set_heading_trust(window.heading_trust);
@@ -296,7 +307,8 @@ FrameReport Localizer::on_image(double t_ms, const cv::Mat& bgr) {
   return on_bearings(t_ms, std::move(bearings), observe_goals(bgr, camera_, field_, goal_colours_));
 }
 
-FrameReport Localizer::on_bearings(double t_ms, BearingScan bearings, std::optional<GoalObservation> goals) {
+FrameReport Localizer::on_bearings(double t_ms, BearingScan bearings,
+                                   std::optional<GoalObservation> goals) {
   if (!std::isfinite(t_ms)) throw std::invalid_argument("Localizer: frame time is not finite");
   if (!covered(t_ms)) {
     // Keep frames in time order; a frame older than a waiting one is still fine to queue.
@@ -363,15 +375,17 @@ void Localizer::set_heading_trust(HeadingTrust trust) {
 }
 
 bool Localizer::heading_known() const {
-  return trust_ == HeadingTrust::kAbsolute || (trust_ == HeadingTrust::kRelative && heading_aligned_);
+  return trust_ == HeadingTrust::kAbsolute ||
+         (trust_ == HeadingTrust::kRelative && heading_aligned_);
 }
 
 void Localizer::set_side(GoalColour defended) {
   if (defended == GoalColour::kUnknown) throw std::invalid_argument("side: must be blue or yellow");
   if (goal_colour_at_x_max(field_, goal_colours_) == GoalColour::kUnknown)
-    throw std::invalid_argument("side: field '" + field_.name +
-                                "' does not say which goal is which colour (goal.colour_at_x_max in the field file, or "
-                                "goal_colour_at_x_max in the camera's vision block from omniloc calibrate)");
+    throw std::invalid_argument(
+        "side: field '" + field_.name +
+        "' does not say which goal is which colour (goal.colour_at_x_max in the field file, or "
+        "goal_colour_at_x_max in the camera's vision block from omniloc calibrate)");
   side_ = defended;
   kickoff_pending_ = true;
 }
@@ -382,7 +396,9 @@ std::optional<SingleFrameResult> Localizer::choose_by_side(const SingleFrameResu
   // which the robot faces at kick-off, lies towards -x.
   const bool own_half_x_max = goal_colour_at_x_max(field_, goal_colours_) == *side_;
   const double centre_x = field_.centre_cm().x();
-  const auto in_own_half = [&](const Pose2& p) { return own_half_x_max ? p.x_cm > centre_x : p.x_cm < centre_x; };
+  const auto in_own_half = [&](const Pose2& p) {
+    return own_half_x_max ? p.x_cm > centre_x : p.x_cm < centre_x;
+  };
   const auto facing_opponent = [&](const Pose2& p) {
     return std::cos(deg_to_rad(p.yaw_deg)) * (own_half_x_max ? -1.0 : 1.0) > 0.0;
   };
@@ -390,13 +406,15 @@ std::optional<SingleFrameResult> Localizer::choose_by_side(const SingleFrameResu
   chosen.accepted = true;
   chosen.ambiguous = chosen.heading_ambiguous = chosen.lines_ambiguous = false;
   chosen.twin.reset();
-  if (g.heading_ambiguous) {  // near the centre spot: the position is known, the heading up to 180 deg
+  if (g.heading_ambiguous) {  // near the centre spot: the position is known, the heading up to 180
+                              // deg
     if (!facing_opponent(g.pose)) chosen.pose.yaw_deg = wrap_deg(g.pose.yaw_deg + 180.0);
     return chosen;
   }
   if (!g.ambiguous || !g.twin || !(g.twin_error < config_.e_th)) return std::nullopt;
   const bool first = in_own_half(g.pose), second = in_own_half(*g.twin);
-  if (first == second) return std::nullopt;  // both on one side of the centre line: the rule cannot tell
+  if (first == second)
+    return std::nullopt;  // both on one side of the centre line: the rule cannot tell
   if (second) {
     chosen.pose = *g.twin;
     chosen.match.position_cm = g.twin->position_cm();
@@ -423,7 +441,8 @@ std::vector<FrameReport> Localizer::take_frame_reports() {
   return out;
 }
 
-FrameReport Localizer::process(double t_ms, const BearingScan& bearings, const GoalObservation* goals) {
+FrameReport Localizer::process(double t_ms, const BearingScan& bearings,
+                               const GoalObservation* goals) {
   FrameReport rep;
   rep.t_ms = t_ms;
   ++stats_.frames;
@@ -445,7 +464,8 @@ FrameReport Localizer::process(double t_ms, const BearingScan& bearings, const G
   return rep;
 }
 
-Localizer::Frame Localizer::frame_at(double t_ms, const BearingScan& bearings, const GoalObservation* goals) const {
+Localizer::Frame Localizer::frame_at(double t_ms, const BearingScan& bearings,
+                                     const GoalObservation* goals) const {
   Frame f;
   f.t_ms = t_ms;
   f.bearings = &bearings;
@@ -478,7 +498,8 @@ void Localizer::search(const Frame& frame, FrameReport& rep) {
     ++stats_.rejected;
     // The gyro's alignment may be what is wrong (a wrong twin at the first fix): after this many
     // failures at its heading, try every heading again.
-    if (trust_ == HeadingTrust::kRelative && heading_aligned_ && ++bad_aligned_searches_ >= config_.lost_after_bad_frames) {
+    if (trust_ == HeadingTrust::kRelative && heading_aligned_ &&
+        ++bad_aligned_searches_ >= config_.lost_after_bad_frames) {
       heading_aligned_ = false;
       bad_aligned_searches_ = 0;
       ++stats_.heading_alignments_dropped;
@@ -513,39 +534,47 @@ void Localizer::track(const Frame& frame, FrameReport& rep) {
   }
 }
 
-Localizer::CrossCheck Localizer::cross_check(const Frame& frame, const MatchResult& local, FrameReport& rep) {
+Localizer::CrossCheck Localizer::cross_check(const Frame& frame, const MatchResult& local,
+                                             FrameReport& rep) {
   // After a kidnapping the local search can still find a passable match near the wrong place, so
   // a bad result alone is not the only symptom. Checked on a bad result, while a disagreement
   // runs, and at least every check_period_ms.
   const bool good = local.error < config_.e_th;
-  if (good && disagree_run_ == 0 && frame.t_ms - last_check_ms_ < config_.check_period_ms) return CrossCheck::kNotRun;
+  if (good && disagree_run_ == 0 && frame.t_ms - last_check_ms_ < config_.check_period_ms)
+    return CrossCheck::kNotRun;
   last_check_ms_ = frame.t_ms;
-  const CheckContext checked{frame.t_ms, frame.predicted.position_cm(), frame.predicted_sigma_cm, local.error};
+  const CheckContext checked{frame.t_ms, frame.predicted.position_cm(), frame.predicted_sigma_cm,
+                             local.error};
   if (config_.cross_check_worker) {
     if (started_check_) return CrossCheck::kNotRun;  // judged at the start of process(): never here
     if (!worker_) worker_ = std::make_unique<CheckWorker>();
     const std::optional<double> yaw = begin_global_search(frame, rep);
     // Copies: the frame's scans go away with it. The members read are the const configuration,
     // field, camera and database, which outlive the worker.
-    worker_->start([this, yaw, bearings = *frame.bearings, scan = frame.scan,
-                    goals = frame.goals ? std::optional<GoalObservation>(*frame.goals) : std::nullopt]() {
-      return locate_frame(config_, field_, camera_, db_, bearings, yaw, goals ? &*goals : nullptr, &scan);
-    });
+    worker_->start(
+        [this, yaw, bearings = *frame.bearings, scan = frame.scan,
+         goals = frame.goals ? std::optional<GoalObservation>(*frame.goals) : std::nullopt]() {
+          return locate_frame(config_, field_, camera_, db_, bearings, yaw,
+                              goals ? &*goals : nullptr, &scan);
+        });
     started_check_ = checked;
     return CrossCheck::kStarted;
   }
   return judge_check(checked, global_match(frame, rep), rep);
 }
 
-Localizer::CrossCheck Localizer::judge_check(const CheckContext& checked, const SingleFrameResult& g, FrameReport& rep) {
-  const double gate = std::max(config_.disagree_min_cm, config_.disagree_sigmas * checked.predicted_sigma_cm);
+Localizer::CrossCheck Localizer::judge_check(const CheckContext& checked,
+                                             const SingleFrameResult& g, FrameReport& rep) {
+  const double gate =
+      std::max(config_.disagree_min_cm, config_.disagree_sigmas * checked.predicted_sigma_cm);
   const bool far = (g.match.position_cm - checked.predicted_cm).norm() > gate;
   const bool better = g.match.error < config_.disagree_error_ratio * checked.local_error;
   if (!(g.match.error < config_.e_th && !g.ambiguous && far && better)) {
     disagree_run_ = 0;
     return CrossCheck::kAgrees;
   }
-  if (disagree_run_ > 0 && (g.match.position_cm - disagree_position_cm_).norm() > config_.disagree_min_cm)
+  if (disagree_run_ > 0 &&
+      (g.match.position_cm - disagree_position_cm_).norm() > config_.disagree_min_cm)
     disagree_run_ = 0;  // a different place each time: not a consistent disagreement
   ++disagree_run_;
   disagree_position_cm_ = g.match.position_cm;
@@ -562,7 +591,8 @@ Localizer::CrossCheck Localizer::judge_started_check(FrameReport& rep) {
   const SingleFrameResult g = worker_->wait();
   // Only while still tracking, and only within the history (its relocalization is applied at the
   // checked frame's time); otherwise the pose has moved on without it.
-  if (state_ != State::kTracking || history_.empty() || (trimmed_ && checked.t_ms < history_.front().window.t_end_ms))
+  if (state_ != State::kTracking || history_.empty() ||
+      (trimmed_ && checked.t_ms < history_.front().window.t_end_ms))
     return CrossCheck::kNotRun;
   const CrossCheck c = judge_check(checked, g, rep);
   if (c == CrossCheck::kRelocalized) rep.global = true;
@@ -573,7 +603,8 @@ void Localizer::discard_started_check() {
   if (!started_check_) return;
   started_check_.reset();
   try {
-    (void)worker_->wait();  // the worker is free for the next check; its answer is about the old pose
+    (void)
+        worker_->wait();  // the worker is free for the next check; its answer is about the old pose
   } catch (const std::exception&) {
     // About the old pose too: a search that failed is as irrelevant now as one that succeeded.
   }
@@ -589,7 +620,8 @@ void Localizer::accept(const Frame& frame, const MatchResult& local, FrameReport
   if (frame.t_ms - last_reset_ms_ >= config_.reset_period_ms - 1e-6) {
     double sigma_yaw = odometry_.estimate().sigma_yaw_deg;
     if (policy_.correct_yaw) {
-      if (const std::optional<double> y = corrected_yaw(frame.t_ms, *frame.bearings, local.position_cm, pose.yaw_deg)) {
+      if (const std::optional<double> y =
+              corrected_yaw(frame.t_ms, *frame.bearings, local.position_cm, pose.yaw_deg)) {
         pose.yaw_deg = *y;
         sigma_yaw = std::min(sigma_yaw, config_.image_sigma_yaw_deg);
       }
@@ -639,18 +671,21 @@ std::optional<double> Localizer::begin_global_search(const Frame& frame, FrameRe
 
 SingleFrameResult Localizer::global_match(const Frame& frame, FrameReport& rep) {
   const std::optional<double> yaw = begin_global_search(frame, rep);
-  return locate_frame(config_, field_, camera_, db_, *frame.bearings, yaw, frame.goals, &frame.scan);
+  return locate_frame(config_, field_, camera_, db_, *frame.bearings, yaw, frame.goals,
+                      &frame.scan);
 }
 
 MatchResult Localizer::local_match(const Frame& frame, double range_cm) const {
-  MatchResult m = local_search(db_, frame.scan, frame.predicted.position_cm(), range_cm, match_options_);
+  MatchResult m =
+      local_search(db_, frame.scan, frame.predicted.position_cm(), range_cm, match_options_);
   apply_refinement(db_, field_, camera_, frame.scan, m, match_options_);
   m.error = judged_error(config_, m);
   return m;
 }
 
 double Localizer::search_range_cm(double speed_cm_per_s) const {
-  return std::max(fuzzy_search_range(config_.fuzzy, speed_cm_per_s).snapped_cm, policy_.min_range_cm);
+  return std::max(fuzzy_search_range(config_.fuzzy, speed_cm_per_s).snapped_cm,
+                  policy_.min_range_cm);
 }
 
 void Localizer::note_global(FrameReport& rep, const SingleFrameResult& global) {
@@ -663,9 +698,11 @@ void Localizer::note_global(FrameReport& rep, const SingleFrameResult& global) {
 }
 
 std::optional<double> Localizer::corrected_yaw(double t_ms, const BearingScan& bearings,
-                                               const Eigen::Vector2d& position_cm, double gyro_yaw_deg) {
+                                               const Eigen::Vector2d& position_cm,
+                                               double gyro_yaw_deg) {
   const double predicted = heading_filter_.predict(t_ms, gyro_yaw_deg);
-  const YawEstimate est = estimate_yaw(field_, camera_, bearings, position_cm, predicted, config_.yaw_search_deg, match_options_);
+  const YawEstimate est = estimate_yaw(field_, camera_, bearings, position_cm, predicted,
+                                       config_.yaw_search_deg, match_options_);
   if (!(est.error < config_.e_th)) return std::nullopt;
   ++stats_.yaw_corrections;
   return heading_filter_.correct(t_ms, predicted, est.yaw_deg);
@@ -695,12 +732,18 @@ LocalizedPose Localizer::make_pose(const EncoderWindow& window) {
   p.sigma_yaw_deg = e.sigma_yaw_deg;
   p.pose = anchor_.valid ? anchor_.carried_to(e.pose) : e.pose;
   p.sigma_xy_cm = anchor_.valid ? anchor_sigma_cm(e.pose) : e.sigma_xy_cm;
-  if (state_ == State::kSearching) p.source = PoseSource::kNone;
-  else if (state_ == State::kLost) p.source = PoseSource::kLost;
-  else if (applied_this_window_) p.source = PoseSource::kImage;
-  else if (last_good_) p.source = PoseSource::kIntegrated;
-  else p.source = PoseSource::kOdometry;
-  if (state_ == State::kLost || state_ == State::kSearching) p.sigma_xy_cm = std::max(p.sigma_xy_cm, 100.0);
+  if (state_ == State::kSearching)
+    p.source = PoseSource::kNone;
+  else if (state_ == State::kLost)
+    p.source = PoseSource::kLost;
+  else if (applied_this_window_)
+    p.source = PoseSource::kImage;
+  else if (last_good_)
+    p.source = PoseSource::kIntegrated;
+  else
+    p.source = PoseSource::kOdometry;
+  if (state_ == State::kLost || state_ == State::kSearching)
+    p.sigma_xy_cm = std::max(p.sigma_xy_cm, 100.0);
   return p;
 }
 

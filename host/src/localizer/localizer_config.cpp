@@ -31,11 +31,13 @@ void LocalizerConfig::validate(const config::Origin& at) const {
   require(crossing_cap_px >= 1 && crossing_cap_px <= 127, at / "crossing_cap_px",
           "must be 1..127 px (the two sides' costs of a slot add up in one byte)", crossing_cap_px);
   if (match_cost == MatchCost::kBounded) {
-    require(e_th <= crossing_cap_px, at / "e_th",
-            "must not exceed crossing_cap_px: the bounded error never does, every match would be good", e_th);
+    require(
+        e_th <= crossing_cap_px, at / "e_th",
+        "must not exceed crossing_cap_px: the bounded error never does, every match would be good",
+        e_th);
   }
-  require(std::isfinite(ambiguity_ratio) && ambiguity_ratio >= 1.0, at / "ambiguity_ratio", "must be a number >= 1",
-          ambiguity_ratio);
+  require(std::isfinite(ambiguity_ratio) && ambiguity_ratio >= 1.0, at / "ambiguity_ratio",
+          "must be a number >= 1", ambiguity_ratio);
   // Upper bounds: the history is kept in memory, and periods beyond a day are typos.
   const auto at_most = [&](double v, const char* field, double hi, const char* why) {
     require(v <= hi, at / field, why, v);
@@ -45,13 +47,15 @@ void LocalizerConfig::validate(const config::Origin& at) const {
   at_most(reset_period_ms, "reset_period_ms", 8.64e7, "must be at most a day (8.64e7 ms)");
   require(std::isfinite(history_ms) && history_ms >= 100.0, at / "history_ms",
           "must be at least 100 ms (frames arrive up to ~50 ms late)", history_ms);
-  at_most(history_ms, "history_ms", 60000.0, "must be at most 60000 ms (the history is kept in memory)");
-  require(scan_rays_per_degree >= 1 && scan_rays_per_degree <= 16, at / "scan_rays_per_degree", "must be 1..16",
-          scan_rays_per_degree);
+  at_most(history_ms, "history_ms", 60000.0,
+          "must be at most 60000 ms (the history is kept in memory)");
+  require(scan_rays_per_degree >= 1 && scan_rays_per_degree <= 16, at / "scan_rays_per_degree",
+          "must be 1..16", scan_rays_per_degree);
   non_negative(min_range_cm, "min_range_cm");
   positive(image_sigma_cm, "image_sigma_cm");
   positive(image_sigma_yaw_deg, "image_sigma_yaw_deg");
-  require(lost_after_bad_frames >= 1, at / "lost_after_bad_frames", "must be >= 1", lost_after_bad_frames);
+  require(lost_after_bad_frames >= 1, at / "lost_after_bad_frames", "must be >= 1",
+          lost_after_bad_frames);
   positive(check_period_ms, "check_period_ms");
   at_most(min_range_cm, "min_range_cm", 10000.0, "must be at most 10000 cm");
   at_most(image_sigma_cm, "image_sigma_cm", 10000.0, "must be at most 10000 cm");
@@ -59,17 +63,20 @@ void LocalizerConfig::validate(const config::Origin& at) const {
   at_most(disagree_min_cm, "disagree_min_cm", 10000.0, "must be at most 10000 cm");
   non_negative(disagree_min_cm, "disagree_min_cm");
   positive(disagree_sigmas, "disagree_sigmas");
-  require(disagree_error_ratio > 0.0 && disagree_error_ratio <= 1.0, at / "disagree_error_ratio", "must be in (0, 1]",
-          disagree_error_ratio);
+  require(disagree_error_ratio > 0.0 && disagree_error_ratio <= 1.0, at / "disagree_error_ratio",
+          "must be in (0, 1]", disagree_error_ratio);
   require(disagree_frames >= 1, at / "disagree_frames", "must be >= 1", disagree_frames);
-  require(yaw_search_deg > 0.0 && yaw_search_deg <= 30.0, at / "yaw_search_deg", "must be in (0, 30] degrees",
-          yaw_search_deg);
+  require(yaw_search_deg > 0.0 && yaw_search_deg <= 30.0, at / "yaw_search_deg",
+          "must be in (0, 30] degrees", yaw_search_deg);
   require(yaw_gain > 0.0 && yaw_gain <= 1.0, at / "yaw_gain", "must be in (0, 1]", yaw_gain);
-  require(yaw_rate_gain >= 0.0 && yaw_rate_gain < 1.0, at / "yaw_rate_gain", "must be in [0, 1)", yaw_rate_gain);
+  require(yaw_rate_gain >= 0.0 && yaw_rate_gain < 1.0, at / "yaw_rate_gain", "must be in [0, 1)",
+          yaw_rate_gain);
   non_negative(yaw_rate_max_deg_per_s, "yaw_rate_max_deg_per_s");
 }
 
-void validate_localizer_config(const LocalizerConfig& c, const std::string& source) { c.validate(source); }
+void validate_localizer_config(const LocalizerConfig& c, const std::string& source) {
+  c.validate(source);
+}
 
 const config::KeyTable<LocalizerConfig>& localizer_config_keys() {
   using config::key;
@@ -85,9 +92,12 @@ const config::KeyTable<LocalizerConfig>& localizer_config_keys() {
             if (mode == LocalizerMode::kPaper) c = LocalizerConfig::paper();
             c.mode = mode;
           },
-          [](const L& c) { return config::Json(c.mode == LocalizerMode::kPaper ? "paper" : "full"); }),
-      config::choice<L, MatchCost>("match_cost", &L::match_cost,
-                                   {{"bounded", MatchCost::kBounded}, {"paper_sad", MatchCost::kPaperSad}}),
+          [](const L& c) {
+            return config::Json(c.mode == LocalizerMode::kPaper ? "paper" : "full");
+          }),
+      config::choice<L, MatchCost>(
+          "match_cost", &L::match_cost,
+          {{"bounded", MatchCost::kBounded}, {"paper_sad", MatchCost::kPaperSad}}),
       key("crossing_cap_px", &L::crossing_cap_px),
       key("e_th", &L::e_th),
       key("ambiguity_ratio", &L::ambiguity_ratio),
@@ -128,35 +138,47 @@ LocalizerConfig parse_localizer_config(const config::Node& node) {
 }
 
 LocalizerConfig load_localizer_config(const std::string& name_or_path) {
-  return parse_localizer_config(config::parse_json_file(resolve_data_file("localizer", name_or_path)).root());
+  return parse_localizer_config(
+      config::parse_json_file(resolve_data_file("localizer", name_or_path)).root());
 }
 
 const char* pose_source_name(PoseSource s) {
   switch (s) {
-    case PoseSource::kNone: return "none";
-    case PoseSource::kImage: return "image";
-    case PoseSource::kIntegrated: return "integrated";
-    case PoseSource::kOdometry: return "odometry";
-    case PoseSource::kLost: return "lost";
+    case PoseSource::kNone:
+      return "none";
+    case PoseSource::kImage:
+      return "image";
+    case PoseSource::kIntegrated:
+      return "integrated";
+    case PoseSource::kOdometry:
+      return "odometry";
+    case PoseSource::kLost:
+      return "lost";
   }
   return "?";
 }
 
 std::optional<PoseSource> parse_pose_source(const std::string& name) {
-  for (PoseSource s : {PoseSource::kNone, PoseSource::kImage, PoseSource::kIntegrated, PoseSource::kOdometry,
-                       PoseSource::kLost})
+  for (PoseSource s : {PoseSource::kNone, PoseSource::kImage, PoseSource::kIntegrated,
+                       PoseSource::kOdometry, PoseSource::kLost})
     if (name == pose_source_name(s)) return s;
   return std::nullopt;
 }
 
 const char* frame_outcome_name(FrameOutcome o) {
   switch (o) {
-    case FrameOutcome::kPending: return "pending";
-    case FrameOutcome::kDropped: return "dropped";
-    case FrameOutcome::kAccepted: return "accepted";
-    case FrameOutcome::kRejected: return "rejected";
-    case FrameOutcome::kAmbiguous: return "ambiguous";
-    case FrameOutcome::kRelocalized: return "relocalized";
+    case FrameOutcome::kPending:
+      return "pending";
+    case FrameOutcome::kDropped:
+      return "dropped";
+    case FrameOutcome::kAccepted:
+      return "accepted";
+    case FrameOutcome::kRejected:
+      return "rejected";
+    case FrameOutcome::kAmbiguous:
+      return "ambiguous";
+    case FrameOutcome::kRelocalized:
+      return "relocalized";
   }
   return "?";
 }

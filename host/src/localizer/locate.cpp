@@ -30,11 +30,13 @@ struct Candidate {
 
 // The second candidate made as good as the first: the heading found again near its hint (when the
 // heading is searched), the position by a local search there at that heading, then the refinement.
-Candidate refine_second(const LocalizerConfig& config, const FieldGeometry& field, const CameraModel& camera,
-                        const FeatureDb& db, const BearingScan& bearings, const Eigen::Vector2d& position_cm,
-                        double yaw_deg, bool search_yaw) {
+Candidate refine_second(const LocalizerConfig& config, const FieldGeometry& field,
+                        const CameraModel& camera, const FeatureDb& db, const BearingScan& bearings,
+                        const Eigen::Vector2d& position_cm, double yaw_deg, bool search_yaw) {
   const MatchOptions opt = match_options_of(config);
-  if (search_yaw) yaw_deg = wrap_deg(estimate_yaw(field, camera, bearings, position_cm, yaw_deg, kAnyYawStepDeg, opt).yaw_deg);
+  if (search_yaw)
+    yaw_deg = wrap_deg(
+        estimate_yaw(field, camera, bearings, position_cm, yaw_deg, kAnyYawStepDeg, opt).yaw_deg);
   const FieldScan scan = make_field_scan(bearings, yaw_deg);
   Candidate c;
   c.match = local_search(db, scan, position_cm, db.grid.step_cm, opt);
@@ -51,23 +53,29 @@ Candidate refine_second(const LocalizerConfig& config, const FieldGeometry& fiel
 // within the ambiguity ratio once refined (or replaces the best when clearly better).
 struct Contender {
   Candidate candidate;
-  bool replaces_best = false;  ///< clearly better than the best: the best is dropped, nothing is ambiguous
+  bool replaces_best =
+      false;  ///< clearly better than the best: the best is dropped, nothing is ambiguous
 };
 
-std::optional<Contender> contender(const LocalizerConfig& config, const FieldGeometry& field, const CameraModel& camera,
-                                   const FeatureDb& db, const BearingScan& bearings, const Candidate& best,
+std::optional<Contender> contender(const LocalizerConfig& config, const FieldGeometry& field,
+                                   const CameraModel& camera, const FeatureDb& db,
+                                   const BearingScan& bearings, const Candidate& best,
                                    double second_yaw_deg, bool yaw_searched) {
   const double ratio = match_options_of(config).ambiguity_ratio;
   if (yaw_searched) {
     const Eigen::Vector2d mirrored = 2.0 * field.centre_cm() - best.match.position_cm;
-    Candidate twin = refine_second(config, field, camera, db, bearings, mirrored, wrap_deg(best.pose.yaw_deg + 180.0), true);
-    if (twin.match.cell >= 0 && twin.match.error <= ratio * best.match.error) return Contender{twin, false};
+    Candidate twin = refine_second(config, field, camera, db, bearings, mirrored,
+                                   wrap_deg(best.pose.yaw_deg + 180.0), true);
+    if (twin.match.cell >= 0 && twin.match.error <= ratio * best.match.error)
+      return Contender{twin, false};
   }
   if (best.match.ambiguous && std::isfinite(best.match.second_error)) {
     // Flagged on the grid errors; compared as the best is judged, after the refinement (a grid
     // point 5 cm from the robot often scores well above its refined error, so the grid errors
     // alone say little): a clearly worse second is no contender, a clearly better one replaces it.
-    const Candidate second = refine_second(config, field, camera, db, bearings, best.match.second_position_cm, second_yaw_deg, yaw_searched);
+    const Candidate second =
+        refine_second(config, field, camera, db, bearings, best.match.second_position_cm,
+                      second_yaw_deg, yaw_searched);
     if (second.match.cell < 0 || second.match.error > ratio * best.match.error) return std::nullopt;
     return Contender{second, second.match.error * ratio < best.match.error};
   }
@@ -76,8 +84,9 @@ std::optional<Contender> contender(const LocalizerConfig& config, const FieldGeo
 
 }  // namespace
 
-SingleFrameResult locate_frame(const LocalizerConfig& config, const FieldGeometry& field, const CameraModel& camera,
-                               const FeatureDb& db, const BearingScan& bearings, std::optional<double> yaw_deg,
+SingleFrameResult locate_frame(const LocalizerConfig& config, const FieldGeometry& field,
+                               const CameraModel& camera, const FeatureDb& db,
+                               const BearingScan& bearings, std::optional<double> yaw_deg,
                                const GoalObservation* goals, const FieldScan* at_yaw) {
   const MatchOptions opt = match_options_of(config);
   SingleFrameResult r;
@@ -101,7 +110,8 @@ SingleFrameResult locate_frame(const LocalizerConfig& config, const FieldGeometr
   }
   best.match.error = judged_error(config, best.match);
   std::optional<Contender> found;
-  if (best.match.cell >= 0) found = contender(config, field, camera, db, bearings, best, second_yaw_deg, r.yaw_searched);
+  if (best.match.cell >= 0)
+    found = contender(config, field, camera, db, bearings, best, second_yaw_deg, r.yaw_searched);
   std::optional<Candidate> other;
   if (found && found->replaces_best) {
     best = found->candidate;
@@ -124,7 +134,8 @@ SingleFrameResult locate_frame(const LocalizerConfig& config, const FieldGeometr
     r.goal_choice.reason = "not needed (the lines alone are not ambiguous)";
   }
   if (r.ambiguous && r.twin &&
-      (r.twin->position_cm() - best.pose.position_cm()).norm() < MatchOptions{}.ambiguity_separation_cm) {
+      (r.twin->position_cm() - best.pose.position_cm()).norm() <
+          MatchOptions{}.ambiguity_separation_cm) {
     r.ambiguous = false;
     r.heading_ambiguous = true;
   }
@@ -149,12 +160,15 @@ void put(cv::Mat& img, const cv::Point& p, const cv::Vec3b& colour) {
 }
 
 // The lines (and the goal boxes) at `pose`, every field point through the camera's radius table.
-void draw_field_model(cv::Mat& out, const CameraModel& camera, const FieldGeometry& field, const Pose2& pose,
-                      const cv::Vec3b& colour) {
+void draw_field_model(cv::Mat& out, const CameraModel& camera, const FieldGeometry& field,
+                      const Pose2& pose, const cv::Vec3b& colour) {
   auto draw = [&](const Eigen::Vector2d& q) {
-    if (const auto px = camera.pixel_of_robot_point(field_to_robot(q - pose.position_cm(), pose.yaw_deg))) {
-      if (std::hypot(px->x() - camera.center_px.x(), px->y() - camera.center_px.y()) >= camera.min_radius_px())
-        put(out, {static_cast<int>(std::lround(px->x())), static_cast<int>(std::lround(px->y()))}, colour);
+    if (const auto px =
+            camera.pixel_of_robot_point(field_to_robot(q - pose.position_cm(), pose.yaw_deg))) {
+      if (std::hypot(px->x() - camera.center_px.x(), px->y() - camera.center_px.y()) >=
+          camera.min_radius_px())
+        put(out, {static_cast<int>(std::lround(px->x())), static_cast<int>(std::lround(px->y()))},
+            colour);
     }
   };
   auto segment = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
@@ -165,7 +179,8 @@ void draw_field_model(cv::Mat& out, const CameraModel& camera, const FieldGeomet
   for (const auto& d : field.discs) draw(d.centre_cm);
   const double cy = field.centre_cm().y(), w = field.goal.width_cm / 2.0;
   for (const double x : {field.border_cm, field.border_cm + field.field_length_cm}) {
-    const double back = x < field.centre_cm().x() ? x - field.goal.depth_cm : x + field.goal.depth_cm;
+    const double back =
+        x < field.centre_cm().x() ? x - field.goal.depth_cm : x + field.goal.depth_cm;
     segment({x, cy - w}, {back, cy - w});
     segment({back, cy - w}, {back, cy + w});
     segment({back, cy + w}, {x, cy + w});
@@ -185,26 +200,33 @@ cv::Mat locate_overlay(const cv::Mat& bgr, const CameraModel& camera, const Fiel
       const double b = static_cast<double>(j) / s.rays_per_degree;
       const std::uint8_t end = s.ray_end_px[static_cast<std::size_t>(j)];
       if (end == kRayHidden) continue;
-      const double step = camera.scan_step_px();  // the scan's radii are sample indices (line_scan.hpp)
+      const double step =
+          camera.scan_step_px();  // the scan's radii are sample indices (line_scan.hpp)
       const double r_end = end == kRayToViewEnd ? view : end * step;
-      if (j % s.rays_per_degree == 0) cv::line(out, pixel_at(camera, r0, b), pixel_at(camera, r_end, b), {110, 110, 110}, 1);
+      if (j % s.rays_per_degree == 0)
+        cv::line(out, pixel_at(camera, r0, b), pixel_at(camera, r_end, b), {110, 110, 110}, 1);
       for (int n = 0; n < kCrossingsPerRay; ++n) {
         const std::uint8_t r = s.radii_px[static_cast<std::size_t>(j * kCrossingsPerRay + n)];
-        if (r != kNoCrossing && r * step < r_end) put(out, pixel_at(camera, r * step, b), {255, 0, 255});
+        if (r != kNoCrossing && r * step < r_end)
+          put(out, pixel_at(camera, r * step, b), {255, 0, 255});
       }
-      if (end != kRayToViewEnd) put(out, pixel_at(camera, r_end, b), {0, 0, 255});  // carpet boundary / obstacle
+      if (end != kRayToViewEnd)
+        put(out, pixel_at(camera, r_end, b), {0, 0, 255});  // carpet boundary / obstacle
     }
   }
   if (in.goals != nullptr) {
     for (const auto& p : in.goals->pixels) {
-      put(out, pixel_at(camera, p.radius_px, p.bearing_deg), p.colour == GoalColour::kBlue ? cv::Vec3b{255, 80, 0} : cv::Vec3b{0, 220, 255});
+      put(out, pixel_at(camera, p.radius_px, p.bearing_deg),
+          p.colour == GoalColour::kBlue ? cv::Vec3b{255, 80, 0} : cv::Vec3b{0, 220, 255});
     }
   }
   if (in.result != nullptr) {
     if (in.result->twin) draw_field_model(out, camera, field, *in.result->twin, {255, 255, 0});
-    if (in.result->match.cell >= 0) draw_field_model(out, camera, field, in.result->pose, {0, 255, 255});
+    if (in.result->match.cell >= 0)
+      draw_field_model(out, camera, field, in.result->pose, {0, 255, 255});
   }
-  const cv::Point c(static_cast<int>(std::lround(camera.center_px.x())), static_cast<int>(std::lround(camera.center_px.y())));
+  const cv::Point c(static_cast<int>(std::lround(camera.center_px.x())),
+                    static_cast<int>(std::lround(camera.center_px.y())));
   cv::circle(out, c, static_cast<int>(std::lround(view)), {0, 255, 0}, 1, cv::LINE_AA);
   return out;
 }

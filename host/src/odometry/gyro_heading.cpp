@@ -13,9 +13,12 @@ namespace omniloc {
 
 const char* heading_trust_name(HeadingTrust trust) {
   switch (trust) {
-    case HeadingTrust::kAbsolute: return "absolute";
-    case HeadingTrust::kRelative: return "relative";
-    case HeadingTrust::kNone: return "none";
+    case HeadingTrust::kAbsolute:
+      return "absolute";
+    case HeadingTrust::kRelative:
+      return "relative";
+    case HeadingTrust::kNone:
+      return "none";
   }
   return "none";
 }
@@ -26,7 +29,8 @@ std::optional<HeadingTrust> parse_heading_trust(const std::string& name) {
   return std::nullopt;
 }
 
-WheelYawHeading::WheelYawHeading(const RobotConfig& robot) : robot_(robot), pinv_(wheel_pseudo_inverse(robot)) {}
+WheelYawHeading::WheelYawHeading(const RobotConfig& robot)
+    : robot_(robot), pinv_(wheel_pseudo_inverse(robot)) {}
 
 double WheelYawHeading::rotation_deg(const EncoderWindow& window) const {
   // The rotation row of eq. (9)'s least-squares inverse: what a gyro would have measured, with the
@@ -39,7 +43,8 @@ double WheelYawHeading::gyro_yaw_deg(const EncoderWindow& window) {
   return yaw_deg_;
 }
 
-GyroHeading::GyroHeading(const RobotConfig& robot, const GyroScale& scale, const GyroHeadingConfig& config)
+GyroHeading::GyroHeading(const RobotConfig& robot, const GyroScale& scale,
+                         const GyroHeadingConfig& config)
     : scale_(scale), config_(config), wheels_(robot), wheel_count_(wheel_count(robot)) {
   if (!(scale.lsb_per_dps > 0.0) || !(scale.odr_hz > 0.0) || !std::isfinite(scale.lsb_per_dps) ||
       !std::isfinite(scale.odr_hz))
@@ -53,7 +58,8 @@ bool GyroHeading::wheels_still(const EncoderWindow& window) const {
 }
 
 void GyroHeading::learn_bias(const WindowGyro& g) {
-  const double decay = std::exp(-static_cast<double>(g.samples) / scale_.odr_hz / config_.bias_time_constant_s);
+  const double decay =
+      std::exp(-static_cast<double>(g.samples) / scale_.odr_hz / config_.bias_time_constant_s);
   bias_sum_lsb_ = bias_sum_lsb_ * decay + static_cast<double>(g.sum_lsb);
   bias_samples_ = bias_samples_ * decay + static_cast<double>(g.samples);
 }
@@ -91,20 +97,24 @@ double GyroHeading::gyro_yaw_deg(const EncoderWindow& window) {
   } else if (still_since_ms_ < 0.0) {
     still_since_ms_ = window.t_end_ms;
   }
-  const bool standing = still && window.t_end_ms - still_since_ms_ >= config_.standstill_min_s * 1000.0;
+  const bool standing =
+      still && window.t_end_ms - still_since_ms_ >= config_.standstill_min_s * 1000.0;
   if (standing) {
     learn_bias(g);  // and the heading stays where it is: the robot cannot turn on still wheels
   } else {
     const double bias_lsb = bias_samples_ > 0.0 ? bias_sum_lsb_ / bias_samples_ : 0.0;
-    yaw_deg_ = wrap_deg(yaw_deg_ + scale_.degrees(static_cast<double>(g.sum_lsb), g.samples, bias_lsb));
+    yaw_deg_ =
+        wrap_deg(yaw_deg_ + scale_.degrees(static_cast<double>(g.sum_lsb), g.samples, bias_lsb));
   }
-  if ((state_ != GyroState::kFault && state_ != GyroState::kMissing) || clean_run_ >= config_.recover_windows)
+  if ((state_ != GyroState::kFault && state_ != GyroState::kMissing) ||
+      clean_run_ >= config_.recover_windows)
     state_ = bias_samples_ > 0.0 ? GyroState::kRunning : GyroState::kLearningBias;
   return yaw_deg_;
 }
 
 HeadingTrust GyroHeading::trust() const {
-  return state_ == GyroState::kRunning || state_ == GyroState::kLearningBias || state_ == GyroState::kStarting
+  return state_ == GyroState::kRunning || state_ == GyroState::kLearningBias ||
+                 state_ == GyroState::kStarting
              ? HeadingTrust::kRelative
              : HeadingTrust::kNone;
 }
@@ -116,17 +126,21 @@ double GyroHeading::bias_deg_per_s() const {
 std::string GyroHeading::describe() const {
   char buf[96];
   switch (state_) {
-    case GyroState::kNoGyro: return "wheels (no gyro on the board)";
-    case GyroState::kLearningBias: return "gyro (bias not learnt yet: no standstill)";
+    case GyroState::kNoGyro:
+      return "wheels (no gyro on the board)";
+    case GyroState::kLearningBias:
+      return "gyro (bias not learnt yet: no standstill)";
     case GyroState::kRunning:
       std::snprintf(buf, sizeof buf, "gyro (bias %+.3f deg/s)", bias_deg_per_s());
       return buf;
-    case GyroState::kMissing: return "wheels (gyro missing: no ICM-42688-P answers WHO_AM_I)";
-    case GyroState::kStarting: return "gyro starting (the wheels until its first sample)";
+    case GyroState::kMissing:
+      return "wheels (gyro missing: no ICM-42688-P answers WHO_AM_I)";
+    case GyroState::kStarting:
+      return "gyro starting (the wheels until its first sample)";
     case GyroState::kFault:
       if (last_flags_ == 0) return "wheels (gyro gave no sample)";
-      std::snprintf(buf, sizeof buf, "wheels (gyro fault flags 0x%02x: %s)", static_cast<unsigned>(last_flags_),
-                    gyro_flag_names(last_flags_).c_str());
+      std::snprintf(buf, sizeof buf, "wheels (gyro fault flags 0x%02x: %s)",
+                    static_cast<unsigned>(last_flags_), gyro_flag_names(last_flags_).c_str());
       return buf;
   }
   return "wheels";
@@ -135,11 +149,14 @@ std::string GyroHeading::describe() const {
 std::string GyroHeading::status_token() const {
   switch (state_) {
     case GyroState::kNoGyro:
-    case GyroState::kMissing: return "wheels-no-gyro";
+    case GyroState::kMissing:
+      return "wheels-no-gyro";
     case GyroState::kStarting:
     case GyroState::kLearningBias:
-    case GyroState::kRunning: return "gyro";
-    case GyroState::kFault: return "wheels-gyro-fault";
+    case GyroState::kRunning:
+      return "gyro";
+    case GyroState::kFault:
+      return "wheels-gyro-fault";
   }
   return "wheels";
 }
@@ -152,9 +169,12 @@ GyroScale GyroScale::of_board() {
 
 std::string gyro_flag_names(std::uint8_t flags) {
   static constexpr std::pair<std::uint32_t, const char*> kNames[] = {
-      {regmap::kGyroFlagWrongId, "wrong WHO_AM_I"},   {regmap::kGyroFlagTimeout, "data-ready timeout"},
-      {regmap::kGyroFlagStuck, "stuck value"},        {regmap::kGyroFlagInvalid, "invalid value"},
-      {regmap::kGyroFlagDropped, "sample dropped"},   {regmap::kGyroFlagNotRunning, "not running"},
+      {regmap::kGyroFlagWrongId, "wrong WHO_AM_I"},
+      {regmap::kGyroFlagTimeout, "data-ready timeout"},
+      {regmap::kGyroFlagStuck, "stuck value"},
+      {regmap::kGyroFlagInvalid, "invalid value"},
+      {regmap::kGyroFlagDropped, "sample dropped"},
+      {regmap::kGyroFlagNotRunning, "not running"},
       {regmap::kGyroFlagAbsent, "absent"}};
   std::string out;
   for (const auto& [bit, name] : kNames)

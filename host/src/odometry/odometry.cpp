@@ -5,8 +5,8 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
-#include <string>
 #include <stdexcept>
+#include <string>
 
 namespace omniloc {
 namespace {
@@ -14,13 +14,14 @@ namespace {
 using Matrix43 = Eigen::Matrix<double, 4, 3>;
 using Matrix42 = Eigen::Matrix<double, 4, 2>;
 
-Eigen::Vector3d weighted_motion(const Matrix43& j, const Eigen::Vector4d& travel_cm, const Eigen::Vector4d& w) {
+Eigen::Vector3d weighted_motion(const Matrix43& j, const Eigen::Vector4d& travel_cm,
+                                const Eigen::Vector4d& w) {
   const Eigen::Matrix3d m = j.transpose() * w.asDiagonal() * j;
   return m.ldlt().solve(j.transpose() * w.asDiagonal() * travel_cm);
 }
 
 struct Isolation {
-  int wheel = 0;            // index 0..wheels-1
+  int wheel = 0;  // index 0..wheels-1
   double magnitude_cm = 0.0;
 };
 
@@ -30,8 +31,9 @@ struct Isolation {
 // motion prior (`predicted` body translation from the last velocity, good to about a_max dt^2)
 // decides. Diagonal wheels (1,4) and (2,3) of the symmetric four leave the same residual signature,
 // so there too the prior decides.
-Isolation isolate_wheel(const Matrix43& j, int wheels, const Eigen::Vector4d& travel, double rotation_rad,
-                        const Eigen::Vector2d& predicted, double sigma_meas, double sigma_prior) {
+Isolation isolate_wheel(const Matrix43& j, int wheels, const Eigen::Vector4d& travel,
+                        double rotation_rad, const Eigen::Vector2d& predicted, double sigma_meas,
+                        double sigma_prior) {
   Isolation best;
   double best_score = std::numeric_limits<double>::infinity();
   for (int k = 0; k < wheels; ++k) {
@@ -41,7 +43,8 @@ Isolation isolate_wheel(const Matrix43& j, int wheels, const Eigen::Vector4d& tr
     if (!t) continue;  // the other wheels alone cannot see some translation: not a hypothesis
     const Eigen::Vector4d r = travel - j * Eigen::Vector3d(t->x(), t->y(), rotation_rad);
     const double others = r.squaredNorm() - r[k] * r[k];
-    const double score = others / (sigma_meas * sigma_meas) + (*t - predicted).squaredNorm() / (sigma_prior * sigma_prior);
+    const double score = others / (sigma_meas * sigma_meas) +
+                         (*t - predicted).squaredNorm() / (sigma_prior * sigma_prior);
     if (score < best_score) {
       best_score = score;
       best = {k, r[k]};
@@ -60,7 +63,9 @@ void check_window(const EncoderWindow& w, const char* who) {
 
 // sin(x)/x: a window turning by dtheta at a steady rate moves along a chord that much shorter
 // than the path the wheels measured.
-double sinc(double x) { return std::abs(x) < 1e-6 ? 1.0 - x * x / 6.0 : std::sin(x) / x; }
+double sinc(double x) {
+  return std::abs(x) < 1e-6 ? 1.0 - x * x / 6.0 : std::sin(x) / x;
+}
 
 double mean_distance_cm(const RobotConfig& c) {
   if (c.wheels.empty()) return c.center_to_wheel_cm;
@@ -71,8 +76,10 @@ double mean_distance_cm(const RobotConfig& c) {
 
 }  // namespace
 
-std::optional<Eigen::Vector2d> translation_with_rotation(const Matrix43& j, const Eigen::Vector4d& travel_cm,
-                                                         double rotation_rad, const Eigen::Vector4d& w) {
+std::optional<Eigen::Vector2d> translation_with_rotation(const Matrix43& j,
+                                                         const Eigen::Vector4d& travel_cm,
+                                                         double rotation_rad,
+                                                         const Eigen::Vector4d& w) {
   const Matrix42 a = j.leftCols<2>();
   const Eigen::Vector4d y = travel_cm - j.col(2) * rotation_rad;
   const Eigen::Matrix2d m = a.transpose() * w.asDiagonal() * a;
@@ -85,7 +92,8 @@ std::optional<Eigen::Vector2d> translation_with_rotation(const Matrix43& j, cons
 Matrix43 padded_wheel_jacobian(const RobotConfig& config) {
   const Eigen::Matrix<double, Eigen::Dynamic, 3> j = wheel_jacobian(config);
   if (j.rows() > 4)
-    throw std::invalid_argument("padded_wheel_jacobian: " + std::to_string(j.rows()) + " wheels, at most 4");
+    throw std::invalid_argument("padded_wheel_jacobian: " + std::to_string(j.rows()) +
+                                " wheels, at most 4");
   Matrix43 out = Matrix43::Zero();
   out.topRows(j.rows()) = j;
   return out;
@@ -101,10 +109,12 @@ Eigen::Vector3d least_squares_motion(const Eigen::Matrix<double, 3, 4>& pinv,
   return pinv * wheel_travel;
 }
 
-Eigen::Vector4d wheel_travel_cm(const RobotConfig& config, const std::array<std::int32_t, 4>& counts) {
+Eigen::Vector4d wheel_travel_cm(const RobotConfig& config,
+                                const std::array<std::int32_t, 4>& counts) {
   Eigen::Vector4d out = Eigen::Vector4d::Zero();
   const int n = wheel_count(config);
-  for (int i = 0; i < n; ++i) out[i] = counts[static_cast<std::size_t>(i)] * cm_per_count(config, i);
+  for (int i = 0; i < n; ++i)
+    out[i] = counts[static_cast<std::size_t>(i)] * cm_per_count(config, i);
   return out;
 }
 
@@ -114,30 +124,36 @@ SlipDetector::SlipDetector(const RobotConfig& config)
       jacobian_(padded_wheel_jacobian(config)),
       pinv_(wheel_pseudo_inverse(config)),
       min_cm_per_count_(std::numeric_limits<double>::infinity()) {
-  for (int i = 0; i < wheels_; ++i) min_cm_per_count_ = std::min(min_cm_per_count_, cm_per_count(config, i));
+  for (int i = 0; i < wheels_; ++i)
+    min_cm_per_count_ = std::min(min_cm_per_count_, cm_per_count(config, i));
 }
 
-SlipCheck SlipDetector::check(const Eigen::Vector4d& travel, double gyro_yaw_rate_deg_per_s, double dt_s,
-                              const Eigen::Vector2d& predicted_cm) const {
+SlipCheck SlipDetector::check(const Eigen::Vector4d& travel, double gyro_yaw_rate_deg_per_s,
+                              double dt_s, const Eigen::Vector2d& predicted_cm) const {
   SlipCheck out;
   const double rotation_rad = deg_to_rad(gyro_yaw_rate_deg_per_s) * dt_s;
   // Full column rank (validated) makes the translation columns independent: this always exists.
   const Eigen::Vector2d t =
-      translation_with_rotation(jacobian_, travel, rotation_rad, Eigen::Vector4d::Ones()).value_or(Eigen::Vector2d::Zero());
+      translation_with_rotation(jacobian_, travel, rotation_rad, Eigen::Vector4d::Ones())
+          .value_or(Eigen::Vector2d::Zero());
   const Eigen::Vector4d residual = travel - jacobian_ * Eigen::Vector3d(t.x(), t.y(), rotation_rad);
-  out.report.wheel_minus_gyro_deg_per_s = rad_to_deg((pinv_ * travel).z()) / dt_s - gyro_yaw_rate_deg_per_s;
+  out.report.wheel_minus_gyro_deg_per_s =
+      rad_to_deg((pinv_ * travel).z()) / dt_s - gyro_yaw_rate_deg_per_s;
 
   // The threshold: the configured rate, raised to 6 sigma of the expected random wheel noise when
   // the wheels travel fast (the residual's norm is Rayleigh-like: P(> 6 sigma) ~ 1e-8 per window).
-  const double noise_cm = config_.wheel_noise_cm_per_sqrt_cm * std::sqrt(travel.head(wheels_).cwiseAbs().mean());
+  const double noise_cm =
+      config_.wheel_noise_cm_per_sqrt_cm * std::sqrt(travel.head(wheels_).cwiseAbs().mean());
   const double thr_cm = std::max(config_.slip_threshold_cm_per_s * dt_s, 6.0 * noise_cm);
   out.report.residual_cm_per_s = residual.norm() / dt_s;
   out.report.threshold_cm_per_s = thr_cm / dt_s;
   if (!(residual.norm() > thr_cm)) return out;
 
   const double sigma_meas = std::max(0.25 * thr_cm, 2.0 * min_cm_per_count_);
-  const double sigma_prior = std::max(config_.max_accel_cm_per_s2 * dt_s * dt_s, 2.0 * min_cm_per_count_);
-  const Isolation iso = isolate_wheel(jacobian_, wheels_, travel, rotation_rad, predicted_cm, sigma_meas, sigma_prior);
+  const double sigma_prior =
+      std::max(config_.max_accel_cm_per_s2 * dt_s * dt_s, 2.0 * min_cm_per_count_);
+  const Isolation iso = isolate_wheel(jacobian_, wheels_, travel, rotation_rad, predicted_cm,
+                                      sigma_meas, sigma_prior);
   out.report.detected = true;
   out.report.wheel = iso.wheel + 1;
   out.report.magnitude_cm = iso.magnitude_cm;
@@ -223,13 +239,15 @@ const OdometryEstimate& Odometry::update(const EncoderWindow& window) {
   est_.wheel_yaw_deg = wrap_deg(est_.wheel_yaw_deg + rad_to_deg(wheel_dyaw_rad));
   // Uncertainty: a fraction of the wheel travel, the heading uncertainty acting on it, and the
   // whole slip magnitude (the isolation may have picked the wrong wheel of a diagonal pair).
-  est_.sigma_yaw_deg = std::sqrt(est_.sigma_yaw_deg * est_.sigma_yaw_deg +
-                                 config_.gyro_arw_deg_per_sqrt_s * config_.gyro_arw_deg_per_sqrt_s * dt_s);
+  est_.sigma_yaw_deg =
+      std::sqrt(est_.sigma_yaw_deg * est_.sigma_yaw_deg +
+                config_.gyro_arw_deg_per_sqrt_s * config_.gyro_arw_deg_per_sqrt_s * dt_s);
   // Wheel errors also displace the centre while turning on the spot, so the growth uses the
   // wheels' rotational travel R * |dtheta| as well as the centre's path.
-  est_.sigma_xy_cm += config_.odometry_noise_fraction * (step_cm + mean_distance_cm_ * std::abs(dyaw_rad)) +
-                      deg_to_rad(est_.sigma_yaw_deg) * step_cm +
-                      (slip.detected ? std::abs(slip.magnitude_cm) : 0.0);
+  est_.sigma_xy_cm +=
+      config_.odometry_noise_fraction * (step_cm + mean_distance_cm_ * std::abs(dyaw_rad)) +
+      deg_to_rad(est_.sigma_yaw_deg) * step_cm +
+      (slip.detected ? std::abs(slip.magnitude_cm) : 0.0);
   est_.slip = slip;
 
   last_velocity_field_ = delta_field / dt_s;

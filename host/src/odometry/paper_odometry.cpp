@@ -14,7 +14,8 @@ PaperOdometry::PaperOdometry(const RobotConfig& config, PaperHeading heading)
   validate_robot_config(config, "PaperOdometry config");
   if (!config.wheels.empty())
     throw std::invalid_argument(
-        "PaperOdometry: equations (10)-(15) are written for the paper's symmetric four-wheel layout "
+        "PaperOdometry: equations (10)-(15) are written for the paper's symmetric four-wheel "
+        "layout "
         "(motor_angle_deg, center_to_wheel_cm); this robot lists its " +
         std::to_string(config.wheels.size()) + " wheels one by one: use Odometry");
 }
@@ -35,26 +36,26 @@ const OdometryEstimate& PaperOdometry::update(const EncoderWindow& window) {
   const double big_r = config_.center_to_wheel_cm;
   const double tm = deg_to_rad(config_.motor_angle_deg);
 
-  const double theta_g_deg = angle_diff_deg(window.gyro_yaw_deg, last_gyro_deg_);        // (11)
-  const double d = theta_g_deg * kPi / 180.0 * big_r / 2.0;                                // (11)
+  const double theta_g_deg = angle_diff_deg(window.gyro_yaw_deg, last_gyro_deg_);  // (11)
+  const double d = theta_g_deg * kPi / 180.0 * big_r / 2.0;                        // (11)
   double sx = 0.0;
   double sy = 0.0;
   for (int i = 0; i < 4; ++i) {
     const double di = (1.0 / n) * (window.counts[static_cast<std::size_t>(i)] / (res * 0.01)) *
-                      (2.0 * kPi * r * t_s);                                               // (10)
-    const double si = di - d;                                                              // (12)
-    sx += -std::cos(tm) * si;                                                              // (13)
-    sy += -std::sin(tm) * si;                                                              // (13)
+                      (2.0 * kPi * r * t_s);  // (10)
+    const double si = di - d;                 // (12)
+    sx += -std::cos(tm) * si;                 // (13)
+    sy += -std::sin(tm) * si;                 // (13)
   }
-  sx *= 0.5;                                                                               // (14)
-  sy *= 0.5;                                                                               // (14)
+  sx *= 0.5;  // (14)
+  sy *= 0.5;  // (14)
   const double length = std::sqrt(sx * sx + sy * sy);
   const double yaw_deg = wrap_deg(window.gyro_yaw_deg + yaw_offset_deg_);
   const double theta_g_term = heading_ == PaperHeading::kGyroYaw ? yaw_deg : theta_g_deg;
   if (length > 0.0) {
-    const double theta_e = std::atan(sy / sx) + deg_to_rad(theta_g_term);                 // (14)
-    est_.pose.x_cm += length * std::cos(theta_e);                                          // (15)
-    est_.pose.y_cm += length * std::sin(theta_e);                                          // (15)
+    const double theta_e = std::atan(sy / sx) + deg_to_rad(theta_g_term);  // (14)
+    est_.pose.x_cm += length * std::cos(theta_e);                          // (15)
+    est_.pose.y_cm += length * std::sin(theta_e);                          // (15)
   }
   est_.t_ms = window.t_end_ms;
   est_.pose.yaw_deg = yaw_deg;

@@ -15,9 +15,10 @@ namespace {
 
 using Jacobian = Eigen::Matrix<double, Eigen::Dynamic, 3>;
 
-// The shorthand's geometry keys: written only when there is no "wheels" list, and refused beside one.
-constexpr const char* kShorthandKeys[] = {"wheel_radius_cm", "center_to_wheel_cm", "motor_angle_deg", "gear_ratio",
-                                          "counts_per_rev"};
+// The shorthand's geometry keys: written only when there is no "wheels" list, and refused beside
+// one.
+constexpr const char* kShorthandKeys[] = {"wheel_radius_cm", "center_to_wheel_cm",
+                                          "motor_angle_deg", "gear_ratio", "counts_per_rev"};
 
 bool is_shorthand_key(const std::string& name) {
   for (const char* k : kShorthandKeys)
@@ -78,21 +79,26 @@ constexpr int kMaxCountsPerRev = 1000000;
 void validate_wheel(const WheelConfig& w, const config::Origin& at) {
   using config::require;
   const auto angle = [&](double v, const char* field) {
-    require(std::isfinite(v) && std::abs(v) <= 360.0, at / field, "must be an angle within [-360, 360] degrees", v);
+    require(std::isfinite(v) && std::abs(v) <= 360.0, at / field,
+            "must be an angle within [-360, 360] degrees", v);
   };
   angle(w.mount_angle_deg, "mount_angle_deg");
-  require(std::isfinite(w.distance_cm) && w.distance_cm >= 0.0, at / "distance_cm", "must be >= 0", w.distance_cm);
-  require(w.distance_cm <= kMaxRobotCm, at / "distance_cm", "must be at most 1000 cm (a robot, not a field)",
+  require(std::isfinite(w.distance_cm) && w.distance_cm >= 0.0, at / "distance_cm", "must be >= 0",
           w.distance_cm);
+  require(w.distance_cm <= kMaxRobotCm, at / "distance_cm",
+          "must be at most 1000 cm (a robot, not a field)", w.distance_cm);
   angle(w.drive_angle_deg, "drive_angle_deg");
-  require(std::isfinite(w.wheel_radius_cm) && w.wheel_radius_cm > 0.0, at / "wheel_radius_cm", "must be > 0",
+  require(std::isfinite(w.wheel_radius_cm) && w.wheel_radius_cm > 0.0, at / "wheel_radius_cm",
+          "must be > 0", w.wheel_radius_cm);
+  require(w.wheel_radius_cm <= kMaxWheelRadiusCm, at / "wheel_radius_cm", "must be at most 100 cm",
           w.wheel_radius_cm);
-  require(w.wheel_radius_cm <= kMaxWheelRadiusCm, at / "wheel_radius_cm", "must be at most 100 cm", w.wheel_radius_cm);
-  require(std::isfinite(w.gear_ratio) && w.gear_ratio > 0.0, at / "gear_ratio", "must be > 0", w.gear_ratio);
+  require(std::isfinite(w.gear_ratio) && w.gear_ratio > 0.0, at / "gear_ratio", "must be > 0",
+          w.gear_ratio);
   require(w.gear_ratio <= kMaxGearRatio, at / "gear_ratio", "must be at most 10000", w.gear_ratio);
-  require(w.counts_per_rev > 0, at / "counts_per_rev", "must be a positive number of encoder cycles per motor turn",
+  require(w.counts_per_rev > 0, at / "counts_per_rev",
+          "must be a positive number of encoder cycles per motor turn", w.counts_per_rev);
+  require(w.counts_per_rev <= kMaxCountsPerRev, at / "counts_per_rev", "must be at most 1000000",
           w.counts_per_rev);
-  require(w.counts_per_rev <= kMaxCountsPerRev, at / "counts_per_rev", "must be at most 1000000", w.counts_per_rev);
 }
 
 // Full column rank 3: every body motion (dx, dy, dtheta) moves some wheel. The columns are cm and
@@ -104,7 +110,8 @@ void validate_rank(const RobotConfig& c, const config::Origin& at) {
   const int rank = (sv.array() > 1e-6 * sv(0)).count();
   if (rank < 3)
     at.fail("degenerate wheel layout: the wheel Jacobian has rank " + std::to_string(rank) +
-                ", not 3, so some motion of the robot moves no wheel (e.g. every drive direction parallel, "
+                ", not 3, so some motion of the robot moves no wheel (e.g. every drive direction "
+                "parallel, "
                 "or every wheel driving along its own radius)",
             "singular values " + config::show({sv(0), sv(1), sv(2)}));
 }
@@ -134,7 +141,9 @@ const config::KeyTable<RobotConfig>& robot_config_keys() {
   return table;
 }
 
-int wheel_count(const RobotConfig& c) { return c.wheels.empty() ? 4 : static_cast<int>(c.wheels.size()); }
+int wheel_count(const RobotConfig& c) {
+  return c.wheels.empty() ? 4 : static_cast<int>(c.wheels.size());
+}
 
 std::vector<WheelConfig> wheel_layout(const RobotConfig& c) {
   if (!c.wheels.empty()) return c.wheels;
@@ -143,7 +152,8 @@ std::vector<WheelConfig> wheel_layout(const RobotConfig& c) {
   std::vector<WheelConfig> out(4);
   for (int i = 0; i < 4; ++i) {
     WheelConfig& w = out[static_cast<std::size_t>(i)];
-    w.mount_angle_deg = rad_to_deg(std::atan2(p[static_cast<std::size_t>(i)].y(), p[static_cast<std::size_t>(i)].x()));
+    w.mount_angle_deg = rad_to_deg(
+        std::atan2(p[static_cast<std::size_t>(i)].y(), p[static_cast<std::size_t>(i)].x()));
     w.distance_cm = c.center_to_wheel_cm;
     w.drive_angle_deg = rad_to_deg(std::atan2(j(i, 1), j(i, 0)));
     w.wheel_radius_cm = c.wheel_radius_cm;
@@ -159,7 +169,8 @@ std::vector<Eigen::Vector2d> wheel_positions_cm(const RobotConfig& c) {
     // Row i of eq. (9) is the wheel's drive direction u and R: the contact point p satisfies
     // (omega x p) . u = omega R, i.e. p = R (u_y, -u_x).
     const Eigen::Matrix<double, 4, 3> j = wheel_jacobian(c.motor_angle_deg, c.center_to_wheel_cm);
-    for (int i = 0; i < 4; ++i) out.push_back(c.center_to_wheel_cm * Eigen::Vector2d(j(i, 1), -j(i, 0)));
+    for (int i = 0; i < 4; ++i)
+      out.push_back(c.center_to_wheel_cm * Eigen::Vector2d(j(i, 1), -j(i, 0)));
     return out;
   }
   for (const WheelConfig& w : c.wheels) {
@@ -186,15 +197,16 @@ Eigen::Matrix<double, Eigen::Dynamic, 3> wheel_jacobian(const RobotConfig& c) {
 
 double counts_per_wheel_turn(const RobotConfig& c, int wheel) {
   if (wheel < 0 || wheel >= wheel_count(c))
-    throw std::out_of_range("counts_per_wheel_turn: wheel index " + std::to_string(wheel) + " of a robot with " +
-                            std::to_string(wheel_count(c)) + " wheels");
+    throw std::out_of_range("counts_per_wheel_turn: wheel index " + std::to_string(wheel) +
+                            " of a robot with " + std::to_string(wheel_count(c)) + " wheels");
   if (c.wheels.empty()) return static_cast<double>(c.counts_per_rev) * c.decoding * c.gear_ratio;
   const WheelConfig& w = c.wheels[static_cast<std::size_t>(wheel)];
   return static_cast<double>(w.counts_per_rev) * c.decoding * w.gear_ratio;
 }
 
 double cm_per_count(const RobotConfig& c, int wheel) {
-  const double r = c.wheels.empty() ? c.wheel_radius_cm : c.wheels.at(static_cast<std::size_t>(wheel)).wheel_radius_cm;
+  const double r = c.wheels.empty() ? c.wheel_radius_cm
+                                    : c.wheels.at(static_cast<std::size_t>(wheel)).wheel_radius_cm;
   return 2.0 * kPi * r / counts_per_wheel_turn(c, wheel);
 }
 
@@ -204,26 +216,31 @@ double shared_value(const RobotConfig& c, F per_wheel, const char* what) {
   const double first = per_wheel(c, 0);
   for (int i = 1; i < wheel_count(c); ++i)
     if (per_wheel(c, i) != first)
-      throw std::logic_error(std::string(what) + ": the wheels differ; ask for one wheel (index 0.." +
+      throw std::logic_error(std::string(what) +
+                             ": the wheels differ; ask for one wheel (index 0.." +
                              std::to_string(wheel_count(c) - 1) + ")");
   return first;
 }
 }  // namespace
 
 double counts_per_wheel_turn(const RobotConfig& c) {
-  return shared_value(c, [](const RobotConfig& r, int i) { return counts_per_wheel_turn(r, i); },
-                      "counts_per_wheel_turn");
+  return shared_value(
+      c, [](const RobotConfig& r, int i) { return counts_per_wheel_turn(r, i); },
+      "counts_per_wheel_turn");
 }
 
 double cm_per_count(const RobotConfig& c) {
-  return shared_value(c, [](const RobotConfig& r, int i) { return cm_per_count(r, i); }, "cm_per_count");
+  return shared_value(
+      c, [](const RobotConfig& r, int i) { return cm_per_count(r, i); }, "cm_per_count");
 }
 
 std::optional<std::string> board_channel_mismatch(int board_channels, int n) {
   if (board_channels == n) return std::nullopt;
-  return "the board counts " + std::to_string(board_channels) + " encoder channels but the robot config has " +
-         std::to_string(n) + " wheels: load the bitstream built for " + std::to_string(n) +
-         " channels (make bitstream CHANNELS=" + std::to_string(n) + "), or the robot file of this robot";
+  return "the board counts " + std::to_string(board_channels) +
+         " encoder channels but the robot config has " + std::to_string(n) +
+         " wheels: load the bitstream built for " + std::to_string(n) +
+         " channels (make bitstream CHANNELS=" + std::to_string(n) +
+         "), or the robot file of this robot";
 }
 
 void RobotConfig::validate(const config::Origin& at) const {
@@ -238,19 +255,24 @@ void RobotConfig::validate(const config::Origin& at) const {
     positive(wheel_radius_cm, "wheel_radius_cm");
     positive(center_to_wheel_cm, "center_to_wheel_cm");
     // Equation (9) needs both sin and cos of theta_m non-zero, or the 4x3 matrix loses rank.
-    require(std::isfinite(motor_angle_deg) && motor_angle_deg > 0.0 && motor_angle_deg < 90.0, at / "motor_angle_deg",
-            "must be strictly between 0 and 90 degrees, or equation (9) loses rank", motor_angle_deg);
+    require(std::isfinite(motor_angle_deg) && motor_angle_deg > 0.0 && motor_angle_deg < 90.0,
+            at / "motor_angle_deg",
+            "must be strictly between 0 and 90 degrees, or equation (9) loses rank",
+            motor_angle_deg);
     positive(gear_ratio, "gear_ratio");
-    require(counts_per_rev > 0, at / "counts_per_rev", "must be a positive number of encoder cycles per motor turn",
-            counts_per_rev);
-    require(wheel_radius_cm <= kMaxWheelRadiusCm, at / "wheel_radius_cm", "must be at most 100 cm", wheel_radius_cm);
-    require(center_to_wheel_cm <= kMaxRobotCm, at / "center_to_wheel_cm", "must be at most 1000 cm (a robot, not a field)",
-            center_to_wheel_cm);
+    require(counts_per_rev > 0, at / "counts_per_rev",
+            "must be a positive number of encoder cycles per motor turn", counts_per_rev);
+    require(wheel_radius_cm <= kMaxWheelRadiusCm, at / "wheel_radius_cm", "must be at most 100 cm",
+            wheel_radius_cm);
+    require(center_to_wheel_cm <= kMaxRobotCm, at / "center_to_wheel_cm",
+            "must be at most 1000 cm (a robot, not a field)", center_to_wheel_cm);
     require(gear_ratio <= kMaxGearRatio, at / "gear_ratio", "must be at most 10000", gear_ratio);
-    require(counts_per_rev <= kMaxCountsPerRev, at / "counts_per_rev", "must be at most 1000000", counts_per_rev);
+    require(counts_per_rev <= kMaxCountsPerRev, at / "counts_per_rev", "must be at most 1000000",
+            counts_per_rev);
   } else {
     const config::Origin list = at / "wheels";
-    require(wheels.size() >= static_cast<std::size_t>(kMinWheels) && wheels.size() <= static_cast<std::size_t>(kMaxWheels),
+    require(wheels.size() >= static_cast<std::size_t>(kMinWheels) &&
+                wheels.size() <= static_cast<std::size_t>(kMaxWheels),
             list, "must list 3 or 4 wheels (the board counts 3 or 4 encoder channels)",
             static_cast<double>(wheels.size()));
     for (std::size_t i = 0; i < wheels.size(); ++i) validate_wheel(wheels[i], list[i]);
@@ -266,15 +288,20 @@ void RobotConfig::validate(const config::Origin& at) const {
   in_range(window_period_ms, "window_period_ms", 0.1, 1000.0, "must be in [0.1, 1000] ms");
   in_range(clock_hz, "clock_hz", 1e3, 1e10, "must be in [1e3, 1e10] Hz");
   positive(slip_threshold_cm_per_s, "slip_threshold_cm_per_s");
-  in_range(slip_threshold_cm_per_s, "slip_threshold_cm_per_s", 0.0, 10000.0, "must be at most 10000 cm/s");
-  in_range(wheel_noise_cm_per_sqrt_cm, "wheel_noise_cm_per_sqrt_cm", 0.0, 10.0, "must be in [0, 10]");
+  in_range(slip_threshold_cm_per_s, "slip_threshold_cm_per_s", 0.0, 10000.0,
+           "must be at most 10000 cm/s");
+  in_range(wheel_noise_cm_per_sqrt_cm, "wheel_noise_cm_per_sqrt_cm", 0.0, 10.0,
+           "must be in [0, 10]");
   positive(max_accel_cm_per_s2, "max_accel_cm_per_s2");
-  in_range(max_accel_cm_per_s2, "max_accel_cm_per_s2", 0.0, 1e5, "must be at most 1e5 cm/s^2 (10 g)");
+  in_range(max_accel_cm_per_s2, "max_accel_cm_per_s2", 0.0, 1e5,
+           "must be at most 1e5 cm/s^2 (10 g)");
   in_range(odometry_noise_fraction, "odometry_noise_fraction", 0.0, 1.0, "must be in [0, 1]");
   in_range(gyro_arw_deg_per_sqrt_s, "gyro_arw_deg_per_sqrt_s", 0.0, 100.0, "must be in [0, 100]");
 }
 
-void validate_robot_config(const RobotConfig& c, const std::string& source) { c.validate(source); }
+void validate_robot_config(const RobotConfig& c, const std::string& source) {
+  c.validate(source);
+}
 
 RobotConfig parse_robot_config(const config::Node& node) {
   node.expect_object();
@@ -284,7 +311,8 @@ RobotConfig parse_robot_config(const config::Node& node) {
   for (auto& k : table) {
     if (k.name == "wheels") k.need = Need::kOptional;
     if (listed && is_shorthand_key(k.name)) {
-      if (node.has(k.name)) (node / k.name).fail("not allowed beside \"wheels\": give it for each wheel");
+      if (node.has(k.name))
+        (node / k.name).fail("not allowed beside \"wheels\": give it for each wheel");
       k.need = Need::kOptional;
     }
   }

@@ -1,4 +1,5 @@
-// The streaming frame decoder: SYNC hunt, LEN/TYPE check, CRC check, body decode, sequence tracking.
+// The streaming frame decoder: SYNC hunt, LEN/TYPE check, CRC check, body decode, sequence
+// tracking.
 #include <algorithm>
 
 #include "omniloc/protocol.hpp"
@@ -7,7 +8,8 @@ namespace omniloc::protocol {
 
 namespace {
 
-/// The first N bytes of a body whose length the caller has checked, as the layout's fixed-size span.
+/// The first N bytes of a body whose length the caller has checked, as the layout's fixed-size
+/// span.
 template <std::size_t N>
 std::span<const std::uint8_t, N> as_layout(std::span<const std::uint8_t> b) {
   return b.first<N>();
@@ -18,14 +20,23 @@ std::span<const std::uint8_t, N> as_layout(std::span<const std::uint8_t> b) {
 Frame decode_body(std::uint8_t type, std::span<const std::uint8_t> b) {
   namespace r = regmap;
   switch (type) {
-    case r::kFrameReadReq: return ReadReq{r::unpack_reg_addr(as_layout<r::kFrameReadReqBodyBytes>(b))};
-    case r::kFrameWriteReq: return WriteReq{r::unpack_reg_value(as_layout<r::kFrameWriteReqBodyBytes>(b))};
-    case r::kFrameSnapshotReq: return SnapshotReq{};
-    case r::kFrameReadResp: return ReadResp{r::unpack_reg_value(as_layout<r::kFrameReadRespBodyBytes>(b))};
-    case r::kFrameWriteAck: return WriteAck{r::unpack_reg_addr(as_layout<r::kFrameWriteAckBodyBytes>(b))};
-    case r::kFrameSnapshotResp: return SnapshotResp{r::unpack_window(as_layout<r::kFrameSnapshotRespBodyBytes>(b))};
-    case r::kFrameTelemetry: return Telemetry{r::unpack_window(as_layout<r::kFrameTelemetryBodyBytes>(b))};
-    default: return ErrorResp{r::unpack_error(as_layout<r::kFrameErrorBodyBytes>(b))};  // the caller has checked type is one of the eight
+    case r::kFrameReadReq:
+      return ReadReq{r::unpack_reg_addr(as_layout<r::kFrameReadReqBodyBytes>(b))};
+    case r::kFrameWriteReq:
+      return WriteReq{r::unpack_reg_value(as_layout<r::kFrameWriteReqBodyBytes>(b))};
+    case r::kFrameSnapshotReq:
+      return SnapshotReq{};
+    case r::kFrameReadResp:
+      return ReadResp{r::unpack_reg_value(as_layout<r::kFrameReadRespBodyBytes>(b))};
+    case r::kFrameWriteAck:
+      return WriteAck{r::unpack_reg_addr(as_layout<r::kFrameWriteAckBodyBytes>(b))};
+    case r::kFrameSnapshotResp:
+      return SnapshotResp{r::unpack_window(as_layout<r::kFrameSnapshotRespBodyBytes>(b))};
+    case r::kFrameTelemetry:
+      return Telemetry{r::unpack_window(as_layout<r::kFrameTelemetryBodyBytes>(b))};
+    default:
+      return ErrorResp{r::unpack_error(as_layout<r::kFrameErrorBodyBytes>(
+          b))};  // the caller has checked type is one of the eight
   }
 }
 
@@ -85,7 +96,8 @@ std::optional<Frame> FrameDecoder::next() {
     if (avail < total) return std::nullopt;
     const std::span<const std::uint8_t> frame(buf_.data() + head_, total);
     const std::uint16_t crc = crc16_ccitt(frame.subspan(1, total - 3));
-    const std::uint16_t got = static_cast<std::uint16_t>((frame[total - 2] << 8) | frame[total - 1]);
+    const std::uint16_t got =
+        static_cast<std::uint16_t>((frame[total - 2] << 8) | frame[total - 1]);
     if (crc != got) {
       ++counters_.bad_crc;
       ++counters_.resync_bytes;

@@ -1,5 +1,5 @@
-// Frame encoders: the body of each TYPE is packed by its generated layout (frame_bodies.hpp); framing
-// and CRC in one place.
+// Frame encoders: the body of each TYPE is packed by its generated layout (frame_bodies.hpp);
+// framing and CRC in one place.
 #include "omniloc/protocol.hpp"
 
 namespace omniloc::protocol {

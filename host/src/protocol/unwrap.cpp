@@ -24,7 +24,8 @@ std::optional<std::int64_t> PositionUnwrapper::value_counts() const {
 
 TimestampUnwrapper::TimestampUnwrapper(double clk_hz) : clk_hz_(clk_hz) {
   if (!(clk_hz > 0.0)) {
-    throw std::invalid_argument("TimestampUnwrapper: clk_hz must be positive, got " + std::to_string(clk_hz));
+    throw std::invalid_argument("TimestampUnwrapper: clk_hz must be positive, got " +
+                                std::to_string(clk_hz));
   }
 }
 

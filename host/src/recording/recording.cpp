@@ -1,14 +1,14 @@
 // Recording directories (issue 7 contract): CSV and meta.json reading and writing.
 #include "omniloc/recording.hpp"
 
-#include <algorithm>
-#include <cerrno>
-#include <chrono>
-#include <cstring>
 #include <fcntl.h>
 #include <unistd.h>
+#include <algorithm>
+#include <cerrno>
 #include <charconv>
+#include <chrono>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -48,7 +48,8 @@ std::vector<std::string> split(const std::string& s) {
 
 // Numbers go through the shared strict parser (strict_number.hpp): the whole cell, finite, in
 // range; its message is kept after the file and line. poses.csv spells "no value" as nan/inf.
-double parse_double(const std::string& s, const fs::path& file, int line, const std::string& column) {
+double parse_double(const std::string& s, const fs::path& file, int line,
+                    const std::string& column) {
   if (s == "nan") return std::numeric_limits<double>::quiet_NaN();
   if (s == "inf") return std::numeric_limits<double>::infinity();
   try {
@@ -58,8 +59,8 @@ double parse_double(const std::string& s, const fs::path& file, int line, const 
   }
 }
 
-long long parse_int(const std::string& s, const fs::path& file, int line, const std::string& column, long long min,
-                    long long max) {
+long long parse_int(const std::string& s, const fs::path& file, int line, const std::string& column,
+                    long long min, long long max) {
   try {
     return omniloc::parse_int(s, "column '" + column + "'", min, max);
   } catch (const NumberError& e) {
@@ -93,7 +94,9 @@ void read_csv(const fs::path& file, const std::vector<std::string>& header, RowF
     if (text.empty()) continue;
     const auto f = split(text);
     if (f.size() != header.size())
-      fail_at(file, line, "expected " + std::to_string(header.size()) + " columns, got " + std::to_string(f.size()));
+      fail_at(file, line,
+              "expected " + std::to_string(header.size()) + " columns, got " +
+                  std::to_string(f.size()));
     row(f, line);
   }
   if (!seen_header) fail_at(file, 1, "empty file (no header)");
@@ -117,25 +120,29 @@ double finite(double v, const fs::path& file, int line, const std::string& colum
 
 std::vector<EncoderWindow> read_encoders_csv(const fs::path& path) {
   std::vector<EncoderWindow> out;
-  read_csv(path, {"t_ms", "seq", "c1", "c2", "c3", "c4", "gyro_yaw_deg"}, [&](const auto& f, int line) {
-    EncoderWindow w;
-    w.t_end_ms = parse_double(f[0], path, line, "t_ms");
-    check_time(w.t_end_ms, out.empty() ? 0.0 : out.back().t_end_ms, !out.empty(), path, line);
-    const long long seq = parse_int(f[1], path, line, "seq", 0, 0xFFFFFFFFLL);
-    if (seq < 0 || seq > 0xFFFFFFFFLL) fail_at(path, line, "column 'seq': out of range");
-    w.seq = static_cast<std::uint32_t>(seq);
-    for (int i = 0; i < 4; ++i) {
-      static const char* const kColumns[4] = {"c1", "c2", "c3", "c4"};
-      const std::string col = kColumns[i];
-      const long long c = parse_int(f[2 + i], path, line, col, std::numeric_limits<std::int32_t>::min(),
-                                    std::numeric_limits<std::int32_t>::max());
-      if (c < std::numeric_limits<std::int32_t>::min() || c > std::numeric_limits<std::int32_t>::max())
-        fail_at(path, line, "column '" + col + "': out of range");
-      w.counts[i] = static_cast<std::int32_t>(c);
-    }
-    w.gyro_yaw_deg = finite(parse_double(f[6], path, line, "gyro_yaw_deg"), path, line, "gyro_yaw_deg");
-    out.push_back(w);
-  });
+  read_csv(
+      path, {"t_ms", "seq", "c1", "c2", "c3", "c4", "gyro_yaw_deg"}, [&](const auto& f, int line) {
+        EncoderWindow w;
+        w.t_end_ms = parse_double(f[0], path, line, "t_ms");
+        check_time(w.t_end_ms, out.empty() ? 0.0 : out.back().t_end_ms, !out.empty(), path, line);
+        const long long seq = parse_int(f[1], path, line, "seq", 0, 0xFFFFFFFFLL);
+        if (seq < 0 || seq > 0xFFFFFFFFLL) fail_at(path, line, "column 'seq': out of range");
+        w.seq = static_cast<std::uint32_t>(seq);
+        for (int i = 0; i < 4; ++i) {
+          static const char* const kColumns[4] = {"c1", "c2", "c3", "c4"};
+          const std::string col = kColumns[i];
+          const long long c =
+              parse_int(f[2 + i], path, line, col, std::numeric_limits<std::int32_t>::min(),
+                        std::numeric_limits<std::int32_t>::max());
+          if (c < std::numeric_limits<std::int32_t>::min() ||
+              c > std::numeric_limits<std::int32_t>::max())
+            fail_at(path, line, "column '" + col + "': out of range");
+          w.counts[i] = static_cast<std::int32_t>(c);
+        }
+        w.gyro_yaw_deg =
+            finite(parse_double(f[6], path, line, "gyro_yaw_deg"), path, line, "gyro_yaw_deg");
+        out.push_back(w);
+      });
   return out;
 }
 
@@ -204,7 +211,9 @@ const config::KeyTable<RecordingMeta>& meta_keys() {
   using M = RecordingMeta;
   static const config::KeyTable<RecordingMeta> table = {
       config::key("field", &M::field, Need::kRequired),
-      config::Key<M>{"field_geometry", Need::kOptional, config::Kind::kOther,
+      config::Key<M>{"field_geometry",
+                     Need::kOptional,
+                     config::Kind::kOther,
                      [](const config::Node& n, M& m) { m.field_geometry = parse_field_spec(n); },
                      [](const M& m) -> std::optional<config::Json> {
                        if (!m.field_geometry) return std::nullopt;
@@ -212,12 +221,18 @@ const config::KeyTable<RecordingMeta>& meta_keys() {
                      },
                      {}},
       config::custom<M>(
-          "camera", Need::kRequired, [](const config::Node& n, M& m) { m.camera = camera_from_json(n); },
+          "camera", Need::kRequired,
+          [](const config::Node& n, M& m) { m.camera = camera_from_json(n); },
           [](const M& m) { return config::write_keys(m.camera, camera_keys()); }),
       config::custom<M>(
-          "robot", Need::kRequired, [](const config::Node& n, M& m) { m.robot = parse_robot_config(n); },
-          [](const M& m) { return config::write_keys(m.robot, robot_config_keys(), Need::kRequired); }),
-      config::Key<M>{"initial_pose", Need::kOptional, config::Kind::kOther,
+          "robot", Need::kRequired,
+          [](const config::Node& n, M& m) { m.robot = parse_robot_config(n); },
+          [](const M& m) {
+            return config::write_keys(m.robot, robot_config_keys(), Need::kRequired);
+          }),
+      config::Key<M>{"initial_pose",
+                     Need::kOptional,
+                     config::Kind::kOther,
                      [](const config::Node& n, M& m) {
                        Pose2 p;
                        config::read_keys(n, pose_keys(), p);
@@ -239,14 +254,17 @@ void check_initial_pose(const Pose2& pose, const FieldGeometry& field, const con
 }  // namespace
 
 void RecordingMeta::validate(const config::Origin& at) const {
-  config::require(!field.empty(), at / "field", "must name a geometry (a name or a path)", config::show(field));
+  config::require(!field.empty(), at / "field", "must name a geometry (a name or a path)",
+                  config::show(field));
   camera.validate(at / "camera");
   robot.validate(at / "robot");
   if (initial_pose) {
-    config::require(std::isfinite(initial_pose->x_cm), at / "initial_pose" / "x_cm", "must be finite", initial_pose->x_cm);
-    config::require(std::isfinite(initial_pose->y_cm), at / "initial_pose" / "y_cm", "must be finite", initial_pose->y_cm);
-    config::require(std::isfinite(initial_pose->yaw_deg), at / "initial_pose" / "yaw_deg", "must be finite",
-                    initial_pose->yaw_deg);
+    config::require(std::isfinite(initial_pose->x_cm), at / "initial_pose" / "x_cm",
+                    "must be finite", initial_pose->x_cm);
+    config::require(std::isfinite(initial_pose->y_cm), at / "initial_pose" / "y_cm",
+                    "must be finite", initial_pose->y_cm);
+    config::require(std::isfinite(initial_pose->yaw_deg), at / "initial_pose" / "yaw_deg",
+                    "must be finite", initial_pose->yaw_deg);
     if (field_geometry) check_initial_pose(*initial_pose, build_field(*field_geometry, ""), at);
   }
 }
@@ -254,17 +272,19 @@ void RecordingMeta::validate(const config::Origin& at) const {
 namespace {
 void check_initial_pose(const Pose2& pose, const FieldGeometry& field, const config::Origin& at) {
   // On the carpet or near it (a robot put down just outside): 1e9 cm was accepted once.
-  const auto inside = [&](double v, double total) { return v >= -kPlacementMarginCm && v <= total + kPlacementMarginCm; };
+  const auto inside = [&](double v, double total) {
+    return v >= -kPlacementMarginCm && v <= total + kPlacementMarginCm;
+  };
   config::require(inside(pose.x_cm, field.total_x_cm()), at / "initial_pose" / "x_cm",
-                  "must lie on the carpet of field '" + field.name + "' (0 .. " + config::show(field.total_x_cm()) +
-                      " cm, 100 cm margin)",
+                  "must lie on the carpet of field '" + field.name + "' (0 .. " +
+                      config::show(field.total_x_cm()) + " cm, 100 cm margin)",
                   pose.x_cm);
   config::require(inside(pose.y_cm, field.total_y_cm()), at / "initial_pose" / "y_cm",
-                  "must lie on the carpet of field '" + field.name + "' (0 .. " + config::show(field.total_y_cm()) +
-                      " cm, 100 cm margin)",
+                  "must lie on the carpet of field '" + field.name + "' (0 .. " +
+                      config::show(field.total_y_cm()) + " cm, 100 cm margin)",
                   pose.y_cm);
-  config::require(std::abs(pose.yaw_deg) <= 3600.0, at / "initial_pose" / "yaw_deg", "must be within +-3600 degrees",
-                  pose.yaw_deg);
+  config::require(std::abs(pose.yaw_deg) <= 3600.0, at / "initial_pose" / "yaw_deg",
+                  "must be within +-3600 degrees", pose.yaw_deg);
 }
 }  // namespace
 
@@ -279,7 +299,8 @@ FieldGeometry recording_field(const Recording& rec) {
       // looked for from the recording's directory.
       const fs::path as_given(rec.meta.field);
       std::error_code ec;
-      const bool beside = as_given.is_relative() && !fs::exists(as_given, ec) && fs::is_regular_file(rec.dir / as_given, ec);
+      const bool beside = as_given.is_relative() && !fs::exists(as_given, ec) &&
+                          fs::is_regular_file(rec.dir / as_given, ec);
       field = load_field(beside ? (rec.dir / as_given).string() : rec.meta.field);
     }
     if (rec.meta.initial_pose) check_initial_pose(*rec.meta.initial_pose, field, meta.string());
@@ -306,20 +327,26 @@ namespace {
 /// heading.csv (RecordingWriter::add_window) into the windows it belongs to.
 void read_heading_csv(const fs::path& path, std::vector<EncoderWindow>& windows) {
   std::vector<std::pair<int, EncoderWindow>> rows;  // (line, window with the heading fields)
-  read_csv(path, {"t_ms", "trust", "gyro_sum_lsb", "gyro_samples", "gyro_flags"}, [&](const auto& f, int line) {
-    EncoderWindow w;
-    w.t_end_ms = parse_double(f[0], path, line, "t_ms");
-    const std::optional<HeadingTrust> trust = parse_heading_trust(f[1]);
-    if (!trust) fail_at(path, line, "column 'trust': must be absolute, relative or none (got '" + f[1] + "')");
-    w.heading_trust = *trust;
-    w.gyro.sum_lsb = parse_int(f[2], path, line, "gyro_sum_lsb", std::numeric_limits<std::int64_t>::min(),
-                               std::numeric_limits<std::int64_t>::max());
-    const long long samples = parse_int(f[3], path, line, "gyro_samples", -1, 0xFFFFFFFFLL);  // -1: no gyro
-    w.gyro.present = samples >= 0;
-    w.gyro.samples = w.gyro.present ? static_cast<std::uint32_t>(samples) : 0U;
-    w.gyro.flags = static_cast<std::uint8_t>(parse_int(f[4], path, line, "gyro_flags", 0, 255));
-    rows.emplace_back(line, w);
-  });
+  read_csv(path, {"t_ms", "trust", "gyro_sum_lsb", "gyro_samples", "gyro_flags"},
+           [&](const auto& f, int line) {
+             EncoderWindow w;
+             w.t_end_ms = parse_double(f[0], path, line, "t_ms");
+             const std::optional<HeadingTrust> trust = parse_heading_trust(f[1]);
+             if (!trust)
+               fail_at(path, line,
+                       "column 'trust': must be absolute, relative or none (got '" + f[1] + "')");
+             w.heading_trust = *trust;
+             w.gyro.sum_lsb = parse_int(f[2], path, line, "gyro_sum_lsb",
+                                        std::numeric_limits<std::int64_t>::min(),
+                                        std::numeric_limits<std::int64_t>::max());
+             const long long samples =
+                 parse_int(f[3], path, line, "gyro_samples", -1, 0xFFFFFFFFLL);  // -1: no gyro
+             w.gyro.present = samples >= 0;
+             w.gyro.samples = w.gyro.present ? static_cast<std::uint32_t>(samples) : 0U;
+             w.gyro.flags =
+                 static_cast<std::uint8_t>(parse_int(f[4], path, line, "gyro_flags", 0, 255));
+             rows.emplace_back(line, w);
+           });
   // The file starts at the first window whose heading was not the default and then has a row for
   // every window: it lines up with the end of encoders.csv.
   if (rows.size() > windows.size())
@@ -331,8 +358,10 @@ void read_heading_csv(const fs::path& path, std::vector<EncoderWindow>& windows)
     EncoderWindow& w = windows[first + i];
     const auto& [line, h] = rows[i];
     if (std::abs(h.t_end_ms - w.t_end_ms) > 1e-3)
-      fail_at(path, line, "column 't_ms': " + std::to_string(h.t_end_ms) + " is not the time of encoders.csv's window " +
-                              std::to_string(first + i + 1) + " (" + std::to_string(w.t_end_ms) + ")");
+      fail_at(path, line,
+              "column 't_ms': " + std::to_string(h.t_end_ms) +
+                  " is not the time of encoders.csv's window " + std::to_string(first + i + 1) +
+                  " (" + std::to_string(w.t_end_ms) + ")");
     w.heading_trust = h.heading_trust;
     w.gyro = h.gyro;
   }
@@ -364,8 +393,8 @@ cv::Mat load_frame(const Recording& rec, std::size_t i) {
   if (img.empty()) throw RecordingError(where + "cannot read image '" + p.string() + "'");
   if (img.cols != rec.meta.camera.width_px || img.rows != rec.meta.camera.height_px) {
     std::ostringstream os;
-    os << where << "image '" << p.string() << "' is " << img.cols << " x " << img.rows << ", the camera is "
-       << rec.meta.camera.width_px << " x " << rec.meta.camera.height_px;
+    os << where << "image '" << p.string() << "' is " << img.cols << " x " << img.rows
+       << ", the camera is " << rec.meta.camera.width_px << " x " << rec.meta.camera.height_px;
     throw RecordingError(os.str());
   }
   return img;
@@ -386,7 +415,9 @@ std::optional<Pose2> truth_at(const std::vector<TruthSample>& truth, double t_ms
 
 namespace {
 
-std::string errno_text() { return std::strerror(errno); }
+std::string errno_text() {
+  return std::strerror(errno);
+}
 
 double steady_s() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -416,7 +447,8 @@ void write_file(const fs::path& p, const char* data, std::size_t n) {
   if (fd < 0) throw RecordingError(p.string() + ": cannot create (" + errno_text() + ")");
   const bool ok = write_all(fd, data, n);
   const std::string why = ok ? "" : errno_text();
-  if (::close(fd) != 0 && ok) throw RecordingError(p.string() + ": write failed (" + errno_text() + ")");
+  if (::close(fd) != 0 && ok)
+    throw RecordingError(p.string() + ": write failed (" + errno_text() + ")");
   if (!ok) {
     std::error_code ec;
     fs::remove(p, ec);
@@ -425,7 +457,8 @@ void write_file(const fs::path& p, const char* data, std::size_t n) {
 }
 
 // The files a recording consists of: what `overwrite` removes, and nothing else.
-const char* const kRecordingFiles[] = {"meta.json", "encoders.csv", "camera.csv", "truth.csv", "poses.csv"};
+const char* const kRecordingFiles[] = {"meta.json", "encoders.csv", "camera.csv", "truth.csv",
+                                       "poses.csv"};
 
 /// A new recording directory: created, or existing and empty, or (overwrite) holding an old
 /// recording, which is removed first (its frames too, so none is left to mix with the new ones).
@@ -435,14 +468,19 @@ void prepare_directory(const fs::path& dir, bool overwrite) {
     throw RecordingError(dir.string() + ": exists and is not a directory");
   if (fs::is_directory(dir, ec) && !fs::is_empty(dir, ec)) {
     if (!overwrite) {
-      throw RecordingError(dir.string() + ": exists and is not empty (an earlier recording?): not overwriting it; "
-                           "record to a new directory, or set record_overwrite (--record-overwrite) to replace it");
+      throw RecordingError(
+          dir.string() +
+          ": exists and is not empty (an earlier recording?): not overwriting it; "
+          "record to a new directory, or set record_overwrite (--record-overwrite) to replace it");
     }
     if (!fs::exists(dir / "meta.json", ec))
-      throw RecordingError(dir.string() + ": not empty and holds no recording (no meta.json): not overwriting it");
+      throw RecordingError(dir.string() +
+                           ": not empty and holds no recording (no meta.json): not overwriting it");
     for (const char* f : kRecordingFiles) fs::remove(dir / f, ec);
     fs::remove_all(dir / "frames", ec);
-    if (ec) throw RecordingError(dir.string() + ": cannot remove the old recording (" + ec.message() + ")");
+    if (ec)
+      throw RecordingError(dir.string() + ": cannot remove the old recording (" + ec.message() +
+                           ")");
   }
   fs::create_directories(dir / "frames", ec);
   if (ec) throw RecordingError(dir.string() + ": cannot create (" + ec.message() + ")");
@@ -466,7 +504,8 @@ void CsvFile::write_row(const std::string& row) {
   if (!write_all(fd_, row.data(), row.size())) {
     const std::string why = errno_text();
     // Whole rows only: cut back what part of this row got in, so the file still reads.
-    if (::ftruncate(fd_, bytes_) != 0) { /* the error below is the one that matters */ }
+    if (::ftruncate(fd_, bytes_) != 0) { /* the error below is the one that matters */
+    }
     throw RecordingError(path_.string() + ": write failed (" + why + ")");
   }
   bytes_ += static_cast<long long>(row.size());
@@ -474,7 +513,8 @@ void CsvFile::write_row(const std::string& row) {
   const double now = steady_s();
   if (now - last_sync_s_ >= 1.0) {
     last_sync_s_ = now;
-    if (::fdatasync(fd_) != 0) throw RecordingError(path_.string() + ": sync failed (" + errno_text() + ")");
+    if (::fdatasync(fd_) != 0)
+      throw RecordingError(path_.string() + ": sync failed (" + errno_text() + ")");
   }
 }
 
@@ -484,7 +524,8 @@ void CsvFile::close() {
   const std::string why = synced ? "" : errno_text();
   const bool closed = ::close(fd_) == 0;
   fd_ = -1;
-  if (!synced || !closed) throw RecordingError(path_.string() + ": write failed (" + (synced ? errno_text() : why) + ")");
+  if (!synced || !closed)
+    throw RecordingError(path_.string() + ": write failed (" + (synced ? errno_text() : why) + ")");
 }
 
 void write_meta(const fs::path& meta_json, const RecordingMeta& m) {
@@ -498,10 +539,12 @@ RecordingWriter::RecordingWriter(const fs::path& dir, const RecordingMeta& meta,
                                  const RecordingOptions& options)
     : dir_(dir), options_(options) {
   if (options.jpeg_quality < 1 || options.jpeg_quality > 100)
-    throw RecordingError(dir.string() + ": JPEG quality must be 1..100 (got " + std::to_string(options.jpeg_quality) + ")");
+    throw RecordingError(dir.string() + ": JPEG quality must be 1..100 (got " +
+                         std::to_string(options.jpeg_quality) + ")");
   prepare_directory(dir, options.overwrite);
   write_meta(dir / "meta.json", meta);
-  encoders_ = std::make_unique<CsvFile>(dir / "encoders.csv", "t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n");
+  encoders_ =
+      std::make_unique<CsvFile>(dir / "encoders.csv", "t_ms,seq,c1,c2,c3,c4,gyro_yaw_deg\n");
   camera_ = std::make_unique<CsvFile>(dir / "camera.csv", "t_ms,file\n");
   if (with_truth) truth_ = std::make_unique<TruthCsvWriter>(dir / "truth.csv");
 }
@@ -516,17 +559,19 @@ void RecordingWriter::check_usable() const {
 void RecordingWriter::add_window(const EncoderWindow& w) {
   check_usable();
   char row[160];
-  std::snprintf(row, sizeof row, "%.6f,%u,%d,%d,%d,%d,%.6f\n", w.t_end_ms, w.seq, w.counts[0], w.counts[1], w.counts[2],
-                w.counts[3], w.gyro_yaw_deg);
+  std::snprintf(row, sizeof row, "%.6f,%u,%d,%d,%d,%d,%.6f\n", w.t_end_ms, w.seq, w.counts[0],
+                w.counts[1], w.counts[2], w.counts[3], w.gyro_yaw_deg);
   try {
     encoders_->write_row(row);
     // heading.csv from the first window whose heading is not the simulator's aligned gyro, then
     // for every window (the reader lines it up with the end of encoders.csv).
     if (!heading_ && (w.heading_trust != HeadingTrust::kAbsolute || w.gyro.present))
-      heading_ = std::make_unique<CsvFile>(dir_ / "heading.csv", "t_ms,trust,gyro_sum_lsb,gyro_samples,gyro_flags\n");
+      heading_ = std::make_unique<CsvFile>(dir_ / "heading.csv",
+                                           "t_ms,trust,gyro_sum_lsb,gyro_samples,gyro_flags\n");
     if (heading_) {
-      std::snprintf(row, sizeof row, "%.6f,%s,%lld,%lld,%u\n", w.t_end_ms, heading_trust_name(w.heading_trust),
-                    static_cast<long long>(w.gyro.sum_lsb), w.gyro.present ? static_cast<long long>(w.gyro.samples) : -1LL,
+      std::snprintf(row, sizeof row, "%.6f,%s,%lld,%lld,%u\n", w.t_end_ms,
+                    heading_trust_name(w.heading_trust), static_cast<long long>(w.gyro.sum_lsb),
+                    w.gyro.present ? static_cast<long long>(w.gyro.samples) : -1LL,
                     static_cast<unsigned>(w.gyro.flags));
       heading_->write_row(row);
     }
@@ -545,8 +590,10 @@ void RecordingWriter::add_frame(double t_ms, const cv::Mat& bgr) {
   try {
     std::vector<std::uint8_t> bytes;
     const std::vector<int> params =
-        jpeg ? std::vector<int>{cv::IMWRITE_JPEG_QUALITY, options_.jpeg_quality} : std::vector<int>{};
-    if (!cv::imencode(jpeg ? ".jpg" : ".png", bgr, bytes, params)) throw RecordingError(p.string() + ": cannot encode image");
+        jpeg ? std::vector<int>{cv::IMWRITE_JPEG_QUALITY, options_.jpeg_quality}
+             : std::vector<int>{};
+    if (!cv::imencode(jpeg ? ".jpg" : ".png", bgr, bytes, params))
+      throw RecordingError(p.string() + ": cannot encode image");
     // The image is complete before camera.csv names it: after a crash every listed frame reads.
     write_file(p, reinterpret_cast<const char*>(bytes.data()), bytes.size());
     frame_bytes_ += bytes.size();
@@ -568,11 +615,13 @@ void RecordingWriter::add_truth(double t_ms, const Pose2& pose) {
 void RecordingWriter::add_clock(const ClockRow& c) {
   check_usable();
   char row[256];
-  std::snprintf(row, sizeof row, "%u,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%u\n", c.seq, c.board_ms, c.arrival_ms, c.t_ms,
-                c.offset_ms, c.drift_ppm, c.uncertainty_ms, c.epoch);
+  std::snprintf(row, sizeof row, "%u,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%u\n", c.seq, c.board_ms,
+                c.arrival_ms, c.t_ms, c.offset_ms, c.drift_ppm, c.uncertainty_ms, c.epoch);
   try {
     if (!clock_)
-      clock_ = std::make_unique<CsvFile>(dir_ / "clock.csv", "seq,board_ms,arrival_ms,t_ms,offset_ms,drift_ppm,uncertainty_ms,epoch\n");
+      clock_ = std::make_unique<CsvFile>(
+          dir_ / "clock.csv",
+          "seq,board_ms,arrival_ms,t_ms,offset_ms,drift_ppm,uncertainty_ms,epoch\n");
     clock_->write_row(row);
   } catch (const RecordingError& e) {
     failed_ = e.what();
@@ -585,7 +634,9 @@ void RecordingWriter::add_frame_time(const FrameTimeRow& f) {
   char row[128];
   std::snprintf(row, sizeof row, "%.6f,%s,%.6f\n", f.t_ms, f.source.c_str(), f.handover_ms);
   try {
-    if (!frame_times_) frame_times_ = std::make_unique<CsvFile>(dir_ / "frame_times.csv", "t_ms,source,handover_ms\n");
+    if (!frame_times_)
+      frame_times_ =
+          std::make_unique<CsvFile>(dir_ / "frame_times.csv", "t_ms,source,handover_ms\n");
     frame_times_->write_row(row);
   } catch (const RecordingError& e) {
     failed_ = e.what();
@@ -613,7 +664,9 @@ void TruthCsvWriter::add(double t_ms, const Pose2& pose) {
   file_.write_row(row);
 }
 
-void TruthCsvWriter::close() { file_.close(); }
+void TruthCsvWriter::close() {
+  file_.close();
+}
 
 PosesCsvWriter::PosesCsvWriter(const fs::path& path)
     : file_(path, "t_ms,x_cm,y_cm,yaw_deg,source,match_error,search_range_cm\n") {}
@@ -623,18 +676,23 @@ PosesCsvWriter::~PosesCsvWriter() = default;
 void PosesCsvWriter::write(const LocalizedPose& p) {
   // inf/nan are spelled "inf"/"nan" (read_poses_csv accepts them): no image result yet.
   auto num = [](double v, char* buf, std::size_t n) {
-    if (std::isnan(v)) std::snprintf(buf, n, "nan");
-    else if (std::isinf(v)) std::snprintf(buf, n, "inf");
-    else std::snprintf(buf, n, "%.3f", v);
+    if (std::isnan(v))
+      std::snprintf(buf, n, "nan");
+    else if (std::isinf(v))
+      std::snprintf(buf, n, "inf");
+    else
+      std::snprintf(buf, n, "%.3f", v);
   };
   char e[32], r[32], row[256];
   num(p.match_error, e, sizeof e);
   num(p.search_range_cm, r, sizeof r);
-  std::snprintf(row, sizeof row, "%.3f,%.3f,%.3f,%.3f,%s,%s,%s\n", p.t_ms, p.pose.x_cm, p.pose.y_cm, p.pose.yaw_deg,
-                pose_source_name(p.source), e, r);
+  std::snprintf(row, sizeof row, "%.3f,%.3f,%.3f,%.3f,%s,%s,%s\n", p.t_ms, p.pose.x_cm, p.pose.y_cm,
+                p.pose.yaw_deg, pose_source_name(p.source), e, r);
   file_.write_row(row);
 }
 
-void PosesCsvWriter::close() { file_.close(); }
+void PosesCsvWriter::close() {
+  file_.close();
+}
 
 }  // namespace omniloc

@@ -11,7 +11,8 @@ namespace omniloc {
 
 std::string feature_db_cache_name(const FieldGeometry& field, const CameraModel& camera) {
   char buf[80];
-  std::snprintf(buf, sizeof buf, "featuredb-%016llx-%016llx.bin", static_cast<unsigned long long>(field.fingerprint()),
+  std::snprintf(buf, sizeof buf, "featuredb-%016llx-%016llx.bin",
+                static_cast<unsigned long long>(field.fingerprint()),
                 static_cast<unsigned long long>(camera.fingerprint()));
   return buf;
 }
@@ -28,15 +29,17 @@ FeatureDb load_or_build_feature_db(const FieldGeometry& field, const CameraModel
     } catch (const std::exception& e) {
       // A stale or damaged database is a cache to rebuild; any other file is someone's data.
       if (!is_feature_db_file(cache_path.string()))
-        throw std::runtime_error(cache_path.string() +
-                                 ": exists and is not an omniloc feature database; not overwriting it (" + e.what() +
-                                 "): remove it or give another database path");
+        throw std::runtime_error(
+            cache_path.string() +
+            ": exists and is not an omniloc feature database; not overwriting it (" + e.what() +
+            "): remove it or give another database path");
       why = std::string("cached database unusable (") + e.what() + ")";
     }
   }
   FeatureDb db = build_feature_db(field, camera, GridSpec::covering(field, 10.0));
   std::error_code ec;
-  if (cache_path.has_parent_path()) std::filesystem::create_directories(cache_path.parent_path(), ec);
+  if (cache_path.has_parent_path())
+    std::filesystem::create_directories(cache_path.parent_path(), ec);
   save_feature_db(db, cache_path.string());
   if (log) log(why + ": built and saved to " + cache_path.string());
   return db;
@@ -58,8 +61,9 @@ ErrorSummary summarize_errors(std::vector<double> e) {
   return s;
 }
 
-ReplayResult replay_recording(const Recording& rec, const LocalizerConfig& config, const FieldGeometry& field,
-                              const FeatureDb& db, const std::function<void(std::size_t, std::size_t)>& progress,
+ReplayResult replay_recording(const Recording& rec, const LocalizerConfig& config,
+                              const FieldGeometry& field, const FeatureDb& db,
+                              const std::function<void(std::size_t, std::size_t)>& progress,
                               const ReplaySettings& settings) {
   Localizer loc(config, rec.meta.robot, field, rec.meta.camera, db, rec.meta.initial_pose);
   if (settings.side) loc.set_side(*settings.side);

@@ -12,7 +12,8 @@ std::string dds_topic_name(const std::string& ros_topic) {
   const auto bad = [&](const std::string& why) {
     return std::invalid_argument("ROS 2 topic '" + ros_topic + "': " + why);
   };
-  if (ros_topic.empty() || ros_topic[0] != '/') throw bad("must be an absolute name starting with '/'");
+  if (ros_topic.empty() || ros_topic[0] != '/')
+    throw bad("must be an absolute name starting with '/'");
   if (ros_topic.size() == 1 || ros_topic.back() == '/') throw bad("must not end with '/'");
   bool token_start = true;
   for (std::size_t i = 1; i < ros_topic.size(); ++i) {

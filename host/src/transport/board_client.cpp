@@ -16,9 +16,12 @@ std::string hex8(std::uint8_t v) {
 
 const char* expect_name(int e) {
   switch (e) {
-    case 0: return "read of";
-    case 1: return "write of";
-    default: return "snapshot via";
+    case 0:
+      return "read of";
+    case 1:
+      return "write of";
+    default:
+      return "snapshot via";
   }
 }
 
@@ -26,7 +29,8 @@ const char* expect_name(int e) {
 
 BoardClient::BoardClient(Transport& transport, BoardClientOptions options)
     : transport_(transport), options_(options) {
-  if (options_.attempts < 1) throw std::invalid_argument("BoardClientOptions.attempts must be >= 1");
+  if (options_.attempts < 1)
+    throw std::invalid_argument("BoardClientOptions.attempts must be >= 1");
   if (options_.response_timeout.count() <= 0) {
     throw std::invalid_argument("BoardClientOptions.response_timeout must be positive");
   }
@@ -41,8 +45,8 @@ void BoardClient::queue_telemetry(const protocol::Window& w) {
 }
 
 void BoardClient::drain_input() {
-  // Answers that arrived after their request timed out would otherwise be taken for the answer to the
-  // next request; take what is already here (telemetry is kept) before sending.
+  // Answers that arrived after their request timed out would otherwise be taken for the answer to
+  // the next request; take what is already here (telemetry is kept) before sending.
   std::array<std::uint8_t, 4096> buf{};
   while (true) {
     while (auto f = decoder_.next()) {
@@ -58,14 +62,16 @@ void BoardClient::drain_input() {
   }
 }
 
-std::optional<protocol::Frame> BoardClient::next_frame(std::chrono::steady_clock::time_point deadline) {
+std::optional<protocol::Frame> BoardClient::next_frame(
+    std::chrono::steady_clock::time_point deadline) {
   std::array<std::uint8_t, 4096> buf{};
   bool last_try = false;
   while (true) {
     if (auto f = decoder_.next()) return f;
     if (last_try) return std::nullopt;
     const auto now = transport_.now();
-    // Past the deadline, one non-blocking read still runs: a zero timeout means "what is already here".
+    // Past the deadline, one non-blocking read still runs: a zero timeout means "what is already
+    // here".
     std::chrono::milliseconds wait{0};
     if (now >= deadline) {
       last_try = true;
@@ -78,11 +84,13 @@ std::optional<protocol::Frame> BoardClient::next_frame(std::chrono::steady_clock
   }
 }
 
-protocol::Frame BoardClient::transact(const protocol::Frame& request, Expect expect, std::uint8_t addr) {
+protocol::Frame BoardClient::transact(const protocol::Frame& request, Expect expect,
+                                      std::uint8_t addr) {
   using namespace protocol;
   ++counters_.requests;
   const auto bytes = encode(request);
-  const std::string what = std::string(expect_name(static_cast<int>(expect))) + " register " + register_name(addr);
+  const std::string what =
+      std::string(expect_name(static_cast<int>(expect))) + " register " + register_name(addr);
   for (int attempt = 0; attempt < options_.attempts; ++attempt) {
     if (attempt > 0) ++counters_.retries;
     drain_input();
@@ -110,8 +118,9 @@ protocol::Frame BoardClient::transact(const protocol::Frame& request, Expect exp
           ++counters_.unexpected_frames;  // a late answer to an earlier request
           continue;
         }
-        throw BoardError("board refused " + what + ": " + std::string(error_name(e->code)) + " (code " +
-                             std::to_string(e->code) + ", detail " + hex8(e->detail) + ")",
+        throw BoardError("board refused " + what + ": " + std::string(error_name(e->code)) +
+                             " (code " + std::to_string(e->code) + ", detail " + hex8(e->detail) +
+                             ")",
                          e->code, addr);
       }
       const bool match = (expect == Expect::kRead && std::holds_alternative<ReadResp>(*f) &&
@@ -123,8 +132,8 @@ protocol::Frame BoardClient::transact(const protocol::Frame& request, Expect exp
       ++counters_.unexpected_frames;
     }
   }
-  throw BoardError("no answer to " + what + " after " + std::to_string(options_.attempts) + " attempts of " +
-                       std::to_string(options_.response_timeout.count()) + " ms",
+  throw BoardError("no answer to " + what + " after " + std::to_string(options_.attempts) +
+                       " attempts of " + std::to_string(options_.response_timeout.count()) + " ms",
                    0, addr);
 }
 

@@ -1,5 +1,5 @@
-// FTDI H-series baud-rate divisor encoding (the same arithmetic as libftdi1's ftdi_to_clkbits, written
-// from the chip's documented divisor format).
+// FTDI H-series baud-rate divisor encoding (the same arithmetic as libftdi1's ftdi_to_clkbits,
+// written from the chip's documented divisor format).
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -37,7 +37,8 @@ BaudSetting h_series_baud(std::uint32_t baud, std::uint16_t port_index) {
   constexpr std::uint32_t kHClk = 120'000'000;
   constexpr std::uint32_t kCClk = 48'000'000;
   if (baud < 183 || baud > 12'000'000) {
-    throw std::invalid_argument("FT2232H baud rate " + std::to_string(baud) + " out of range 183..12000000");
+    throw std::invalid_argument("FT2232H baud rate " + std::to_string(baud) +
+                                " out of range 183..12000000");
   }
   Encoded e{};
   if (static_cast<std::uint64_t>(baud) * 10 > kHClk / 0x3FFF) {
@@ -48,8 +49,8 @@ BaudSetting h_series_baud(std::uint32_t baud, std::uint16_t port_index) {
   }
   const double err = std::abs(static_cast<double>(e.baud) - baud) / baud;
   if (err > 0.03) {
-    throw std::invalid_argument("FT2232H cannot make " + std::to_string(baud) + " baud: nearest is " +
-                                std::to_string(e.baud) + " baud");
+    throw std::invalid_argument("FT2232H cannot make " + std::to_string(baud) +
+                                " baud: nearest is " + std::to_string(e.baud) + " baud");
   }
   BaudSetting s;
   s.value = static_cast<std::uint16_t>(e.divisor & 0xFFFF);

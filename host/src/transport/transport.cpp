@@ -5,10 +5,14 @@ namespace omniloc {
 
 const char* to_string(TransportErrorKind kind) {
   switch (kind) {
-    case TransportErrorKind::kDeviceGone: return "device gone";
-    case TransportErrorKind::kIo: return "I/O error";
-    case TransportErrorKind::kConfig: return "configuration failed";
-    case TransportErrorKind::kNotFound: return "not found";
+    case TransportErrorKind::kDeviceGone:
+      return "device gone";
+    case TransportErrorKind::kIo:
+      return "I/O error";
+    case TransportErrorKind::kConfig:
+      return "configuration failed";
+    case TransportErrorKind::kNotFound:
+      return "not found";
   }
   return "?";
 }

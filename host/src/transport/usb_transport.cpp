@@ -20,10 +20,13 @@ namespace omniloc {
 
 namespace {
 
-std::string usb_error(int rc) { return std::string(libusb_error_name(rc)); }
+std::string usb_error(int rc) {
+  return std::string(libusb_error_name(rc));
+}
 
 [[noreturn]] void fail(int rc, const std::string& what) {
-  const auto kind = rc == LIBUSB_ERROR_NO_DEVICE ? TransportErrorKind::kDeviceGone : TransportErrorKind::kConfig;
+  const auto kind =
+      rc == LIBUSB_ERROR_NO_DEVICE ? TransportErrorKind::kDeviceGone : TransportErrorKind::kConfig;
   throw TransportError(kind, what + ": " + usb_error(rc));
 }
 
@@ -64,7 +67,8 @@ struct DeviceList {
 
 bool is_ft2232h(libusb_device* dev) {
   libusb_device_descriptor d{};
-  return libusb_get_device_descriptor(dev, &d) == 0 && d.idVendor == ftdi::kVid && d.idProduct == ftdi::kPidFt2232h;
+  return libusb_get_device_descriptor(dev, &d) == 0 && d.idVendor == ftdi::kVid &&
+         d.idProduct == ftdi::kPidFt2232h;
 }
 
 /// Reads a device's strings; returns the open handle when keep is set and opening worked.
@@ -130,8 +134,8 @@ struct UsbTransport::Impl {
 
   std::string where() const {
     char buf[96];
-    std::snprintf(buf, sizeof buf, "FT2232H %03d/%03d serial '%s' channel B", info.bus, info.address,
-                  info.serial.c_str());
+    std::snprintf(buf, sizeof buf, "FT2232H %03d/%03d serial '%s' channel B", info.bus,
+                  info.address, info.serial.c_str());
     return buf;
   }
 
@@ -150,7 +154,8 @@ struct UsbTransport::Impl {
         if (packet_bytes <= 2) packet_bytes = 512;
       } else {
         if (h) libusb_close(h);
-        seen.push_back("'" + d.product + "' serial '" + d.serial + "'" + (d.error.empty() ? "" : " (" + d.error + ")"));
+        seen.push_back("'" + d.product + "' serial '" + d.serial + "'" +
+                       (d.error.empty() ? "" : " (" + d.error + ")"));
       }
     }
     if (!handle) {
@@ -165,8 +170,9 @@ struct UsbTransport::Impl {
   }
 
   void control(std::uint8_t request, std::uint16_t value, std::uint16_t index, const char* what) {
-    const int rc = libusb_control_transfer(handle, ftdi::kRequestTypeOut, request, value, index, nullptr, 0,
-                                           static_cast<unsigned>(opt.io_timeout.count()));
+    const int rc =
+        libusb_control_transfer(handle, ftdi::kRequestTypeOut, request, value, index, nullptr, 0,
+                                static_cast<unsigned>(opt.io_timeout.count()));
     if (rc < 0) fail(rc, where() + ": " + what);
   }
 
@@ -194,7 +200,9 @@ struct UsbTransport::Impl {
     control(ftdi::kReqReset, ftdi::kResetPurgeTx, ftdi::kPortB, "purge TX");
   }
 
-  static void LIBUSB_CALL on_in(libusb_transfer* t) { static_cast<Impl*>(t->user_data)->completed(t); }
+  static void LIBUSB_CALL on_in(libusb_transfer* t) {
+    static_cast<Impl*>(t->user_data)->completed(t);
+  }
 
   void completed(libusb_transfer* t) {
     std::unique_lock lock(mu);
@@ -221,7 +229,8 @@ struct UsbTransport::Impl {
     } else if (t->status == LIBUSB_TRANSFER_NO_DEVICE) {
       gone = true;
     } else if (t->status != LIBUSB_TRANSFER_CANCELLED) {
-      io_error = where() + ": bulk IN transfer status " + std::to_string(static_cast<int>(t->status));
+      io_error =
+          where() + ": bulk IN transfer status " + std::to_string(static_cast<int>(t->status));
     }
     const bool resubmit = !stopping && !gone && t->status != LIBUSB_TRANSFER_CANCELLED;
     if (resubmit) {
@@ -244,10 +253,12 @@ struct UsbTransport::Impl {
     for (int i = 0; i < opt.in_transfers; ++i) {
       buffers.emplace_back(static_cast<std::size_t>(opt.in_transfer_bytes));
       libusb_transfer* t = libusb_alloc_transfer(0);
-      if (!t) throw TransportError(TransportErrorKind::kConfig, where() + ": libusb_alloc_transfer failed");
+      if (!t)
+        throw TransportError(TransportErrorKind::kConfig,
+                             where() + ": libusb_alloc_transfer failed");
       transfers.push_back(t);
-      libusb_fill_bulk_transfer(t, handle, ftdi::kEpInB, buffers.back().data(), opt.in_transfer_bytes, &Impl::on_in,
-                                this, 0);
+      libusb_fill_bulk_transfer(t, handle, ftdi::kEpInB, buffers.back().data(),
+                                opt.in_transfer_bytes, &Impl::on_in, this, 0);
     }
     events = std::thread([this] {
       while (run_events.load()) {
@@ -299,14 +310,17 @@ UsbTransport::UsbTransport(UsbTransportOptions options) : impl_(std::make_unique
   }
 }
 
-UsbTransport::~UsbTransport() { impl_->shutdown(); }
+UsbTransport::~UsbTransport() {
+  impl_->shutdown();
+}
 
 void UsbTransport::write(std::span<const std::uint8_t> bytes) {
   auto& d = *impl_;
   std::size_t done = 0;
   while (done < bytes.size()) {
     int sent = 0;
-    const int rc = libusb_bulk_transfer(d.handle, ftdi::kEpOutB, const_cast<unsigned char*>(bytes.data() + done),
+    const int rc = libusb_bulk_transfer(d.handle, ftdi::kEpOutB,
+                                        const_cast<unsigned char*>(bytes.data() + done),
                                         static_cast<int>(bytes.size() - done), &sent,
                                         static_cast<unsigned>(d.opt.io_timeout.count()));
     done += static_cast<std::size_t>(std::max(sent, 0));
@@ -315,12 +329,14 @@ void UsbTransport::write(std::span<const std::uint8_t> bytes) {
     if (rc == LIBUSB_ERROR_NO_DEVICE) {
       d.gone = true;
       d.cv.notify_all();
-      throw TransportError(TransportErrorKind::kDeviceGone, d.where() + ": unplugged (LIBUSB_ERROR_NO_DEVICE on bulk OUT)");
+      throw TransportError(TransportErrorKind::kDeviceGone,
+                           d.where() + ": unplugged (LIBUSB_ERROR_NO_DEVICE on bulk OUT)");
     }
     if (rc == LIBUSB_ERROR_TIMEOUT) ++d.counters.write_timeouts;
     if (rc < 0) {
-      throw TransportError(TransportErrorKind::kIo, d.where() + ": bulk OUT after " + std::to_string(done) + " of " +
-                                                        std::to_string(bytes.size()) + " bytes: " + usb_error(rc));
+      throw TransportError(TransportErrorKind::kIo,
+                           d.where() + ": bulk OUT after " + std::to_string(done) + " of " +
+                               std::to_string(bytes.size()) + " bytes: " + usb_error(rc));
     }
   }
 }
@@ -334,7 +350,8 @@ std::size_t UsbTransport::read(std::span<std::uint8_t> out, std::chrono::millise
   d.rx.erase(d.rx.begin(), d.rx.begin() + static_cast<std::ptrdiff_t>(n));
   if (n > 0) return n;  // deliver what arrived before reporting a failure
   if (d.gone) {
-    throw TransportError(TransportErrorKind::kDeviceGone, d.where() + ": unplugged (LIBUSB_ERROR_NO_DEVICE)");
+    throw TransportError(TransportErrorKind::kDeviceGone,
+                         d.where() + ": unplugged (LIBUSB_ERROR_NO_DEVICE)");
   }
   if (!d.io_error.empty()) {
     std::string e;
@@ -355,8 +372,12 @@ TransportStatus UsbTransport::status() const {
   return s;
 }
 
-const UsbBoardInfo& UsbTransport::board() const { return impl_->info; }
+const UsbBoardInfo& UsbTransport::board() const {
+  return impl_->info;
+}
 
-std::uint32_t UsbTransport::actual_baud() const { return impl_->baud.actual_baud; }
+std::uint32_t UsbTransport::actual_baud() const {
+  return impl_->baud.actual_baud;
+}
 
 }  // namespace omniloc

@@ -18,7 +18,8 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 template <class GetX, class GetY>
 double interp(const std::vector<RadiusMark>& lut, double x, GetX gx, GetY gy) {
   if (lut.size() < 2 || !(x >= gx(lut.front())) || !(x <= gx(lut.back()))) return kNaN;
-  const auto it = std::lower_bound(lut.begin(), lut.end(), x, [&](const RadiusMark& m, double v) { return gx(m) < v; });
+  const auto it = std::lower_bound(lut.begin(), lut.end(), x,
+                                   [&](const RadiusMark& m, double v) { return gx(m) < v; });
   if (it == lut.begin()) return gy(*it);
   const RadiusMark& hi = *it;
   const RadiusMark& lo = *(it - 1);
@@ -33,12 +34,17 @@ double CameraModel::view_radius_px() const {
   return std::min(image_r, radius_lut.empty() ? 0.0 : radius_lut.back().radius_px);
 }
 
-double CameraModel::scan_step_px() const { return std::max(1.0, view_radius_px() / kMaxScanSample); }
+double CameraModel::scan_step_px() const {
+  return std::max(1.0, view_radius_px() / kMaxScanSample);
+}
 
-int CameraModel::first_scan_sample() const { return static_cast<int>(std::ceil(min_radius_px() / scan_step_px())); }
+int CameraModel::first_scan_sample() const {
+  return static_cast<int>(std::ceil(min_radius_px() / scan_step_px()));
+}
 
 int CameraModel::last_scan_sample() const {
-  // A step above 1 px is the view divided into kMaxScanSample samples: the last one is the view's end.
+  // A step above 1 px is the view divided into kMaxScanSample samples: the last one is the view's
+  // end.
   const double step = scan_step_px();
   return step > 1.0 ? kMaxScanSample : static_cast<int>(std::floor(view_radius_px()));
 }
@@ -48,13 +54,15 @@ double CameraModel::min_radius_px() const {
 }
 
 double CameraModel::ground_cm_at_radius(double r) const {
-  return interp(radius_lut, r, [](const RadiusMark& m) { return m.radius_px; },
-                [](const RadiusMark& m) { return m.ground_cm; });
+  return interp(
+      radius_lut, r, [](const RadiusMark& m) { return m.radius_px; },
+      [](const RadiusMark& m) { return m.ground_cm; });
 }
 
 double CameraModel::radius_px_at_ground(double d) const {
-  return interp(radius_lut, d, [](const RadiusMark& m) { return m.ground_cm; },
-                [](const RadiusMark& m) { return m.radius_px; });
+  return interp(
+      radius_lut, d, [](const RadiusMark& m) { return m.ground_cm; },
+      [](const RadiusMark& m) { return m.radius_px; });
 }
 
 std::optional<Eigen::Vector2d> CameraModel::pixel_of_robot_point(const Eigen::Vector2d& p) const {
@@ -99,31 +107,39 @@ std::uint64_t CameraModel::fingerprint() const {
 
 void CameraModel::validate(const config::Origin& at) const {
   using config::require;
-  require(width_px >= 1 && width_px <= 16384, at / "width", "must be a pixel count in 1..16384", width_px);
-  require(height_px >= 1 && height_px <= 16384, at / "height", "must be a pixel count in 1..16384", height_px);
-  const bool centre_inside = center_px.x() >= 0 && center_px.y() >= 0 && center_px.x() <= width_px - 1.0 &&
-                             center_px.y() <= height_px - 1.0;
-  require(centre_inside, at / "center_px",
-          "lies outside the " + std::to_string(width_px) + " x " + std::to_string(height_px) + " image",
-          config::show({center_px.x(), center_px.y()}));
+  require(width_px >= 1 && width_px <= 16384, at / "width", "must be a pixel count in 1..16384",
+          width_px);
+  require(height_px >= 1 && height_px <= 16384, at / "height", "must be a pixel count in 1..16384",
+          height_px);
+  const bool centre_inside = center_px.x() >= 0 && center_px.y() >= 0 &&
+                             center_px.x() <= width_px - 1.0 && center_px.y() <= height_px - 1.0;
+  require(
+      centre_inside, at / "center_px",
+      "lies outside the " + std::to_string(width_px) + " x " + std::to_string(height_px) + " image",
+      config::show({center_px.x(), center_px.y()}));
   if (radius_lut.size() < 2)
-    (at / "radius_lut").fail("must be a list of at least two [r_px, d_cm] pairs",
-                             std::to_string(radius_lut.size()) + " row(s)");
+    (at / "radius_lut")
+        .fail("must be a list of at least two [r_px, d_cm] pairs",
+              std::to_string(radius_lut.size()) + " row(s)");
   for (std::size_t i = 0; i < radius_lut.size(); ++i) {
     const RadiusMark& m = radius_lut[i];
     const std::string row = config::show({m.radius_px, m.ground_cm});
-    require(m.radius_px >= 0 && m.ground_cm >= 0, (at / "radius_lut")[i], "values must be >= 0", row);
+    require(m.radius_px >= 0 && m.ground_cm >= 0, (at / "radius_lut")[i], "values must be >= 0",
+            row);
     if (i > 0)
-      require(m.radius_px > radius_lut[i - 1].radius_px && m.ground_cm > radius_lut[i - 1].ground_cm,
-              (at / "radius_lut")[i], "table must be strictly increasing in both radius and distance", row);
+      require(
+          m.radius_px > radius_lut[i - 1].radius_px && m.ground_cm > radius_lut[i - 1].ground_cm,
+          (at / "radius_lut")[i], "table must be strictly increasing in both radius and distance",
+          row);
   }
   require(std::isfinite(yaw_offset_deg) && std::abs(yaw_offset_deg) <= 360.0, at / "yaw_offset_deg",
           "must be an angle within [-360, 360] degrees", yaw_offset_deg);
-  require(std::isfinite(body_radius_px) && body_radius_px >= 0.0, at / "mask" / "body_radius_px", "must be >= 0",
-          body_radius_px);
+  require(std::isfinite(body_radius_px) && body_radius_px >= 0.0, at / "mask" / "body_radius_px",
+          "must be >= 0", body_radius_px);
   for (std::size_t i = 0; i < masts.size(); ++i) {
     const config::Origin m = (at / "mask" / "masts")[i];
-    require(std::isfinite(masts[i].bearing_deg), m / "bearing_deg", "must be finite", masts[i].bearing_deg);
+    require(std::isfinite(masts[i].bearing_deg), m / "bearing_deg", "must be finite",
+            masts[i].bearing_deg);
     require(masts[i].half_width_deg >= 0.0 && masts[i].half_width_deg < 90.0, m / "half_width_deg",
             "must be in [0, 90)", masts[i].half_width_deg);
   }
@@ -203,7 +219,8 @@ CameraModel camera_from_json(const config::Node& node) {
 }
 
 CameraModel load_camera(const std::string& name_or_path) {
-  return camera_from_json(config::parse_json_file(resolve_data_file("cameras", name_or_path)).root());
+  return camera_from_json(
+      config::parse_json_file(resolve_data_file("cameras", name_or_path)).root());
 }
 
 }  // namespace omniloc

@@ -31,7 +31,7 @@ namespace {
 // floor beyond the carpet, walls and clutter. Fewer merge the carpet with its surroundings under a
 // colour cast; more split one carpet by its light (the vote then still picks its largest part).
 constexpr int kClusters = 6;
-constexpr int kBearings = 180;           // 2 deg: a person or a rod takes a few
+constexpr int kBearings = 180;             // 2 deg: a person or a rod takes a few
 constexpr int kMaxClusterSamples = 12000;  // k-means on a subsample; every pixel is then classified
 // The carpet must be seen on this fraction of the bearings: it surrounds the robot, which struts
 // and obstacles hide on some bearings only (four 15 px rods at 60 px hide about 60 deg of 360).
@@ -78,11 +78,14 @@ std::optional<Clusters> cluster_colours(const cv::Mat& lab8, const CarpetSearch&
   cv::Mat labels, centres;
   const std::uint64_t saved = cv::theRNG().state;
   cv::theRNG().state = 0x0A11C0DEull;
-  cv::kmeans(data, kClusters, labels, cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 30, 0.1), 3,
+  cv::kmeans(data, kClusters, labels,
+             cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 30, 0.1), 3,
              cv::KMEANS_PP_CENTERS, centres);
   cv::theRNG().state = saved;
   Clusters c;
-  for (int k = 0; k < centres.rows; ++k) c.centres.emplace_back(centres.at<float>(k, 0), centres.at<float>(k, 1), centres.at<float>(k, 2));
+  for (int k = 0; k < centres.rows; ++k)
+    c.centres.emplace_back(centres.at<float>(k, 0), centres.at<float>(k, 1),
+                           centres.at<float>(k, 2));
   return c;
 }
 
@@ -132,7 +135,8 @@ Votes vote(const cv::Mat& lab8, const CarpetSearch& s, const Clusters& c) {
   // Gaps up to a fortieth of the view are bridged: a 12.5 cm line next to the robot is a few px
   // wide in any omni view; the carpet runs between lines are many times that.
   const int bridge = std::max(2, static_cast<int>(std::lround(s.outer_px / 40.0)));
-  const int r0 = static_cast<int>(std::floor(s.inner_px)), r1 = static_cast<int>(std::ceil(s.outer_px));
+  const int r0 = static_cast<int>(std::floor(s.inner_px)),
+            r1 = static_cast<int>(std::ceil(s.outer_px));
   std::vector<int> labels;
   for (int b = 0; b < kBearings; ++b) {
     const double a = 2.0 * kPi * b / kBearings;
@@ -146,7 +150,8 @@ Votes vote(const cv::Mat& lab8, const CarpetSearch& s, const Clusters& c) {
     }
     const auto runs = runs_along(labels, r0, bridge);
     // Without a known body, the run from the centre is the robot's (lens, body): not the floor.
-    const std::size_t skip = s.inner_px <= 0.0 && !runs.empty() && runs.front().begin <= bridge ? 1 : 0;
+    const std::size_t skip =
+        s.inner_px <= 0.0 && !runs.empty() && runs.front().begin <= bridge ? 1 : 0;
     // With the body known (the search starts beyond it), the floor next to it is what the robot
     // stands on: the first run as wide as a bridge (not a line) votes, so that near the carpet's
     // edge the floor beyond it, longer in the image, does not outvote it. Without, the body may
@@ -180,8 +185,9 @@ std::vector<cv::Vec3b> to_hsv(std::vector<cv::Vec3b> bgr) {
 // The carpet's own pixels: those of the cluster on the bearings' winning runs (the floor that
 // reaches out from the robot), not the same colour elsewhere (a wall of its hue, the floor behind
 // an obstacle), every pixel along each run.
-std::vector<cv::Vec3b> samples_on_runs(const cv::Mat& bgr, const cv::Mat& lab8, const CarpetSearch& s, const Clusters& c,
-                                       const Votes& v, int label) {
+std::vector<cv::Vec3b> samples_on_runs(const cv::Mat& bgr, const cv::Mat& lab8,
+                                       const CarpetSearch& s, const Clusters& c, const Votes& v,
+                                       int label) {
   std::vector<cv::Vec3b> px;
   for (int b = 0; b < kBearings; ++b) {
     const Run& run = v.winners[static_cast<std::size_t>(b)];
@@ -191,17 +197,19 @@ std::vector<cv::Vec3b> samples_on_runs(const cv::Mat& bgr, const cv::Mat& lab8, 
       const int u = static_cast<int>(std::lround(s.centre_px.x + r * std::cos(a)));
       const int vv = static_cast<int>(std::lround(s.centre_px.y - r * std::sin(a)));
       if (u < 0 || vv < 0 || u >= bgr.cols || vv >= bgr.rows) continue;
-      if (c.nearest(lab_of(lab8.at<cv::Vec3b>(vv, u))) == label) px.push_back(bgr.at<cv::Vec3b>(vv, u));
+      if (c.nearest(lab_of(lab8.at<cv::Vec3b>(vv, u))) == label)
+        px.push_back(bgr.at<cv::Vec3b>(vv, u));
     }
   }
   return to_hsv(std::move(px));
 }
 
 // With a pixel named as carpet: every pixel of its cluster in the searched ring.
-std::vector<cv::Vec3b> samples_of_cluster(const cv::Mat& bgr, const cv::Mat& lab8, const CarpetSearch& s, const Clusters& c,
-                                          int label) {
+std::vector<cv::Vec3b> samples_of_cluster(const cv::Mat& bgr, const cv::Mat& lab8,
+                                          const CarpetSearch& s, const Clusters& c, int label) {
   const double area = kPi * (s.outer_px * s.outer_px - s.inner_px * s.inner_px);
-  const int step = std::max(1, static_cast<int>(std::floor(std::sqrt(area / (4.0 * kMaxClusterSamples)))));
+  const int step =
+      std::max(1, static_cast<int>(std::floor(std::sqrt(area / (4.0 * kMaxClusterSamples)))));
   std::vector<cv::Vec3b> px;
   for (int v = 0; v < bgr.rows; v += step)
     for (int u = 0; u < bgr.cols; u += step)
@@ -211,11 +219,14 @@ std::vector<cv::Vec3b> samples_of_cluster(const cv::Mat& bgr, const cv::Mat& lab
   return to_hsv(std::move(px));
 }
 
-std::string fmt0(double x) { return std::to_string(static_cast<long>(std::lround(x))); }
+std::string fmt0(double x) {
+  return std::to_string(static_cast<long>(std::lround(x)));
+}
 
 }  // namespace
 
-std::optional<CarpetColour> estimate_carpet_colour(const cv::Mat& bgr, const CarpetSearch& s, std::string* why) {
+std::optional<CarpetColour> estimate_carpet_colour(const cv::Mat& bgr, const CarpetSearch& s,
+                                                   std::string* why) {
   auto fail = [&](const std::string& reason) -> std::optional<CarpetColour> {
     if (why != nullptr) *why = "no carpet: " + reason;
     return std::nullopt;
@@ -225,28 +236,39 @@ std::optional<CarpetColour> estimate_carpet_colour(const cv::Mat& bgr, const Car
   cv::Mat lab8;
   cv::cvtColor(bgr, lab8, cv::COLOR_BGR2Lab);
   const auto clusters = cluster_colours(lab8, s);
-  if (!clusters) return fail("too few pixels in the view (" + fmt0(s.inner_px) + " to " + fmt0(s.outer_px) + " px)");
+  if (!clusters)
+    return fail("too few pixels in the view (" + fmt0(s.inner_px) + " to " + fmt0(s.outer_px) +
+                " px)");
   std::vector<cv::Vec3b> hsv;
   if (s.carpet_at) {
-    const cv::Point p(static_cast<int>(std::lround(s.carpet_at->x)), static_cast<int>(std::lround(s.carpet_at->y)));
+    const cv::Point p(static_cast<int>(std::lround(s.carpet_at->x)),
+                      static_cast<int>(std::lround(s.carpet_at->y)));
     if (p.x < 0 || p.y < 0 || p.x >= bgr.cols || p.y >= bgr.rows) {
-      return fail("the carpet pixel given (" + fmt0(s.carpet_at->x) + ", " + fmt0(s.carpet_at->y) + ") is outside the image");
+      return fail("the carpet pixel given (" + fmt0(s.carpet_at->x) + ", " + fmt0(s.carpet_at->y) +
+                  ") is outside the image");
     }
-    hsv = samples_of_cluster(bgr, lab8, s, *clusters, clusters->nearest(lab_of(lab8.at<cv::Vec3b>(p))));
+    hsv = samples_of_cluster(bgr, lab8, s, *clusters,
+                             clusters->nearest(lab_of(lab8.at<cv::Vec3b>(p))));
   } else {
     const Votes v = vote(lab8, s, *clusters);
-    const int label = static_cast<int>(std::max_element(v.length.begin(), v.length.end()) - v.length.begin());
-    const double coverage = static_cast<double>(v.bearings_seen[static_cast<std::size_t>(label)]) / kBearings;
-    if (v.length[static_cast<std::size_t>(label)] <= 0.0) return fail("no colour reaches out from the robot on any bearing");
+    const int label =
+        static_cast<int>(std::max_element(v.length.begin(), v.length.end()) - v.length.begin());
+    const double coverage =
+        static_cast<double>(v.bearings_seen[static_cast<std::size_t>(label)]) / kBearings;
+    if (v.length[static_cast<std::size_t>(label)] <= 0.0)
+      return fail("no colour reaches out from the robot on any bearing");
     if (coverage < kMinBearingCoverage) {
-      return fail("the colour reaching farthest from the robot surrounds it on only " + fmt0(100 * coverage) +
-                  " % of the bearings (at least " + fmt0(100 * kMinBearingCoverage) + " % needed)");
+      return fail("the colour reaching farthest from the robot surrounds it on only " +
+                  fmt0(100 * coverage) + " % of the bearings (at least " +
+                  fmt0(100 * kMinBearingCoverage) + " % needed)");
     }
     hsv = samples_on_runs(bgr, lab8, s, *clusters, v, label);
   }
   std::string inner_why;
   auto colour = carpet_colour_from_samples(hsv, &inner_why, /*allow_grey=*/true);
-  if (!colour) return fail(inner_why.substr(inner_why.find(": ") == std::string::npos ? 0 : inner_why.find(": ") + 2));
+  if (!colour)
+    return fail(
+        inner_why.substr(inner_why.find(": ") == std::string::npos ? 0 : inner_why.find(": ") + 2));
   return colour;
 }
 

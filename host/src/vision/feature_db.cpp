@@ -21,7 +21,8 @@ namespace {
 
 constexpr char kMagic[8] = {'O', 'M', 'N', 'I', 'F', 'D', 'B', '\0'};
 
-// Fixed little-endian header; the payload follows, then an FNV-1a 64 checksum of everything before it.
+// Fixed little-endian header; the payload follows, then an FNV-1a 64 checksum of everything before
+// it.
 struct Header {
   char magic[8];
   std::uint32_t version;
@@ -50,7 +51,8 @@ std::string hex(std::uint64_t v) {
 
 GridSpec GridSpec::covering(const FieldGeometry& field, double step_cm) {
   if (!(step_cm >= 1.0) || step_cm > 100.0) {
-    throw std::invalid_argument("grid step must be between 1 and 100 cm, got " + std::to_string(step_cm));
+    throw std::invalid_argument("grid step must be between 1 and 100 cm, got " +
+                                std::to_string(step_cm));
   }
   GridSpec g;
   g.step_cm = step_cm;
@@ -62,9 +64,10 @@ GridSpec GridSpec::covering(const FieldGeometry& field, double step_cm) {
   return g;
 }
 
-FeatureDb build_feature_db(const FieldGeometry& field, const CameraModel& camera, const GridSpec& grid,
-                           const BuildProgress& progress, unsigned threads) {
-  if (grid.nx <= 0 || grid.ny <= 0 || !(grid.step_cm > 0.0)) throw std::invalid_argument("build_feature_db: empty grid");
+FeatureDb build_feature_db(const FieldGeometry& field, const CameraModel& camera,
+                           const GridSpec& grid, const BuildProgress& progress, unsigned threads) {
+  if (grid.nx <= 0 || grid.ny <= 0 || !(grid.step_cm > 0.0))
+    throw std::invalid_argument("build_feature_db: empty grid");
   FeatureDb db;
   db.grid = grid;
   db.field_fingerprint = field.fingerprint();
@@ -79,8 +82,10 @@ FeatureDb build_feature_db(const FieldGeometry& field, const CameraModel& camera
     std::vector<WhiteInterval> scratch;
     for (int j = next_row++; j < grid.ny; j = next_row++) {
       for (int i = 0; i < grid.nx; ++i) {
-        expected_features(field, camera, grid.position(i, j),
-                          db.features.data() + static_cast<std::size_t>(j * grid.nx + i) * kFeatureBytes, scratch);
+        expected_features(
+            field, camera, grid.position(i, j),
+            db.features.data() + static_cast<std::size_t>(j * grid.nx + i) * kFeatureBytes,
+            scratch);
       }
       // Counted under the lock so that reports arrive in increasing order.
       const std::lock_guard lock(progress_mutex);
@@ -119,7 +124,8 @@ void save_feature_db(const FeatureDb& db, const std::string& path) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   if (!out) throw std::runtime_error(path + ": cannot open for writing");
   out.write(reinterpret_cast<const char*>(&h), sizeof h);
-  out.write(reinterpret_cast<const char*>(db.features.data()), static_cast<std::streamsize>(db.features.size()));
+  out.write(reinterpret_cast<const char*>(db.features.data()),
+            static_cast<std::streamsize>(db.features.size()));
   out.write(reinterpret_cast<const char*>(&sum), sizeof sum);
   out.close();
   if (!out) throw std::runtime_error(path + ": write failed");
@@ -148,25 +154,32 @@ std::vector<char> read_database_file(const std::string& path, const std::string&
   std::vector<char> bytes(sizeof(Header));
   in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   std::memcpy(&h, bytes.data(), sizeof h);
-  if (std::memcmp(h.magic, kMagic, sizeof kMagic) != 0) throw std::runtime_error(where + "not an omniloc feature database");
+  if (std::memcmp(h.magic, kMagic, sizeof kMagic) != 0)
+    throw std::runtime_error(where + "not an omniloc feature database");
   if (h.version != kFeatureDbVersion) {
-    throw std::runtime_error(where + "database format version " + std::to_string(h.version) + ", this build reads version " +
-                             std::to_string(kFeatureDbVersion) + ": rebuild it with `omniloc builddb`");
+    throw std::runtime_error(where + "database format version " + std::to_string(h.version) +
+                             ", this build reads version " + std::to_string(kFeatureDbVersion) +
+                             ": rebuild it with `omniloc builddb`");
   }
-  if (h.header_bytes != sizeof(Header) || h.rays != kScanRays || h.crossings != kCrossingsPerRay || h.nx <= 0 ||
-      h.ny <= 0 || h.nx > 100000 || h.ny > 100000 ||
-      h.payload_bytes != static_cast<std::uint64_t>(h.nx) * static_cast<std::uint64_t>(h.ny) * kFeatureBytes) {
-    throw std::runtime_error(where + "corrupt header (grid " + std::to_string(h.nx) + " x " + std::to_string(h.ny) +
-                             ", " + std::to_string(h.rays) + " rays x " + std::to_string(h.crossings) + ")");
+  if (h.header_bytes != sizeof(Header) || h.rays != kScanRays || h.crossings != kCrossingsPerRay ||
+      h.nx <= 0 || h.ny <= 0 || h.nx > 100000 || h.ny > 100000 ||
+      h.payload_bytes !=
+          static_cast<std::uint64_t>(h.nx) * static_cast<std::uint64_t>(h.ny) * kFeatureBytes) {
+    throw std::runtime_error(where + "corrupt header (grid " + std::to_string(h.nx) + " x " +
+                             std::to_string(h.ny) + ", " + std::to_string(h.rays) + " rays x " +
+                             std::to_string(h.crossings) + ")");
   }
   const std::uint64_t expected = sizeof(Header) + h.payload_bytes + sizeof(std::uint64_t);
   if (size != expected) {
-    throw std::runtime_error(where + (size < expected ? "truncated" : "oversized") + " feature database: " +
-                             std::to_string(size) + " bytes, the header announces " + std::to_string(expected));
+    throw std::runtime_error(where + (size < expected ? "truncated" : "oversized") +
+                             " feature database: " + std::to_string(size) +
+                             " bytes, the header announces " + std::to_string(expected));
   }
   bytes.resize(expected);
   in.read(bytes.data() + sizeof(Header), static_cast<std::streamsize>(expected - sizeof(Header)));
-  if (!in) throw std::runtime_error(where + "read failed after " + std::to_string(in.gcount()) + " bytes of the payload");
+  if (!in)
+    throw std::runtime_error(where + "read failed after " + std::to_string(in.gcount()) +
+                             " bytes of the payload");
   return bytes;
 }
 
@@ -179,25 +192,29 @@ void check_grid(const Header& h, const FieldGeometry& field, const std::string& 
     std::snprintf(buf, sizeof buf, "%.9g", v);
     return std::string(buf);
   };
-  if (!std::isfinite(h.step_cm) || h.step_cm < 1.0 || h.step_cm > 100.0 || !std::isfinite(h.x0_cm) ||
-      !std::isfinite(h.y0_cm)) {
-    throw std::runtime_error(where + "corrupt grid (origin (" + show(h.x0_cm) + ", " + show(h.y0_cm) + ") cm, step " +
-                             show(h.step_cm) + " cm; the step must be 1 .. 100 cm)");
+  if (!std::isfinite(h.step_cm) || h.step_cm < 1.0 || h.step_cm > 100.0 ||
+      !std::isfinite(h.x0_cm) || !std::isfinite(h.y0_cm)) {
+    throw std::runtime_error(where + "corrupt grid (origin (" + show(h.x0_cm) + ", " +
+                             show(h.y0_cm) + ") cm, step " + show(h.step_cm) +
+                             " cm; the step must be 1 .. 100 cm)");
   }
   // A grid with a single point along a side cannot tell positions along it apart (and has no
   // neighbours to interpolate between): a step of more than half the carpet's side.
   if (h.nx < 2 || h.ny < 2) {
-    throw std::runtime_error(where + "grid " + std::to_string(h.nx) + " x " + std::to_string(h.ny) + " at " +
-                             show(h.step_cm) + " cm has fewer than 2 points along a side: rebuild it with a smaller "
+    throw std::runtime_error(where + "grid " + std::to_string(h.nx) + " x " + std::to_string(h.ny) +
+                             " at " + show(h.step_cm) +
+                             " cm has fewer than 2 points along a side: rebuild it with a smaller "
                              "`omniloc builddb --step`");
   }
   const GridSpec g = GridSpec::covering(field, h.step_cm);
   constexpr double kTolCm = 1e-6;
-  if (g.nx != h.nx || g.ny != h.ny || std::abs(g.x0_cm - h.x0_cm) > kTolCm || std::abs(g.y0_cm - h.y0_cm) > kTolCm) {
-    throw std::runtime_error(where + "grid " + std::to_string(h.nx) + " x " + std::to_string(h.ny) + " from (" +
-                             show(h.x0_cm) + ", " + show(h.y0_cm) + ") cm is not the grid of field '" + field.name +
-                             "' at " + show(h.step_cm) + " cm (" + std::to_string(g.nx) + " x " + std::to_string(g.ny) +
-                             " from (" + show(g.x0_cm) + ", " + show(g.y0_cm) + ")): rebuild it with `omniloc builddb`");
+  if (g.nx != h.nx || g.ny != h.ny || std::abs(g.x0_cm - h.x0_cm) > kTolCm ||
+      std::abs(g.y0_cm - h.y0_cm) > kTolCm) {
+    throw std::runtime_error(
+        where + "grid " + std::to_string(h.nx) + " x " + std::to_string(h.ny) + " from (" +
+        show(h.x0_cm) + ", " + show(h.y0_cm) + ") cm is not the grid of field '" + field.name +
+        "' at " + show(h.step_cm) + " cm (" + std::to_string(g.nx) + " x " + std::to_string(g.ny) +
+        " from (" + show(g.x0_cm) + ", " + show(g.y0_cm) + ")): rebuild it with `omniloc builddb`");
   }
 }
 
@@ -212,7 +229,8 @@ bool is_feature_db_file(const std::string& path) {
   return in.gcount() == sizeof magic && std::memcmp(magic, kMagic, sizeof kMagic) == 0;
 }
 
-FeatureDb load_feature_db(const std::string& path, const FieldGeometry& field, const CameraModel& camera) {
+FeatureDb load_feature_db(const std::string& path, const FieldGeometry& field,
+                          const CameraModel& camera) {
   const std::string where = path + ": ";
   Header h{};
   const std::vector<char> bytes = read_database_file(path, where, h);
@@ -220,23 +238,24 @@ FeatureDb load_feature_db(const std::string& path, const FieldGeometry& field, c
   std::memcpy(&stored, bytes.data() + sizeof(Header) + h.payload_bytes, sizeof stored);
   const std::uint64_t actual = detail::fnv1a(bytes.data(), sizeof(Header) + h.payload_bytes);
   if (stored != actual) {
-    throw std::runtime_error(where + "checksum mismatch (stored " + hex(stored) + ", computed " + hex(actual) +
-                             "): the file is corrupt");
+    throw std::runtime_error(where + "checksum mismatch (stored " + hex(stored) + ", computed " +
+                             hex(actual) + "): the file is corrupt");
   }
   if (h.field_fingerprint != field.fingerprint()) {
-    throw std::runtime_error(where + "built for a different field geometry (fingerprint " + hex(h.field_fingerprint) +
-                             ", field '" + field.name + "' has " + hex(field.fingerprint()) +
-                             "): rebuild it with `omniloc builddb`");
+    throw std::runtime_error(where + "built for a different field geometry (fingerprint " +
+                             hex(h.field_fingerprint) + ", field '" + field.name + "' has " +
+                             hex(field.fingerprint()) + "): rebuild it with `omniloc builddb`");
   }
   if (h.camera_fingerprint != camera.fingerprint()) {
     throw std::runtime_error(where + "built for a different camera radius table (fingerprint " +
-                             hex(h.camera_fingerprint) + ", camera in use has " + hex(camera.fingerprint()) +
-                             "): rebuild it with `omniloc builddb`");
+                             hex(h.camera_fingerprint) + ", camera in use has " +
+                             hex(camera.fingerprint()) + "): rebuild it with `omniloc builddb`");
   }
   // The fingerprint covers the view the step derives from; the step is checked by itself to say so.
   if (h.radius_step_px != camera.scan_step_px()) {
     throw std::runtime_error(where + "radii sampled every " + std::to_string(h.radius_step_px) +
-                             " px, the camera in use samples every " + std::to_string(camera.scan_step_px()) +
+                             " px, the camera in use samples every " +
+                             std::to_string(camera.scan_step_px()) +
                              " px: rebuild it with `omniloc builddb`");
   }
   check_grid(h, field, where);
@@ -245,7 +264,8 @@ FeatureDb load_feature_db(const std::string& path, const FieldGeometry& field, c
   db.field_fingerprint = h.field_fingerprint;
   db.camera_fingerprint = h.camera_fingerprint;
   db.radius_step_px = h.radius_step_px;
-  db.features.assign(bytes.begin() + sizeof(Header), bytes.begin() + static_cast<std::ptrdiff_t>(sizeof(Header) + h.payload_bytes));
+  db.features.assign(bytes.begin() + sizeof(Header),
+                     bytes.begin() + static_cast<std::ptrdiff_t>(sizeof(Header) + h.payload_bytes));
   return db;
 }
 

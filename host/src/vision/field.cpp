@@ -18,8 +18,12 @@ constexpr double kMaxLineWidthCm = 50.0;
 
 void FieldSpec::validate(const config::Origin& at) const {
   using config::require;
-  const auto positive = [&](double v, const config::Origin& f) { require(v > 0.0, f, "must be > 0", v); };
-  const auto non_negative = [&](double v, const config::Origin& f) { require(v >= 0.0, f, "must be >= 0", v); };
+  const auto positive = [&](double v, const config::Origin& f) {
+    require(v > 0.0, f, "must be > 0", v);
+  };
+  const auto non_negative = [&](double v, const config::Origin& f) {
+    require(v >= 0.0, f, "must be >= 0", v);
+  };
   require(!name.empty(), at / "name", "must not be empty", config::show(name));
   positive(field_length_cm, at / "field_length_cm");
   positive(field_width_cm, at / "field_width_cm");
@@ -27,39 +31,49 @@ void FieldSpec::validate(const config::Origin& at) const {
   positive(line_width_cm, at / "line_width_cm");
   // Bounds far beyond any robot-soccer field (MSL is 22 x 14 m), so that a typo cannot ask for a
   // database of 10^6 x 10^6 points (a length of 1e7 cm ended in std::bad_alloc).
-  require(field_length_cm <= kMaxFieldSideCm, at / "field_length_cm", "must be at most 5000 cm (50 m)", field_length_cm);
-  require(field_width_cm <= kMaxFieldSideCm, at / "field_width_cm", "must be at most 5000 cm (50 m)", field_width_cm);
+  require(field_length_cm <= kMaxFieldSideCm, at / "field_length_cm",
+          "must be at most 5000 cm (50 m)", field_length_cm);
+  require(field_width_cm <= kMaxFieldSideCm, at / "field_width_cm",
+          "must be at most 5000 cm (50 m)", field_width_cm);
   require(border_cm <= kMaxBorderCm, at / "border_cm", "must be at most 1000 cm", border_cm);
   // A line is a few cm wide; 1000 cm would paint the whole field white.
-  require(line_width_cm <= kMaxLineWidthCm, at / "line_width_cm", "must be at most 50 cm", line_width_cm);
+  require(line_width_cm <= kMaxLineWidthCm, at / "line_width_cm", "must be at most 50 cm",
+          line_width_cm);
   const double L = field_length_cm, W = field_width_cm;
   non_negative(centre_circle_radius_cm, at / "centre_circle_radius_cm");
-  require(centre_circle_radius_cm < W / 2.0, at / "centre_circle_radius_cm", "must be < field_width_cm / 2",
-          centre_circle_radius_cm);
+  require(centre_circle_radius_cm < W / 2.0, at / "centre_circle_radius_cm",
+          "must be < field_width_cm / 2", centre_circle_radius_cm);
   non_negative(corner_arc_radius_cm, at / "corner_arc_radius_cm");
-  require(corner_arc_radius_cm < W / 2.0, at / "corner_arc_radius_cm", "must be < field_width_cm / 2",
-          corner_arc_radius_cm);
+  require(corner_arc_radius_cm < W / 2.0, at / "corner_arc_radius_cm",
+          "must be < field_width_cm / 2", corner_arc_radius_cm);
   positive(goal.width_cm, at / "goal" / "width_cm");
   require(goal.width_cm < W, at / "goal" / "width_cm", "must be < field_width_cm", goal.width_cm);
   positive(goal.depth_cm, at / "goal" / "depth_cm");
   // The goal box stands on the carpet's border behind the goal line, inside the field frame.
-  require(goal.depth_cm <= border_cm, at / "goal" / "depth_cm", "must be <= border_cm", goal.depth_cm);
-  for (const auto& [key, area] : {std::pair{"goal_area", &goal_area}, std::pair{"penalty_area", &penalty_area}}) {
+  require(goal.depth_cm <= border_cm, at / "goal" / "depth_cm", "must be <= border_cm",
+          goal.depth_cm);
+  for (const auto& [key, area] :
+       {std::pair{"goal_area", &goal_area}, std::pair{"penalty_area", &penalty_area}}) {
     non_negative(area->depth_cm, at / key / "depth_cm");
-    require(area->depth_cm < L / 2.0, at / key / "depth_cm", "must be < field_length_cm / 2", area->depth_cm);
+    require(area->depth_cm < L / 2.0, at / key / "depth_cm", "must be < field_length_cm / 2",
+            area->depth_cm);
     non_negative(area->width_cm, at / key / "width_cm");
     require(area->width_cm < W, at / key / "width_cm", "must be < field_width_cm", area->width_cm);
   }
   non_negative(penalty_arc.radius_cm, at / "penalty_arc" / "radius_cm");
-  non_negative(penalty_arc.centre_from_goal_line_cm, at / "penalty_arc" / "centre_from_goal_line_cm");
-  require(penalty_arc.centre_from_goal_line_cm + penalty_arc.radius_cm < L / 2.0, at / "penalty_arc",
-          "arc must stay within its half of the field (centre_from_goal_line_cm + radius_cm < field_length_cm / 2)",
+  non_negative(penalty_arc.centre_from_goal_line_cm,
+               at / "penalty_arc" / "centre_from_goal_line_cm");
+  require(penalty_arc.centre_from_goal_line_cm + penalty_arc.radius_cm < L / 2.0,
+          at / "penalty_arc",
+          "arc must stay within its half of the field (centre_from_goal_line_cm + radius_cm < "
+          "field_length_cm / 2)",
           penalty_arc.centre_from_goal_line_cm + penalty_arc.radius_cm);
   if (marks_from_centre_cm.empty()) return;
   positive(mark_radius_cm, at / "marks" / "radius_cm");
   for (std::size_t i = 0; i < marks_from_centre_cm.size(); ++i) {
     const Eigen::Vector2d& d = marks_from_centre_cm[i];
-    require(std::abs(d.x()) + mark_radius_cm < L / 2.0 + 1e-9 && std::abs(d.y()) + mark_radius_cm < W / 2.0,
+    require(std::abs(d.x()) + mark_radius_cm < L / 2.0 + 1e-9 &&
+                std::abs(d.y()) + mark_radius_cm < W / 2.0,
             (at / "marks" / "from_centre_cm")[i], "lies outside the playing area",
             config::show({d.x(), d.y()}));
   }
@@ -67,9 +81,12 @@ void FieldSpec::validate(const config::Origin& at) const {
 
 const char* goal_colour_name(GoalColour c) {
   switch (c) {
-    case GoalColour::kBlue: return "blue";
-    case GoalColour::kYellow: return "yellow";
-    case GoalColour::kUnknown: break;
+    case GoalColour::kBlue:
+      return "blue";
+    case GoalColour::kYellow:
+      return "yellow";
+    case GoalColour::kUnknown:
+      break;
   }
   return "unknown";
 }
@@ -77,15 +94,20 @@ const char* goal_colour_name(GoalColour c) {
 namespace {
 // Optional "colour_at_x_max": "blue" | "yellow"; absent (unknown) is not written back.
 config::Key<FieldGoal> goal_colour_key() {
-  const config::Choices<GoalColour> names = {{"blue", GoalColour::kBlue}, {"yellow", GoalColour::kYellow}};
-  return config::Key<FieldGoal>{
-      "colour_at_x_max", config::Need::kOptional, config::Kind::kText,
-      [names](const config::Node& n, FieldGoal& g) { g.colour_at_x_max = config::read_choice(n, names); },
-      [](const FieldGoal& g) -> std::optional<config::Json> {
-        if (g.colour_at_x_max == GoalColour::kUnknown) return std::nullopt;
-        return config::Json(goal_colour_name(g.colour_at_x_max));
-      },
-      "which goal colour is at the x = max end; absent = unknown"};
+  const config::Choices<GoalColour> names = {{"blue", GoalColour::kBlue},
+                                             {"yellow", GoalColour::kYellow}};
+  return config::Key<FieldGoal>{"colour_at_x_max",
+                                config::Need::kOptional,
+                                config::Kind::kText,
+                                [names](const config::Node& n, FieldGoal& g) {
+                                  g.colour_at_x_max = config::read_choice(n, names);
+                                },
+                                [](const FieldGoal& g) -> std::optional<config::Json> {
+                                  if (g.colour_at_x_max == GoalColour::kUnknown)
+                                    return std::nullopt;
+                                  return config::Json(goal_colour_name(g.colour_at_x_max));
+                                },
+                                "which goal colour is at the x = max end; absent = unknown"};
 }
 }  // namespace
 
@@ -123,7 +145,8 @@ const config::KeyTable<FieldSpec>& field_spec_keys() {
       config::nested("penalty_arc", &F::penalty_arc,
                      config::KeyTable<PenaltyArc>{
                          key("radius_cm", &PenaltyArc::radius_cm, Need::kRequired),
-                         key("centre_from_goal_line_cm", &PenaltyArc::centre_from_goal_line_cm, Need::kRequired),
+                         key("centre_from_goal_line_cm", &PenaltyArc::centre_from_goal_line_cm,
+                             Need::kRequired),
                      },
                      Need::kRequired),
       key("corner_arc_radius_cm", &F::corner_arc_radius_cm, Need::kRequired),
@@ -199,7 +222,8 @@ FieldGeometry build_field(const FieldSpec& spec, const std::string& source) {
     f.arcs.push_back({Eigen::Vector2d(x1, y1), corner_r, 180.0, 270.0});
     f.arcs.push_back({Eigen::Vector2d(x0, y1), corner_r, 270.0, 360.0});
   }
-  for (const Eigen::Vector2d& d : spec.marks_from_centre_cm) f.discs.push_back({c + d, spec.mark_radius_cm});
+  for (const Eigen::Vector2d& d : spec.marks_from_centre_cm)
+    f.discs.push_back({c + d, spec.mark_radius_cm});
   return f;
 }
 
@@ -240,8 +264,8 @@ bool ray_near(const Eigen::Vector2d& o, const Eigen::Vector2d& u, double t_lo, d
 }
 
 // Roots of |o + t u - c| = r (u unit); returns the count (0 or 2).
-int circle_hits(const Eigen::Vector2d& o, const Eigen::Vector2d& u, const Eigen::Vector2d& c, double r,
-                double& t0, double& t1) {
+int circle_hits(const Eigen::Vector2d& o, const Eigen::Vector2d& u, const Eigen::Vector2d& c,
+                double r, double& t0, double& t1) {
   const Eigen::Vector2d f = o - c;
   const double b = f.dot(u);
   const double disc = b * b - (f.squaredNorm() - r * r);
@@ -263,12 +287,14 @@ void push_clipped(double a, double b, double t_lo, double t_hi, std::vector<Whit
 std::uint64_t FieldGeometry::fingerprint() const {
   using detail::fnv1a_double;
   std::uint64_t h = detail::kFnvOffset;
-  for (double v : {field_length_cm, field_width_cm, border_cm, line_width_cm}) h = fnv1a_double(v, h);
+  for (double v : {field_length_cm, field_width_cm, border_cm, line_width_cm})
+    h = fnv1a_double(v, h);
   for (const auto& s : segments) {
     for (double v : {s.a_cm.x(), s.a_cm.y(), s.b_cm.x(), s.b_cm.y()}) h = fnv1a_double(v, h);
   }
   for (const auto& a : arcs) {
-    for (double v : {a.centre_cm.x(), a.centre_cm.y(), a.radius_cm, a.start_deg, a.end_deg}) h = fnv1a_double(v, h);
+    for (double v : {a.centre_cm.x(), a.centre_cm.y(), a.radius_cm, a.start_deg, a.end_deg})
+      h = fnv1a_double(v, h);
   }
   for (const auto& d : discs) {
     for (double v : {d.centre_cm.x(), d.centre_cm.y(), d.radius_cm}) h = fnv1a_double(v, h);
@@ -287,17 +313,20 @@ bool on_carpet(const FieldGeometry& field, const Eigen::Vector2d& p) {
 
 bool placeable(const FieldGeometry& field, const Eigen::Vector2d& p) {
   const double m = kPlacementMarginCm;
-  return p.x() >= -m && p.y() >= -m && p.x() <= field.total_x_cm() + m && p.y() <= field.total_y_cm() + m;
+  return p.x() >= -m && p.y() >= -m && p.x() <= field.total_x_cm() + m &&
+         p.y() <= field.total_y_cm() + m;
 }
 
-void for_each_line_point(const FieldGeometry& field, double step_cm, const std::function<void(const Eigen::Vector2d&)>& f) {
+void for_each_line_point(const FieldGeometry& field, double step_cm,
+                         const std::function<void(const Eigen::Vector2d&)>& f) {
   for (const auto& s : field.segments) {
     const int n = std::max(1, static_cast<int>(std::ceil((s.b_cm - s.a_cm).norm() / step_cm)));
     for (int i = 0; i <= n; ++i) f(s.a_cm + (s.b_cm - s.a_cm) * (static_cast<double>(i) / n));
   }
   for (const auto& a : field.arcs) {
     const double span_deg = a.end_deg - a.start_deg;
-    const int n = std::max(1, static_cast<int>(std::ceil(deg_to_rad(span_deg) * a.radius_cm / step_cm)));
+    const int n =
+        std::max(1, static_cast<int>(std::ceil(deg_to_rad(span_deg) * a.radius_cm / step_cm)));
     for (int i = 0; i <= n; ++i) {
       const double t = deg_to_rad(a.start_deg + span_deg * i / n);
       f(a.centre_cm + a.radius_cm * Eigen::Vector2d(std::cos(t), std::sin(t)));
@@ -307,17 +336,21 @@ void for_each_line_point(const FieldGeometry& field, double step_cm, const std::
 
 bool is_white(const FieldGeometry& field, const Eigen::Vector2d& p) {
   const double h = field.line_width_cm / 2.0;
-  // Bounding-box rejects first: most points are far from most lines (the renderer calls this per pixel).
+  // Bounding-box rejects first: most points are far from most lines (the renderer calls this per
+  // pixel).
   for (const auto& s : field.segments) {
-    if (p.x() < std::min(s.a_cm.x(), s.b_cm.x()) - h || p.x() > std::max(s.a_cm.x(), s.b_cm.x()) + h ||
-        p.y() < std::min(s.a_cm.y(), s.b_cm.y()) - h || p.y() > std::max(s.a_cm.y(), s.b_cm.y()) + h) {
+    if (p.x() < std::min(s.a_cm.x(), s.b_cm.x()) - h ||
+        p.x() > std::max(s.a_cm.x(), s.b_cm.x()) + h ||
+        p.y() < std::min(s.a_cm.y(), s.b_cm.y()) - h ||
+        p.y() > std::max(s.a_cm.y(), s.b_cm.y()) + h) {
       continue;
     }
     if (in_segment(s, h, p)) return true;
   }
   for (const auto& a : field.arcs) {
     const double reach = a.radius_cm + h;
-    if (std::abs(p.x() - a.centre_cm.x()) > reach || std::abs(p.y() - a.centre_cm.y()) > reach) continue;
+    if (std::abs(p.x() - a.centre_cm.x()) > reach || std::abs(p.y() - a.centre_cm.y()) > reach)
+      continue;
     if (in_arc(a, h, p)) return true;
   }
   for (const auto& d : field.discs) {
@@ -336,15 +369,17 @@ WhiteLineIndex::WhiteLineIndex(const FieldGeometry& field) : field_(field) {
   std::vector<Box> boxes;
   for (const auto& sg : field_.segments) {
     boxes.push_back({std::min(sg.a_cm.x(), sg.b_cm.x()) - h, std::min(sg.a_cm.y(), sg.b_cm.y()) - h,
-                     std::max(sg.a_cm.x(), sg.b_cm.x()) + h, std::max(sg.a_cm.y(), sg.b_cm.y()) + h});
+                     std::max(sg.a_cm.x(), sg.b_cm.x()) + h,
+                     std::max(sg.a_cm.y(), sg.b_cm.y()) + h});
   }
   for (const auto& a : field_.arcs) {
     const double r = a.radius_cm + h;
-    boxes.push_back({a.centre_cm.x() - r, a.centre_cm.y() - r, a.centre_cm.x() + r, a.centre_cm.y() + r});
+    boxes.push_back(
+        {a.centre_cm.x() - r, a.centre_cm.y() - r, a.centre_cm.x() + r, a.centre_cm.y() + r});
   }
   for (const auto& d : field_.discs) {
-    boxes.push_back({d.centre_cm.x() - d.radius_cm, d.centre_cm.y() - d.radius_cm, d.centre_cm.x() + d.radius_cm,
-                     d.centre_cm.y() + d.radius_cm});
+    boxes.push_back({d.centre_cm.x() - d.radius_cm, d.centre_cm.y() - d.radius_cm,
+                     d.centre_cm.x() + d.radius_cm, d.centre_cm.y() + d.radius_cm});
   }
   if (boxes.size() > 65535) throw std::invalid_argument("WhiteLineIndex: too many lines");
   std::vector<std::vector<std::uint16_t>> buckets(static_cast<std::size_t>(nx_ * ny_));
@@ -354,7 +389,8 @@ WhiteLineIndex::WhiteLineIndex(const FieldGeometry& field) : field_(field) {
     const int j0 = std::max(0, static_cast<int>(std::floor(boxes[b].y0 / cell_cm_)));
     const int j1 = std::min(ny_ - 1, static_cast<int>(std::floor(boxes[b].y1 / cell_cm_)));
     for (int j = j0; j <= j1; ++j) {
-      for (int i = i0; i <= i1; ++i) buckets[static_cast<std::size_t>(j * nx_ + i)].push_back(static_cast<std::uint16_t>(b));
+      for (int i = i0; i <= i1; ++i)
+        buckets[static_cast<std::size_t>(j * nx_ + i)].push_back(static_cast<std::uint16_t>(b));
     }
   }
   offsets_.push_back(0);
@@ -396,16 +432,16 @@ RayCaster::RayCaster(const FieldGeometry& field) : half_width_cm_(field.line_wid
   }
   for (const auto& a : field.arcs) {
     const double span = a.end_deg - a.start_deg;
-    arcs_.push_back({a,
-                     Eigen::Vector2d(std::cos(deg_to_rad(a.start_deg)), std::sin(deg_to_rad(a.start_deg))),
-                     Eigen::Vector2d(std::cos(deg_to_rad(a.end_deg)), std::sin(deg_to_rad(a.end_deg))),
-                     span >= 360.0, span <= 180.0});
+    arcs_.push_back(
+        {a, Eigen::Vector2d(std::cos(deg_to_rad(a.start_deg)), std::sin(deg_to_rad(a.start_deg))),
+         Eigen::Vector2d(std::cos(deg_to_rad(a.end_deg)), std::sin(deg_to_rad(a.end_deg))),
+         span >= 360.0, span <= 180.0});
   }
   discs_ = field.discs;
 }
 
-void RayCaster::intervals(const Eigen::Vector2d& o, const Eigen::Vector2d& u, double t_lo, double t_hi,
-                          std::vector<WhiteInterval>& out) const {
+void RayCaster::intervals(const Eigen::Vector2d& o, const Eigen::Vector2d& u, double t_lo,
+                          double t_hi, std::vector<WhiteInterval>& out) const {
   out.clear();
   const double h = half_width_cm_;
   for (const auto& sg : segs_) {
@@ -414,7 +450,8 @@ void RayCaster::intervals(const Eigen::Vector2d& o, const Eigen::Vector2d& u, do
     // Slab test in the segment's frame: along in [-h, len + h], across in [-h, h].
     double enter = t_lo, exit = t_hi;
     const double p_along = ao.dot(sg.ex), d_along = u.dot(sg.ex);
-    const double p_across = sg.ex.x() * ao.y() - sg.ex.y() * ao.x(), d_across = sg.ex.x() * u.y() - sg.ex.y() * u.x();
+    const double p_across = sg.ex.x() * ao.y() - sg.ex.y() * ao.x(),
+                 d_across = sg.ex.x() * u.y() - sg.ex.y() * u.x();
     bool hit = true;
     for (const auto& [p, d, lo, hi] :
          {std::tuple{p_along, d_along, -h, sg.len + h}, std::tuple{p_across, d_across, -h, h}}) {
@@ -432,7 +469,8 @@ void RayCaster::intervals(const Eigen::Vector2d& o, const Eigen::Vector2d& u, do
   for (const auto& d : discs_) {
     if (!ray_near(o, u, t_lo, t_hi, d.centre_cm, d.radius_cm)) continue;
     double t0 = 0, t1 = 0;
-    if (circle_hits(o, u, d.centre_cm, d.radius_cm, t0, t1) == 2) push_clipped(t0, t1, t_lo, t_hi, out);
+    if (circle_hits(o, u, d.centre_cm, d.radius_cm, t0, t1) == 2)
+      push_clipped(t0, t1, t_lo, t_hi, out);
   }
   for (const auto& pa : arcs_) {
     const FieldArc& a = pa.arc;
@@ -445,7 +483,8 @@ void RayCaster::intervals(const Eigen::Vector2d& o, const Eigen::Vector2d& u, do
       if (r2 < r_in * r_in || r2 > r_out * r_out) return false;
       if (pa.full) return true;
       if (pa.half_or_less) {
-        return pa.e_start.x() * d.y() - pa.e_start.y() * d.x() >= 0.0 && d.x() * pa.e_end.y() - d.y() * pa.e_end.x() >= 0.0;
+        return pa.e_start.x() * d.y() - pa.e_start.y() * d.x() >= 0.0 &&
+               d.x() * pa.e_end.y() - d.y() * pa.e_end.x() >= 0.0;
       }
       return angle_in_sweep(rad_to_deg(std::atan2(d.y(), d.x())), a);
     };
@@ -471,7 +510,8 @@ void RayCaster::intervals(const Eigen::Vector2d& o, const Eigen::Vector2d& u, do
         cand[n++] = (f.x() * e->y() - f.y() * e->x()) / den;
       }
     }
-    for (int i = 2; i < n; ++i) {  // insertion sort of at most 6 values (cand[0] = t_lo stays first)
+    for (int i = 2; i < n;
+         ++i) {  // insertion sort of at most 6 values (cand[0] = t_lo stays first)
       for (int k = i; k > 1 && cand[k - 1] > cand[k]; --k) std::swap(cand[k - 1], cand[k]);
     }
     double prev = t_lo;
@@ -488,7 +528,8 @@ void RayCaster::intervals(const Eigen::Vector2d& o, const Eigen::Vector2d& u, do
     }
     if (in_run) push_clipped(run_start, t_hi, t_lo, t_hi, out);
   }
-  std::sort(out.begin(), out.end(), [](const WhiteInterval& x, const WhiteInterval& y) { return x.enter_cm < y.enter_cm; });
+  std::sort(out.begin(), out.end(),
+            [](const WhiteInterval& x, const WhiteInterval& y) { return x.enter_cm < y.enter_cm; });
   std::size_t w = 0;
   for (std::size_t i = 0; i < out.size(); ++i) {
     if (w > 0 && out[i].enter_cm <= out[w - 1].exit_cm) {
@@ -500,8 +541,8 @@ void RayCaster::intervals(const Eigen::Vector2d& o, const Eigen::Vector2d& u, do
   out.resize(w);
 }
 
-void white_intervals(const FieldGeometry& field, const Eigen::Vector2d& o, const Eigen::Vector2d& u, double t_lo,
-                     double t_hi, std::vector<WhiteInterval>& out) {
+void white_intervals(const FieldGeometry& field, const Eigen::Vector2d& o, const Eigen::Vector2d& u,
+                     double t_lo, double t_hi, std::vector<WhiteInterval>& out) {
   RayCaster(field).intervals(o, u, t_lo, t_hi, out);
 }
 

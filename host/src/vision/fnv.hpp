@@ -9,7 +9,8 @@ namespace omniloc::detail {
 
 inline constexpr std::uint64_t kFnvOffset = 14695981039346656037ull;
 
-[[nodiscard]] inline std::uint64_t fnv1a(const void* data, std::size_t size, std::uint64_t h = kFnvOffset) {
+[[nodiscard]] inline std::uint64_t fnv1a(const void* data, std::size_t size,
+                                         std::uint64_t h = kFnvOffset) {
   const auto* p = static_cast<const unsigned char*>(data);
   for (std::size_t i = 0; i < size; ++i) {
     h ^= p[i];

@@ -28,10 +28,13 @@ inline Px classify(const std::uint8_t* bgr, const ScanParams& p, const int* sdiv
 
 void check_image(const cv::Mat& bgr, const CameraModel& cam) {
   if (bgr.empty()) throw std::invalid_argument("scan: empty image");
-  if (bgr.type() != CV_8UC3) throw std::invalid_argument("scan: image must be 8-bit BGR (CV_8UC3), got type " + std::to_string(bgr.type()));
+  if (bgr.type() != CV_8UC3)
+    throw std::invalid_argument("scan: image must be 8-bit BGR (CV_8UC3), got type " +
+                                std::to_string(bgr.type()));
   if (bgr.cols != cam.width_px || bgr.rows != cam.height_px) {
-    throw std::invalid_argument("scan: image is " + std::to_string(bgr.cols) + " x " + std::to_string(bgr.rows) +
-                                " but the camera model expects " + std::to_string(cam.width_px) + " x " +
+    throw std::invalid_argument("scan: image is " + std::to_string(bgr.cols) + " x " +
+                                std::to_string(bgr.rows) + " but the camera model expects " +
+                                std::to_string(cam.width_px) + " x " +
                                 std::to_string(cam.height_px));
   }
 }
@@ -40,8 +43,8 @@ void check_image(const cv::Mat& bgr, const CameraModel& cam) {
 // radii (kNoCrossing-padded) and returns the ray's end: the first sample of a dark run (an
 // obstacle) before the fourth crossing, else kRayToViewEnd.
 template <class ClassifyAt>
-std::uint8_t walk_ray(const CameraModel& cam, double phi, int k0, int k1, const ScanParams& p, std::uint8_t* out,
-              ClassifyAt classify_at) {
+std::uint8_t walk_ray(const CameraModel& cam, double phi, int k0, int k1, const ScanParams& p,
+                      std::uint8_t* out, ClassifyAt classify_at) {
   // Sample k lies k * step px out: the step folded into the direction.
   const double step = cam.scan_step_px();
   const double cu = std::cos(phi) * (cam.mirrored ? -step : step);
@@ -76,17 +79,23 @@ std::uint8_t walk_ray(const CameraModel& cam, double phi, int k0, int k1, const 
 const std::array<Eigen::Vector2d, kScanRays>& ray_directions() {
   static const std::array<Eigen::Vector2d, kScanRays> dirs = [] {
     std::array<Eigen::Vector2d, kScanRays> d;
-    for (int k = 0; k < kScanRays; ++k) d[static_cast<std::size_t>(k)] = {std::cos(deg_to_rad(k)), std::sin(deg_to_rad(k))};
+    for (int k = 0; k < kScanRays; ++k)
+      d[static_cast<std::size_t>(k)] = {std::cos(deg_to_rad(k)), std::sin(deg_to_rad(k))};
     return d;
   }();
   return dirs;
 }
 
-int first_sample(const CameraModel& cam) { return cam.first_scan_sample(); }
-int last_sample(const CameraModel& cam) { return cam.last_scan_sample(); }
+int first_sample(const CameraModel& cam) {
+  return cam.first_scan_sample();
+}
+int last_sample(const CameraModel& cam) {
+  return cam.last_scan_sample();
+}
 
 template <class ClassifyAt>
-Scan scan_with(const CameraModel& cam, double yaw_deg, const ScanParams& p, ClassifyAt classify_at) {
+Scan scan_with(const CameraModel& cam, double yaw_deg, const ScanParams& p,
+               ClassifyAt classify_at) {
   Scan s;
   const int k0 = first_sample(cam), k1 = last_sample(cam);
   for (int k = 0; k < kScanRays; ++k) {
@@ -114,10 +123,13 @@ int Scan::rays_valid() const {
 Scan scan_image(const cv::Mat& bgr, const CameraModel& cam, double yaw_deg, const ScanParams& p) {
   check_image(bgr, cam);
   const int* sdiv = detail::hsv_tables().sat_div;
-  return scan_with(cam, yaw_deg, p, [&](int u, int v) { return classify(bgr.ptr<std::uint8_t>(v) + 3 * u, p, sdiv); });
+  return scan_with(cam, yaw_deg, p, [&](int u, int v) {
+    return classify(bgr.ptr<std::uint8_t>(v) + 3 * u, p, sdiv);
+  });
 }
 
-Scan scan_image_reference(const cv::Mat& bgr, const CameraModel& cam, double yaw_deg, const ScanParams& p) {
+Scan scan_image_reference(const cv::Mat& bgr, const CameraModel& cam, double yaw_deg,
+                          const ScanParams& p) {
   check_image(bgr, cam);
   cv::Mat hsv, white, dark;
   cv::cvtColor(bgr, hsv, cv::COLOR_BGR2HSV);
@@ -129,10 +141,12 @@ Scan scan_image_reference(const cv::Mat& bgr, const CameraModel& cam, double yaw
   });
 }
 
-BearingScan scan_image_bearings(const cv::Mat& bgr, const CameraModel& cam, int rays_per_degree, const ScanParams& p) {
+BearingScan scan_image_bearings(const cv::Mat& bgr, const CameraModel& cam, int rays_per_degree,
+                                const ScanParams& p) {
   check_image(bgr, cam);
   if (rays_per_degree < 1 || rays_per_degree > 20) {
-    throw std::invalid_argument("scan_image_bearings: rays_per_degree must be 1..20, got " + std::to_string(rays_per_degree));
+    throw std::invalid_argument("scan_image_bearings: rays_per_degree must be 1..20, got " +
+                                std::to_string(rays_per_degree));
   }
   const int* sdiv = detail::hsv_tables().sat_div;
   BearingScan s;
@@ -155,18 +169,21 @@ BearingScan scan_image_bearings(const cv::Mat& bgr, const CameraModel& cam, int 
 Scan rotate_to_field(const BearingScan& b, double yaw_deg) {
   Scan s;
   const int n = kScanRays * b.rays_per_degree;
-  if (static_cast<int>(b.ray_end_px.size()) != n) throw std::invalid_argument("rotate_to_field: malformed bearing scan");
+  if (static_cast<int>(b.ray_end_px.size()) != n)
+    throw std::invalid_argument("rotate_to_field: malformed bearing scan");
   for (int k = 0; k < kScanRays; ++k) {
     long j = std::lround((static_cast<double>(k) - yaw_deg) * b.rays_per_degree) % n;
     if (j < 0) j += n;
     s.ray_end_px[static_cast<std::size_t>(k)] = b.ray_end_px[static_cast<std::size_t>(j)];
-    std::copy_n(b.radii_px.begin() + j * kCrossingsPerRay, kCrossingsPerRay, s.radii_px.begin() + k * kCrossingsPerRay);
+    std::copy_n(b.radii_px.begin() + j * kCrossingsPerRay, kCrossingsPerRay,
+                s.radii_px.begin() + k * kCrossingsPerRay);
   }
   return s;
 }
 
-void expected_features(const FieldGeometry& field, const CameraModel& cam, const Eigen::Vector2d& pos,
-                       std::uint8_t* out, std::vector<WhiteInterval>& iv, int min_gap_px, double bearing_offset_deg) {
+void expected_features(const FieldGeometry& field, const CameraModel& cam,
+                       const Eigen::Vector2d& pos, std::uint8_t* out,
+                       std::vector<WhiteInterval>& iv, int min_gap_px, double bearing_offset_deg) {
   const int k0 = first_sample(cam), k1 = last_sample(cam);
   const double step = cam.scan_step_px();
   const double t_lo = cam.ground_cm_at_radius(k0 * step);
@@ -174,13 +191,18 @@ void expected_features(const FieldGeometry& field, const CameraModel& cam, const
   const RayCaster caster(field);
   const auto& dirs = ray_directions();
   for (int k = 0; k < kScanRays; ++k) {
-    const Eigen::Vector2d dir = bearing_offset_deg == 0.0 ? dirs[static_cast<std::size_t>(k)]
-                                                          : Eigen::Vector2d(std::cos(deg_to_rad(k + bearing_offset_deg)),
-                                                                            std::sin(deg_to_rad(k + bearing_offset_deg)));
+    const Eigen::Vector2d dir = bearing_offset_deg == 0.0
+                                    ? dirs[static_cast<std::size_t>(k)]
+                                    : Eigen::Vector2d(std::cos(deg_to_rad(k + bearing_offset_deg)),
+                                                      std::sin(deg_to_rad(k + bearing_offset_deg)));
     caster.intervals(pos, dir, t_lo, t_hi, iv);
-    crossings_of_runs(k0, k1, min_gap_px, iv, [&cam, step](const WhiteInterval& w) {
-      return std::pair{cam.radius_px_at_ground(w.enter_cm) / step, cam.radius_px_at_ground(w.exit_cm) / step};
-    }, out + k * kCrossingsPerRay);
+    crossings_of_runs(
+        k0, k1, min_gap_px, iv,
+        [&cam, step](const WhiteInterval& w) {
+          return std::pair{cam.radius_px_at_ground(w.enter_cm) / step,
+                           cam.radius_px_at_ground(w.exit_cm) / step};
+        },
+        out + k * kCrossingsPerRay);
   }
 }
 

@@ -23,7 +23,8 @@ struct Window {
 // Fills the errors of a window of cells, picks the best, the second distinct minimum and the
 // ambiguity flag. `error_of(cell)` returns the normalised error (kNoError: nothing compared).
 template <class ErrorOf>
-MatchResult search_window(const FeatureDb& db, const Window& w, int rays_used, const MatchOptions& opt, ErrorOf error_of) {
+MatchResult search_window(const FeatureDb& db, const Window& w, int rays_used,
+                          const MatchOptions& opt, ErrorOf error_of) {
   MatchResult r;
   r.rays_used = rays_used;
   if (rays_used == 0) return r;  // nothing seen: error stays kNoError
@@ -83,12 +84,15 @@ MatchResult search_window(const FeatureDb& db, const Window& w, int rays_used, c
   return r;
 }
 
-Window full_window(const FeatureDb& db) { return {0, db.grid.nx - 1, 0, db.grid.ny - 1}; }
+Window full_window(const FeatureDb& db) {
+  return {0, db.grid.nx - 1, 0, db.grid.ny - 1};
+}
 
 /// The grid index nearest to `v_cm`, clamped to [0, n - 1] before the conversion to int (a centre
 /// of 1e300 cm is finite, and converting it unclamped is undefined behaviour).
 int nearest_index(double v_cm, double origin_cm, double step_cm, int n) {
-  const double k = std::clamp(std::round((v_cm - origin_cm) / step_cm), 0.0, static_cast<double>(n - 1));
+  const double k =
+      std::clamp(std::round((v_cm - origin_cm) / step_cm), 0.0, static_cast<double>(n - 1));
   return static_cast<int>(k);
 }
 
@@ -97,12 +101,15 @@ int nearest_index(double v_cm, double origin_cm, double step_cm, int n) {
 void check_db(const FeatureDb& db) {
   const GridSpec& g = db.grid;
   constexpr int kMaxSide = 100000;  // as the file format's limit
-  const bool grid_ok = g.nx >= 1 && g.ny >= 1 && g.nx <= kMaxSide && g.ny <= kMaxSide && std::isfinite(g.x0_cm) &&
-                       std::isfinite(g.y0_cm) && std::isfinite(g.step_cm) && g.step_cm > 0.0 &&
-                       static_cast<std::int64_t>(g.nx) * g.ny <= std::numeric_limits<int>::max() / 2;
-  if (!grid_ok || db.features.size() != static_cast<std::size_t>(g.nx) * static_cast<std::size_t>(g.ny) * kFeatureBytes) {
-    throw std::invalid_argument("matcher: feature database is empty, has a non-finite or non-positive grid, or does "
-                                "not match its grid");
+  const bool grid_ok =
+      g.nx >= 1 && g.ny >= 1 && g.nx <= kMaxSide && g.ny <= kMaxSide && std::isfinite(g.x0_cm) &&
+      std::isfinite(g.y0_cm) && std::isfinite(g.step_cm) && g.step_cm > 0.0 &&
+      static_cast<std::int64_t>(g.nx) * g.ny <= std::numeric_limits<int>::max() / 2;
+  if (!grid_ok || db.features.size() != static_cast<std::size_t>(g.nx) *
+                                            static_cast<std::size_t>(g.ny) * kFeatureBytes) {
+    throw std::invalid_argument(
+        "matcher: feature database is empty, has a non-finite or non-positive grid, or does "
+        "not match its grid");
   }
 }
 
@@ -128,18 +135,21 @@ FieldScan make_field_scan(const Scan& field_frame_scan) {
 MatchResult global_search(const FeatureDb& db, const FieldScan& scan, const MatchOptions& opt) {
   check_db(db);
   const PreparedScan& p = scan.prepared;
-  return search_window(db, full_window(db), p.rays_used, opt, [&](int c) { return match_error(db.cell_features(c), p, opt); });
+  return search_window(db, full_window(db), p.rays_used, opt,
+                       [&](int c) { return match_error(db.cell_features(c), p, opt); });
 }
 
 MatchResult global_search(const FeatureDb& db, const Scan& scan, const MatchOptions& opt) {
   return global_search(db, make_field_scan(scan), opt);
 }
 
-MatchResult global_search_reference(const FeatureDb& db, const Scan& scan, const MatchOptions& opt) {
+MatchResult global_search_reference(const FeatureDb& db, const Scan& scan,
+                                    const MatchOptions& opt) {
   check_db(db);
   const int rays = scan.rays_valid();
   return search_window(db, full_window(db), rays, opt, [&](int c) {
-    if (opt.cost == MatchCost::kPaperSad) return static_cast<double>(sad_reference(db.cell_features(c), scan)) / rays;
+    if (opt.cost == MatchCost::kPaperSad)
+      return static_cast<double>(sad_reference(db.cell_features(c), scan)) / rays;
     const CostTerms t = bounded_cost_reference(db.cell_features(c), scan, opt.crossing_cap_px);
     return t.crossings == 0 ? kNoError : static_cast<double>(t.sum) / t.crossings;
   });
@@ -149,8 +159,8 @@ int local_search_reach_cells(double range_cm, double grid_step_cm) {
   return static_cast<int>(std::floor(range_cm / grid_step_cm + 1e-9));
 }
 
-MatchResult local_search(const FeatureDb& db, const FieldScan& scan, const Eigen::Vector2d& centre, double range_cm,
-                         const MatchOptions& opt) {
+MatchResult local_search(const FeatureDb& db, const FieldScan& scan, const Eigen::Vector2d& centre,
+                         double range_cm, const MatchOptions& opt) {
   check_db(db);
   if (!(range_cm >= 0.0) || !centre.allFinite()) {
     throw std::invalid_argument("local_search: range must be >= 0 cm and the centre finite");
@@ -159,25 +169,28 @@ MatchResult local_search(const FeatureDb& db, const FieldScan& scan, const Eigen
   const int ci = nearest_index(centre.x(), g.x0_cm, g.step_cm, g.nx);
   const int cj = nearest_index(centre.y(), g.y0_cm, g.step_cm, g.ny);
   // A range beyond the grid is the whole grid (and keeps ci + reach within int).
-  const int reach = range_cm >= g.step_cm * std::max(g.nx, g.ny) ? std::max(g.nx, g.ny)
-                                                                  : local_search_reach_cells(range_cm, g.step_cm);
+  const int reach = range_cm >= g.step_cm * std::max(g.nx, g.ny)
+                        ? std::max(g.nx, g.ny)
+                        : local_search_reach_cells(range_cm, g.step_cm);
   const Window w{std::max(0, ci - reach), std::min(g.nx - 1, ci + reach), std::max(0, cj - reach),
                  std::min(g.ny - 1, cj + reach)};
   const PreparedScan& p = scan.prepared;
-  return search_window(db, w, p.rays_used, opt, [&](int c) { return match_error(db.cell_features(c), p, opt); });
+  return search_window(db, w, p.rays_used, opt,
+                       [&](int c) { return match_error(db.cell_features(c), p, opt); });
 }
 
-MatchResult local_search(const FeatureDb& db, const Scan& scan, const Eigen::Vector2d& centre, double range_cm,
-                         const MatchOptions& opt) {
+MatchResult local_search(const FeatureDb& db, const Scan& scan, const Eigen::Vector2d& centre,
+                         double range_cm, const MatchOptions& opt) {
   return local_search(db, make_field_scan(scan), centre, range_cm, opt);
 }
 
-double error_at(const FieldGeometry& field, const CameraModel& camera, const PreparedScan& p, const Eigen::Vector2d& pos,
-                const MatchOptions& opt, double bearing_offset_deg) {
+double error_at(const FieldGeometry& field, const CameraModel& camera, const PreparedScan& p,
+                const Eigen::Vector2d& pos, const MatchOptions& opt, double bearing_offset_deg) {
   if (p.rays_used == 0) return kNoError;
   alignas(32) std::array<std::uint8_t, kFeatureBytes> expected{};
   std::vector<WhiteInterval> scratch;
-  expected_features(field, camera, pos, expected.data(), scratch, ScanParams{}.min_gap_px, bearing_offset_deg);
+  expected_features(field, camera, pos, expected.data(), scratch, ScanParams{}.min_gap_px,
+                    bearing_offset_deg);
   return match_error(expected.data(), p, opt);
 }
 
@@ -194,7 +207,8 @@ double equiangular_offset(double em, double e0, double ep) {
 
 }  // namespace
 
-void interpolate_match(const FeatureDb& db, const FieldScan& scan, MatchResult& r, const MatchOptions& opt) {
+void interpolate_match(const FeatureDb& db, const FieldScan& scan, MatchResult& r,
+                       const MatchOptions& opt) {
   if (r.cell < 0 || r.rays_used == 0) return;
   const PreparedScan& p = scan.prepared;
   const GridSpec& g = db.grid;
@@ -209,16 +223,18 @@ void interpolate_match(const FeatureDb& db, const FieldScan& scan, MatchResult& 
     if (!std::isfinite(em) || !std::isfinite(ep) || !std::isfinite(e0)) return 0.0;
     return equiangular_offset(em, e0, ep);
   };
-  r.position_cm = r.grid_position_cm + g.step_cm * Eigen::Vector2d(offset(err(i - 1, j), err(i + 1, j)),
-                                                                   offset(err(i, j - 1), err(i, j + 1)));
+  r.position_cm =
+      r.grid_position_cm + g.step_cm * Eigen::Vector2d(offset(err(i - 1, j), err(i + 1, j)),
+                                                       offset(err(i, j - 1), err(i, j + 1)));
 }
 
-void interpolate_match(const FeatureDb& db, const Scan& scan, MatchResult& r, const MatchOptions& opt) {
+void interpolate_match(const FeatureDb& db, const Scan& scan, MatchResult& r,
+                       const MatchOptions& opt) {
   interpolate_match(db, make_field_scan(scan), r, opt);
 }
 
-void refine_match_reference(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, MatchResult& r,
-                  const MatchOptions& opt) {
+void refine_match_reference(const FieldGeometry& field, const CameraModel& camera,
+                            const FieldScan& scan, MatchResult& r, const MatchOptions& opt) {
   if (r.cell < 0 || r.rays_used == 0) return;
   // A non-finite start would never compare equal to itself and never stop (a corrupt grid origin
   // did that once); load_feature_db refuses such grids, and this keeps the loop finite regardless.
@@ -226,15 +242,17 @@ void refine_match_reference(const FieldGeometry& field, const CameraModel& camer
   const PreparedScan& p = scan.prepared;
   Eigen::Vector2d pos = r.position_cm;
   int probes = pos == r.grid_position_cm ? 0 : 1;
-  double best = pos == r.grid_position_cm ? r.error : error_at(field, camera, p, pos, opt, scan.bearing_offset_deg);
+  double best = pos == r.grid_position_cm
+                    ? r.error
+                    : error_at(field, camera, p, pos, opt, scan.bearing_offset_deg);
   const Eigen::Vector2d steps[] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
   const double limit = opt.refine_reach_cm;
   // Each move lowers the error strictly and stays within `limit`, so the walk ends; the cap only
   // guards against options that would make it absurdly long (a min step of 1e-300).
   constexpr int kMaxSteps = 10'000;
   int steps_taken = 0;
-  for (double step = opt.refine_start_step_cm; step >= opt.refine_min_step_cm - 1e-9 && steps_taken < kMaxSteps;
-       ++steps_taken) {
+  for (double step = opt.refine_start_step_cm;
+       step >= opt.refine_min_step_cm - 1e-9 && steps_taken < kMaxSteps; ++steps_taken) {
     Eigen::Vector2d best_pos = pos;
     for (const auto& d : steps) {
       const Eigen::Vector2d q = pos + step * d;
@@ -270,8 +288,8 @@ namespace {
 // centre the model is the ray cast itself, bit for bit.
 class LinearisedCaster {
  public:
-  LinearisedCaster(const FieldGeometry& field, const CameraModel& camera, const Eigen::Vector2d& centre_cm,
-                   double bearing_offset_deg)
+  LinearisedCaster(const FieldGeometry& field, const CameraModel& camera,
+                   const Eigen::Vector2d& centre_cm, double bearing_offset_deg)
       : caster_(field), camera_(camera), centre_(centre_cm) {
     k0_ = camera.first_scan_sample();
     k1_ = camera.last_scan_sample();
@@ -280,20 +298,24 @@ class LinearisedCaster {
     t_hi_ = camera.ground_cm_at_radius(k1_ * step_px_);
     std::vector<Run> at_x, at_y;
     for (int k = 0; k < kScanRays; ++k) {
-      dirs_[static_cast<std::size_t>(k)] = {std::cos(deg_to_rad(k + bearing_offset_deg)), std::sin(deg_to_rad(k + bearing_offset_deg))};
+      dirs_[static_cast<std::size_t>(k)] = {std::cos(deg_to_rad(k + bearing_offset_deg)),
+                                            std::sin(deg_to_rad(k + bearing_offset_deg))};
       first_[static_cast<std::size_t>(k)] = static_cast<int>(runs_.size());
       cast(centre_, k, runs_);
       at_x.clear();
       at_y.clear();
       cast(centre_ + Eigen::Vector2d(kStepCm, 0.0), k, at_x);
       cast(centre_ + Eigen::Vector2d(0.0, kStepCm), k, at_y);
-      const std::size_t n = runs_.size() - static_cast<std::size_t>(first_[static_cast<std::size_t>(k)]);
+      const std::size_t n =
+          runs_.size() - static_cast<std::size_t>(first_[static_cast<std::size_t>(k)]);
       exact_[static_cast<std::size_t>(k)] = at_x.size() != n || at_y.size() != n;
       if (exact_[static_cast<std::size_t>(k)]) continue;
       for (std::size_t i = 0; i < n; ++i) {
         Run& r = runs_[static_cast<std::size_t>(first_[static_cast<std::size_t>(k)]) + i];
-        r.enter_g = {(at_x[i].enter_px - r.enter_px) / kStepCm, (at_y[i].enter_px - r.enter_px) / kStepCm};
-        r.exit_g = {(at_x[i].exit_px - r.exit_px) / kStepCm, (at_y[i].exit_px - r.exit_px) / kStepCm};
+        r.enter_g = {(at_x[i].enter_px - r.enter_px) / kStepCm,
+                     (at_y[i].enter_px - r.enter_px) / kStepCm};
+        r.exit_g = {(at_x[i].exit_px - r.exit_px) / kStepCm,
+                    (at_y[i].exit_px - r.exit_px) / kStepCm};
       }
     }
     first_[kScanRays] = static_cast<int>(runs_.size());
@@ -311,7 +333,8 @@ class LinearisedCaster {
   /// offset) and clipped at 3 robust spreads (a spurious crossing within the cap is not noise).
   /// Rays the model does not hold (cast exactly) are left out. nullopt with fewer than
   /// kMinCrossings crossings or a singular H.
-  [[nodiscard]] std::optional<Eigen::Matrix2d> covariance(const Eigen::Vector2d& q, const PreparedScan& scan,
+  [[nodiscard]] std::optional<Eigen::Matrix2d> covariance(const Eigen::Vector2d& q,
+                                                          const PreparedScan& scan,
                                                           int cap_px) const {
     const Eigen::Vector2d d = q - centre_;
     struct Term {
@@ -329,7 +352,8 @@ class LinearisedCaster {
         if (seen == kNoCrossing || seen >= scan.end[slot]) continue;
         double nearest = kNoError;
         Eigen::Vector2d g{0.0, 0.0};
-        for (int i = first_[static_cast<std::size_t>(k)]; i < first_[static_cast<std::size_t>(k) + 1]; ++i) {
+        for (int i = first_[static_cast<std::size_t>(k)];
+             i < first_[static_cast<std::size_t>(k) + 1]; ++i) {
           const Run& r = runs_[static_cast<std::size_t>(i)];
           const double at = r.enter_px + r.enter_g.dot(d);
           if (at < k0_ || at > k1_) continue;  // no entry the scan could see
@@ -343,7 +367,8 @@ class LinearisedCaster {
         h += g * g.transpose();
       }
     }
-    if (static_cast<int>(terms.size()) < kMinCrossings || std::abs(h.determinant()) < 1e-12) return std::nullopt;
+    if (static_cast<int>(terms.size()) < kMinCrossings || std::abs(h.determinant()) < 1e-12)
+      return std::nullopt;
     const auto median = [](std::vector<double> v) {
       const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
       std::nth_element(v.begin(), mid, v.end());
@@ -357,7 +382,8 @@ class LinearisedCaster {
     const double clip = 3.0 * std::max(1.4826 * median(r), 1.0 / std::sqrt(12.0));
     std::array<Eigen::Vector2d, kScanRays / kSectorRays> score;
     score.fill(Eigen::Vector2d::Zero());
-    for (const Term& t : terms) score[static_cast<std::size_t>(t.sector)] += t.g * std::clamp(t.r - centre, -clip, clip);
+    for (const Term& t : terms)
+      score[static_cast<std::size_t>(t.sector)] += t.g * std::clamp(t.r - centre, -clip, clip);
     Eigen::Matrix2d b = Eigen::Matrix2d::Zero();
     int sectors = 0;
     for (const Eigen::Vector2d& s : score) {
@@ -382,12 +408,14 @@ class LinearisedCaster {
         for (const Run& r : scratch_runs_) px_.push_back({r.enter_px, r.exit_px});
       } else {
         px_.clear();
-        for (int i = first_[static_cast<std::size_t>(k)]; i < first_[static_cast<std::size_t>(k) + 1]; ++i) {
+        for (int i = first_[static_cast<std::size_t>(k)];
+             i < first_[static_cast<std::size_t>(k) + 1]; ++i) {
           const Run& r = runs_[static_cast<std::size_t>(i)];
           px_.push_back({r.enter_px + r.enter_g.dot(d), r.exit_px + r.exit_g.dot(d)});
         }
       }
-      crossings_of_runs(k0_, k1_, min_gap, px_, [](const auto& r) { return r; }, o);
+      crossings_of_runs(
+          k0_, k1_, min_gap, px_, [](const auto& r) { return r; }, o);
     }
   }
 
@@ -403,7 +431,8 @@ class LinearisedCaster {
     caster_.intervals(origin, dirs_[static_cast<std::size_t>(k)], t_lo_, t_hi_, iv_);
     for (const auto& w : iv_) {
       Run r;
-      r.enter_px = camera_.radius_px_at_ground(w.enter_cm) / step_px_;  // in samples (line_scan.hpp)
+      r.enter_px =
+          camera_.radius_px_at_ground(w.enter_cm) / step_px_;  // in samples (line_scan.hpp)
       r.exit_px = camera_.radius_px_at_ground(w.exit_cm) / step_px_;
       out.push_back(r);
     }
@@ -428,8 +457,13 @@ class LinearisedCaster {
 // kRecentreCm of its centre, and remembered, since the walk comes back to points it has seen.
 class ProbeErrors {
  public:
-  ProbeErrors(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, const MatchOptions& opt)
-      : field_(field), camera_(camera), scan_(scan.prepared), offset_deg_(scan.bearing_offset_deg), opt_(opt) {}
+  ProbeErrors(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan,
+              const MatchOptions& opt)
+      : field_(field),
+        camera_(camera),
+        scan_(scan.prepared),
+        offset_deg_(scan.bearing_offset_deg),
+        opt_(opt) {}
   double operator()(const Eigen::Vector2d& q) {
     for (const auto& [at, e] : seen_) {
       if ((at - q).cwiseAbs().maxCoeff() < 1e-6) return e;
@@ -481,8 +515,8 @@ void set_covariance(MatchResult& r, const std::optional<Eigen::Matrix2d>& cov, d
 }
 }  // namespace
 
-void refine_match_previous(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, MatchResult& r,
-                           const MatchOptions& opt) {
+void refine_match_previous(const FieldGeometry& field, const CameraModel& camera,
+                           const FieldScan& scan, MatchResult& r, const MatchOptions& opt) {
   if (r.cell < 0 || r.rays_used == 0) return;
   // A non-finite start would never compare equal to itself and never stop (a corrupt grid origin
   // did that once); load_feature_db refuses such grids, and this keeps the loop finite regardless.
@@ -493,14 +527,17 @@ void refine_match_previous(const FieldGeometry& field, const CameraModel& camera
   double best = error_of(pos);  // the linearised caster is centred here: this one is exact
   const double start_error = best;
   const double limit = opt.refine_reach_cm;
-  const auto within = [&](const Eigen::Vector2d& q) { return (q - r.grid_position_cm).cwiseAbs().maxCoeff() <= limit; };
+  const auto within = [&](const Eigen::Vector2d& q) {
+    return (q - r.grid_position_cm).cwiseAbs().maxCoeff() <= limit;
+  };
   // A pattern search as refine_match_reference, except that once the centre is the best of its
   // four neighbours, the V fitted through them along each axis (the shape of the bounded cost
   // near its minimum, as interpolate_match) proposes a point below the step before it halves.
-  constexpr int kMaxSteps = 10'000;  // each move lowers the error strictly; this only bounds absurd options
+  constexpr int kMaxSteps =
+      10'000;  // each move lowers the error strictly; this only bounds absurd options
   int steps_taken = 0;
-  for (double step = opt.refine_start_step_cm; step >= opt.refine_min_step_cm - 1e-9 && steps_taken < kMaxSteps;
-       ++steps_taken) {
+  for (double step = opt.refine_start_step_cm;
+       step >= opt.refine_min_step_cm - 1e-9 && steps_taken < kMaxSteps; ++steps_taken) {
     double e[4];  // +x, -x, +y, -y
     const Eigen::Vector2d dirs[] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
     int best_dir = -1;
@@ -533,7 +570,9 @@ void refine_match_previous(const FieldGeometry& field, const CameraModel& camera
   }
   // The walk ran on the model: the error at its end is cast exactly, and the start kept if that
   // is no better.
-  const double exact = pos == start ? start_error : error_at(field, camera, scan.prepared, pos, opt, scan.bearing_offset_deg);
+  const double exact =
+      pos == start ? start_error
+                   : error_at(field, camera, scan.prepared, pos, opt, scan.bearing_offset_deg);
   r.refine_probes = error_of.probes();
   r.refine_casts = 3 * error_of.linearisations() + (pos == start ? 0 : 1);
   if (exact < start_error) {
@@ -543,17 +582,19 @@ void refine_match_previous(const FieldGeometry& field, const CameraModel& camera
     r.position_cm = start;
     r.refined_error = start_error;
   }
-  set_covariance(r, error_of.caster_at(r.position_cm).covariance(r.position_cm, scan.prepared, opt.crossing_cap_px),
+  set_covariance(r,
+                 error_of.caster_at(r.position_cm)
+                     .covariance(r.position_cm, scan.prepared, opt.crossing_cap_px),
                  opt.refine_min_step_cm);
 }
 
-void refine_match(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan, MatchResult& r,
-                  const MatchOptions& opt) {
+void refine_match(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan,
+                  MatchResult& r, const MatchOptions& opt) {
   refine_match_previous(field, camera, scan, r, opt);
 }
 
-void refine_match(const FieldGeometry& field, const CameraModel& camera, const Scan& scan, MatchResult& r,
-                  const MatchOptions& opt) {
+void refine_match(const FieldGeometry& field, const CameraModel& camera, const Scan& scan,
+                  MatchResult& r, const MatchOptions& opt) {
   refine_match(field, camera, make_field_scan(scan), r, opt);
 }
 
@@ -563,10 +604,11 @@ void apply_refinement(const FeatureDb& db, const FieldGeometry& field, const Cam
   if (opt.refinement == Refinement::kRayCast) refine_match(field, camera, scan, r, opt);
 }
 
-YawEstimate estimate_yaw(const FieldGeometry& field, const CameraModel& camera, const BearingScan& bearings,
-                         const Eigen::Vector2d& position_cm, double yaw_hint_deg, double range_deg,
-                         const MatchOptions& opt) {
-  if (!(range_deg >= 0.0) || range_deg > 180.0) throw std::invalid_argument("estimate_yaw: range must be 0..180 deg");
+YawEstimate estimate_yaw(const FieldGeometry& field, const CameraModel& camera,
+                         const BearingScan& bearings, const Eigen::Vector2d& position_cm,
+                         double yaw_hint_deg, double range_deg, const MatchOptions& opt) {
+  if (!(range_deg >= 0.0) || range_deg > 180.0)
+    throw std::invalid_argument("estimate_yaw: range must be 0..180 deg");
   alignas(32) std::array<std::uint8_t, kFeatureBytes> expected{};
   std::vector<WhiteInterval> scratch;
   expected_features(field, camera, position_cm, expected.data(), scratch);
@@ -576,7 +618,8 @@ YawEstimate estimate_yaw(const FieldGeometry& field, const CameraModel& camera, 
   int best_s = 0;
   for (int s = -steps; s <= steps; ++s) {
     const double yaw = yaw_hint_deg + static_cast<double>(s) / bearings.rays_per_degree;
-    const double e = match_error(expected.data(), prepare_scan(rotate_to_field(bearings, yaw)), opt);
+    const double e =
+        match_error(expected.data(), prepare_scan(rotate_to_field(bearings, yaw)), opt);
     if (!(e < kNoError)) continue;
     errors[static_cast<std::size_t>(s + steps)] = e;
     if (e < best.error) {
@@ -595,8 +638,9 @@ YawEstimate estimate_yaw(const FieldGeometry& field, const CameraModel& camera, 
   return best;
 }
 
-PoseMatch global_search_any_yaw(const FeatureDb& db, const FieldGeometry& field, const CameraModel& camera,
-                                const BearingScan& bearings, double yaw_step_deg, const MatchOptions& opt) {
+PoseMatch global_search_any_yaw(const FeatureDb& db, const FieldGeometry& field,
+                                const CameraModel& camera, const BearingScan& bearings,
+                                double yaw_step_deg, const MatchOptions& opt) {
   if (!(yaw_step_deg >= 0.25) || yaw_step_deg > 45.0) {
     throw std::invalid_argument("global_search_any_yaw: yaw step must be 0.25..45 deg");
   }
@@ -616,7 +660,8 @@ PoseMatch global_search_any_yaw(const FeatureDb& db, const FieldGeometry& field,
     return out;
   }
   // Finer yaw at the best grid point, then the position again at that yaw.
-  const YawEstimate y = estimate_yaw(field, camera, bearings, best.m.grid_position_cm, best.yaw, yaw_step_deg, opt);
+  const YawEstimate y =
+      estimate_yaw(field, camera, bearings, best.m.grid_position_cm, best.yaw, yaw_step_deg, opt);
   const FieldScan scan = make_field_scan(bearings, y.yaw_deg);
   out.match = local_search(db, scan, best.m.grid_position_cm, db.grid.step_cm, opt);
   out.yaw_deg = wrap_deg(y.yaw_deg);
@@ -625,7 +670,9 @@ PoseMatch global_search_any_yaw(const FeatureDb& db, const FieldGeometry& field,
   out.match.second_error = kNoError;
   out.match.ambiguous = false;
   for (const auto& c : per_yaw) {
-    if (c.m.cell < 0 || (c.m.grid_position_cm - out.match.grid_position_cm).norm() < opt.ambiguity_separation_cm) continue;
+    if (c.m.cell < 0 ||
+        (c.m.grid_position_cm - out.match.grid_position_cm).norm() < opt.ambiguity_separation_cm)
+      continue;
     if (c.m.error < out.match.second_error) {
       out.match.second_error = c.m.error;
       out.match.second_position_cm = c.m.grid_position_cm;
@@ -637,12 +684,14 @@ PoseMatch global_search_any_yaw(const FeatureDb& db, const FieldGeometry& field,
   return out;
 }
 
-MatchResult image_to_position(const cv::Mat& bgr, const CameraModel& camera, const FieldGeometry& field,
-                              const FeatureDb& db, double yaw_deg, const Eigen::Vector2d* around_cm, double range_cm,
+MatchResult image_to_position(const cv::Mat& bgr, const CameraModel& camera,
+                              const FieldGeometry& field, const FeatureDb& db, double yaw_deg,
+                              const Eigen::Vector2d* around_cm, double range_cm,
                               const MatchOptions& opt, const ScanParams& scan_params) {
   FieldScan scan = make_field_scan(scan_image(bgr, camera, yaw_deg, scan_params));
   scan.yaw_deg = yaw_deg;
-  MatchResult r = around_cm != nullptr ? local_search(db, scan, *around_cm, range_cm, opt) : global_search(db, scan, opt);
+  MatchResult r = around_cm != nullptr ? local_search(db, scan, *around_cm, range_cm, opt)
+                                       : global_search(db, scan, opt);
   apply_refinement(db, field, camera, scan, r, opt);
   return r;
 }

@@ -1,5 +1,6 @@
-// Match-cost kernels: the paper's SAD and the bounded per-crossing cost. The AVX2 kernel is compiled for AVX2 with a target attribute (the library itself is
-// built for the baseline ISA) and chosen at run time, so the binary still runs on older CPUs.
+// Match-cost kernels: the paper's SAD and the bounded per-crossing cost. The AVX2 kernel is
+// compiled for AVX2 with a target attribute (the library itself is built for the baseline ISA) and
+// chosen at run time, so the binary still runs on older CPUs.
 #include <algorithm>
 #include <cstdlib>
 
@@ -15,9 +16,12 @@ namespace omniloc {
 namespace {
 
 // A database byte at or beyond the ray's end becomes kNoCrossing (unknown, like the scan's).
-inline int clip_to_end(int d, int end) { return d >= end ? int{kNoCrossing} : d; }
+inline int clip_to_end(int d, int end) {
+  return d >= end ? int{kNoCrossing} : d;
+}
 
-std::uint32_t sad_portable(const std::uint8_t* db, const std::uint8_t* obs, const std::uint8_t* end) {
+std::uint32_t sad_portable(const std::uint8_t* db, const std::uint8_t* obs,
+                           const std::uint8_t* end) {
   std::uint32_t sum = 0;
   for (int i = 0; i < kFeatureBytes; ++i) {
     const int d = clip_to_end(db[i], end[i]);
@@ -28,8 +32,9 @@ std::uint32_t sad_portable(const std::uint8_t* db, const std::uint8_t* obs, cons
 }
 
 #ifdef OMNILOC_HAVE_X86
-__attribute__((target("avx2"))) std::uint32_t sad_avx2(const std::uint8_t* db, const std::uint8_t* obs,
-                                                        const std::uint8_t* end) {
+__attribute__((target("avx2"))) std::uint32_t sad_avx2(const std::uint8_t* db,
+                                                       const std::uint8_t* obs,
+                                                       const std::uint8_t* end) {
   static_assert(kFeatureBytes % 32 == 0);
   __m256i acc = _mm256_setzero_si256();
   for (int i = 0; i < kFeatureBytes; i += 32) {
@@ -44,7 +49,8 @@ __attribute__((target("avx2"))) std::uint32_t sad_avx2(const std::uint8_t* db, c
 }
 
 bool cpu_has_avx2() {
-  static const bool has = __builtin_cpu_supports("avx2") != 0;  // CPU feature, fixed for the process
+  static const bool has =
+      __builtin_cpu_supports("avx2") != 0;  // CPU feature, fixed for the process
   return has;
 }
 #endif
@@ -97,16 +103,20 @@ PreparedScan prepare_scan(const Scan& scan) {
 namespace {
 
 // Distance from x (a crossing) to y (a crossing or kNoCrossing): kNoCrossing is never near.
-inline int crossing_distance(int x, int y) { return y == kNoCrossing ? 255 : std::abs(x - y); }
+inline int crossing_distance(int x, int y) {
+  return y == kNoCrossing ? 255 : std::abs(x - y);
+}
 
 // One side of the ray: the cost of each crossing of `a` against the nearest of `b`.
-inline std::uint32_t one_side(const std::uint8_t* a, const std::uint8_t* b, int cap_px, std::uint32_t& crossings) {
+inline std::uint32_t one_side(const std::uint8_t* a, const std::uint8_t* b, int cap_px,
+                              std::uint32_t& crossings) {
   std::uint32_t sum = 0;
   for (int n = 0; n < kCrossingsPerRay; ++n) {
     if (a[n] == kNoCrossing) continue;
     ++crossings;
     int nearest = 255;
-    for (int m = 0; m < kCrossingsPerRay; ++m) nearest = std::min(nearest, crossing_distance(a[n], b[m]));
+    for (int m = 0; m < kCrossingsPerRay; ++m)
+      nearest = std::min(nearest, crossing_distance(a[n], b[m]));
     sum += static_cast<std::uint32_t>(std::min(nearest, cap_px));
   }
   return sum;
@@ -119,28 +129,38 @@ inline CostTerms bounded_ray(const std::uint8_t* d, const std::uint8_t* o, int c
 }
 
 #ifdef OMNILOC_HAVE_X86
-// Byte shuffles that rotate every 4-byte group (one ray) by 1, 2, 3: slot n then holds crossing (n + r) % 4.
+// Byte shuffles that rotate every 4-byte group (one ray) by 1, 2, 3: slot n then holds crossing (n
+// + r) % 4.
 alignas(32) constexpr std::uint8_t kRotate[3][32] = {
-    {1, 2, 3, 0, 5, 6, 7, 4, 9, 10, 11, 8, 13, 14, 15, 12, 1, 2, 3, 0, 5, 6, 7, 4, 9, 10, 11, 8, 13, 14, 15, 12},
-    {2, 3, 0, 1, 6, 7, 4, 5, 10, 11, 8, 9, 14, 15, 12, 13, 2, 3, 0, 1, 6, 7, 4, 5, 10, 11, 8, 9, 14, 15, 12, 13},
-    {3, 0, 1, 2, 7, 4, 5, 6, 11, 8, 9, 10, 15, 12, 13, 14, 3, 0, 1, 2, 7, 4, 5, 6, 11, 8, 9, 10, 15, 12, 13, 14}};
+    {1, 2, 3, 0, 5, 6, 7, 4, 9, 10, 11, 8, 13, 14, 15, 12,
+     1, 2, 3, 0, 5, 6, 7, 4, 9, 10, 11, 8, 13, 14, 15, 12},
+    {2, 3, 0, 1, 6, 7, 4, 5, 10, 11, 8, 9, 14, 15, 12, 13,
+     2, 3, 0, 1, 6, 7, 4, 5, 10, 11, 8, 9, 14, 15, 12, 13},
+    {3, 0, 1, 2, 7, 4, 5, 6, 11, 8, 9, 10, 15, 12, 13, 14,
+     3, 0, 1, 2, 7, 4, 5, 6, 11, 8, 9, 10, 15, 12, 13, 14}};
 
 // Per byte of a: min over the 4 crossings of b on the same ray of the distance, capped; 0 where a
 // has no crossing.
-__attribute__((target("avx2"))) inline __m256i side_avx2(__m256i a, __m256i a_none, __m256i b, __m256i cap) {
+__attribute__((target("avx2"))) inline __m256i side_avx2(__m256i a, __m256i a_none, __m256i b,
+                                                         __m256i cap) {
   const __m256i ones = _mm256_set1_epi8(static_cast<char>(0xFF));
   __m256i nearest = ones;
   for (int r = 0; r < kCrossingsPerRay; ++r) {
-    const __m256i br = r == 0 ? b : _mm256_shuffle_epi8(b, _mm256_load_si256(reinterpret_cast<const __m256i*>(kRotate[r - 1])));
+    const __m256i br =
+        r == 0 ? b
+               : _mm256_shuffle_epi8(
+                     b, _mm256_load_si256(reinterpret_cast<const __m256i*>(kRotate[r - 1])));
     const __m256i diff = _mm256_or_si256(_mm256_subs_epu8(a, br), _mm256_subs_epu8(br, a));
-    const __m256i far = _mm256_or_si256(diff, _mm256_cmpeq_epi8(br, ones));  // no crossing: never near
+    const __m256i far =
+        _mm256_or_si256(diff, _mm256_cmpeq_epi8(br, ones));  // no crossing: never near
     nearest = _mm256_min_epu8(nearest, far);
   }
   return _mm256_andnot_si256(a_none, _mm256_min_epu8(nearest, cap));
 }
 
-__attribute__((target("avx2"))) CostTerms bounded_avx2(const std::uint8_t* db, const std::uint8_t* obs,
-                                                        const std::uint8_t* end, int cap_px) {
+__attribute__((target("avx2"))) CostTerms bounded_avx2(const std::uint8_t* db,
+                                                       const std::uint8_t* obs,
+                                                       const std::uint8_t* end, int cap_px) {
   const __m256i ones = _mm256_set1_epi8(static_cast<char>(0xFF));
   const __m256i cap = _mm256_set1_epi8(static_cast<char>(cap_px));
   __m256i acc = _mm256_setzero_si256();
@@ -149,12 +169,16 @@ __attribute__((target("avx2"))) CostTerms bounded_avx2(const std::uint8_t* db, c
     const __m256i raw = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(db + i));
     const __m256i e = _mm256_load_si256(reinterpret_cast<const __m256i*>(end + i));
     const __m256i o = _mm256_load_si256(reinterpret_cast<const __m256i*>(obs + i));
-    const __m256i d = _mm256_or_si256(raw, _mm256_cmpeq_epi8(_mm256_max_epu8(raw, e), raw));  // clipped at the end
+    const __m256i d = _mm256_or_si256(
+        raw, _mm256_cmpeq_epi8(_mm256_max_epu8(raw, e), raw));  // clipped at the end
     const __m256i d_none = _mm256_cmpeq_epi8(d, ones), o_none = _mm256_cmpeq_epi8(o, ones);
-    const __m256i cost = _mm256_adds_epu8(side_avx2(d, d_none, o, cap), side_avx2(o, o_none, d, cap));
+    const __m256i cost =
+        _mm256_adds_epu8(side_avx2(d, d_none, o, cap), side_avx2(o, o_none, d, cap));
     acc = _mm256_add_epi64(acc, _mm256_sad_epu8(cost, _mm256_setzero_si256()));
-    crossings += static_cast<std::uint32_t>(__builtin_popcount(~static_cast<unsigned>(_mm256_movemask_epi8(d_none)))) +
-                 static_cast<std::uint32_t>(__builtin_popcount(~static_cast<unsigned>(_mm256_movemask_epi8(o_none))));
+    crossings += static_cast<std::uint32_t>(
+                     __builtin_popcount(~static_cast<unsigned>(_mm256_movemask_epi8(d_none)))) +
+                 static_cast<std::uint32_t>(
+                     __builtin_popcount(~static_cast<unsigned>(_mm256_movemask_epi8(o_none))));
   }
   const __m128i s = _mm_add_epi64(_mm256_castsi256_si128(acc), _mm256_extracti128_si256(acc, 1));
   return {static_cast<std::uint32_t>(_mm_cvtsi128_si64(s) + _mm_extract_epi64(s, 1)), crossings};
@@ -171,7 +195,8 @@ CostTerms bounded_cost_reference(const std::uint8_t* db_entry, const Scan& scan,
     for (int n = 0; n < kCrossingsPerRay; ++n) {
       const int i = k * kCrossingsPerRay + n;
       d[n] = static_cast<std::uint8_t>(clip_to_end(db_entry[i], end));
-      o[n] = static_cast<std::uint8_t>(clip_to_end(scan.radii_px[static_cast<std::size_t>(i)], end));
+      o[n] =
+          static_cast<std::uint8_t>(clip_to_end(scan.radii_px[static_cast<std::size_t>(i)], end));
     }
     const CostTerms t = bounded_ray(d, o, cap_px);
     total.sum += t.sum;
@@ -184,7 +209,9 @@ CostTerms bounded_cost_portable(const std::uint8_t* db_entry, const PreparedScan
   CostTerms total;
   for (int i = 0; i < kFeatureBytes; i += kCrossingsPerRay) {
     std::uint8_t d[kCrossingsPerRay];
-    for (int n = 0; n < kCrossingsPerRay; ++n) d[n] = static_cast<std::uint8_t>(clip_to_end(db_entry[i + n], s.end[static_cast<std::size_t>(i + n)]));
+    for (int n = 0; n < kCrossingsPerRay; ++n)
+      d[n] = static_cast<std::uint8_t>(
+          clip_to_end(db_entry[i + n], s.end[static_cast<std::size_t>(i + n)]));
     const CostTerms t = bounded_ray(d, s.radii.data() + i, cap_px);
     total.sum += t.sum;
     total.crossings += t.crossings;
@@ -201,7 +228,8 @@ CostTerms bounded_cost_fast(const std::uint8_t* db_entry, const PreparedScan& s,
 
 double match_error(const std::uint8_t* db_entry, const PreparedScan& s, const MatchOptions& opt) {
   if (s.rays_used == 0) return kNoError;
-  if (opt.cost == MatchCost::kPaperSad) return static_cast<double>(sad_fast(db_entry, s)) / s.rays_used;
+  if (opt.cost == MatchCost::kPaperSad)
+    return static_cast<double>(sad_fast(db_entry, s)) / s.rays_used;
   const CostTerms t = bounded_cost_fast(db_entry, s, opt.crossing_cap_px);
   return t.crossings == 0 ? kNoError : static_cast<double>(t.sum) / t.crossings;
 }

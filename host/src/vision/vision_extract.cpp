@@ -27,16 +27,20 @@ constexpr int kMaxRaysPerDegree = 20;
 inline int hue_of(const std::uint8_t* p, int v, int diff, const int* hdiv) {
   const int b = p[0], g = p[1], r = p[2];
   int h;
-  if (v == r) h = g - b;
-  else if (v == g) h = b - r + 2 * diff;
-  else h = r - g + 4 * diff;
+  if (v == r)
+    h = g - b;
+  else if (v == g)
+    h = b - r + 2 * diff;
+  else
+    h = r - g + 4 * diff;
   h = (h * hdiv[diff] + (1 << 11)) >> 12;
   return h < 0 ? h + 180 : (h >= 180 ? h - 180 : h);
 }
 
 #ifdef OMNILOC_HAVE_X86
 bool cpu_has_avx2() {
-  static const bool has = __builtin_cpu_supports("avx2") != 0;  // CPU feature, fixed for the process
+  static const bool has =
+      __builtin_cpu_supports("avx2") != 0;  // CPU feature, fixed for the process
   return has;
 }
 
@@ -45,11 +49,13 @@ bool cpu_has_avx2() {
 // gets the divisor of 1; it is multiplied by a difference of 0). hsv_divisors_match() checks them
 // against the tables for every value once, before they are used.
 __attribute__((target("avx2"))) inline __m256i sat_div8(__m256i v) {
-  const __m256 q = _mm256_div_ps(_mm256_set1_ps(255.0f * 4096.0f), _mm256_cvtepi32_ps(_mm256_max_epi32(v, _mm256_set1_epi32(1))));
+  const __m256 q = _mm256_div_ps(_mm256_set1_ps(255.0f * 4096.0f),
+                                 _mm256_cvtepi32_ps(_mm256_max_epi32(v, _mm256_set1_epi32(1))));
   return _mm256_cvttps_epi32(_mm256_round_ps(q, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC));
 }
 __attribute__((target("avx2"))) inline __m256i hue_div8(__m256i d) {
-  const __m256 q = _mm256_div_ps(_mm256_set1_ps(30.0f * 4096.0f), _mm256_cvtepi32_ps(_mm256_max_epi32(d, _mm256_set1_epi32(1))));
+  const __m256 q = _mm256_div_ps(_mm256_set1_ps(30.0f * 4096.0f),
+                                 _mm256_cvtepi32_ps(_mm256_max_epi32(d, _mm256_set1_epi32(1))));
   return _mm256_cvttps_epi32(_mm256_round_ps(q, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC));
 }
 __attribute__((target("avx2"))) bool hsv_divisors_match_avx2() {
@@ -57,7 +63,8 @@ __attribute__((target("avx2"))) bool hsv_divisors_match_avx2() {
   const int* hdiv = detail::hsv_tables().hue_div;
   for (int i = 1; i < 256; i += 8) {
     alignas(32) std::int32_t s[8], h[8];
-    const __m256i x = _mm256_add_epi32(_mm256_set1_epi32(i), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+    const __m256i x =
+        _mm256_add_epi32(_mm256_set1_epi32(i), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
     _mm256_store_si256(reinterpret_cast<__m256i*>(s), sat_div8(x));
     _mm256_store_si256(reinterpret_cast<__m256i*>(h), hue_div8(x));
     for (int k = 0; k < 8 && i + k < 256; ++k)
@@ -66,7 +73,8 @@ __attribute__((target("avx2"))) bool hsv_divisors_match_avx2() {
   return true;
 }
 bool hsv_divisors_match() {
-  static const bool match = hsv_divisors_match_avx2();  // a property of the CPU's float division, fixed
+  static const bool match =
+      hsv_divisors_match_avx2();  // a property of the CPU's float division, fixed
   return match;
 }
 
@@ -77,7 +85,8 @@ struct HueRanges {
 bool hue_ranges(const std::array<bool, 180>& ok, HueRanges& out) {
   int n = 0;
   for (int i = 0; i < 180; ++i) {
-    if (!ok[static_cast<std::size_t>(i)] || (i > 0 && ok[static_cast<std::size_t>(i - 1)])) continue;
+    if (!ok[static_cast<std::size_t>(i)] || (i > 0 && ok[static_cast<std::size_t>(i - 1)]))
+      continue;
     if (n == 2) return false;
     int j = i;
     while (j + 1 < 180 && ok[static_cast<std::size_t>(j + 1)]) ++j;
@@ -90,28 +99,33 @@ bool hue_ranges(const std::array<bool, 180>& ok, HueRanges& out) {
 
 // code_pixels' word for 8 pixels at p (24 bytes; 28 are read): V | S << 8 | carpet hue << 16, with
 // OpenCV's integer HSV exactly as the scalar loop.
-__attribute__((target("avx2"))) inline __m256i code8_avx2(const std::uint8_t* p, const HueRanges& hr_ok,
+__attribute__((target("avx2"))) inline __m256i code8_avx2(const std::uint8_t* p,
+                                                          const HueRanges& hr_ok,
                                                           __m256i sat_min_minus_1) {
   const __m256i x = _mm256_inserti128_si256(
       _mm256_castsi128_si256(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p))),
       _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 12)), 1);
   // Each 128-bit half holds 4 pixels (12 bytes): their b, g and r bytes to 32-bit lanes.
-  const __m256i mb = _mm256_setr_epi8(0, -1, -1, -1, 3, -1, -1, -1, 6, -1, -1, -1, 9, -1, -1, -1, 0, -1, -1, -1, 3, -1,
-                                      -1, -1, 6, -1, -1, -1, 9, -1, -1, -1);
-  const __m256i mg = _mm256_setr_epi8(1, -1, -1, -1, 4, -1, -1, -1, 7, -1, -1, -1, 10, -1, -1, -1, 1, -1, -1, -1, 4, -1,
-                                      -1, -1, 7, -1, -1, -1, 10, -1, -1, -1);
-  const __m256i mr = _mm256_setr_epi8(2, -1, -1, -1, 5, -1, -1, -1, 8, -1, -1, -1, 11, -1, -1, -1, 2, -1, -1, -1, 5, -1,
-                                      -1, -1, 8, -1, -1, -1, 11, -1, -1, -1);
-  const __m256i b = _mm256_shuffle_epi8(x, mb), g = _mm256_shuffle_epi8(x, mg), r = _mm256_shuffle_epi8(x, mr);
+  const __m256i mb = _mm256_setr_epi8(0, -1, -1, -1, 3, -1, -1, -1, 6, -1, -1, -1, 9, -1, -1, -1, 0,
+                                      -1, -1, -1, 3, -1, -1, -1, 6, -1, -1, -1, 9, -1, -1, -1);
+  const __m256i mg = _mm256_setr_epi8(1, -1, -1, -1, 4, -1, -1, -1, 7, -1, -1, -1, 10, -1, -1, -1,
+                                      1, -1, -1, -1, 4, -1, -1, -1, 7, -1, -1, -1, 10, -1, -1, -1);
+  const __m256i mr = _mm256_setr_epi8(2, -1, -1, -1, 5, -1, -1, -1, 8, -1, -1, -1, 11, -1, -1, -1,
+                                      2, -1, -1, -1, 5, -1, -1, -1, 8, -1, -1, -1, 11, -1, -1, -1);
+  const __m256i b = _mm256_shuffle_epi8(x, mb), g = _mm256_shuffle_epi8(x, mg),
+                r = _mm256_shuffle_epi8(x, mr);
   const __m256i v = _mm256_max_epi32(_mm256_max_epi32(b, g), r);
   const __m256i diff = _mm256_sub_epi32(v, _mm256_min_epi32(_mm256_min_epi32(b, g), r));
   const __m256i round = _mm256_set1_epi32(1 << 11);
-  const __m256i s = _mm256_srli_epi32(_mm256_add_epi32(_mm256_mullo_epi32(diff, sat_div8(v)), round), 12);
+  const __m256i s =
+      _mm256_srli_epi32(_mm256_add_epi32(_mm256_mullo_epi32(diff, sat_div8(v)), round), 12);
   const __m256i hr = _mm256_sub_epi32(g, b);
   const __m256i hg = _mm256_add_epi32(_mm256_sub_epi32(b, r), _mm256_slli_epi32(diff, 1));
   const __m256i hb = _mm256_add_epi32(_mm256_sub_epi32(r, g), _mm256_slli_epi32(diff, 2));
-  const __m256i h0 = _mm256_blendv_epi8(_mm256_blendv_epi8(hb, hg, _mm256_cmpeq_epi32(v, g)), hr, _mm256_cmpeq_epi32(v, r));
-  __m256i h = _mm256_srai_epi32(_mm256_add_epi32(_mm256_mullo_epi32(h0, hue_div8(diff)), round), 12);
+  const __m256i h0 = _mm256_blendv_epi8(_mm256_blendv_epi8(hb, hg, _mm256_cmpeq_epi32(v, g)), hr,
+                                        _mm256_cmpeq_epi32(v, r));
+  __m256i h =
+      _mm256_srai_epi32(_mm256_add_epi32(_mm256_mullo_epi32(h0, hue_div8(diff)), round), 12);
   const __m256i k180 = _mm256_set1_epi32(180);
   h = _mm256_add_epi32(h, _mm256_and_si256(k180, _mm256_cmpgt_epi32(_mm256_setzero_si256(), h)));
   h = _mm256_sub_epi32(h, _mm256_and_si256(k180, _mm256_cmpgt_epi32(h, _mm256_set1_epi32(179))));
@@ -119,13 +133,16 @@ __attribute__((target("avx2"))) inline __m256i code8_avx2(const std::uint8_t* p,
                                        _mm256_cmpgt_epi32(_mm256_set1_epi32(hr_ok.hi[0] + 1), h));
   const __m256i in1 = _mm256_and_si256(_mm256_cmpgt_epi32(h, _mm256_set1_epi32(hr_ok.lo[1] - 1)),
                                        _mm256_cmpgt_epi32(_mm256_set1_epi32(hr_ok.hi[1] + 1), h));
-  const __m256i flag = _mm256_and_si256(_mm256_or_si256(in0, in1), _mm256_cmpgt_epi32(s, sat_min_minus_1));
-  return _mm256_or_si256(_mm256_or_si256(v, _mm256_slli_epi32(s, 8)), _mm256_srli_epi32(_mm256_slli_epi32(flag, 31), 15));
+  const __m256i flag =
+      _mm256_and_si256(_mm256_or_si256(in0, in1), _mm256_cmpgt_epi32(s, sat_min_minus_1));
+  return _mm256_or_si256(_mm256_or_si256(v, _mm256_slli_epi32(s, 8)),
+                         _mm256_srli_epi32(_mm256_slli_epi32(flag, 31), 15));
 }
 
 // The rows of code_pixels_avx2: [row_u0, row_u1] of each row, 8 pixels at a time, the rest scalar.
-__attribute__((target("avx2"))) void code_rows_avx2(const cv::Mat& bgr, const std::int32_t* row_u0, const std::int32_t* row_u1,
-                                                    std::uint32_t* code, const HueRanges& hue_ok, int sat_min) {
+__attribute__((target("avx2"))) void code_rows_avx2(const cv::Mat& bgr, const std::int32_t* row_u0,
+                                                    const std::int32_t* row_u1, std::uint32_t* code,
+                                                    const HueRanges& hue_ok, int sat_min) {
   const int* sdiv = detail::hsv_tables().sat_div;
   const int* hdiv = detail::hsv_tables().hue_div;
   const __m256i sat_min_minus_1 = _mm256_set1_epi32(sat_min - 1);
@@ -137,15 +154,18 @@ __attribute__((target("avx2"))) void code_rows_avx2(const cv::Mat& bgr, const st
     std::uint32_t* out = code + static_cast<std::size_t>(row) * static_cast<std::size_t>(bgr.cols);
     int u = u0;
     for (; u + 7 <= u1 && p + 28 <= data_end; u += 8, p += 24) {
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + u), code8_avx2(p, hue_ok, sat_min_minus_1));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + u),
+                          code8_avx2(p, hue_ok, sat_min_minus_1));
     }
     for (; u <= u1; ++u, p += 3) {
       const int v = std::max({p[0], p[1], p[2]});
       const int diff = v - std::min({p[0], p[1], p[2]});
       const int s = (diff * sdiv[v] + (1 << 11)) >> 12;
       const int h = hue_of(p, v, diff, hdiv);
-      const bool carpet_hue = s >= sat_min && ((h >= hue_ok.lo[0] && h <= hue_ok.hi[0]) || (h >= hue_ok.lo[1] && h <= hue_ok.hi[1]));
-      out[u] = static_cast<std::uint32_t>(v) | static_cast<std::uint32_t>(s) << 8 | static_cast<std::uint32_t>(carpet_hue) << 16;
+      const bool carpet_hue = s >= sat_min && ((h >= hue_ok.lo[0] && h <= hue_ok.hi[0]) ||
+                                               (h >= hue_ok.lo[1] && h <= hue_ok.hi[1]));
+      out[u] = static_cast<std::uint32_t>(v) | static_cast<std::uint32_t>(s) << 8 |
+               static_cast<std::uint32_t>(carpet_hue) << 16;
     }
   }
 }
@@ -173,7 +193,8 @@ struct LockLanes {
   alignas(32) std::int32_t bins[8], vref[8], sref[8], vmin[8], vmax[8];
   // Out: bins walked (up to and including the one that ended the ray), the step that ended it
   // (-1: none), its carpet bins and their sums of V and S, and whether the carpet resumed behind
-  // the end (walk_fast's look behind: carpet_resume_px carpet bins in a row within resume_within_px).
+  // the end (walk_fast's look behind: carpet_resume_px carpet bins in a row within
+  // resume_within_px).
   alignas(32) std::int32_t walked[8], end_step[8], carpet[8], sum_v[8], sum_s[8], resumed[8];
 };
 
@@ -187,38 +208,48 @@ __attribute__((target("avx2"))) inline void store8(std::int32_t* p, __m256i x) {
 // Eight words by eight scalar loads: faster here than the gather instruction (which costs about
 // as much as 16 loads on the machines measured, docs/VISION.md).
 __attribute__((target("avx2"))) inline __m256i gather8(const int* base, const std::int32_t* at) {
-  return _mm256_setr_epi32(base[at[0]], base[at[1]], base[at[2]], base[at[3]], base[at[4]], base[at[5]], base[at[6]],
-                           base[at[7]]);
+  return _mm256_setr_epi32(base[at[0]], base[at[1]], base[at[2]], base[at[3]], base[at[4]],
+                           base[at[5]], base[at[6]], base[at[7]]);
 }
 
 // Returns the steps walked (every lane has ended or run out of bins after them).
-__attribute__((target("avx2"))) int walk_group_avx2(const std::uint32_t* code, const std::int32_t* pixel0,
-                                                    const std::int32_t* pixel1, int steps, const LockConsts& k,
-                                                    LockLanes& ln, std::uint32_t* rec, std::uint32_t* hist,
+__attribute__((target("avx2"))) int walk_group_avx2(const std::uint32_t* code,
+                                                    const std::int32_t* pixel0,
+                                                    const std::int32_t* pixel1, int steps,
+                                                    const LockConsts& k, LockLanes& ln,
+                                                    std::uint32_t* rec, std::uint32_t* hist,
                                                     std::uint32_t* line_bits) {
   const auto* code_i = reinterpret_cast<const int*>(code);
   const __m256i bins = load8(ln.bins);
   const __m256i one = _mm256_set1_epi32(1), m255 = _mm256_set1_epi32(255);
   __m256i vref = load8(ln.vref), sref = load8(ln.sref);
-  const __m256i vmin_m1 = _mm256_sub_epi32(load8(ln.vmin), one), vmax_p1 = _mm256_add_epi32(load8(ln.vmax), one);
-  const __m256i vstep = _mm256_set1_epi32(k.val_step_q + 255), sstep = _mm256_set1_epi32(k.sat_step_q);
+  const __m256i vmin_m1 = _mm256_sub_epi32(load8(ln.vmin), one),
+                vmax_p1 = _mm256_add_epi32(load8(ln.vmax), one);
+  const __m256i vstep = _mm256_set1_epi32(k.val_step_q + 255),
+                sstep = _mm256_set1_epi32(k.sat_step_q);
   // v >= v_line_min <=> v > vl, s <= s_line_max <=> sl > s.
   __m256i vl = _mm256_sub_epi32(_mm256_srai_epi32(_mm256_add_epi32(vref, vstep), 8), one);
   __m256i sl = _mm256_add_epi32(_mm256_srai_epi32(_mm256_sub_epi32(sref, sstep), 8), one);
   const __m256i flag_min = _mm256_set1_epi32(0xffff);
   const __m256i end_run_m1 = _mm256_set1_epi32(k.end_run_px - 1);
-  const __m256i c32 = _mm256_set1_epi32(32), c128 = _mm256_set1_epi32(128), not63 = _mm256_set1_epi32(~63);
+  const __m256i c32 = _mm256_set1_epi32(32), c128 = _mm256_set1_epi32(128),
+                not63 = _mm256_set1_epi32(~63);
   // One "none" slot per lane: back-to-back increments of one counter would wait on each other.
-  const __m256i none_lane = _mm256_setr_epi32(kHistNone, kHistNone + 1, kHistNone + 2, kHistNone + 3, kHistNone + 4,
-                                              kHistNone + 5, kHistNone + 6, kHistNone + 7);
+  const __m256i none_lane =
+      _mm256_setr_epi32(kHistNone, kHistNone + 1, kHistNone + 2, kHistNone + 3, kHistNone + 4,
+                        kHistNone + 5, kHistNone + 6, kHistNone + 7);
   const __m256i wide_bit = _mm256_set1_epi32(static_cast<int>(kHistWide | 255u | (255u << 12)));
   const __m128i shift = _mm_cvtsi32_si128(k.alpha_shift >= 0 ? k.alpha_shift : 0);
   const __m256i alpha = _mm256_set1_epi32(k.alpha_q);
-  __m256i alive = _mm256_set1_epi32(-1), other_run = _mm256_setzero_si256(), walked = _mm256_setzero_si256();
+  __m256i alive = _mm256_set1_epi32(-1), other_run = _mm256_setzero_si256(),
+          walked = _mm256_setzero_si256();
   __m256i end_step = _mm256_set1_epi32(-1), ncarpet = _mm256_setzero_si256();
-  __m256i sum_v = _mm256_setzero_si256(), sum_s = _mm256_setzero_si256(), bits = _mm256_setzero_si256();
-  // Behind an end: lanes looking for the carpet up to their last step to look at, the run of carpet bins.
-  __m256i looking = _mm256_setzero_si256(), look_last = _mm256_setzero_si256(), resume = _mm256_setzero_si256();
+  __m256i sum_v = _mm256_setzero_si256(), sum_s = _mm256_setzero_si256(),
+          bits = _mm256_setzero_si256();
+  // Behind an end: lanes looking for the carpet up to their last step to look at, the run of carpet
+  // bins.
+  __m256i looking = _mm256_setzero_si256(), look_last = _mm256_setzero_si256(),
+          resume = _mm256_setzero_si256();
   __m256i resumed = _mm256_setzero_si256();
   const __m256i resume_m1 = _mm256_set1_epi32(k.carpet_resume_px - 1);
   const __m256i look_reach = _mm256_set1_epi32(k.resume_within_px - k.end_run_px);
@@ -231,38 +262,51 @@ __attribute__((target("avx2"))) int walk_group_avx2(const std::uint32_t* code, c
     if (_mm256_testz_si256(_mm256_or_si256(act, look), _mm256_or_si256(act, look))) break;
     const __m256i c0 = gather8(code_i, pixel0 + 8 * s), c1 = gather8(code_i, pixel1 + 8 * s);
     const __m256i v0 = _mm256_and_si256(c0, m255), v1 = _mm256_and_si256(c1, m255);
-    const __m256i s0 = _mm256_and_si256(_mm256_srli_epi32(c0, 8), m255), s1 = _mm256_and_si256(_mm256_srli_epi32(c1, 8), m255);
+    const __m256i s0 = _mm256_and_si256(_mm256_srli_epi32(c0, 8), m255),
+                  s1 = _mm256_and_si256(_mm256_srli_epi32(c1, 8), m255);
     const __m256i line0 = _mm256_and_si256(_mm256_cmpgt_epi32(v0, vl), _mm256_cmpgt_epi32(sl, s0));
     const __m256i line1 = _mm256_and_si256(_mm256_cmpgt_epi32(v1, vl), _mm256_cmpgt_epi32(sl, s1));
     const __m256i any_line = _mm256_or_si256(line0, line1);
     // A pixel of the carpet's colour (cp: and not line).
-    const __m256i raw0 = _mm256_and_si256(_mm256_and_si256(_mm256_cmpgt_epi32(c0, flag_min), _mm256_cmpgt_epi32(v0, vmin_m1)),
-                                          _mm256_cmpgt_epi32(vmax_p1, v0));
-    const __m256i raw1 = _mm256_and_si256(_mm256_and_si256(_mm256_cmpgt_epi32(c1, flag_min), _mm256_cmpgt_epi32(v1, vmin_m1)),
-                                          _mm256_cmpgt_epi32(vmax_p1, v1));
+    const __m256i raw0 = _mm256_and_si256(
+        _mm256_and_si256(_mm256_cmpgt_epi32(c0, flag_min), _mm256_cmpgt_epi32(v0, vmin_m1)),
+        _mm256_cmpgt_epi32(vmax_p1, v0));
+    const __m256i raw1 = _mm256_and_si256(
+        _mm256_and_si256(_mm256_cmpgt_epi32(c1, flag_min), _mm256_cmpgt_epi32(v1, vmin_m1)),
+        _mm256_cmpgt_epi32(vmax_p1, v1));
     const __m256i cp0 = _mm256_andnot_si256(line0, raw0), cp1 = _mm256_andnot_si256(line1, raw1);
     // Looking behind an end: any pixel of the carpet's colour makes the bin carpet.
-    resume = _mm256_blendv_epi8(resume, _mm256_and_si256(_mm256_add_epi32(resume, one), _mm256_or_si256(raw0, raw1)), look);
+    resume = _mm256_blendv_epi8(
+        resume, _mm256_and_si256(_mm256_add_epi32(resume, one), _mm256_or_si256(raw0, raw1)), look);
     const __m256i found = _mm256_and_si256(look, _mm256_cmpgt_epi32(resume, resume_m1));
     resumed = _mm256_or_si256(resumed, found);
-    looking = _mm256_and_si256(_mm256_andnot_si256(found, looking), _mm256_cmpgt_epi32(look_last, sv));
+    looking =
+        _mm256_and_si256(_mm256_andnot_si256(found, looking), _mm256_cmpgt_epi32(look_last, sv));
     const __m256i any_cp = _mm256_or_si256(cp0, cp1);
     const __m256i line = _mm256_and_si256(any_line, act);
     const __m256i carpet = _mm256_andnot_si256(any_line, _mm256_and_si256(any_cp, act));
     const __m256i other = _mm256_andnot_si256(_mm256_or_si256(any_line, any_cp), act);
     const __m256i bv = _mm256_blendv_epi8(v0, v1, cp1), bs = _mm256_blendv_epi8(s0, s1, cp1);
-    const __m256i dv = _mm256_sub_epi32(_mm256_slli_epi32(bv, 8), vref), ds = _mm256_sub_epi32(_mm256_slli_epi32(bs, 8), sref);
+    const __m256i dv = _mm256_sub_epi32(_mm256_slli_epi32(bv, 8), vref),
+                  ds = _mm256_sub_epi32(_mm256_slli_epi32(bs, 8), sref);
     // The bin as seen, before the means move.
-    const __m256i line_v = _mm256_and_si256(line, _mm256_max_epi32(_mm256_and_si256(line0, v0), _mm256_and_si256(line1, v1)));
-    const __m256i r = _mm256_or_si256(_mm256_or_si256(_mm256_max_epi32(v0, v1), _mm256_slli_epi32(line_v, 8)), _mm256_slli_epi32(vref, 16));
+    const __m256i line_v = _mm256_and_si256(
+        line, _mm256_max_epi32(_mm256_and_si256(line0, v0), _mm256_and_si256(line1, v1)));
+    const __m256i r =
+        _mm256_or_si256(_mm256_or_si256(_mm256_max_epi32(v0, v1), _mm256_slli_epi32(line_v, 8)),
+                        _mm256_slli_epi32(vref, 16));
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(rec + 8 * s), r);
-    const __m256i dvr = _mm256_srai_epi32(_mm256_add_epi32(dv, c128), 8), dsr = _mm256_srai_epi32(_mm256_add_epi32(ds, c128), 8);
+    const __m256i dvr = _mm256_srai_epi32(_mm256_add_epi32(dv, c128), 8),
+                  dsr = _mm256_srai_epi32(_mm256_add_epi32(ds, c128), 8);
     const __m256i dv32 = _mm256_add_epi32(dvr, c32), ds32 = _mm256_add_epi32(dsr, c32);
-    const __m256i narrow_ok = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_or_si256(dv32, ds32), not63), _mm256_setzero_si256());
+    const __m256i narrow_ok = _mm256_cmpeq_epi32(
+        _mm256_and_si256(_mm256_or_si256(dv32, ds32), not63), _mm256_setzero_si256());
     const __m256i narrow = _mm256_or_si256(_mm256_slli_epi32(dv32, 6), ds32);
     // kHistWide | (dv + 255) | (ds + 255) << 12: dv + 255 and ds + 255 lie in 0..510.
-    const __m256i wide = _mm256_add_epi32(wide_bit, _mm256_add_epi32(dvr, _mm256_slli_epi32(dsr, 12)));
-    const __m256i h = _mm256_blendv_epi8(none_lane, _mm256_blendv_epi8(wide, narrow, narrow_ok), carpet);
+    const __m256i wide =
+        _mm256_add_epi32(wide_bit, _mm256_add_epi32(dvr, _mm256_slli_epi32(dsr, 12)));
+    const __m256i h =
+        _mm256_blendv_epi8(none_lane, _mm256_blendv_epi8(wide, narrow, narrow_ok), carpet);
     if (k.histogram) _mm256_storeu_si256(reinterpret_cast<__m256i*>(hist + 8 * s), h);
     __m256i step_v, step_s;
     if (k.alpha_shift >= 0) {
@@ -284,18 +328,20 @@ __attribute__((target("avx2"))) int walk_group_avx2(const std::uint32_t* code, c
     const __m256i ended = _mm256_and_si256(other, _mm256_cmpgt_epi32(other_run, end_run_m1));
     end_step = _mm256_blendv_epi8(end_step, sv, ended);
     alive = _mm256_andnot_si256(ended, alive);
-    // The look behind covers the steps after this one up to min(bins - 2, end + resume_within_px - 1)
-    // (a bin counts once its successor is reached within resume_within_px, as walk_fast).
+    // The look behind covers the steps after this one up to min(bins - 2, end + resume_within_px -
+    // 1) (a bin counts once its successor is reached within resume_within_px, as walk_fast).
     const __m256i last = _mm256_min_epi32(bins_m2, _mm256_add_epi32(sv, look_reach));
     look_last = _mm256_blendv_epi8(look_last, last, ended);
     looking = _mm256_or_si256(looking, _mm256_and_si256(ended, _mm256_cmpgt_epi32(last, sv)));
-    bits = _mm256_or_si256(bits, _mm256_and_si256(line, _mm256_set1_epi32(static_cast<int>(1u << (s & 31)))));
+    bits = _mm256_or_si256(
+        bits, _mm256_and_si256(line, _mm256_set1_epi32(static_cast<int>(1u << (s & 31)))));
     if ((s & 31) == 31) {
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(line_bits + 8 * (s >> 5)), bits);
       bits = _mm256_setzero_si256();
     }
   }
-  if ((s & 31) != 0) _mm256_storeu_si256(reinterpret_cast<__m256i*>(line_bits + 8 * (s >> 5)), bits);
+  if ((s & 31) != 0)
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(line_bits + 8 * (s >> 5)), bits);
   store8(ln.walked, walked);
   store8(ln.end_step, end_step);
   store8(ln.carpet, ncarpet);
@@ -309,7 +355,9 @@ __attribute__((target("avx2"))) int walk_group_avx2(const std::uint32_t* code, c
 // The carpet's deviation histograms (which estimate the line steps) are taken from one ray per
 // degree: 90 000 carpet bins or so on a frame are as good a sample as 360 000, and at 4 rays per
 // degree their counting was a fifth of the extraction's time (bench_frame_path).
-inline bool histogram_ray(int j, int rays) { return j % std::max(1, rays / kScanRays) == 0; }
+inline bool histogram_ray(int j, int rays) {
+  return j % std::max(1, rays / kScanRays) == 0;
+}
 
 // Robust sigma (1.4826 MAD) of a histogram of integer deviations offset by 255.
 double hist_sigma(const std::array<int, 511>& h) {
@@ -326,7 +374,8 @@ double hist_sigma(const std::array<int, 511>& h) {
   };
   const int med = quantile_bin(h, n);
   std::array<int, 511> dev{};
-  for (int i = 0; i < 511; ++i) dev[static_cast<std::size_t>(std::abs(i - med))] += h[static_cast<std::size_t>(i)];
+  for (int i = 0; i < 511; ++i)
+    dev[static_cast<std::size_t>(std::abs(i - med))] += h[static_cast<std::size_t>(i)];
   return 1.4826 * quantile_bin(dev, n);
 }
 
@@ -356,7 +405,8 @@ struct WhiteRun {
       peak = 0;
       floor = static_cast<float>(vref_q) / 256.0f;
     }
-    if (n < static_cast<int>(v.size())) v[static_cast<std::size_t>(n++)] = static_cast<std::uint8_t>(line_v);
+    if (n < static_cast<int>(v.size()))
+      v[static_cast<std::size_t>(n++)] = static_cast<std::uint8_t>(line_v);
     peak = std::max(peak, line_v);
   }
   // Closes an open run, writing its crossing to out[found++] when it counts.
@@ -372,13 +422,15 @@ struct WhiteRun {
     }
     int k = 0;
     while (k + 1 < n && static_cast<float>(v[static_cast<std::size_t>(k)]) < half) ++k;
-    out[found++] = static_cast<std::uint8_t>(start + k - (edge_in_bin_before(k, half, k0, min_gap) ? 1 : 0));
+    out[found++] =
+        static_cast<std::uint8_t>(start + k - (edge_in_bin_before(k, half, k0, min_gap) ? 1 : 0));
   }
   // The database's crossing is the first integer at or beyond the edge (expected_features). Bin b
   // holds the pixel centres in (b - 1, b], so the first bin at the edge level can lie one beyond
   // it: the edge is placed where the level crosses `half`, linearly between the two bins' pixel
   // centres (RayTable::bin_centre), and the crossing is the bin before when the edge is at or below
-  // its upper end (the first bin alone put crossings 0.27 px outward on average on rendered frames).
+  // its upper end (the first bin alone put crossings 0.27 px outward on average on rendered
+  // frames).
   [[nodiscard]] bool edge_in_bin_before(int k, float half, int k0, int min_gap) const {
     const int b = start + k;
     if (centre == nullptr || b - 1 < centre_first || b - centre_first >= centre_count) return false;
@@ -386,7 +438,8 @@ struct WhiteRun {
     // A clipped peak (over-exposed white) is not the line's level: half of it comes early.
     if (peak >= kClippedV) return false;
     const float vk = static_cast<float>(v[static_cast<std::size_t>(k)]);
-    const float vp = k > 0 ? static_cast<float>(v[static_cast<std::size_t>(k - 1)]) : (before_v > 0 ? static_cast<float>(before_v) : floor);
+    const float vp = k > 0 ? static_cast<float>(v[static_cast<std::size_t>(k - 1)])
+                           : (before_v > 0 ? static_cast<float>(before_v) : floor);
     if (!(vk >= half && vp < half && vk > vp)) return false;
     const float cp = centre[b - 1 - centre_first], ck = centre[b - centre_first];
     const float edge = cp + (half - vp) / (vk - vp) * (ck - cp);
@@ -417,8 +470,9 @@ std::uint8_t* start_ray(bool hidden, int j, BearingScan& scan, ExtractionReport&
 // A walked ray's outcome: where it ends (its first "other" bin of the end run, end < 0: none),
 // whether that is an obstacle (the carpet resumes behind it) or the carpet's end, and its crossings
 // below the end (the end is exclusive).
-void finish_ray(int end, bool carpet_resumes, int carpet_bins, int k0, const ExtractionParams& x, std::uint8_t* out,
-                std::uint8_t& ray_end, std::uint8_t& carpet_end, ExtractionReport& rep) {
+void finish_ray(int end, bool carpet_resumes, int carpet_bins, int k0, const ExtractionParams& x,
+                std::uint8_t* out, std::uint8_t& ray_end, std::uint8_t& carpet_end,
+                ExtractionReport& rep) {
   if (carpet_bins >= x.carpet_resume_px) ++rep.rays_seen;
   if (end < 0) {
     ray_end = kRayToViewEnd;
@@ -498,7 +552,8 @@ const LineExtractor::RayTable& LineExtractor::table(int rpd, std::size_t step_by
       if (u < 0 || v < 0 || u >= width_px_ || v >= height_px_) return;
       const double along = ((u - cx_) * du + (v - cy_) * dv) / step_px_;
       // The sample convention of the database (expected_features): a crossing at the first integer
-      // radius at or beyond the line's edge, so a pixel counts at the integer at or above its centre.
+      // radius at or beyond the line's edge, so a pixel counts at the integer at or above its
+      // centre.
       const int bin = static_cast<int>(std::ceil(along - 1e-9));
       if (bin < k0_ || bin > k1_) return;
       t.offset.push_back(static_cast<std::int32_t>(v * static_cast<long>(step_bytes) + 3L * u));
@@ -509,13 +564,17 @@ const LineExtractor::RayTable& LineExtractor::table(int rpd, std::size_t step_by
       t.row_u1[static_cast<std::size_t>(v)] = std::max(t.row_u1[static_cast<std::size_t>(v)], u);
     };
     for (double r = k0_ * step_px_ - 0.5; r <= k1_ * step_px_ + 0.5; r += 0.05) {
-      const int u = static_cast<int>(std::floor(cx_ + r * du + 0.5)), v = static_cast<int>(std::floor(cy_ + r * dv + 0.5));
+      const int u = static_cast<int>(std::floor(cx_ + r * du + 0.5)),
+                v = static_cast<int>(std::floor(cy_ + r * dv + 0.5));
       if (u == pu && v == pv) continue;
       if (pu >= 0 && u != pu && v != pv) {
         // Diagonal step: the corner pixel whose centre is nearer the ray line.
-        const double da = std::abs((u - cx_) * dv - (pv - cy_) * du), db = std::abs((pu - cx_) * dv - (v - cy_) * du);
-        if (da <= db) emit(u, pv);
-        else emit(pu, v);
+        const double da = std::abs((u - cx_) * dv - (pv - cy_) * du),
+                     db = std::abs((pu - cx_) * dv - (v - cy_) * du);
+        if (da <= db)
+          emit(u, pv);
+        else
+          emit(pu, v);
       }
       emit(u, v);
       pu = u;
@@ -537,14 +596,17 @@ void LineExtractor::bin_layout(RayTable& t, int n) const {
   t.bin_begin.assign(1, 0);
   t.first_bin.assign(static_cast<std::size_t>(n), 0);
   for (int j = 0; j < n && t.bins_ok; ++j) {
-    const std::int32_t i0 = t.begin[static_cast<std::size_t>(j)], i1 = t.begin[static_cast<std::size_t>(j) + 1];
+    const std::int32_t i0 = t.begin[static_cast<std::size_t>(j)],
+                       i1 = t.begin[static_cast<std::size_t>(j) + 1];
     if (i0 < i1) t.first_bin[static_cast<std::size_t>(j)] = t.bin[static_cast<std::size_t>(i0)];
     for (std::int32_t i = i0; i < i1;) {
       const auto k = static_cast<std::size_t>(i);
       const bool pair = i + 1 < i1 && t.bin[k + 1] == t.bin[k];
       const int next = i + (pair ? 2 : 1);
-      if (next < i1 && t.bin[static_cast<std::size_t>(next)] != t.bin[k] + 1) t.bins_ok = false;  // three in a bin or a gap
-      if (pair && std::abs(t.pixel[k + 1] - t.pixel[k]) > 32767) t.bins_ok = false;  // a row wider than int16
+      if (next < i1 && t.bin[static_cast<std::size_t>(next)] != t.bin[k] + 1)
+        t.bins_ok = false;  // three in a bin or a gap
+      if (pair && std::abs(t.pixel[k + 1] - t.pixel[k]) > 32767)
+        t.bins_ok = false;  // a row wider than int16
       t.bin_pixel.push_back(t.pixel[k]);
       t.bin_second.push_back(static_cast<std::int16_t>(pair ? t.pixel[k + 1] - t.pixel[k] : 0));
       t.bin_centre.push_back(pair ? std::max(t.along[k], t.along[k + 1]) : t.along[k]);
@@ -561,7 +623,9 @@ void LineExtractor::bin_layout(RayTable& t, int n) const {
     int steps = 0;
     for (std::size_t l = 0; l < 8; ++l) {
       const int j = g + l < rays.size() ? rays[g + l] : -1;
-      const int bins = j < 0 ? 0 : t.bin_begin[static_cast<std::size_t>(j) + 1] - t.bin_begin[static_cast<std::size_t>(j)];
+      const int bins = j < 0 ? 0
+                             : t.bin_begin[static_cast<std::size_t>(j) + 1] -
+                                   t.bin_begin[static_cast<std::size_t>(j)];
       t.lock_ray.push_back(j);
       t.lock_bins.push_back(bins);
       steps = std::max(steps, bins);
@@ -571,7 +635,8 @@ void LineExtractor::bin_layout(RayTable& t, int n) const {
         const std::size_t lane = g + l;
         std::int32_t p0 = 0, p1 = 0;
         if (lane < rays.size() && st < t.lock_bins[lane]) {
-          const auto k = static_cast<std::size_t>(t.bin_begin[static_cast<std::size_t>(rays[lane])] + st);
+          const auto k =
+              static_cast<std::size_t>(t.bin_begin[static_cast<std::size_t>(rays[lane])] + st);
           p0 = t.bin_pixel[k];
           p1 = p0 + t.bin_second[k];
         }
@@ -595,7 +660,8 @@ bool LineExtractor::ensure_carpet(const cv::Mat& bgr, std::string* why) {
   const auto c = estimate_carpet_colour(bgr, search, why);
   if (!c) return false;
   if (!(c->median_val >= 1.0)) {  // the light follows the carpet's brightness: a black one has none
-    *why = "no carpet: the floor around the robot is black (median brightness " + std::to_string(c->median_val) + ")";
+    *why = "no carpet: the floor around the robot is black (median brightness " +
+           std::to_string(c->median_val) + ")";
     return false;
   }
   // A line is brighter than the carpet by at least min_val_step: a carpet at the sensor's top (the
@@ -612,9 +678,11 @@ bool LineExtractor::ensure_carpet(const cv::Mat& bgr, std::string* why) {
 }
 
 // The walk of every ray, whatever gives each pixel's values: px(i, vmin, vmax, v, s) sets table
-// entry i's V and S and says whether it has the carpet's colour within the value window [vmin, vmax].
+// entry i's V and S and says whether it has the carpet's colour within the value window [vmin,
+// vmax].
 template <class Pixel>
-void LineExtractor::walk_rays(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr, Pixel px) const {
+void LineExtractor::walk_rays(const RayTable& t, BearingScan& scan, ExtractionReport& rep,
+                              Frame& fr, Pixel px) const {
   const ExtractionParams& x = vision_.extraction;
   const int min_gap = ScanParams{}.min_gap_px;  // the database's gap rule (expected_features)
   const int alpha_q = std::max(1, static_cast<int>(std::lround(256.0 / x.carpet_mean_px)));
@@ -626,7 +694,8 @@ void LineExtractor::walk_rays(const RayTable& t, BearingScan& scan, ExtractionRe
     if (out == nullptr) continue;
     const bool sampled = histogram_ray(j, n);
     const int sec = t.sector[static_cast<std::size_t>(j)];
-    const int vmin = fr.vmin[static_cast<std::size_t>(sec)], vmax = fr.vmax[static_cast<std::size_t>(sec)];
+    const int vmin = fr.vmin[static_cast<std::size_t>(sec)],
+              vmax = fr.vmax[static_cast<std::size_t>(sec)];
     // Running carpet means in 8-bit fixed point (Q8): integer arithmetic on every carpet bin.
     int vref_q = static_cast<int>(std::lround(256.0 * sector_val_[static_cast<std::size_t>(sec)]));
     int sref_q = static_cast<int>(std::lround(256.0 * sector_sat_[static_cast<std::size_t>(sec)]));
@@ -642,11 +711,13 @@ void LineExtractor::walk_rays(const RayTable& t, BearingScan& scan, ExtractionRe
     int bin = -1;
     bool b_line = false, b_carpet = false;
     int b_v = 0, b_s = 0, b_line_v = 0, b_any_v = 0;
-    int prev_bin = -1, prev_v = 0;  // the last closed bin that was not line, and its brightest pixel
+    int prev_bin = -1,
+        prev_v = 0;  // the last closed bin that was not line, and its brightest pixel
     WhiteRun run;
     run.on_ray(t, j);
     const auto edge_fraction = static_cast<float>(x.edge_fraction);
-    // One bin decided: crossing (line entry after the gap), carpet (updates the running mean), or other.
+    // One bin decided: crossing (line entry after the gap), carpet (updates the running mean), or
+    // other.
     auto close_bin = [&]() {
       ++bins_seen;
       if (b_line) {
@@ -728,14 +799,17 @@ void LineExtractor::walk_rays(const RayTable& t, BearingScan& scan, ExtractionRe
         cur_carpet = px(i, vmin, vmax, v, s) || cur_carpet;
       }
     }
-    finish_ray(end, resume >= x.carpet_resume_px, carpet_bins, k0_, x, out, scan.ray_end_px[static_cast<std::size_t>(j)],
+    finish_ray(end, resume >= x.carpet_resume_px, carpet_bins, k0_, x, out,
+               scan.ray_end_px[static_cast<std::size_t>(j)],
                rep.carpet_end_px[static_cast<std::size_t>(j)], rep);
   }
-  rep.carpet_fraction = bins_seen > 0 ? static_cast<double>(bins_carpet) / static_cast<double>(bins_seen) : 0.0;
+  rep.carpet_fraction =
+      bins_seen > 0 ? static_cast<double>(bins_carpet) / static_cast<double>(bins_seen) : 0.0;
 }
 
 // Reference: every pixel converted from BGR on every ray that touches it (OpenCV's integer HSV).
-void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const {
+void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& scan,
+                         ExtractionReport& rep, Frame& fr) const {
   const int* sdiv = detail::hsv_tables().sat_div;
   const int* hdiv = detail::hsv_tables().hue_div;
   const int sat_min = fr.sat_min;
@@ -744,26 +818,32 @@ void LineExtractor::walk(const cv::Mat& bgr, const RayTable& t, BearingScan& sca
     v = std::max({p[0], p[1], p[2]});
     const int diff = v - std::min({p[0], p[1], p[2]});
     s = (diff * sdiv[v] + (1 << 11)) >> 12;
-    return s >= sat_min && v >= vmin && v <= vmax && hue_ok_[static_cast<std::size_t>(hue_of(p, v, diff, hdiv))];
+    return s >= sat_min && v >= vmin && v <= vmax &&
+           hue_ok_[static_cast<std::size_t>(hue_of(p, v, diff, hdiv))];
   });
 }
 
 // Each pixel any ray touches, converted once per frame into code_ (rows in memory order): near the
-// centre several rays share a pixel, and the walk then reads one word instead of three bytes and a hue.
+// centre several rays share a pixel, and the walk then reads one word instead of three bytes and a
+// hue.
 void LineExtractor::code_pixels(const cv::Mat& bgr, const RayTable& t, int sat_min) {
   const int* sdiv = detail::hsv_tables().sat_div;
   const int* hdiv = detail::hsv_tables().hue_div;
   code_.resize(static_cast<std::size_t>(width_px_) * static_cast<std::size_t>(height_px_));
   for (int row = 0; row < height_px_; ++row) {
-    const int u0 = t.row_u0[static_cast<std::size_t>(row)], u1 = t.row_u1[static_cast<std::size_t>(row)];
+    const int u0 = t.row_u0[static_cast<std::size_t>(row)],
+              u1 = t.row_u1[static_cast<std::size_t>(row)];
     const std::uint8_t* p = bgr.ptr<std::uint8_t>(row) + 3 * u0;
-    std::uint32_t* out = code_.data() + static_cast<std::size_t>(row) * static_cast<std::size_t>(width_px_);
+    std::uint32_t* out =
+        code_.data() + static_cast<std::size_t>(row) * static_cast<std::size_t>(width_px_);
     for (int u = u0; u <= u1; ++u, p += 3) {
       const int v = std::max({p[0], p[1], p[2]});
       const int diff = v - std::min({p[0], p[1], p[2]});
       const int s = (diff * sdiv[v] + (1 << 11)) >> 12;
-      const bool carpet_hue = s >= sat_min && hue_ok_[static_cast<std::size_t>(hue_of(p, v, diff, hdiv))];
-      out[u] = static_cast<std::uint32_t>(v) | static_cast<std::uint32_t>(s) << 8 | static_cast<std::uint32_t>(carpet_hue) << 16;
+      const bool carpet_hue =
+          s >= sat_min && hue_ok_[static_cast<std::size_t>(hue_of(p, v, diff, hdiv))];
+      out[u] = static_cast<std::uint32_t>(v) | static_cast<std::uint32_t>(s) << 8 |
+               static_cast<std::uint32_t>(carpet_hue) << 16;
     }
   }
 }
@@ -789,15 +869,19 @@ bool LineExtractor::code_pixels_avx2(const cv::Mat& bgr, const RayTable& t, int 
 // walk_fast's decisions for 8 rays at a time (walk_group_avx2), then per ray the white runs from
 // the line bins it recorded, the look behind an end and finish_ray as in walk_fast. False (nothing
 // walked) without AVX2 or when a sector's carpet level does not fit the record's 16 bits.
-bool LineExtractor::walk_lockstep(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const {
+bool LineExtractor::walk_lockstep(const RayTable& t, BearingScan& scan, ExtractionReport& rep,
+                                  Frame& fr) const {
 #ifdef OMNILOC_HAVE_X86
   const ExtractionParams& x = vision_.extraction;
-  if (!cpu_has_avx2() || t.lock_begin.size() < 2 || x.carpet_resume_px < 1 || x.resume_within_px < 1) return false;
+  if (!cpu_has_avx2() || t.lock_begin.size() < 2 || x.carpet_resume_px < 1 ||
+      x.resume_within_px < 1)
+    return false;
   const std::size_t sectors = sector_val_.size();
   std::vector<std::int32_t> vref0(sectors), sref0(sectors);
   for (std::size_t k = 0; k < sectors; ++k) {
     const long v = std::lround(256.0 * sector_val_[k]), sat = std::lround(256.0 * sector_sat_[k]);
-    if (v < 0 || v > 65535 || sat < -65535 || sat > 65535) return false;  // the mean stays within [0, max(start, 255 * 256)]
+    if (v < 0 || v > 65535 || sat < -65535 || sat > 65535)
+      return false;  // the mean stays within [0, max(start, 255 * 256)]
     vref0[k] = static_cast<std::int32_t>(v);
     sref0[k] = static_cast<std::int32_t>(sat);
   }
@@ -819,7 +903,8 @@ bool LineExtractor::walk_lockstep(const RayTable& t, BearingScan& scan, Extracti
     if (t.hidden[static_cast<std::size_t>(j)]) (void)start_ray(true, j, scan, rep);
   const std::size_t groups = t.lock_begin.size() - 1;
   int max_steps = 0;
-  for (std::size_t g = 0; g < groups; ++g) max_steps = std::max(max_steps, t.lock_begin[g + 1] - t.lock_begin[g]);
+  for (std::size_t g = 0; g < groups; ++g)
+    max_steps = std::max(max_steps, t.lock_begin[g + 1] - t.lock_begin[g]);
   const auto words = static_cast<std::size_t>(8 * (max_steps + 32));
   std::vector<std::uint32_t> rec(words), hist(words), line_bits(words / 32 + 8);
   // The narrow histogram in a copy per lane (neighbouring rays deviate alike at the same step, and
@@ -831,7 +916,8 @@ bool LineExtractor::walk_lockstep(const RayTable& t, BearingScan& scan, Extracti
   for (std::size_t g = 0; g < groups; ++g) {
     for (std::size_t l = 0; l < 8; ++l) {
       const int j = t.lock_ray[8 * g + l];
-      const auto sec = j < 0 ? std::size_t{0} : static_cast<std::size_t>(t.sector[static_cast<std::size_t>(j)]);
+      const auto sec =
+          j < 0 ? std::size_t{0} : static_cast<std::size_t>(t.sector[static_cast<std::size_t>(j)]);
       ln.bins[l] = t.lock_bins[8 * g + l];
       ln.vref[l] = vref0[sec];
       ln.sref[l] = sref0[sec];
@@ -839,9 +925,10 @@ bool LineExtractor::walk_lockstep(const RayTable& t, BearingScan& scan, Extracti
       ln.vmax[l] = fr.vmax[sec];
     }
     const std::int32_t first = t.lock_begin[g], steps = t.lock_begin[g + 1] - first;
-    const int ran = walk_group_avx2(code, t.lock_pixel0.data() + 8 * static_cast<std::size_t>(first),
-                                    t.lock_pixel1.data() + 8 * static_cast<std::size_t>(first), steps, kc, ln, rec.data(),
-                                    hist.data(), line_bits.data());
+    const int ran =
+        walk_group_avx2(code, t.lock_pixel0.data() + 8 * static_cast<std::size_t>(first),
+                        t.lock_pixel1.data() + 8 * static_cast<std::size_t>(first), steps, kc, ln,
+                        rec.data(), hist.data(), line_bits.data());
     for (std::size_t l = 0; kc.histogram && l < 8; ++l) {
       const int j = t.lock_ray[8 * g + l];
       if (j < 0 || !histogram_ray(j, n)) continue;
@@ -871,8 +958,10 @@ bool LineExtractor::walk_lockstep(const RayTable& t, BearingScan& scan, Extracti
           const int line_v = static_cast<int>((r >> 8) & 255u), vref_q = static_cast<int>(r >> 16);
           if (run.open && st != last + 1) run.finish(out, found, edge_fraction, k0, min_gap);
           if (!run.open) {
-            const int prev_v = st > 0 ? static_cast<int>(rec[8 * static_cast<std::size_t>(st - 1) + l] & 255u) : 0;
-            run.add(first_bin + st, line_v, st - last - 1, min_gap, st > 0 ? first_bin + st - 1 : -1, prev_v, vref_q);
+            const int prev_v =
+                st > 0 ? static_cast<int>(rec[8 * static_cast<std::size_t>(st - 1) + l] & 255u) : 0;
+            run.add(first_bin + st, line_v, st - last - 1, min_gap,
+                    st > 0 ? first_bin + st - 1 : -1, prev_v, vref_q);
           } else {
             run.add(first_bin + st, line_v, 0, min_gap, -1, 0, vref_q);
           }
@@ -887,7 +976,8 @@ bool LineExtractor::walk_lockstep(const RayTable& t, BearingScan& scan, Extracti
       fr.sum_s[sec] += static_cast<double>(ln.sum_s[l]);
       fr.count[sec] += ln.carpet[l];
       const int end = ln.end_step[l] >= 0 ? first_bin + ln.end_step[l] - x.end_run_px + 1 : -1;
-      finish_ray(end, ln.resumed[l] != 0, ln.carpet[l], k0, x, out, scan.ray_end_px[static_cast<std::size_t>(j)],
+      finish_ray(end, ln.resumed[l] != 0, ln.carpet[l], k0, x, out,
+                 scan.ray_end_px[static_cast<std::size_t>(j)],
                  rep.carpet_end_px[static_cast<std::size_t>(j)], rep);
     }
   }
@@ -900,7 +990,8 @@ bool LineExtractor::walk_lockstep(const RayTable& t, BearingScan& scan, Extracti
       fr.dev_s[static_cast<std::size_t>(b - 32 + 255)] += c;
     }
   }
-  rep.carpet_fraction = bins_seen > 0 ? static_cast<double>(bins_carpet) / static_cast<double>(bins_seen) : 0.0;
+  rep.carpet_fraction =
+      bins_seen > 0 ? static_cast<double>(bins_carpet) / static_cast<double>(bins_seen) : 0.0;
   return true;
 #else
   (void)t;
@@ -913,7 +1004,8 @@ bool LineExtractor::walk_lockstep(const RayTable& t, BearingScan& scan, Extracti
 
 // As walk_rays, bin by bin: both pixels of a bin read and combined without branches, the same
 // decisions in the same order (WhiteRun, the look behind an end and finish_ray as in walk_rays).
-void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionReport& rep, Frame& fr) const {
+void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionReport& rep,
+                              Frame& fr) const {
   const ExtractionParams& x = vision_.extraction;
   const std::uint32_t* code = code_.data();
   const int min_gap = ScanParams{}.min_gap_px;
@@ -929,7 +1021,9 @@ void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionRe
   int alpha_shift = -1;
   for (int a = 0; a <= 8; ++a)
     if (alpha_q == 1 << a) alpha_shift = 8 - a;
-  auto step_mean = [alpha_q, alpha_shift](int d_q) { return alpha_shift >= 0 ? d_q >> alpha_shift : (d_q * alpha_q) >> 8; };
+  auto step_mean = [alpha_q, alpha_shift](int d_q) {
+    return alpha_shift >= 0 ? d_q >> alpha_shift : (d_q * alpha_q) >> 8;
+  };
   // Read once: the histograms' int stores could alias the parameters' ints, forcing reloads.
   const int end_run_px = x.end_run_px, k0 = k0_;
   const float edge_fraction = static_cast<float>(x.edge_fraction);
@@ -938,7 +1032,8 @@ void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionRe
     if (out == nullptr) continue;
     const bool sampled = histogram_ray(j, n);
     const int sec = t.sector[static_cast<std::size_t>(j)];
-    const int vmin = fr.vmin[static_cast<std::size_t>(sec)], vmax = fr.vmax[static_cast<std::size_t>(sec)];
+    const int vmin = fr.vmin[static_cast<std::size_t>(sec)],
+              vmax = fr.vmax[static_cast<std::size_t>(sec)];
     int vref_q = static_cast<int>(std::lround(256.0 * sector_val_[static_cast<std::size_t>(sec)]));
     int sref_q = static_cast<int>(std::lround(256.0 * sector_sat_[static_cast<std::size_t>(sec)]));
     long ray_sum_v = 0, ray_sum_s = 0, ray_count = 0;
@@ -947,7 +1042,8 @@ void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionRe
     int prev_bin = -1, prev_v = 0;
     WhiteRun run;
     run.on_ray(t, j);
-    const std::int32_t b0 = t.bin_begin[static_cast<std::size_t>(j)], b1 = t.bin_begin[static_cast<std::size_t>(j) + 1];
+    const std::int32_t b0 = t.bin_begin[static_cast<std::size_t>(j)],
+                       b1 = t.bin_begin[static_cast<std::size_t>(j) + 1];
     const int first_bin = t.first_bin[static_cast<std::size_t>(j)];
     const std::int32_t* bp = t.bin_pixel.data();
     const std::int16_t* bs = t.bin_second.data();
@@ -957,12 +1053,14 @@ void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionRe
       const std::uint32_t c0 = code[bp[k]], c1 = code[bp[k] + bs[k]];
       const int v0 = static_cast<int>(c0 & 255u), s0 = static_cast<int>((c0 >> 8) & 255u);
       const int v1 = static_cast<int>(c1 & 255u), s1 = static_cast<int>((c1 >> 8) & 255u);
-      const bool line0 = v0 >= v_line_min && s0 <= s_line_max, line1 = v1 >= v_line_min && s1 <= s_line_max;
+      const bool line0 = v0 >= v_line_min && s0 <= s_line_max,
+                 line1 = v1 >= v_line_min && s1 <= s_line_max;
       const bool carpet1 = !line1 && (c1 >> 16) != 0 && v1 >= vmin && v1 <= vmax;
       const bool carpet0 = !line0 && (c0 >> 16) != 0 && v0 >= vmin && v0 <= vmax;
       ++bins_seen;
       if (line0 || line1) {
-        run.add(bin, std::max(line0 ? v0 : 0, line1 ? v1 : 0), gap, min_gap, prev_bin, prev_v, vref_q);
+        run.add(bin, std::max(line0 ? v0 : 0, line1 ? v1 : 0), gap, min_gap, prev_bin, prev_v,
+                vref_q);
         gap = 0;
         other_run = 0;
         continue;
@@ -1000,7 +1098,8 @@ void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionRe
     fr.sum_s[static_cast<std::size_t>(sec)] += static_cast<double>(ray_sum_s);
     fr.count[static_cast<std::size_t>(sec)] += ray_count;
     // Behind the end: a bin counts once the next one is reached within resume_within_px (as the
-    // per-pixel walk commits a bin at its successor's first pixel); any carpet pixel makes it carpet.
+    // per-pixel walk commits a bin at its successor's first pixel); any carpet pixel makes it
+    // carpet.
     int resume = 0;
     if (end >= 0) {
       const int look_to = end + x.resume_within_px;
@@ -1008,18 +1107,21 @@ void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionRe
         if (first_bin + (k + 1 - b0) > look_to) break;
         const std::uint32_t c0 = code[bp[k]], c1 = code[bp[k] + bs[k]];
         const int v0 = static_cast<int>(c0 & 255u), v1 = static_cast<int>(c1 & 255u);
-        const bool carpet = ((c0 >> 16) != 0 && v0 >= vmin && v0 <= vmax) || ((c1 >> 16) != 0 && v1 >= vmin && v1 <= vmax);
+        const bool carpet = ((c0 >> 16) != 0 && v0 >= vmin && v0 <= vmax) ||
+                            ((c1 >> 16) != 0 && v1 >= vmin && v1 <= vmax);
         resume = carpet ? resume + 1 : 0;
       }
     }
-    finish_ray(end, resume >= x.carpet_resume_px, carpet_bins, k0, x, out, scan.ray_end_px[static_cast<std::size_t>(j)],
+    finish_ray(end, resume >= x.carpet_resume_px, carpet_bins, k0, x, out,
+               scan.ray_end_px[static_cast<std::size_t>(j)],
                rep.carpet_end_px[static_cast<std::size_t>(j)], rep);
   }
   for (std::size_t b = 0; b < 511; ++b) {
     fr.dev_v[b] += hist_v[0][b] + hist_v[1][b] + hist_v[2][b] + hist_v[3][b];
     fr.dev_s[b] += hist_s[0][b] + hist_s[1][b] + hist_s[2][b] + hist_s[3][b];
   }
-  rep.carpet_fraction = bins_seen > 0 ? static_cast<double>(bins_carpet) / static_cast<double>(bins_seen) : 0.0;
+  rep.carpet_fraction =
+      bins_seen > 0 ? static_cast<double>(bins_carpet) / static_cast<double>(bins_seen) : 0.0;
 }
 
 // Follows the light: each sector's carpet level moves light_follow of the way to this frame's mean
@@ -1028,14 +1130,15 @@ void LineExtractor::adapt(const Frame& fr) {
   const ExtractionParams& x = vision_.extraction;
   for (std::size_t k = 0; k < sector_val_.size(); ++k) {
     if (fr.count[k] == 0) continue;
-    const double v = fr.sum_v[k] / static_cast<double>(fr.count[k]), s = fr.sum_s[k] / static_cast<double>(fr.count[k]);
-    sector_val_[k] = std::clamp(sector_val_[k] + x.light_follow * (v - sector_val_[k]), ref_val_ / x.light_range,
-                                ref_val_ * x.light_range);
+    const double v = fr.sum_v[k] / static_cast<double>(fr.count[k]),
+                 s = fr.sum_s[k] / static_cast<double>(fr.count[k]);
+    sector_val_[k] = std::clamp(sector_val_[k] + x.light_follow * (v - sector_val_[k]),
+                                ref_val_ / x.light_range, ref_val_ * x.light_range);
     sector_sat_[k] += x.light_follow * (s - sector_sat_[k]);
   }
   if (!vision_.line_contrast) {
     LineContrast seen{std::max(x.val_sigmas * hist_sigma(fr.dev_v), x.min_val_step),
-                            std::max(x.sat_sigmas * hist_sigma(fr.dev_s), x.min_sat_step)};
+                      std::max(x.sat_sigmas * hist_sigma(fr.dev_s), x.min_sat_step)};
     // A grey carpet's saturation is noise: its lines are told by brightness alone.
     if (carpet_ && is_grey_carpet(carpet_->hue_half_width)) seen.sat_step = 0.0;
     if (!contrast_) {
@@ -1061,11 +1164,15 @@ void LineExtractor::mark_tall_obstacles(const BearingScan& scan, ExtractionRepor
   for (int j = 0; j < n; ++j) {
     std::uint8_t& ce = rep.carpet_end_px[static_cast<std::size_t>(j)];
     const int e = scan.ray_end_px[static_cast<std::size_t>(j)];
-    if (e == kRayHidden || e == kRayToViewEnd || ce == 255) continue;  // hidden, open or already an obstacle
+    if (e == kRayHidden || e == kRayToViewEnd || ce == 255)
+      continue;  // hidden, open or already an obstacle
     around.clear();
-    for (int d = -w; d <= w; d += scan.rays_per_degree)  // one ray per degree is enough for a median
-      if (scan.ray_end_px[static_cast<std::size_t>(((j + d) % n + n) % n)] != kRayHidden) around.push_back(reach(j + d));
-    std::nth_element(around.begin(), around.begin() + static_cast<std::ptrdiff_t>(around.size() / 2), around.end());
+    for (int d = -w; d <= w;
+         d += scan.rays_per_degree)  // one ray per degree is enough for a median
+      if (scan.ray_end_px[static_cast<std::size_t>(((j + d) % n + n) % n)] != kRayHidden)
+        around.push_back(reach(j + d));
+    std::nth_element(around.begin(),
+                     around.begin() + static_cast<std::ptrdiff_t>(around.size() / 2), around.end());
     if (e + x.obstacle_step_px <= around[around.size() / 2]) {
       ce = 255;
       --rep.rays_ended_at_carpet_edge;
@@ -1123,11 +1230,13 @@ BearingScan LineExtractor::extract(const cv::Mat& bgr, int rpd, ExtractionReport
   return extract_impl(bgr, rpd, report, Walk::kFast);
 }
 
-BearingScan LineExtractor::extract_reference(const cv::Mat& bgr, int rpd, ExtractionReport* report) {
+BearingScan LineExtractor::extract_reference(const cv::Mat& bgr, int rpd,
+                                             ExtractionReport* report) {
   return extract_impl(bgr, rpd, report, Walk::kReference);
 }
 
-BearingScan LineExtractor::extract_with(Walk how, const cv::Mat& bgr, int rpd, ExtractionReport* report) {
+BearingScan LineExtractor::extract_with(Walk how, const cv::Mat& bgr, int rpd,
+                                        ExtractionReport* report) {
   return extract_impl(bgr, rpd, report, how);
 }
 
@@ -1139,7 +1248,8 @@ BearingScan LineExtractor::extract_with(Walk how, const cv::Mat& bgr, int rpd, E
 // line never updates that reference. When even that finds too little carpet (the light jumped
 // beyond what the window follows), an estimated carpet is estimated again from this frame. A carpet
 // estimated from a frame that gives nothing usable is not kept: the next frame estimates again.
-BearingScan LineExtractor::extract_impl(const cv::Mat& bgr, int rpd, ExtractionReport* report, Walk how) {
+BearingScan LineExtractor::extract_impl(const cv::Mat& bgr, int rpd, ExtractionReport* report,
+                                        Walk how) {
   ExtractionReport local;
   ExtractionReport& rep = report != nullptr ? *report : local;
   const bool followed = !sector_val_.empty();
@@ -1169,15 +1279,21 @@ BearingScan LineExtractor::extract_impl(const cv::Mat& bgr, int rpd, ExtractionR
   return scan;
 }
 
-BearingScan LineExtractor::extract_once(const cv::Mat& bgr, int rpd, ExtractionReport* report, Walk how) {
+BearingScan LineExtractor::extract_once(const cv::Mat& bgr, int rpd, ExtractionReport* report,
+                                        Walk how) {
   const bool fast = how != Walk::kReference;
   if (bgr.empty()) throw std::invalid_argument("extract: empty image");
-  if (bgr.type() != CV_8UC3) throw std::invalid_argument("extract: image must be 8-bit BGR (CV_8UC3), got type " + std::to_string(bgr.type()));
+  if (bgr.type() != CV_8UC3)
+    throw std::invalid_argument("extract: image must be 8-bit BGR (CV_8UC3), got type " +
+                                std::to_string(bgr.type()));
   if (bgr.cols != width_px_ || bgr.rows != height_px_) {
-    throw std::invalid_argument("extract: image is " + std::to_string(bgr.cols) + " x " + std::to_string(bgr.rows) +
-                                " but the camera model expects " + std::to_string(width_px_) + " x " + std::to_string(height_px_));
+    throw std::invalid_argument("extract: image is " + std::to_string(bgr.cols) + " x " +
+                                std::to_string(bgr.rows) + " but the camera model expects " +
+                                std::to_string(width_px_) + " x " + std::to_string(height_px_));
   }
-  if (rpd < 1 || rpd > kMaxRaysPerDegree) throw std::invalid_argument("extract: rays_per_degree must be 1..20, got " + std::to_string(rpd));
+  if (rpd < 1 || rpd > kMaxRaysPerDegree)
+    throw std::invalid_argument("extract: rays_per_degree must be 1..20, got " +
+                                std::to_string(rpd));
   ExtractionReport local;
   ExtractionReport& rep = report != nullptr ? *report : local;
   rep = ExtractionReport{};
@@ -1207,13 +1323,17 @@ BearingScan LineExtractor::extract_once(const cv::Mat& bgr, int rpd, ExtractionR
   // cheaper). With AVX2 it always pays: the plane converts 8 pixels at a time and the lockstep walk
   // needs it (2 rays per degree, 1280 x 1024: 1.0 ms with it, 1.8 ms without, bench_frame_path).
   long plane_px = 0;
-  for (std::size_t row = 0; row < t.row_u0.size(); ++row) plane_px += std::max(0, t.row_u1[row] - t.row_u0[row] + 1);
-  const bool coded = fast && t.bins_ok && (static_cast<long>(t.pixel.size()) >= plane_px || (how == Walk::kFast && cpu_has_avx2()));
+  for (std::size_t row = 0; row < t.row_u0.size(); ++row)
+    plane_px += std::max(0, t.row_u1[row] - t.row_u0[row] + 1);
+  const bool coded =
+      fast && t.bins_ok &&
+      (static_cast<long>(t.pixel.size()) >= plane_px || (how == Walk::kFast && cpu_has_avx2()));
   if (coded) {
     const int sat_min = static_cast<int>(std::ceil(carpet_->sat_min));
     if (how == Walk::kBinWalk || !code_pixels_avx2(bgr, t, sat_min)) code_pixels(bgr, t, sat_min);
   }
-  // The first frame is walked twice: once to measure the light and the carpet's spread, then with them.
+  // The first frame is walked twice: once to measure the light and the carpet's spread, then with
+  // them.
   for (int pass = first ? 0 : 1; pass < 2; ++pass) {
     Frame fr;
     fr.vmin.resize(sectors);
@@ -1249,12 +1369,15 @@ BearingScan LineExtractor::extract_once(const cv::Mat& bgr, int rpd, ExtractionR
     }
   }
   rep.carpet = *carpet_;
-  if (fast) mark_tall_obstacles_fast(scan, rep);
-  else mark_tall_obstacles(scan, rep);
+  if (fast)
+    mark_tall_obstacles_fast(scan, rep);
+  else
+    mark_tall_obstacles(scan, rep);
   // Obstacle blobs: neighbouring rays ended on the carpet at similar radii.
   for (int j = 0; j < n; ++j) {
     const auto e = scan.ray_end_px[static_cast<std::size_t>(j)];
-    const bool obstacle = e != kRayHidden && e != kRayToViewEnd && rep.carpet_end_px[static_cast<std::size_t>(j)] == 255;
+    const bool obstacle = e != kRayHidden && e != kRayToViewEnd &&
+                          rep.carpet_end_px[static_cast<std::size_t>(j)] == 255;
     if (!obstacle) continue;
     if (!rep.obstacles.empty()) {
       ObstacleBlob& b = rep.obstacles.back();
@@ -1268,23 +1391,29 @@ BearingScan LineExtractor::extract_once(const cv::Mat& bgr, int rpd, ExtractionR
     }
     rep.obstacles.push_back({j, j, static_cast<int>(e)});
   }
-  if (rep.obstacles.size() > 1 && rep.obstacles.back().last_ray == n - 1 && rep.obstacles.front().first_ray == 0) {
+  if (rep.obstacles.size() > 1 && rep.obstacles.back().last_ray == n - 1 &&
+      rep.obstacles.front().first_ray == 0) {
     rep.obstacles.front().first_ray = rep.obstacles.back().first_ray;  // wraps through ray 0
-    rep.obstacles.front().near_radius_px = std::min(rep.obstacles.front().near_radius_px, rep.obstacles.back().near_radius_px);
+    rep.obstacles.front().near_radius_px =
+        std::min(rep.obstacles.front().near_radius_px, rep.obstacles.back().near_radius_px);
     rep.obstacles.pop_back();
   }
   const int total = n - static_cast<int>(std::count(t.hidden.begin(), t.hidden.end(), true));
   if (rep.carpet_fraction < x.min_carpet_fraction) {
-    rep.reason = "no carpet: " + std::to_string(static_cast<int>(std::lround(100 * rep.carpet_fraction))) +
-                 " % of the view is carpet (at least " + std::to_string(static_cast<int>(std::lround(100 * x.min_carpet_fraction))) + " % needed)";
+    rep.reason =
+        "no carpet: " + std::to_string(static_cast<int>(std::lround(100 * rep.carpet_fraction))) +
+        " % of the view is carpet (at least " +
+        std::to_string(static_cast<int>(std::lround(100 * x.min_carpet_fraction))) + " % needed)";
     if (rep.carpet_estimated) {
       carpet_.reset();  // estimated from something else: estimate again on the next frame
       sector_val_.clear();
     }
   } else if (rep.rays_seen < x.min_rays_seen * total) {
-    rep.reason = "too few rays see the carpet: " + std::to_string(rep.rays_seen) + " of " + std::to_string(total);
+    rep.reason = "too few rays see the carpet: " + std::to_string(rep.rays_seen) + " of " +
+                 std::to_string(total);
   } else if (rep.crossings < x.min_crossings) {
-    rep.reason = "too few line crossings: " + std::to_string(rep.crossings) + " (at least " + std::to_string(x.min_crossings) + ")";
+    rep.reason = "too few line crossings: " + std::to_string(rep.crossings) + " (at least " +
+                 std::to_string(x.min_crossings) + ")";
   }
   rep.usable = rep.reason.empty();
   return scan;

@@ -51,14 +51,22 @@ const KeyTable<ExtractionParams>& extraction_keys() {
   using config::key;
   using E = ExtractionParams;
   static const KeyTable<E> t = {
-      key("end_run_px", &E::end_run_px), key("carpet_resume_px", &E::carpet_resume_px),
+      key("end_run_px", &E::end_run_px),
+      key("carpet_resume_px", &E::carpet_resume_px),
       key("resume_within_px", &E::resume_within_px),
-      key("obstacle_window_deg", &E::obstacle_window_deg), key("obstacle_step_px", &E::obstacle_step_px),
-      key("edge_fraction", &E::edge_fraction), key("carpet_mean_px", &E::carpet_mean_px), key("sectors", &E::sectors),
-      key("light_follow", &E::light_follow), key("light_range", &E::light_range),
-      key("val_sigmas", &E::val_sigmas), key("sat_sigmas", &E::sat_sigmas),
-      key("min_val_step", &E::min_val_step), key("min_sat_step", &E::min_sat_step),
-      key("min_carpet_fraction", &E::min_carpet_fraction), key("min_rays_seen", &E::min_rays_seen),
+      key("obstacle_window_deg", &E::obstacle_window_deg),
+      key("obstacle_step_px", &E::obstacle_step_px),
+      key("edge_fraction", &E::edge_fraction),
+      key("carpet_mean_px", &E::carpet_mean_px),
+      key("sectors", &E::sectors),
+      key("light_follow", &E::light_follow),
+      key("light_range", &E::light_range),
+      key("val_sigmas", &E::val_sigmas),
+      key("sat_sigmas", &E::sat_sigmas),
+      key("min_val_step", &E::min_val_step),
+      key("min_sat_step", &E::min_sat_step),
+      key("min_carpet_fraction", &E::min_carpet_fraction),
+      key("min_rays_seen", &E::min_rays_seen),
       key("min_crossings", &E::min_crossings),
   };
   return t;
@@ -67,8 +75,11 @@ const KeyTable<ExtractionParams>& extraction_keys() {
 // An optional nested struct: present in the file -> engaged (its own table's defaults for the keys
 // it omits); absent -> nullopt and nothing written.
 template <class S>
-Key<VisionModel> optional_nested(std::string name, std::optional<S> VisionModel::*member, const KeyTable<S>& sub) {
-  return Key<VisionModel>{std::move(name), Need::kOptional, config::Kind::kOther,
+Key<VisionModel> optional_nested(std::string name, std::optional<S> VisionModel::*member,
+                                 const KeyTable<S>& sub) {
+  return Key<VisionModel>{std::move(name),
+                          Need::kOptional,
+                          config::Kind::kOther,
                           [member, &sub](const config::Node& n, VisionModel& out) {
                             S s{};
                             config::read_keys(n, sub, s);
@@ -103,7 +114,6 @@ const config::KeyTable<GoalCueConfig>& goal_cue_keys() {
 
 }  // namespace
 
-
 const std::vector<config::Key<VisionModel>>& vision_keys() {
   using V = VisionModel;
   static const KeyTable<V> t = {
@@ -111,8 +121,9 @@ const std::vector<config::Key<VisionModel>>& vision_keys() {
       optional_nested("line_contrast", &V::line_contrast, contrast_keys()),
       config::group<V>("goals", {optional_nested("blue", &V::goal_blue, goal_keys()),
                                  optional_nested("yellow", &V::goal_yellow, goal_keys())}),
-      config::choice("goal_colour_at_x_max", &V::goal_colour_at_x_max,
-                     config::Choices<std::string>{{"", ""}, {"blue", "blue"}, {"yellow", "yellow"}}),
+      config::choice(
+          "goal_colour_at_x_max", &V::goal_colour_at_x_max,
+          config::Choices<std::string>{{"", ""}, {"blue", "blue"}, {"yellow", "yellow"}}),
       config::nested("goal_cue", &V::goal_cue, goal_cue_keys()),
       config::nested("extraction", &V::extraction, extraction_keys()),
   };
@@ -121,9 +132,11 @@ const std::vector<config::Key<VisionModel>>& vision_keys() {
 
 void GoalCueConfig::validate(const config::Origin& at) const {
   config::require(min_pixels >= 1, at / "min_pixels", "must be >= 1", min_pixels);
-  config::require(min_margin > 0.0 && min_margin <= 1.0, at / "min_margin", "must be in (0, 1]", min_margin);
+  config::require(min_margin > 0.0 && min_margin <= 1.0, at / "min_margin", "must be in (0, 1]",
+                  min_margin);
   config::require(post_margin_cm >= 0.0, at / "post_margin_cm", "must be >= 0", post_margin_cm);
-  config::require(pixel_step >= 1 && pixel_step <= 16, at / "pixel_step", "must be in 1..16", pixel_step);
+  config::require(pixel_step >= 1 && pixel_step <= 16, at / "pixel_step", "must be in 1..16",
+                  pixel_step);
 }
 
 bool GoalHsv::contains(int h, int s, int v) const {
@@ -140,15 +153,15 @@ void VisionModel::validate(const config::Origin& at) const {
     check_level(c, "sat_min", carpet_hsv->sat_min);
     check_level(c, "val_min", carpet_hsv->val_min);
     check_level(c, "val_max", carpet_hsv->val_max);
-    require(carpet_hsv->val_max > carpet_hsv->val_min, c / "val_max", "must be above val_min " + config::show(carpet_hsv->val_min),
-            carpet_hsv->val_max);
+    require(carpet_hsv->val_max > carpet_hsv->val_min, c / "val_max",
+            "must be above val_min " + config::show(carpet_hsv->val_min), carpet_hsv->val_max);
   }
   if (line_contrast) {
     const config::Origin c = at / "line_contrast";
-    require(line_contrast->val_step > 0.0 && line_contrast->val_step <= 255.0, c / "val_step", "must be in (0, 255]",
-            line_contrast->val_step);
-    require(line_contrast->sat_step >= 0.0 && line_contrast->sat_step <= 255.0, c / "sat_step", "must be in [0, 255]",
-            line_contrast->sat_step);
+    require(line_contrast->val_step > 0.0 && line_contrast->val_step <= 255.0, c / "val_step",
+            "must be in (0, 255]", line_contrast->val_step);
+    require(line_contrast->sat_step >= 0.0 && line_contrast->sat_step <= 255.0, c / "sat_step",
+            "must be in [0, 255]", line_contrast->sat_step);
   }
   for (const auto& [name, g] : {std::pair{"blue", &goal_blue}, std::pair{"yellow", &goal_yellow}}) {
     if (!*g) continue;
@@ -160,29 +173,42 @@ void VisionModel::validate(const config::Origin& at) const {
   const ExtractionParams& e = extraction;
   const config::Origin x = at / "extraction";
   require(e.end_run_px >= 1 && e.end_run_px <= 64, x / "end_run_px", "must be 1..64", e.end_run_px);
-  require(e.carpet_resume_px >= 1 && e.carpet_resume_px <= 64, x / "carpet_resume_px", "must be 1..64", e.carpet_resume_px);
-  require(e.obstacle_window_deg >= 0.0 && e.obstacle_window_deg <= 90.0, x / "obstacle_window_deg", "must be in [0, 90]",
-          e.obstacle_window_deg);
-  require(e.obstacle_step_px >= 1 && e.obstacle_step_px <= 254, x / "obstacle_step_px", "must be 1..254", e.obstacle_step_px);
-  require(e.resume_within_px >= 1 && e.resume_within_px <= 254, x / "resume_within_px", "must be 1..254", e.resume_within_px);
-  require(e.edge_fraction > 0.0 && e.edge_fraction < 1.0, x / "edge_fraction", "must be in (0, 1)", e.edge_fraction);
-  require(e.carpet_mean_px >= 1 && e.carpet_mean_px <= 128, x / "carpet_mean_px", "must be 1..128", e.carpet_mean_px);
+  require(e.carpet_resume_px >= 1 && e.carpet_resume_px <= 64, x / "carpet_resume_px",
+          "must be 1..64", e.carpet_resume_px);
+  require(e.obstacle_window_deg >= 0.0 && e.obstacle_window_deg <= 90.0, x / "obstacle_window_deg",
+          "must be in [0, 90]", e.obstacle_window_deg);
+  require(e.obstacle_step_px >= 1 && e.obstacle_step_px <= 254, x / "obstacle_step_px",
+          "must be 1..254", e.obstacle_step_px);
+  require(e.resume_within_px >= 1 && e.resume_within_px <= 254, x / "resume_within_px",
+          "must be 1..254", e.resume_within_px);
+  require(e.edge_fraction > 0.0 && e.edge_fraction < 1.0, x / "edge_fraction", "must be in (0, 1)",
+          e.edge_fraction);
+  require(e.carpet_mean_px >= 1 && e.carpet_mean_px <= 128, x / "carpet_mean_px", "must be 1..128",
+          e.carpet_mean_px);
   require(e.sectors >= 1 && e.sectors <= 360, x / "sectors", "must be 1..360", e.sectors);
-  require(e.light_follow >= 0.0 && e.light_follow <= 1.0, x / "light_follow", "must be in [0, 1]", e.light_follow);
-  require(e.light_range >= 1.0 && e.light_range <= 16.0, x / "light_range", "must be in [1, 16]", e.light_range);
-  require(e.val_sigmas > 0.0 && e.val_sigmas <= 20.0, x / "val_sigmas", "must be in (0, 20]", e.val_sigmas);
-  require(e.sat_sigmas >= 0.0 && e.sat_sigmas <= 20.0, x / "sat_sigmas", "must be in [0, 20]", e.sat_sigmas);
-  require(e.min_val_step > 0.0 && e.min_val_step <= 255.0, x / "min_val_step", "must be in (0, 255]", e.min_val_step);
-  require(e.min_sat_step >= 0.0 && e.min_sat_step <= 255.0, x / "min_sat_step", "must be in [0, 255]", e.min_sat_step);
-  require(e.min_carpet_fraction >= 0.0 && e.min_carpet_fraction <= 1.0, x / "min_carpet_fraction", "must be in [0, 1]",
-          e.min_carpet_fraction);
-  require(e.min_rays_seen >= 0.0 && e.min_rays_seen <= 1.0, x / "min_rays_seen", "must be in [0, 1]", e.min_rays_seen);
+  require(e.light_follow >= 0.0 && e.light_follow <= 1.0, x / "light_follow", "must be in [0, 1]",
+          e.light_follow);
+  require(e.light_range >= 1.0 && e.light_range <= 16.0, x / "light_range", "must be in [1, 16]",
+          e.light_range);
+  require(e.val_sigmas > 0.0 && e.val_sigmas <= 20.0, x / "val_sigmas", "must be in (0, 20]",
+          e.val_sigmas);
+  require(e.sat_sigmas >= 0.0 && e.sat_sigmas <= 20.0, x / "sat_sigmas", "must be in [0, 20]",
+          e.sat_sigmas);
+  require(e.min_val_step > 0.0 && e.min_val_step <= 255.0, x / "min_val_step",
+          "must be in (0, 255]", e.min_val_step);
+  require(e.min_sat_step >= 0.0 && e.min_sat_step <= 255.0, x / "min_sat_step",
+          "must be in [0, 255]", e.min_sat_step);
+  require(e.min_carpet_fraction >= 0.0 && e.min_carpet_fraction <= 1.0, x / "min_carpet_fraction",
+          "must be in [0, 1]", e.min_carpet_fraction);
+  require(e.min_rays_seen >= 0.0 && e.min_rays_seen <= 1.0, x / "min_rays_seen",
+          "must be in [0, 1]", e.min_rays_seen);
   require(e.min_crossings >= 0, x / "min_crossings", "must be >= 0", e.min_crossings);
 }
 
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
-  const auto k = static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) * static_cast<double>(v.size() - 1));
+  const auto k =
+      static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) * static_cast<double>(v.size() - 1));
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
   return v[k];
 }
@@ -194,20 +220,23 @@ double robust_sigma(std::vector<double> v) {
   return 1.4826 * percentile(std::move(v), 0.5);
 }
 
-std::optional<CarpetColour> carpet_colour_from_samples(const std::vector<cv::Vec3b>& samples, std::string* why, bool allow_grey) {
+std::optional<CarpetColour> carpet_colour_from_samples(const std::vector<cv::Vec3b>& samples,
+                                                       std::string* why, bool allow_grey) {
   constexpr int kHb = 45, kSb = 16, kVb = 16;  // 8 deg hue, 16 levels of S and V
   if (samples.empty()) {
     if (why) *why = "no carpet: no pixels next to the robot";
     return std::nullopt;
   }
   std::vector<int> hist(kHb * kSb * kVb, 0);
-  for (const auto& p : samples) ++hist[static_cast<std::size_t>((p[0] / 4) * kSb * kVb + (p[1] / 16) * kVb + p[2] / 16)];
+  for (const auto& p : samples)
+    ++hist[static_cast<std::size_t>((p[0] / 4) * kSb * kVb + (p[1] / 16) * kVb + p[2] / 16)];
   const auto peak = static_cast<int>(std::max_element(hist.begin(), hist.end()) - hist.begin());
   const int ph = peak / (kSb * kVb), ps = (peak / kVb) % kSb, pv = peak % kVb;
   std::vector<double> hs, ss, vs;
   for (const auto& p : samples) {
     const int dh = std::abs(p[0] / 4 - ph);
-    if (std::min(dh, kHb - dh) <= 1 && std::abs(p[1] / 16 - ps) <= 1 && std::abs(p[2] / 16 - pv) <= 1) {
+    if (std::min(dh, kHb - dh) <= 1 && std::abs(p[1] / 16 - ps) <= 1 &&
+        std::abs(p[2] / 16 - pv) <= 1) {
       double h = p[0];
       if (h - ph * 4 > 90) h -= 180;  // unwrap around the peak
       if (ph * 4 - h > 90) h += 180;
@@ -246,11 +275,13 @@ std::optional<CarpetColour> carpet_colour_from_samples(const std::vector<cv::Vec
       return g;
     }
   }
-  if (static_cast<double>(hs.size()) < 0.05 * static_cast<double>(samples.size()) || c.median_sat < 20.0) {
+  if (static_cast<double>(hs.size()) < 0.05 * static_cast<double>(samples.size()) ||
+      c.median_sat < 20.0) {
     if (why) {
-      *why = "no carpet: no dominant colour around the robot (hue " + std::to_string(static_cast<int>(2 * c.hue)) +
-             " deg on " + std::to_string(hs.size()) + " of " + std::to_string(samples.size()) +
-             " pixels, median saturation " + std::to_string(static_cast<int>(c.median_sat)) + ")";
+      *why = "no carpet: no dominant colour around the robot (hue " +
+             std::to_string(static_cast<int>(2 * c.hue)) + " deg on " + std::to_string(hs.size()) +
+             " of " + std::to_string(samples.size()) + " pixels, median saturation " +
+             std::to_string(static_cast<int>(c.median_sat)) + ")";
     }
     return std::nullopt;
   }

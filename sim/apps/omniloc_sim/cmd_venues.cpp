@@ -45,7 +45,8 @@ void prepare_out(const fs::path& out) {
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
     throw std::runtime_error("--out " + out.string() + ": exists and is not a directory");
   fs::create_directories(out, ec);
-  if (ec) throw std::runtime_error("--out " + out.string() + ": cannot create (" + ec.message() + ")");
+  if (ec)
+    throw std::runtime_error("--out " + out.string() + ": cannot create (" + ec.message() + ")");
 }
 
 // The field file a venue's truth names: the shipped name, or the spec written beside the venues.
@@ -59,8 +60,8 @@ std::string field_file(const sim::Venue& v, const fs::path& out) {
 int run_venues(const VenuesArgs& a) {
   const fs::path out(a.out);
   prepare_out(out);
-  std::printf("omniloc-sim venues: %d venues from seed %llu into %s\n", a.count, static_cast<unsigned long long>(a.seed),
-              out.string().c_str());
+  std::printf("omniloc-sim venues: %d venues from seed %llu into %s\n", a.count,
+              static_cast<unsigned long long>(a.seed), out.string().c_str());
   for (int i = 0; i < a.count; ++i) {
     const std::uint64_t seed = sim::venue_seed(a.seed, static_cast<std::uint64_t>(i));
     const sim::Venue v = sim::sample_venue(seed);
@@ -71,9 +72,10 @@ int run_venues(const VenuesArgs& a) {
     write_png(dir / "calib.png", shots.calib);
     write_png(dir / "frame.png", shots.frame);
     write_text(dir / "truth.json", sim::venue_truth_json(v, shots, field));
-    std::printf("venue %d/%d seed %llu: %s%s, %s mirror, %dx%d, %zu rods, spot %s -> %s\n", i + 1, a.count,
-                static_cast<unsigned long long>(seed), v.field_name.c_str(), v.lab ? " (lab)" : "",
-                sim::mirror_profile_name(v.optics.profile), v.optics.width_px, v.optics.height_px, v.optics.rods.size(),
+    std::printf("venue %d/%d seed %llu: %s%s, %s mirror, %dx%d, %zu rods, spot %s -> %s\n", i + 1,
+                a.count, static_cast<unsigned long long>(seed), v.field_name.c_str(),
+                v.lab ? " (lab)" : "", sim::mirror_profile_name(v.optics.profile),
+                v.optics.width_px, v.optics.height_px, v.optics.rods.size(),
                 shots.spot.name.c_str(), dir.string().c_str());
     std::fflush(stdout);
   }
@@ -83,11 +85,13 @@ int run_venues(const VenuesArgs& a) {
 }  // namespace
 
 Subcommand add_venues(CLI::App& program) {
-  CLI::App* app = program.add_subcommand(
-      "venues", "Sampled cameras, robots and venues: per venue calib.png, frame.png and truth.json (sim/README.md).");
+  CLI::App* app = program.add_subcommand("venues",
+                                         "Sampled cameras, robots and venues: per venue calib.png, "
+                                         "frame.png and truth.json (sim/README.md).");
   auto a = std::make_shared<VenuesArgs>();
   add_number_option(*app, "--count", a->count, "how many venues", 1, 100000);
-  add_number_option(*app, "--seed", a->seed, "run seed (venue i's seed is derived from it and i, and printed)");
+  add_number_option(*app, "--seed", a->seed,
+                    "run seed (venue i's seed is derived from it and i, and printed)");
   app->add_option("--out", a->out, "output folder (created if missing)")->required();
   return {app, [a] { return run_venues(*a); }};
 }

@@ -1,9 +1,10 @@
 // The simulated encoder board: the Verilated rtl/omniloc_top.v (encoder core + UART link, as on the
-// iCEBreaker at its board clock and UART rate, regmap::kBoardClockHz and regmap::kUartBaud: 12 MHz and
-// 1 Mbaud) with models of what its pins are wired to: the FT2232H's UART side (a bit-exact serializer
-// into the FPGA's RX pin and a decoder of its TX pin), the four encoders (an EncoderSource that
-// gives the A/B levels of every clock cycle) and the ICM-42688-P gyro on the SPI pins (sim::Icm42688,
-// stepped every cycle; without one MISO reads 1, the pull-up of an empty PMOD).
+// iCEBreaker at its board clock and UART rate, regmap::kBoardClockHz and regmap::kUartBaud: 12 MHz
+// and 1 Mbaud) with models of what its pins are wired to: the FT2232H's UART side (a bit-exact
+// serializer into the FPGA's RX pin and a decoder of its TX pin), the four encoders (an
+// EncoderSource that gives the A/B levels of every clock cycle) and the ICM-42688-P gyro on the SPI
+// pins (sim::Icm42688, stepped every cycle; without one MISO reads 1, the pull-up of an empty
+// PMOD).
 //
 // BoardSim is a UartSide, so it plugs into the FT2232H model under umockdev; SimTransport puts it
 // behind the host's Transport interface in-process, advancing simulated time while the host waits.
@@ -90,9 +91,11 @@ class BoardSim final : public UartSide {
 /// A board's simulated time as a steady_clock time point (for Transport::now()).
 [[nodiscard]] inline std::chrono::steady_clock::time_point board_time(const BoardSim& board) {
   const std::int64_t c = board.cycle();
-  const std::int64_t ns = (c / BoardSim::kClockHz) * 1'000'000'000 + (c % BoardSim::kClockHz) * 1'000'000'000 / BoardSim::kClockHz;
+  const std::int64_t ns = (c / BoardSim::kClockHz) * 1'000'000'000 +
+                          (c % BoardSim::kClockHz) * 1'000'000'000 / BoardSim::kClockHz;
   return std::chrono::steady_clock::time_point(
-      std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::nanoseconds(ns)));
+      std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+          std::chrono::nanoseconds(ns)));
 }
 
 /// The host's Transport straight onto a BoardSim: write() queues bytes for the board's RX pin;
@@ -104,7 +107,9 @@ class SimTransport final : public Transport {
   std::size_t read(std::span<std::uint8_t> out, std::chrono::milliseconds timeout) override;
   [[nodiscard]] TransportStatus status() const override;
   /// Board time: timeouts and the host's deadlines run on the simulated clock.
-  [[nodiscard]] std::chrono::steady_clock::time_point now() const override { return board_time(board_); }
+  [[nodiscard]] std::chrono::steady_clock::time_point now() const override {
+    return board_time(board_);
+  }
 
  private:
   BoardSim& board_;

@@ -29,7 +29,9 @@ struct QuadratureEdge {
   const std::int64_t p = quarter & 3;
   return p == 1 || p == 2;
 }
-[[nodiscard]] constexpr bool level_b(std::int64_t quarter) { return (quarter & 3) >= 2; }
+[[nodiscard]] constexpr bool level_b(std::int64_t quarter) {
+  return (quarter & 3) >= 2;
+}
 
 class QuadratureStream {
  public:
@@ -50,7 +52,9 @@ class QuadratureStream {
   void fill_levels(std::int64_t first_cycle, std::span<std::uint8_t> out);
 
   /// Current quarter-step index of a motor (after the edges handed out so far).
-  [[nodiscard]] std::int64_t quarter(int motor) const { return quarter_[static_cast<std::size_t>(motor)]; }
+  [[nodiscard]] std::int64_t quarter(int motor) const {
+    return quarter_[static_cast<std::size_t>(motor)];
+  }
   [[nodiscard]] std::uint8_t levels() const;
   [[nodiscard]] const World& world() const { return world_; }
 

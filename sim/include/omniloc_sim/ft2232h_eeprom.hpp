@@ -20,8 +20,8 @@ struct EepromIdentity {
 
 /// Reads an ftdi_eeprom configuration (`key=value` lines, "quoted" strings, # comments). Throws
 /// std::runtime_error naming the file (and line) for an unreadable file, a line that is not
-/// `key=value`, a key given twice, a bad number, or a missing vendor_id / product_id / manufacturer / product / serial
-/// / chb_type.
+/// `key=value`, a key given twice, a bad number, or a missing vendor_id / product_id / manufacturer
+/// / product / serial / chb_type.
 [[nodiscard]] EepromIdentity read_eeprom_identity(const std::filesystem::path& conf);
 
 }  // namespace omniloc::sim

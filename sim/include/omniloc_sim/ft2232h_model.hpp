@@ -1,9 +1,9 @@
-// The USB-bridge device model: an emulated FT2232H (0403:6010) on an emulated USB bus (umockdev, all in
-// user space), so that libusb -- and UsbTransport, the exact code that runs on the robot -- talks to it
-// as to real hardware. Control requests are checked against what channel B as an 8N1 UART needs;
-// bulk OUT bytes on 0x04 go to a pluggable UartSide (the reference board model, later the Verilated
-// board), bulk IN on 0x83 returns packets of [modem status, line status, data...], at most 512 bytes
-// each, after data arrives or when the latency timer expires, as the chip does.
+// The USB-bridge device model: an emulated FT2232H (0403:6010) on an emulated USB bus (umockdev,
+// all in user space), so that libusb -- and UsbTransport, the exact code that runs on the robot --
+// talks to it as to real hardware. Control requests are checked against what channel B as an 8N1
+// UART needs; bulk OUT bytes on 0x04 go to a pluggable UartSide (the reference board model, later
+// the Verilated board), bulk IN on 0x83 returns packets of [modem status, line status, data...], at
+// most 512 bytes each, after data arrives or when the latency timer expires, as the chip does.
 //
 // Requires running under `umockdev-wrapper` (LD_PRELOAD of libumockdev-preload); built by
 // tests/usb/CMakeLists.txt (library omniloc_usb_model) since it needs libumockdev.
@@ -41,10 +41,11 @@ struct Ft2232hConfig {
   std::string manufacturer;
   std::string product;
   std::string serial;
-  bool kernel_driver_bound = true;  ///< ftdi_sio holds interface 1 until the host detaches it
+  bool kernel_driver_bound = true;   ///< ftdi_sio holds interface 1 until the host detaches it
   std::uint8_t modem_status = 0x31;  ///< first byte of every IN packet (CTS, DSR, low nibble 1)
 
-  /// A chip whose EEPROM was written with this identity (read_eeprom_identity of the firmware file).
+  /// A chip whose EEPROM was written with this identity (read_eeprom_identity of the firmware
+  /// file).
   [[nodiscard]] static Ft2232hConfig programmed_with(const EepromIdentity& eeprom) {
     Ft2232hConfig c;
     c.manufacturer = eeprom.manufacturer;
@@ -87,8 +88,8 @@ struct Ft2232hState {
   /// True when the channel is set up as the host library must: channel B reset, purged both ways,
   /// UART bitmode, 8N1, no flow control.
   [[nodiscard]] bool configured_as_uart() const {
-    return resets > 0 && purges_rx > 0 && purges_tx > 0 && bitmode == 0x0000 && data_characteristics == 0x0008 &&
-           flow_control == 0x0000;
+    return resets > 0 && purges_rx > 0 && purges_tx > 0 && bitmode == 0x0000 &&
+           data_characteristics == 0x0008 && flow_control == 0x0000;
   }
 };
 
@@ -100,7 +101,8 @@ class Ft2232hModel {
   Ft2232hModel(const Ft2232hModel&) = delete;
   Ft2232hModel& operator=(const Ft2232hModel&) = delete;
 
-  /// Pulls the cable: URBs in flight complete with -ESHUTDOWN, every later request fails with ENODEV.
+  /// Pulls the cable: URBs in flight complete with -ESHUTDOWN, every later request fails with
+  /// ENODEV.
   void unplug();
   /// Sets line-status bits (OE 0x02, PE 0x04, FE 0x08, BI 0x10) on the next count IN packets.
   void inject_line_status(std::uint8_t bits, int count = 1);

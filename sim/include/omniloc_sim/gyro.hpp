@@ -8,12 +8,12 @@
 namespace omniloc::sim {
 
 struct GyroModel {
-  double arw_deg_per_sqrt_s = 0.005;         ///< white rate noise (0.3 deg/sqrt(h))
-  double bias_sigma_deg_per_s = 0.01;        ///< residual bias after calibration, drawn once
+  double arw_deg_per_sqrt_s = 0.005;               ///< white rate noise (0.3 deg/sqrt(h))
+  double bias_sigma_deg_per_s = 0.01;              ///< residual bias after calibration, drawn once
   double bias_walk_deg_per_s_per_sqrt_s = 0.0005;  ///< bias drift (random walk of the bias)
-  double scale_error_sigma = 0.002;          ///< scale-factor error, drawn once (0.2 %)
-  double quantum_deg = 0.01;                 ///< resolution of the reported angle
-  double bias_offset_deg_per_s = 0.0;        ///< a known extra bias (e.g. a bad calibration)
+  double scale_error_sigma = 0.002;                ///< scale-factor error, drawn once (0.2 %)
+  double quantum_deg = 0.01;                       ///< resolution of the reported angle
+  double bias_offset_deg_per_s = 0.0;              ///< a known extra bias (e.g. a bad calibration)
 
   /// Only the quantisation of the reported angle.
   [[nodiscard]] static GyroModel noise_free() { return {0.0, 0.0, 0.0, 0.0, 0.01}; }

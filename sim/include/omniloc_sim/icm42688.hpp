@@ -7,9 +7,9 @@
 // docs/GYRO.md lists them.
 //
 // It is stepped once per clock cycle of the design that drives it, with the pins as that cycle's
-// edge left them (CS, SCLK, MOSI), and returns MISO for the next edge. The gyro samples the true yaw
-// rate (a function of time, deg/s) at the output data rate, adds a bias and white noise, scales by
-// the configured range and rounds. The data registers never change while CS is low (an update
+// edge left them (CS, SCLK, MOSI), and returns MISO for the next edge. The gyro samples the true
+// yaw rate (a function of time, deg/s) at the output data rate, adds a bias and white noise, scales
+// by the configured range and rounds. The data registers never change while CS is low (an update
 // falling into a transaction is applied when CS rises), so a burst reads one sample.
 //
 // Checks of the master (recorded in violations(), never thrown): an SPI access within 1 ms of the
@@ -26,20 +26,20 @@
 namespace omniloc::sim {
 
 struct Icm42688Params {
-  double clk_hz = 12e6;              ///< step() calls per second (the driving design's clock)
-  double bias_dps = 0.0;             ///< constant rate bias
-  double noise_dps_rms = 0.0;        ///< white noise added to each sample
-  double startup_s = 0.030;          ///< gyro start-up: PWR_MGMT0 on to the first data-ready
-  std::uint64_t seed = 1;            ///< of the noise
-  bool keep_logs = true;             ///< false: produced() and reads() hold only the latest (long runs)
+  double clk_hz = 12e6;        ///< step() calls per second (the driving design's clock)
+  double bias_dps = 0.0;       ///< constant rate bias
+  double noise_dps_rms = 0.0;  ///< white noise added to each sample
+  double startup_s = 0.030;    ///< gyro start-up: PWR_MGMT0 on to the first data-ready
+  std::uint64_t seed = 1;      ///< of the noise
+  bool keep_logs = true;       ///< false: produced() and reads() hold only the latest (long runs)
 };
 
 /// Fault injection; may be changed between steps.
 struct Icm42688Faults {
-  std::uint8_t who_am_i = 0x47;      ///< what WHO_AM_I reads (0x47 = the genuine part)
-  bool no_data_ready = false;        ///< no new samples, DATA_RDY_INT never set
-  bool stuck = false;                ///< new samples repeat the last value (data-ready goes on)
-  bool invalid = false;              ///< new samples read 0x8000 (the part's "no data" value)
+  std::uint8_t who_am_i = 0x47;  ///< what WHO_AM_I reads (0x47 = the genuine part)
+  bool no_data_ready = false;    ///< no new samples, DATA_RDY_INT never set
+  bool stuck = false;            ///< new samples repeat the last value (data-ready goes on)
+  bool invalid = false;          ///< new samples read 0x8000 (the part's "no data" value)
 };
 
 class Icm42688 {
@@ -54,11 +54,11 @@ class Icm42688 {
   static constexpr std::uint8_t kDataRdyInt = 0x08;    ///< INT_STATUS bit 3
   static constexpr std::uint8_t kResetDoneInt = 0x10;  ///< INT_STATUS bit 4
 
-  using RateFn = std::function<double(double t_s)>;   ///< true yaw rate in deg/s at time t_s
+  using RateFn = std::function<double(double t_s)>;  ///< true yaw rate in deg/s at time t_s
 
   struct Sample {
     std::int16_t value;
-    std::uint64_t cycle;   ///< produced: the ODR instant; read: the burst's last rising SCLK edge
+    std::uint64_t cycle;  ///< produced: the ODR instant; read: the burst's last rising SCLK edge
   };
 
   Icm42688(const Icm42688Params& params, RateFn true_rate_dps);
@@ -103,12 +103,12 @@ class Icm42688 {
   bool prev_cs_n_ = true, prev_sclk_ = false, prev_mosi_ = false;
   bool miso_ = false;
   // The transaction.
-  int bits_ = 0;                 ///< rising edges since CS fell
-  std::uint8_t in_ = 0;          ///< MOSI bits of the current byte
-  std::uint8_t out_ = 0;         ///< MISO bits still to send
+  int bits_ = 0;          ///< rising edges since CS fell
+  std::uint8_t in_ = 0;   ///< MOSI bits of the current byte
+  std::uint8_t out_ = 0;  ///< MISO bits still to send
   bool read_ = false;
   std::uint8_t addr_ = 0;
-  std::vector<std::uint8_t> read_addrs_;   ///< registers loaded for MISO in this transaction
+  std::vector<std::uint8_t> read_addrs_;  ///< registers loaded for MISO in this transaction
   std::vector<std::uint8_t> read_values_;
   bool reset_pending_ = false;
   bool sample_pending_ = false;  ///< an ODR instant fell into a transaction

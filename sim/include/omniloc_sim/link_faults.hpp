@@ -22,9 +22,10 @@ struct FaultRates {
 /// Every fault injected in one direction, by byte offset in the undisturbed stream.
 struct FaultLog {
   std::uint64_t corrupted = 0;
-  std::uint64_t dropped = 0;      ///< single drops plus every byte of each truncation
+  std::uint64_t dropped = 0;  ///< single drops plus every byte of each truncation
   std::uint64_t truncations = 0;
-  std::vector<std::uint64_t> damaged_offsets;  ///< sorted: offsets of every corrupted or removed byte
+  std::vector<std::uint64_t>
+      damaged_offsets;  ///< sorted: offsets of every corrupted or removed byte
   std::uint64_t bytes_seen = 0;
 };
 
@@ -60,7 +61,8 @@ class FaultChannel {
       } else if (x < rates_.truncate_per_byte + rates_.drop_per_byte + rates_.corrupt_per_byte) {
         ++log_.corrupted;
         log_.damaged_offsets.push_back(at);
-        out.push_back(static_cast<std::uint8_t>(b ^ std::uniform_int_distribution<int>(1, 255)(rng_)));
+        out.push_back(
+            static_cast<std::uint8_t>(b ^ std::uniform_int_distribution<int>(1, 255)(rng_)));
       } else {
         out.push_back(b);
       }
@@ -83,7 +85,9 @@ class FaultChannel {
 class FaultyUart final : public UartSide {
  public:
   FaultyUart(UartSide& inner, FaultRates to_board, FaultRates from_board, std::uint64_t seed)
-      : inner_(inner), to_board_(to_board, seed), from_board_(from_board, seed ^ 0x9E3779B97F4A7C15ull) {}
+      : inner_(inner),
+        to_board_(to_board, seed),
+        from_board_(from_board, seed ^ 0x9E3779B97F4A7C15ull) {}
 
   void to_board(std::span<const std::uint8_t> bytes) override {
     scratch_.clear();

@@ -11,7 +11,7 @@ namespace omniloc::sim {
 struct PlayingArea {
   double world_x_cm = 0.0;  ///< carpet, border included
   double world_y_cm = 0.0;
-  double x_min_cm = 0.0;    ///< the outer field lines
+  double x_min_cm = 0.0;  ///< the outer field lines
   double x_max_cm = 0.0;
   double y_min_cm = 0.0;
   double y_max_cm = 0.0;
@@ -22,9 +22,11 @@ struct PlayingArea {
 };
 
 /// The playing area of `field`.
-[[nodiscard]] PlayingArea playing_area(const FieldGeometry& field, double robot_half_size_cm = 20.0);
+[[nodiscard]] PlayingArea playing_area(const FieldGeometry& field,
+                                       double robot_half_size_cm = 20.0);
 
-/// The FIRA RoboSot area, from common/fields/fira-robosot.json (loaded once): the simulator's default.
+/// The FIRA RoboSot area, from common/fields/fira-robosot.json (loaded once): the simulator's
+/// default.
 [[nodiscard]] const PlayingArea& fira_robosot_area();
 
 }  // namespace omniloc::sim

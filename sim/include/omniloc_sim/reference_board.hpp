@@ -1,20 +1,20 @@
 // Golden model of the omniloc encoder board as the host sees it through its UART: the registers of
-// common/regmap.json, the request/response protocol and streamed telemetry, with window counts taken
-// from a script instead of encoder waveforms. Time advances only when the test says so
+// common/regmap.json, the request/response protocol and streamed telemetry, with window counts
+// taken from a script instead of encoder waveforms. Time advances only when the test says so
 // (run_windows), so every run is deterministic. Thread-safe: the emulated USB bridge calls it from
 // umockdev's worker thread while the test thread advances time.
 //
 // The request parser follows rtl/frame_rx.v byte for byte (tests/link/tb_reference_board_vs_rtl.cpp
 // feeds both the same byte streams and compares the answers): hunt for SYNC; a LEN of 0 or above
-// 1 + WRITE_REQ body is answered ERROR MALFORMED (detail = LEN) at once; otherwise LEN bytes and the
-// CRC are collected, and a wrong CRC is answered BAD_CRC (detail = TYPE), a right CRC on anything but
-// a well-formed request MALFORMED (detail = TYPE). The parser does not rescan the bytes of a rejected
-// frame (the host's decoder does). frame_rx aborts a frame after an inter-byte gap (MALFORMED,
-// detail 0xFF); the model has no byte timing, so it treats the end of each to_board() chunk as such a
-// gap when a frame is left incomplete -- the host writes every request whole and writes again only
-// after an answer or a timeout, both longer than the gap. Register errors name the address in the
-// detail: BAD_ADDRESS, READ_ONLY, BAD_VALUE (a refused value also sets STATUS.BAD_WRITE). A bad
-// frame never writes a register.
+// 1 + WRITE_REQ body is answered ERROR MALFORMED (detail = LEN) at once; otherwise LEN bytes and
+// the CRC are collected, and a wrong CRC is answered BAD_CRC (detail = TYPE), a right CRC on
+// anything but a well-formed request MALFORMED (detail = TYPE). The parser does not rescan the
+// bytes of a rejected frame (the host's decoder does). frame_rx aborts a frame after an inter-byte
+// gap (MALFORMED, detail 0xFF); the model has no byte timing, so it treats the end of each
+// to_board() chunk as such a gap when a frame is left incomplete -- the host writes every request
+// whole and writes again only after an answer or a timeout, both longer than the gap. Register
+// errors name the address in the detail: BAD_ADDRESS, READ_ONLY, BAD_VALUE (a refused value also
+// sets STATUS.BAD_WRITE). A bad frame never writes a register.
 #pragma once
 
 #include <array>
@@ -32,7 +32,8 @@
 namespace omniloc::sim {
 
 struct ReferenceBoardConfig {
-  std::uint32_t clk_hz = regmap::kBoardClockHz;  ///< the iCEBreaker's clock, as the Verilated board (sim::BoardSim)
+  std::uint32_t clk_hz =
+      regmap::kBoardClockHz;  ///< the iCEBreaker's clock, as the Verilated board (sim::BoardSim)
   std::uint32_t tick_hz = regmap::kTickHz;
   std::uint32_t initial_timestamp_cycles = 0;
   std::array<std::uint32_t, regmap::kChannels> initial_position{};  ///< to exercise wrap-around
@@ -58,7 +59,8 @@ using GyroScript = std::function<GyroWindowScript(std::uint32_t seq)>;
 
 class ReferenceBoard final : public UartSide {
  public:
-  /// Where one emitted frame lies in the board's output byte stream (for fault-injection bookkeeping).
+  /// Where one emitted frame lies in the board's output byte stream (for fault-injection
+  /// bookkeeping).
   struct EmittedFrame {
     std::uint64_t offset = 0;  ///< index of its SYNC byte in everything the board ever sent
     std::size_t bytes = 0;
@@ -69,7 +71,8 @@ class ReferenceBoard final : public UartSide {
     std::uint32_t value;
   };
 
-  explicit ReferenceBoard(ReferenceBoardConfig cfg = {}, CountScript script = nullptr, GyroScript gyro = nullptr)
+  explicit ReferenceBoard(ReferenceBoardConfig cfg = {}, CountScript script = nullptr,
+                          GyroScript gyro = nullptr)
       : cfg_(cfg), script_(std::move(script)), gyro_(std::move(gyro)) {
     period_cycles_ = cfg_.clk_hz / cfg_.tick_hz;
     timestamp_ = cfg_.initial_timestamp_cycles;
@@ -96,7 +99,8 @@ class ReferenceBoard final : public UartSide {
   }
 
   // ---- Test control ----
-  /// Advances time by n windows of PERIOD cycles; each captured window is streamed when STREAM is set.
+  /// Advances time by n windows of PERIOD cycles; each captured window is streamed when STREAM is
+  /// set.
   void run_windows(int n) {
     std::lock_guard lock(mu_);
     for (int i = 0; i < n; ++i) capture();
@@ -180,9 +184,10 @@ class ReferenceBoard final : public UartSide {
         const auto crc = static_cast<std::uint16_t>((rx_crc_hi_ << 8) | b);
         if (crc != protocol::crc16_ccitt(rx_frame_)) return rx_error(regmap::kErrBadCrc, type);
         const std::size_t body = rx_frame_.size() - 2;
-        const bool request = (type == regmap::kFrameReadReq && body == regmap::kFrameReadReqBodyBytes) ||
-                             (type == regmap::kFrameWriteReq && body == regmap::kFrameWriteReqBodyBytes) ||
-                             (type == regmap::kFrameSnapshotReq && body == regmap::kFrameSnapshotReqBodyBytes);
+        const bool request =
+            (type == regmap::kFrameReadReq && body == regmap::kFrameReadReqBodyBytes) ||
+            (type == regmap::kFrameWriteReq && body == regmap::kFrameWriteReqBodyBytes) ||
+            (type == regmap::kFrameSnapshotReq && body == regmap::kFrameSnapshotReqBodyBytes);
         if (!request) return rx_error(regmap::kErrMalformed, type);
         ++rx_counters_.requests;
         handle(protocol::decode_body(type, std::span<const std::uint8_t>(rx_frame_).subspan(2)));
@@ -206,8 +211,12 @@ class ReferenceBoard final : public UartSide {
     w.seq = ++seq_;
     w.timestamp_cycles = timestamp_;
     if (script_) w.count = script_(w.seq);
-    for (int ch = cfg_.channels; ch < regmap::kChannels; ++ch) w.count[static_cast<std::size_t>(ch)] = 0;
-    const GyroWindowScript g = gyro_ ? gyro_(w.seq) : GyroWindowScript{0, static_cast<std::uint8_t>(regmap::kGyroOdrHz / cfg_.tick_hz), 0};
+    for (int ch = cfg_.channels; ch < regmap::kChannels; ++ch)
+      w.count[static_cast<std::size_t>(ch)] = 0;
+    const GyroWindowScript g =
+        gyro_
+            ? gyro_(w.seq)
+            : GyroWindowScript{0, static_cast<std::uint8_t>(regmap::kGyroOdrHz / cfg_.tick_hz), 0};
     w.gyro_sum = g.sum;
     w.gyro_count = g.count;
     w.gyro_flags = g.flags;
@@ -250,29 +259,48 @@ class ReferenceBoard final : public UartSide {
     if (addr >= r::kRegSnapPosition0 && addr <= r::kRegSnapPosition3) {
       return latched_positions_[addr - r::kRegSnapPosition0];
     }
-    if (addr >= r::kRegErrorCount0 && addr <= r::kRegErrorCount3) return 0u;  // the script makes no illegal edges
+    if (addr >= r::kRegErrorCount0 && addr <= r::kRegErrorCount3)
+      return 0u;  // the script makes no illegal edges
     switch (addr) {
-      case r::kRegId: return r::kIdValue;
-      case r::kRegVersion: return r::kVersionValue;
-      case r::kRegConfig: return r::kConfigChannels.put(0, static_cast<std::uint32_t>(cfg_.channels));
-      case r::kRegControl: return control_;
-      case r::kRegFilter: return filter_;
-      case r::kRegPeriod: return period_cycles_;
-      case r::kRegStatus: return status_;
-      case r::kRegTimestamp: return timestamp_;
-      case r::kRegLinkErrors: return 0u;  // bytes arrive whole here: no stop-bit or overrun errors
-      case r::kRegSnapSeq: return latched_.seq;
-      case r::kRegSnapTimestamp: return latched_.timestamp_cycles;
-      case r::kRegSnapDir: return latched_.dir;
-      case r::kRegSnapStatus: return latched_.status;
-      case r::kRegSnapGyroSum: return static_cast<std::uint32_t>(latched_.gyro_sum);
+      case r::kRegId:
+        return r::kIdValue;
+      case r::kRegVersion:
+        return r::kVersionValue;
+      case r::kRegConfig:
+        return r::kConfigChannels.put(0, static_cast<std::uint32_t>(cfg_.channels));
+      case r::kRegControl:
+        return control_;
+      case r::kRegFilter:
+        return filter_;
+      case r::kRegPeriod:
+        return period_cycles_;
+      case r::kRegStatus:
+        return status_;
+      case r::kRegTimestamp:
+        return timestamp_;
+      case r::kRegLinkErrors:
+        return 0u;  // bytes arrive whole here: no stop-bit or overrun errors
+      case r::kRegSnapSeq:
+        return latched_.seq;
+      case r::kRegSnapTimestamp:
+        return latched_.timestamp_cycles;
+      case r::kRegSnapDir:
+        return latched_.dir;
+      case r::kRegSnapStatus:
+        return latched_.status;
+      case r::kRegSnapGyroSum:
+        return static_cast<std::uint32_t>(latched_.gyro_sum);
       case r::kRegSnapGyro:
-        return r::kSnapGyroFlags.put(r::kSnapGyroCount.put(0, latched_.gyro_count), latched_.gyro_flags);
-      case r::kRegGyroState:  // the live reader: faults counted per flagged window (the RTL counts each fault)
+        return r::kSnapGyroFlags.put(r::kSnapGyroCount.put(0, latched_.gyro_count),
+                                     latched_.gyro_flags);
+      case r::kRegGyroState:  // the live reader: faults counted per flagged window (the RTL counts
+                              // each fault)
         return r::kGyroStateFaults.put(
-            r::kGyroStateAbsent.put(r::kGyroStateRunning.put(0, gyro_running_ ? 1 : 0), gyro_absent_ ? 1 : 0),
+            r::kGyroStateAbsent.put(r::kGyroStateRunning.put(0, gyro_running_ ? 1 : 0),
+                                    gyro_absent_ ? 1 : 0),
             gyro_faults_);
-      default: return std::nullopt;
+      default:
+        return std::nullopt;
     }
   }
 
@@ -304,8 +332,11 @@ class ReferenceBoard final : public UartSide {
         }
         period_cycles_ = v;
         break;
-      case r::kRegStatus: status_ &= ~v; break;
-      default: return r::kErrReadOnly;
+      case r::kRegStatus:
+        status_ &= ~v;
+        break;
+      default:
+        return r::kErrReadOnly;
     }
     if (cfg_.keep_history) writes_.push_back(AppliedWrite{addr, v});
     return 0;
@@ -335,7 +366,7 @@ class ReferenceBoard final : public UartSide {
       } else {
         emit(WriteAck{wr->addr});
       }
-    } else {  // SNAPSHOT_REQ: the parser lets nothing else through
+    } else {    // SNAPSHOT_REQ: the parser lets nothing else through
       latch();  // the status byte is SNAP_STATUS: STATUS as it stood at that window's capture
       emit(SnapshotResp{latched_});
     }

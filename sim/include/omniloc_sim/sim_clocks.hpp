@@ -14,15 +14,15 @@
 namespace omniloc::sim {
 
 struct SimClockConfig {
-  double board_drift_ppm = 0.0;      ///< board crystal against the host clock (+: the board runs fast)
-  double usb_jitter_mean_ms = 0.0;   ///< exponential USB latency of a window, mean ...
-  double usb_jitter_max_ms = 0.0;    ///< ... capped here
-  double burst_every_s = 0.0;        ///< mean time between late bursts (0: none)
-  double burst_extra_ms = 0.0;       ///< a burst delays every window in it by this much
-  double burst_length_ms = 0.0;      ///< how long a burst lasts
-  double camera_latency_ms = 0.0;    ///< exposure to hand-over, fixed part ...
-  double camera_jitter_ms = 0.0;     ///< ... plus uniform 0 .. this
-  double camera_drop_fraction = 0.0; ///< frames lost in the driver
+  double board_drift_ppm = 0.0;  ///< board crystal against the host clock (+: the board runs fast)
+  double usb_jitter_mean_ms = 0.0;    ///< exponential USB latency of a window, mean ...
+  double usb_jitter_max_ms = 0.0;     ///< ... capped here
+  double burst_every_s = 0.0;         ///< mean time between late bursts (0: none)
+  double burst_extra_ms = 0.0;        ///< a burst delays every window in it by this much
+  double burst_length_ms = 0.0;       ///< how long a burst lasts
+  double camera_latency_ms = 0.0;     ///< exposure to hand-over, fixed part ...
+  double camera_jitter_ms = 0.0;      ///< ... plus uniform 0 .. this
+  double camera_drop_fraction = 0.0;  ///< frames lost in the driver
 
   /// All clocks equal, no latency, no drops (the simulator before issue 18).
   [[nodiscard]] static SimClockConfig perfect() { return {}; }
@@ -43,8 +43,8 @@ struct SimClockConfig {
     return c;
   }
   [[nodiscard]] bool is_perfect() const {
-    return board_drift_ppm == 0.0 && usb_jitter_mean_ms == 0.0 && burst_every_s == 0.0 && camera_latency_ms == 0.0 &&
-           camera_jitter_ms == 0.0 && camera_drop_fraction == 0.0;
+    return board_drift_ppm == 0.0 && usb_jitter_mean_ms == 0.0 && burst_every_s == 0.0 &&
+           camera_latency_ms == 0.0 && camera_jitter_ms == 0.0 && camera_drop_fraction == 0.0;
   }
 };
 
@@ -52,15 +52,21 @@ struct SimClockConfig {
 struct BoardCrystal {
   double drift_ppm = 0.0;
   double board_start_ms = 0.0;  ///< board time at host time 0
-  [[nodiscard]] double board_ms(double host_ms) const { return host_ms * (1.0 + drift_ppm * 1e-6) + board_start_ms; }
-  [[nodiscard]] double host_ms(double board_ms) const { return (board_ms - board_start_ms) / (1.0 + drift_ppm * 1e-6); }
+  [[nodiscard]] double board_ms(double host_ms) const {
+    return host_ms * (1.0 + drift_ppm * 1e-6) + board_start_ms;
+  }
+  [[nodiscard]] double host_ms(double board_ms) const {
+    return (board_ms - board_start_ms) / (1.0 + drift_ppm * 1e-6);
+  }
 };
 
 /// When each window arrives on the host: its host end time plus the latency. Calls must come in
 /// time order; arrivals never go back (a USB pipe keeps the order).
 class UsbArrivals {
  public:
-  UsbArrivals(const SimClockConfig& c, std::uint64_t seed) : c_(c), rng_(seed) { schedule_burst(0.0); }
+  UsbArrivals(const SimClockConfig& c, std::uint64_t seed) : c_(c), rng_(seed) {
+    schedule_burst(0.0);
+  }
   [[nodiscard]] double arrival_ms(double host_end_ms) {
     double lat = 0.0;
     if (c_.usb_jitter_mean_ms > 0.0) {
@@ -68,8 +74,10 @@ class UsbArrivals {
       lat = std::min(e(rng_), c_.usb_jitter_max_ms);
     }
     if (c_.burst_every_s > 0.0) {
-      while (host_end_ms >= burst_start_ms_ + c_.burst_length_ms) schedule_burst(burst_start_ms_ + c_.burst_length_ms);
-      if (host_end_ms >= burst_start_ms_) lat += c_.burst_extra_ms;  // the host or the bridge stalled
+      while (host_end_ms >= burst_start_ms_ + c_.burst_length_ms)
+        schedule_burst(burst_start_ms_ + c_.burst_length_ms);
+      if (host_end_ms >= burst_start_ms_)
+        lat += c_.burst_extra_ms;  // the host or the bridge stalled
     }
     last_ = std::max(last_, host_end_ms + lat);
     return last_;

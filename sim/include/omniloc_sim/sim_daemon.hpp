@@ -2,8 +2,8 @@
 // ICM-42688-P model -> Verilated board (rtl/omniloc_top.v) -> SimTransport, the heading from the
 // board's gyro windows as on the real robot (GyroHeading, no side channel), a camera rendering the
 // field at the true pose, and the simulation's host clock as the daemon's (realistic clocks by
-// default, sim_clocks.hpp). `omnilocd-sim`, `omniloc-sim demo` and the tests build their runs from it; truth reaches them through the truth
-// log and the daemon's observer, never through the daemon.
+// default, sim_clocks.hpp). `omnilocd-sim`, `omniloc-sim demo` and the tests build their runs from
+// it; truth reaches them through the truth log and the daemon's observer, never through the daemon.
 #pragma once
 
 #include <cstdint>
@@ -36,7 +36,8 @@ struct SimRobotOptions {
 class SimulatedRobot {
  public:
   /// `models` must outlive the robot (the renderer keeps the field and camera).
-  SimulatedRobot(const daemon::DaemonModels& models, Trajectory trajectory, const SimRobotOptions& options);
+  SimulatedRobot(const daemon::DaemonModels& models, Trajectory trajectory,
+                 const SimRobotOptions& options);
 
   /// Clock, board factory, heading (the board's gyro windows) and camera for the Daemon (observer
   /// and log are the caller's).
@@ -58,7 +59,8 @@ class SimulatedRobot {
 
 /// Writes the true pose at every window's time into `writer` (truth.csv beside a recording).
 /// The writer and the truth log must outlive the daemon run.
-[[nodiscard]] std::function<void(const EncoderWindow&)> truth_recorder(const SimTruthLog& truth, TruthCsvWriter& writer);
+[[nodiscard]] std::function<void(const EncoderWindow&)> truth_recorder(const SimTruthLog& truth,
+                                                                       TruthCsvWriter& writer);
 
 /// Trajectory names make_trajectory knows, for --help texts.
 [[nodiscard]] std::string trajectory_names();

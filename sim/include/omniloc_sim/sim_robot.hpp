@@ -1,8 +1,9 @@
-// The simulated robot's I/O for the robot's own Daemon (omniloc/daemon.hpp), used by `omnilocd-sim`,
-// `omniloc-sim demo` and the tests: the world simulator's truth and gyro, logged as the simulation
-// advances (the heading source; truth is looked up by observers, never by the daemon), and a camera
-// that renders the field at the true pose. Header-only on top of omniloc_sim (no Verilated board
-// here: verilated_robot.hpp adds that), so host tests can use it with a reference board.
+// The simulated robot's I/O for the robot's own Daemon (omniloc/daemon.hpp), used by
+// `omnilocd-sim`, `omniloc-sim demo` and the tests: the world simulator's truth and gyro, logged as
+// the simulation advances (the heading source; truth is looked up by observers, never by the
+// daemon), and a camera that renders the field at the true pose. Header-only on top of omniloc_sim
+// (no Verilated board here: verilated_robot.hpp adds that), so host tests can use it with a
+// reference board.
 #pragma once
 
 #include <algorithm>
@@ -53,7 +54,9 @@ class SimTruthLog final : public HeadingSource {
     if (!s) return std::nullopt;
     return s->truth;
   }
-  [[nodiscard]] double latest_ms() const { return samples_.empty() ? -1e300 : samples_.back().t_ms; }
+  [[nodiscard]] double latest_ms() const {
+    return samples_.empty() ? -1e300 : samples_.back().t_ms;
+  }
 
  private:
   struct Sample {
@@ -62,7 +65,8 @@ class SimTruthLog final : public HeadingSource {
     double gyro_yaw_deg;
   };
   [[nodiscard]] std::optional<Sample> sample_at(double t_ms) const {
-    if (samples_.empty() || t_ms < samples_.front().t_ms || t_ms > samples_.back().t_ms) return std::nullopt;
+    if (samples_.empty() || t_ms < samples_.front().t_ms || t_ms > samples_.back().t_ms)
+      return std::nullopt;
     const auto it = std::lower_bound(samples_.begin(), samples_.end(), t_ms,
                                      [](const Sample& s, double t) { return s.t_ms < t; });
     if (it->t_ms == t_ms || it == samples_.begin()) return *it;
@@ -82,12 +86,13 @@ class SimTruthLog final : public HeadingSource {
 
 /// A camera rendering the field at the logged true pose, `fps` frames per second of daemon time.
 /// Frame k is taken at k / fps; poll() hands out the newest frame due (older undelivered ones are
-/// dropped, as a live camera would). Rendering runs on a worker thread, started as soon as the truth
-/// log has passed a frame's time, so the simulation and the renderer use two cores; poll() waits
-/// for the frame it returns, so what is delivered does not depend on thread timing.
+/// dropped, as a live camera would). Rendering runs on a worker thread, started as soon as the
+/// truth log has passed a frame's time, so the simulation and the renderer use two cores; poll()
+/// waits for the frame it returns, so what is delivered does not depend on thread timing.
 class SimCamera final : public FrameSource {
  public:
-  SimCamera(const OmniRenderer& renderer, SimTruthLog& truth, double fps, RenderOptions options = {});
+  SimCamera(const OmniRenderer& renderer, SimTruthLog& truth, double fps,
+            RenderOptions options = {});
   ~SimCamera() override;
   SimCamera(const SimCamera&) = delete;
   SimCamera& operator=(const SimCamera&) = delete;
@@ -107,7 +112,8 @@ class SimCamera final : public FrameSource {
   }
   /// When frame k is handed over (its exposure time with no delays), and whether it is lost.
   [[nodiscard]] double handover_ms(std::int64_t k) const {
-    return static_cast<double>(k) * period_ms_ + (delayed_ ? latency_ms_ + jitter_ms_ * unit(k, 1) : 0.0);
+    return static_cast<double>(k) * period_ms_ +
+           (delayed_ ? latency_ms_ + jitter_ms_ * unit(k, 1) : 0.0);
   }
   [[nodiscard]] bool dropped(std::int64_t k) const { return delayed_ && unit(k, 2) < drop_; }
   [[nodiscard]] double period_ms() const { return period_ms_; }
@@ -122,14 +128,15 @@ class SimCamera final : public FrameSource {
   SimTruthLog& truth_;
   double period_ms_;
   RenderOptions options_;
-  std::int64_t last_k_ = -1;       // last frame handed out
-  std::int64_t next_job_k_ = 0;    // next frame to start rendering
+  std::int64_t last_k_ = -1;     // last frame handed out
+  std::int64_t next_job_k_ = 0;  // next frame to start rendering
   double stop_ms_ = 1e300;
   bool delayed_ = false;
   double latency_ms_ = 0.0, jitter_ms_ = 0.0, drop_ = 0.0;
   std::uint64_t delay_seed_ = 0;
   [[nodiscard]] double unit(std::int64_t k, std::uint64_t stream) const {
-    std::uint64_t z = delay_seed_ ^ (static_cast<std::uint64_t>(k) * 0x9E3779B97F4A7C15ULL) ^ (stream << 56);
+    std::uint64_t z =
+        delay_seed_ ^ (static_cast<std::uint64_t>(k) * 0x9E3779B97F4A7C15ULL) ^ (stream << 56);
     z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;  // splitmix64's finaliser
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
     z ^= z >> 31;

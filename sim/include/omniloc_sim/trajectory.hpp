@@ -73,8 +73,8 @@ class Trajectory {
     double t0 = 0.0;
     double duration = 0.0;
     Pose2 start;
-    Trapezoid move;        // along the path (cm)
-    Trapezoid turn;        // yaw (deg), for non-tangent headings
+    Trapezoid move;  // along the path (cm)
+    Trapezoid turn;  // yaw (deg), for non-tangent headings
     double turn_sign = 1.0;
     Eigen::Vector2d direction{1.0, 0.0};  // line
     Eigen::Vector2d centre{0.0, 0.0};     // arc

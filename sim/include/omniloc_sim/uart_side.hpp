@@ -19,13 +19,14 @@ class UartSide {
   virtual ~UartSide() = default;
   /// Bytes the host sent, in order (bridge TX -> FPGA RX).
   virtual void to_board(std::span<const std::uint8_t> bytes) = 0;
-  /// Moves up to out.size() bytes the board has sent (FPGA TX -> bridge RX) into out; returns the count.
+  /// Moves up to out.size() bytes the board has sent (FPGA TX -> bridge RX) into out; returns the
+  /// count.
   virtual std::size_t from_board(std::span<std::uint8_t> out) = 0;
 };
 
 /// A Transport straight onto a UartSide, with no USB in between: for protocol and client tests.
-/// Single-threaded: the UART side answers synchronously, so when nothing is there, nothing will come
-/// and read() just sleeps out its timeout.
+/// Single-threaded: the UART side answers synchronously, so when nothing is there, nothing will
+/// come and read() just sleeps out its timeout.
 class UartSideTransport final : public Transport {
  public:
   explicit UartSideTransport(UartSide& side) : side_(side) {}

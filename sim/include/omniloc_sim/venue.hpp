@@ -32,13 +32,13 @@ enum class VenueField : std::uint8_t { kFira, kMsl, kMsl18x12 };
 struct Venue {
   std::uint64_t seed = 0;
   VenueField field_kind = VenueField::kFira;
-  std::string field_name;        // venue_field_name(field_kind)
-  bool field_shipped = true;     // field is exactly common/fields/<field_name>.json
-  bool lab = false;              // the carpet stops short on some sides (render.realism.look.carpet_inset_cm)
-  FieldGeometry field;           // as painted (its line width may differ from the file's)
-  TrueOptics optics;             // the camera and the robot's body, rods and lens as they really are
-  double body_fraction = 0.0;    // the body's image radius / the mirror's radius
-  RenderOptions render;          // realism on, with the venue's look, light and sensor
+  std::string field_name;     // venue_field_name(field_kind)
+  bool field_shipped = true;  // field is exactly common/fields/<field_name>.json
+  bool lab = false;  // the carpet stops short on some sides (render.realism.look.carpet_inset_cm)
+  FieldGeometry field;         // as painted (its line width may differ from the file's)
+  TrueOptics optics;           // the camera and the robot's body, rods and lens as they really are
+  double body_fraction = 0.0;  // the body's image radius / the mirror's radius
+  RenderOptions render;        // realism on, with the venue's look, light and sensor
 };
 
 /// The venue of `seed`. Ranges (venue.cpp's constants): image 400 x 400 .. 1280 x 1024 at 1:1, 5:4,
@@ -78,6 +78,7 @@ struct VenueShots {
 /// truth.json: field (name, whether shipped, the spec as a geometry file), the true optics, the
 /// nominal camera as a camera file, the robot, the known spot, the two poses and the look.
 /// `field_file` is the file name the field is in (the shipped name, or a written field-*.json).
-[[nodiscard]] std::string venue_truth_json(const Venue& venue, const VenueShots& shots, const std::string& field_file);
+[[nodiscard]] std::string venue_truth_json(const Venue& venue, const VenueShots& shots,
+                                           const std::string& field_file);
 
 }  // namespace omniloc::sim

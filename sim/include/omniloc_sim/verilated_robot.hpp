@@ -1,12 +1,12 @@
 // The simulated robot on the Verilated board, for `omnilocd-sim` and `omniloc-sim demo`: the
-// world simulator's quadrature waveforms drive the Verilated rtl/omniloc_top.v (BoardSim) at 12 MHz,
-// the ICM-42688-P model on its SPI pins measures the world's true yaw rate (with the world gyro's
-// bias, scale error and rate noise), the host reaches it through SimTransport, and the daemon's
-// heading is the board's gyro windows (GyroHeading), its clock the host clock of the
+// world simulator's quadrature waveforms drive the Verilated rtl/omniloc_top.v (BoardSim) at 12
+// MHz, the ICM-42688-P model on its SPI pins measures the world's true yaw rate (with the world
+// gyro's bias, scale error and rate noise), the host reaches it through SimTransport, and the
+// daemon's heading is the board's gyro windows (GyroHeading), its clock the host clock of the
 // simulation (sim_clocks.hpp): the board's simulated time over (1 + board_drift_ppm 1e-6), the
-// windows' bytes delivered after a USB latency (DelayedSimTransport). With SimClockConfig::perfect()
-// the daemon's clock is the board's time and bytes arrive as the UART delivers them.
-// Header-only; programs including it link omniloc_board_sim.
+// windows' bytes delivered after a USB latency (DelayedSimTransport). With
+// SimClockConfig::perfect() the daemon's clock is the board's time and bytes arrive as the UART
+// delivers them. Header-only; programs including it link omniloc_board_sim.
 #pragma once
 
 #include <algorithm>
@@ -55,7 +55,8 @@ class YawRateLog {
     if (!points_.empty() && cycle <= points_.back().cycle) return;
     double apparent = yaw_deg;
     if (!points_.empty()) {
-      const double dt_s = static_cast<double>(cycle - points_.back().cycle) / static_cast<double>(BoardSim::kClockHz);
+      const double dt_s = static_cast<double>(cycle - points_.back().cycle) /
+                          static_cast<double>(BoardSim::kClockHz);
       const double wanted = yaw_deg - last_true_deg_ + carry_deg_;
       const double step = std::clamp(wanted, -kMaxCarryDps * dt_s, kMaxCarryDps * dt_s);
       carry_deg_ = wanted - step;
@@ -72,7 +73,8 @@ class YawRateLog {
     while (i > 1 && points_[i - 1].cycle > cycle) --i;
     const Point& a = points_[i - 1];
     const Point& b = points_[i];
-    return (b.yaw_deg - a.yaw_deg) / (static_cast<double>(b.cycle - a.cycle) / static_cast<double>(BoardSim::kClockHz));
+    return (b.yaw_deg - a.yaw_deg) /
+           (static_cast<double>(b.cycle - a.cycle) / static_cast<double>(BoardSim::kClockHz));
   }
 
  private:
@@ -118,7 +120,8 @@ class LoggingQuadratureSource final : public EncoderSource {
   Icm42688Params p;
   p.clk_hz = static_cast<double>(BoardSim::kClockHz);
   p.bias_dps = world.gyro().bias_deg_per_s();
-  p.noise_dps_rms = world.config().gyro.arw_deg_per_sqrt_s * std::sqrt(static_cast<double>(regmap::kGyroOdrHz));
+  p.noise_dps_rms =
+      world.config().gyro.arw_deg_per_sqrt_s * std::sqrt(static_cast<double>(regmap::kGyroOdrHz));
   p.seed = world.config().seed ^ 0x6F1C0ULL;
   p.keep_logs = false;
   return p;
@@ -128,11 +131,13 @@ class LoggingQuadratureSource final : public EncoderSource {
 /// (equal to it with a perfect crystal); waiting runs the board.
 class BoardSimClock final : public daemon::DaemonClock {
  public:
-  explicit BoardSimClock(BoardSim& board, BoardCrystal crystal = {}) : board_(board), crystal_(crystal) {}
+  explicit BoardSimClock(BoardSim& board, BoardCrystal crystal = {})
+      : board_(board), crystal_(crystal) {}
   double now_ms() override { return crystal_.host_ms(board_.seconds() * 1000.0); }
   void wait_ms(double ms) override {
     if (ms > 0)
-      board_.run_cycles(static_cast<std::int64_t>(ms * (1.0 + crystal_.drift_ppm * 1e-6) * (BoardSim::kClockHz / 1000)));
+      board_.run_cycles(static_cast<std::int64_t>(ms * (1.0 + crystal_.drift_ppm * 1e-6) *
+                                                  (BoardSim::kClockHz / 1000)));
   }
 
  private:
@@ -160,7 +165,8 @@ class DelayedSimTransport final : public Transport {
     while (n < out.size() && !held_.empty() && held_.front().release_ms <= host_.now_ms()) {
       Chunk& c = held_.front();
       const std::size_t k = std::min(out.size() - n, c.bytes.size() - c.used);
-      std::copy_n(c.bytes.begin() + static_cast<std::ptrdiff_t>(c.used), k, out.begin() + static_cast<std::ptrdiff_t>(n));
+      std::copy_n(c.bytes.begin() + static_cast<std::ptrdiff_t>(c.used), k,
+                  out.begin() + static_cast<std::ptrdiff_t>(n));
       n += k;
       c.used += k;
       if (c.used == c.bytes.size()) held_.pop_front();
@@ -185,7 +191,8 @@ class DelayedSimTransport final : public Transport {
   void take() {
     std::uint8_t buf[512];
     for (std::size_t n; (n = board_.from_board(buf)) > 0;)
-      held_.push_back({std::vector<std::uint8_t>(buf, buf + n), 0, usb_.arrival_ms(host_.now_ms())});
+      held_.push_back(
+          {std::vector<std::uint8_t>(buf, buf + n), 0, usb_.arrival_ms(host_.now_ms())});
   }
   BoardSim& board_;
   daemon::DaemonClock& host_;
@@ -195,7 +202,8 @@ class DelayedSimTransport final : public Transport {
   TransportCounters counters_;
 };
 
-/// Everything of the simulated robot, wired: world -> encoders and gyro -> Verilated board -> transport.
+/// Everything of the simulated robot, wired: world -> encoders and gyro -> Verilated board ->
+/// transport.
 struct VerilatedRobot {
   SimClockConfig clocks;
   QuadratureStream stream;
@@ -207,16 +215,19 @@ struct VerilatedRobot {
   UsbArrivals usb;
 
   /// `clocks`: perfect() by default here (SimRobotOptions chooses realistic ones for the daemon).
-  VerilatedRobot(const WorldConfig& world, Trajectory trajectory, const SimClockConfig& clock_config = {},
-                 std::uint64_t clock_seed = 1)
-      : clocks(clock_config), stream(world, std::move(trajectory)),
+  VerilatedRobot(const WorldConfig& world, Trajectory trajectory,
+                 const SimClockConfig& clock_config = {}, std::uint64_t clock_seed = 1)
+      : clocks(clock_config),
+        stream(world, std::move(trajectory)),
         source(stream, log, BoardCrystal{clock_config.board_drift_ppm, 0.0}),
         gyro(board_gyro_params(stream.world()),
              [this, scale = 1.0 + stream.world().gyro().scale_error()](double t_s) {
-               return scale * source.yaw().rate_dps(static_cast<std::int64_t>(t_s * static_cast<double>(BoardSim::kClockHz)));
+               return scale * source.yaw().rate_dps(static_cast<std::int64_t>(
+                                  t_s * static_cast<double>(BoardSim::kClockHz)));
              }),
         board(&source, &gyro),
-        clock(board, BoardCrystal{clock_config.board_drift_ppm, 0.0}), usb(clock_config, clock_seed) {}
+        clock(board, BoardCrystal{clock_config.board_drift_ppm, 0.0}),
+        usb(clock_config, clock_seed) {}
 
   /// A fresh transport each time (the board itself keeps running, as after a USB replug): the
   /// plain SimTransport with perfect clocks, else one with the USB latency.

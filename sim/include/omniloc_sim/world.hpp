@@ -1,6 +1,6 @@
 // The simulated robot: a three- or four-wheel omni platform (the wheel Jacobian of its RobotConfig:
-// equation (9) for the symmetric shorthand, any listed layout otherwise) tracking a Trajectory on the
-// FIRA field, with per-wheel slip, carpet bumps, encoder errors and a gyroscope. Time runs in
+// equation (9) for the symmetric shorthand, any listed layout otherwise) tracking a Trajectory on
+// the FIRA field, with per-wheel slip, carpet bumps, encoder errors and a gyroscope. Time runs in
 // board clock cycles; the physics advances in fixed steps (1 ms by default) with a constant body
 // twist per step, so the wheel travel is exact for the integrated ground truth.
 //
@@ -25,8 +25,9 @@
 
 namespace omniloc::sim {
 
-/// Wheel `wheel` (1..wheel count) spins `extra_speed_cm_per_s` faster than the ground under it, in its
-/// direction of travel, from start_s for duration_s: the wheel turns, the robot does not follow.
+/// Wheel `wheel` (1..wheel count) spins `extra_speed_cm_per_s` faster than the ground under it, in
+/// its direction of travel, from start_s for duration_s: the wheel turns, the robot does not
+/// follow.
 struct SlipEvent {
   int wheel = 1;
   double start_s = 0.0;
@@ -44,7 +45,8 @@ struct CarpetBump {
 
 /// The robot is picked up at at_s and put down at `to` at once: the wheels are in the air (no
 /// counts), the gyro feels the change of heading. The rest of the trajectory is driven from the new
-/// pose (the reference is moved rigidly with the robot); keeping it on the field is up to the caller.
+/// pose (the reference is moved rigidly with the robot); keeping it on the field is up to the
+/// caller.
 struct KidnapEvent {
   double at_s = 0.0;
   Pose2 to;
@@ -81,11 +83,11 @@ struct WorldConfig {
 struct SimWindow {
   EncoderWindow window;
   std::int64_t t_end_cycles = 0;
-  Pose2 truth;                    ///< at the end of the window (yaw wrapped)
-  double truth_distance_cm = 0.0; ///< path length of the robot centre since the start
-  std::uint8_t slip_wheels = 0;   ///< bit i: wheel i+1 slipped during this window
-  std::uint8_t bump_wheels = 0;   ///< bit i: wheel i+1 was on a bump during this window
-  bool kidnapped = false;         ///< the robot was carried during this window
+  Pose2 truth;                     ///< at the end of the window (yaw wrapped)
+  double truth_distance_cm = 0.0;  ///< path length of the robot centre since the start
+  std::uint8_t slip_wheels = 0;    ///< bit i: wheel i+1 slipped during this window
+  std::uint8_t bump_wheels = 0;    ///< bit i: wheel i+1 was on a bump during this window
+  bool kidnapped = false;          ///< the robot was carried during this window
 };
 
 /// Quarter-step positions of the four encoder slots over the last physics step (a three-wheel
@@ -108,7 +110,9 @@ inline constexpr int kFracBits = 16;
 [[nodiscard]] std::int64_t position_at(const StepSpan& span, int w, std::int64_t cycle);
 
 /// Whole quarter-steps at a fixed-point position.
-[[nodiscard]] constexpr std::int64_t quarter_of(std::int64_t pos) { return floor_div(pos, std::int64_t{1} << kFracBits); }
+[[nodiscard]] constexpr std::int64_t quarter_of(std::int64_t pos) {
+  return floor_div(pos, std::int64_t{1} << kFracBits);
+}
 
 /// Decoded count at quarter-step index q, as the RTL decoder counts (rtl/quadrature_decoder.v):
 /// X4 every transition, X2 the A transitions, X1 only the 00<->10 transition.
@@ -161,7 +165,8 @@ class World {
   std::uint8_t bump_mask_ = 0;
   bool kidnap_flag_ = false;
   std::size_t next_kidnap_ = 0;
-  // Rigid map applied to the trajectory's reference after kidnappings: p -> R(ref_yaw) p + ref_shift.
+  // Rigid map applied to the trajectory's reference after kidnappings: p -> R(ref_yaw) p +
+  // ref_shift.
   double ref_yaw_deg_ = 0.0;
   Eigen::Vector2d ref_shift_{0.0, 0.0};
   [[nodiscard]] TrajectorySample reference(double t_s) const;

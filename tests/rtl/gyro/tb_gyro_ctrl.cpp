@@ -24,9 +24,10 @@ using omniloc::sim::Icm42688;
 using omniloc::sim::Icm42688Params;
 
 constexpr double kClkHz = 12e6;
-constexpr std::uint64_t kMs = 12000;    // cycles per millisecond
-constexpr int kStuckN = 64;             // gyro_ctrl's STUCK_N default
-constexpr std::uint64_t kLatency = 8;   // cycles from the model's last SCLK edge to the hand-over, at most
+constexpr std::uint64_t kMs = 12000;  // cycles per millisecond
+constexpr int kStuckN = 64;           // gyro_ctrl's STUCK_N default
+constexpr std::uint64_t kLatency =
+    8;  // cycles from the model's last SCLK edge to the hand-over, at most
 constexpr unsigned kFlagId = 1, kFlagTimeout = 2, kFlagStuck = 4, kFlagInvalid = 8;
 
 struct Window {
@@ -34,7 +35,7 @@ struct Window {
   std::uint32_t count;
   std::uint32_t flags;
   std::uint32_t fault_count;
-  std::uint64_t tick_cycle;   // the step index in which tick_i was high
+  std::uint64_t tick_cycle;  // the step index in which tick_i was high
 };
 
 class Bench {
@@ -56,8 +57,8 @@ class Bench {
     if (dut_->gyro_valid_o) {
       auto sum = static_cast<std::int64_t>(dut_->gyro_sum_o & 0xFFFFFFU);
       if (sum & 0x800000) sum -= 0x1000000;
-      windows_.push_back({sum, dut_->gyro_count_o, dut_->gyro_flags_o, dut_->gyro_fault_count_o,
-                          last_tick_});
+      windows_.push_back(
+          {sum, dut_->gyro_count_o, dut_->gyro_flags_o, dut_->gyro_fault_count_o, last_tick_});
     }
   }
 
@@ -112,7 +113,7 @@ struct Accepted {
 Accepted accepted_of(const std::vector<Icm42688::Sample>& reads) {
   Accepted a;
   std::int16_t prev = 0;
-  int run = 0;   // repeats of prev
+  int run = 0;  // repeats of prev
   for (const auto& s : reads) {
     const bool invalid = s.value == INT16_MIN;
     const bool same = s.value == prev;
@@ -133,7 +134,8 @@ Accepted accepted_of(const std::vector<Icm42688::Sample>& reads) {
 /// The windows partition the accepted samples in order: window k holds the next count_k of them,
 /// its sum is theirs, each was read before its tick and after the previous tick (less the
 /// hand-over latency); all samples read well before the last tick are in some window.
-void expect_partition(const std::vector<Window>& windows, const std::vector<Icm42688::Sample>& acc) {
+void expect_partition(const std::vector<Window>& windows,
+                      const std::vector<Icm42688::Sample>& acc) {
   std::size_t next = 0;
   std::uint64_t prev_tick = 0;
   for (std::size_t k = 0; k < windows.size(); ++k) {
@@ -143,22 +145,25 @@ void expect_partition(const std::vector<Window>& windows, const std::vector<Icm4
     for (std::uint32_t i = 0; i < w.count; ++i) {
       const auto& s = acc[next + i];
       sum += s.value;
-      EXPECT_LT(s.cycle, w.tick_cycle) << "window " << k << " sample " << i << " read after the tick";
-      EXPECT_GE(s.cycle + kLatency, prev_tick) << "window " << k << " sample " << i
-                                               << " belongs to an earlier window";
+      EXPECT_LT(s.cycle, w.tick_cycle)
+          << "window " << k << " sample " << i << " read after the tick";
+      EXPECT_GE(s.cycle + kLatency, prev_tick)
+          << "window " << k << " sample " << i << " belongs to an earlier window";
     }
     EXPECT_EQ(w.sum, sum) << "window " << k << " (" << w.count << " samples)";
     next += w.count;
     prev_tick = w.tick_cycle;
   }
-  std::size_t settled = 0;   // samples read before the last tick less the latency
+  std::size_t settled = 0;  // samples read before the last tick less the latency
   for (const auto& s : acc) {
     if (s.cycle + kLatency < prev_tick) ++settled;
   }
   EXPECT_GE(next, settled) << "samples read before the last tick are missing from the windows";
 }
 
-double sine_rate(double t) { return 90.0 * std::sin(2.0 * M_PI * 0.7 * t) + 20.0 * std::cos(2.0 * M_PI * 3.1 * t); }
+double sine_rate(double t) {
+  return 90.0 * std::sin(2.0 * M_PI * 0.7 * t) + 20.0 * std::cos(2.0 * M_PI * 3.1 * t);
+}
 
 TEST(GyroCtrl, StartupChecksTheIdAndConfiguresThePart) {
   Bench b({kClkHz, 0.0, 0.0, 0.030, 1}, [](double) { return 0.0; });
@@ -167,13 +172,13 @@ TEST(GyroCtrl, StartupChecksTheIdAndConfiguresThePart) {
   EXPECT_TRUE(m.violations().empty()) << m.violations().front();
   EXPECT_EQ(m.soft_resets(), 1);
   EXPECT_EQ(m.who_am_i_reads(), 1);
-  EXPECT_EQ(m.reg(Icm42688::kPwrMgmt0), 0x0C);      // gyro low-noise mode
-  EXPECT_EQ(m.reg(Icm42688::kGyroConfig0), 0x06);   // +-2000 dps, 1 kHz
+  EXPECT_EQ(m.reg(Icm42688::kPwrMgmt0), 0x0C);     // gyro low-noise mode
+  EXPECT_EQ(m.reg(Icm42688::kGyroConfig0), 0x06);  // +-2000 dps, 1 kHz
   EXPECT_DOUBLE_EQ(m.odr_hz(), 1000.0);
   EXPECT_DOUBLE_EQ(m.sensitivity_lsb_per_dps(), 16.4);
   EXPECT_TRUE(b->gyro_running_o);
   EXPECT_FALSE(b->gyro_id_fault_o);
-  EXPECT_GE(m.reads().size(), 8U);   // data from 31.2 ms on (1.2 ms of waits + 30 ms start-up)
+  EXPECT_GE(m.reads().size(), 8U);  // data from 31.2 ms on (1.2 ms of waits + 30 ms start-up)
   EXPECT_EQ(b->gyro_fault_count_o, 0U);
 }
 
@@ -181,7 +186,7 @@ TEST(GyroCtrl, ConstantRateGivesTheHandComputedSum) {
   // 123.4 deg/s at 16.4 LSB/(deg/s) = 2023.76: every sample reads 2024. Noise-free, so the values
   // are identical: the first 63 are summed, from the 64th (STUCK_N) on they count as stuck.
   Bench b({kClkHz, 0.0, 0.0, 0.030, 1}, [](double) { return 123.4; });
-  b.run_windows(40 * kMs, 40 * kMs);   // the first window, to 40 ms: samples from 31.2 ms on
+  b.run_windows(40 * kMs, 40 * kMs);  // the first window, to 40 ms: samples from 31.2 ms on
   ASSERT_EQ(b.windows().size(), 1U);
   const std::uint32_t first = b.windows()[0].count;
   EXPECT_GE(first, 8U);
@@ -191,22 +196,23 @@ TEST(GyroCtrl, ConstantRateGivesTheHandComputedSum) {
   ASSERT_EQ(b.windows().size(), 6U);
   for (std::size_t k = 1; k < 6; ++k) {
     const Window& w = b.windows()[k];
-    EXPECT_EQ(w.count, 10U);          // 1 kHz in 10 ms windows
+    EXPECT_EQ(w.count, 10U);  // 1 kHz in 10 ms windows
     EXPECT_EQ(w.sum, 2024 * 10);
     EXPECT_EQ(w.flags, 0U);
   }
-  b.run_windows(20 * kMs, 10 * kMs);   // the run reaches 64 identical samples: the rest are stuck
+  b.run_windows(20 * kMs, 10 * kMs);  // the run reaches 64 identical samples: the rest are stuck
   ASSERT_EQ(b.windows().size(), 8U);
   const Window& w6 = b.windows()[6];
   EXPECT_EQ(w6.flags, kFlagStuck);
-  EXPECT_EQ(first + 50 + w6.count, 63U);   // exactly STUCK_N - 1 samples summed
+  EXPECT_EQ(first + 50 + w6.count, 63U);  // exactly STUCK_N - 1 samples summed
   EXPECT_EQ(w6.sum, 2024 * static_cast<std::int64_t>(w6.count));
   EXPECT_EQ(b.windows()[7].count, 0U);
   EXPECT_EQ(b->gyro_fault_count_o, 10U - w6.count + 10U);
 }
 
 TEST(GyroCtrl, EverySampleLandsInExactlyOneWindow) {
-  const std::uint64_t seed = omniloc::rtl_tb::test_seed("GyroCtrl.EverySampleLandsInExactlyOneWindow", 42);
+  const std::uint64_t seed =
+      omniloc::rtl_tb::test_seed("GyroCtrl.EverySampleLandsInExactlyOneWindow", 42);
   std::mt19937_64 rng(seed);
   Bench b({kClkHz, 0.7, 0.3, 0.030, seed}, sine_rate);
   b.run(35 * kMs);
@@ -237,7 +243,7 @@ TEST(GyroCtrl, WrongIdIsAFaultRetriedEvery100Ms) {
   b.model().faults().who_am_i = 0x12;
   b.run_windows(350 * kMs, 10 * kMs);
   auto& m = b.model();
-  EXPECT_EQ(m.who_am_i_reads(), 4);   // at 1 ms, then every 101 ms
+  EXPECT_EQ(m.who_am_i_reads(), 4);  // at 1 ms, then every 101 ms
   EXPECT_EQ(m.soft_resets(), 4);
   EXPECT_EQ(m.reg(Icm42688::kPwrMgmt0), 0x00) << "the gyro was switched on with a wrong ID";
   EXPECT_TRUE(b->gyro_id_fault_o);
@@ -256,7 +262,8 @@ TEST(GyroCtrl, WrongIdIsAFaultRetriedEvery100Ms) {
   b.run_windows(150 * kMs, 10 * kMs);
   EXPECT_TRUE(b->gyro_running_o);
   EXPECT_EQ(b.windows().back().count, 10U);
-  EXPECT_NEAR(static_cast<double>(b.windows().back().sum), 164.0 * 10, 150.0);   // 10 dps, noise 8 LSB rms
+  EXPECT_NEAR(static_cast<double>(b.windows().back().sum), 164.0 * 10,
+              150.0);  // 10 dps, noise 8 LSB rms
   EXPECT_EQ(b->gyro_fault_count_o, 4U);
   EXPECT_TRUE(m.violations().empty()) << m.violations().front();
 }
@@ -270,7 +277,7 @@ TEST(GyroCtrl, NoDataReadyIsATimeoutAndARestart) {
   b.run_windows(20 * kMs, 10 * kMs);
   m.faults().no_data_ready = false;
   b.run_windows(60 * kMs, 10 * kMs);
-  EXPECT_EQ(m.soft_resets(), 2);   // the start-up once more after the timeout
+  EXPECT_EQ(m.soft_resets(), 2);  // the start-up once more after the timeout
   EXPECT_EQ(b->gyro_fault_count_o, 1U);
   EXPECT_TRUE(b->gyro_running_o);
   int flagged = 0;
@@ -304,7 +311,7 @@ TEST(GyroCtrl, StuckValueIsRejectedFromTheNthRepeat) {
     if (w.flags & kFlagStuck) ++flagged;
     EXPECT_EQ(w.flags & ~kFlagStuck, 0U);
   }
-  EXPECT_GE(flagged, 13);   // ~137 stuck samples at 10 a window
+  EXPECT_GE(flagged, 13);  // ~137 stuck samples at 10 a window
   EXPECT_EQ(b.windows().back().count, 10U);
 }
 
@@ -314,7 +321,7 @@ TEST(GyroCtrl, InvalidValueIsRejected) {
   b.run_windows(20 * kMs, 10 * kMs);
   auto& m = b.model();
   m.faults().invalid = true;
-  b.run(5 * kMs);   // about five samples of 0x8000, within one window
+  b.run(5 * kMs);  // about five samples of 0x8000, within one window
   m.faults().invalid = false;
   b.run_windows(30 * kMs, 10 * kMs);
   const Accepted acc = accepted_of(m.reads());

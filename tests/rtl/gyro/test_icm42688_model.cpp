@@ -41,7 +41,9 @@ class Master {
     return rx;
   }
   void write(std::uint8_t addr, std::uint8_t v) { xfer({addr, v}); }
-  std::uint8_t read(std::uint8_t addr) { return xfer({static_cast<std::uint8_t>(0x80 | addr), 0})[1]; }
+  std::uint8_t read(std::uint8_t addr) {
+    return xfer({static_cast<std::uint8_t>(0x80 | addr), 0})[1];
+  }
   std::int16_t read_z() {
     const auto rx = xfer({0x80 | Icm42688::kGyroDataZ1, 0, 0});
     return static_cast<std::int16_t>(static_cast<std::uint16_t>((rx[1] << 8) | rx[2]));
@@ -61,9 +63,9 @@ TEST(Icm42688Model, ReadsIdAndResetValues) {
   spi.idle(10);
   EXPECT_EQ(spi.read(Icm42688::kWhoAmI), 0x47);
   EXPECT_EQ(spi.read(Icm42688::kGyroConfig0), 0x06);
-  EXPECT_EQ(spi.read(Icm42688::kIntStatus), 0x10);   // RESET_DONE_INT
-  EXPECT_EQ(spi.read(Icm42688::kIntStatus), 0x00);   // cleared by the read
-  EXPECT_EQ(spi.read_z(), INT16_MIN);                // no data yet
+  EXPECT_EQ(spi.read(Icm42688::kIntStatus), 0x10);  // RESET_DONE_INT
+  EXPECT_EQ(spi.read(Icm42688::kIntStatus), 0x00);  // cleared by the read
+  EXPECT_EQ(spi.read_z(), INT16_MIN);               // no data yet
   m.faults().who_am_i = 0x12;
   EXPECT_EQ(spi.read(Icm42688::kWhoAmI), 0x12);
   EXPECT_TRUE(m.violations().empty());
@@ -79,7 +81,7 @@ TEST(Icm42688Model, ScaleFollowsTheRangeAndOdrTheRate) {
   spi.write(Icm42688::kGyroConfig0, (2 << 5) | 5);
   EXPECT_DOUBLE_EQ(m.sensitivity_lsb_per_dps(), 65.5);
   EXPECT_DOUBLE_EQ(m.odr_hz(), 2000.0);
-  spi.idle(26 * kMs);   // 29 ms after PWR_MGMT0
+  spi.idle(26 * kMs);  // 29 ms after PWR_MGMT0
   EXPECT_TRUE(m.produced().empty()) << "data before the 30 ms start-up";
   spi.idle(2 * kMs);
   EXPECT_EQ(spi.read(Icm42688::kIntStatus) & Icm42688::kDataRdyInt, Icm42688::kDataRdyInt);
@@ -95,7 +97,7 @@ TEST(Icm42688Model, NoiseAndBiasHaveTheirStatistics) {
   Icm42688 m({kClkHz, 2.0, 1.0, 0.0, 99}, [](double) { return 0.0; });
   Master spi(m);
   spi.write(Icm42688::kPwrMgmt0, 0x0C);
-  spi.idle(2000 * kMs);   // 2 s at 1 kHz: 2000 samples
+  spi.idle(2000 * kMs);  // 2 s at 1 kHz: 2000 samples
   double s = 0, s2 = 0;
   const auto& p = m.produced();
   ASSERT_GE(p.size(), 1999U);
@@ -105,8 +107,8 @@ TEST(Icm42688Model, NoiseAndBiasHaveTheirStatistics) {
   }
   const double n = static_cast<double>(p.size());
   const double mean = s / n, sd = std::sqrt(s2 / n - mean * mean);
-  EXPECT_NEAR(mean, 32.8, 1.5);   // 4 sigma of the mean (0.37 LSB)
-  EXPECT_NEAR(sd, 16.4, 1.0);     // 4 sigma of the sd (0.26 LSB)
+  EXPECT_NEAR(mean, 32.8, 1.5);  // 4 sigma of the mean (0.37 LSB)
+  EXPECT_NEAR(sd, 16.4, 1.0);    // 4 sigma of the sd (0.26 LSB)
 }
 
 TEST(Icm42688Model, FlagsAMasterThatDoesNotWait) {
@@ -115,16 +117,16 @@ TEST(Icm42688Model, FlagsAMasterThatDoesNotWait) {
   spi.write(Icm42688::kDeviceConfig, 0x01);
   EXPECT_EQ(m.soft_resets(), 1);
   spi.idle(100);
-  spi.read(Icm42688::kWhoAmI);   // within 1 ms of the reset
+  spi.read(Icm42688::kWhoAmI);  // within 1 ms of the reset
   ASSERT_EQ(m.violations().size(), 1U);
   EXPECT_NE(m.violations()[0].find("1 ms of the soft reset"), std::string::npos);
   spi.idle(2 * kMs);
   spi.write(Icm42688::kPwrMgmt0, 0x0C);
-  spi.write(Icm42688::kGyroConfig0, 0x06);   // within 200 us of the mode change
+  spi.write(Icm42688::kGyroConfig0, 0x06);  // within 200 us of the mode change
   ASSERT_EQ(m.violations().size(), 2U);
   EXPECT_NE(m.violations()[1].find("200 us"), std::string::npos);
   spi.idle(kMs);
-  spi.write(Icm42688::kGyroConfig0, 0x0C);   // GYRO_ODR 12: reserved
+  spi.write(Icm42688::kGyroConfig0, 0x0C);  // GYRO_ODR 12: reserved
   ASSERT_EQ(m.violations().size(), 3U);
   EXPECT_NE(m.violations()[2].find("reserved"), std::string::npos);
 }

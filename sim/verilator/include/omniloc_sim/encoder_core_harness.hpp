@@ -56,7 +56,8 @@ class EncoderCoreHarness {
 
   /// Steps from issuing a request until its answer is in response().
   static constexpr int kBusLatency = 3;
-  /// Present a request during the next step() only; its answer is in response() kBusLatency steps later.
+  /// Present a request during the next step() only; its answer is in response() kBusLatency steps
+  /// later.
   void issue_read(std::uint8_t addr);
   void issue_write(std::uint8_t addr, std::uint32_t data);
   /// The bus answer acknowledged at the last step, if any.
