@@ -216,6 +216,8 @@ def cpp(spec, regs):
     for key, value in link_values(spec).items():
         out.append(f"/// {spec['link'][key]['description']}")
         out.append(f"inline constexpr std::uint32_t {camel(key)} = {value}u;")
+    out += ["/// The window period at reset (PERIOD = clock / TICK_HZ): the host's one definition of it.",
+            "inline constexpr double kWindowPeriodMs = 1000.0 / kTickHz;"]
     out += ["", "/// A bit field inside a 32-bit register.",
             "struct Field {", "  int lsb;", "  int width;",
             "  [[nodiscard]] constexpr std::uint32_t mask() const { return (width >= 32 ? 0xFFFFFFFFu : ((1u << width) - 1u)) << lsb; }",

@@ -12,13 +12,13 @@ module crc16_ccitt (
     input  wire [7:0]  data_i,
     output reg  [15:0] crc_o
 );
-    integer i;
-    always @(*) begin
-        crc_o = crc_i ^ {data_i, 8'h00};
-        for (i = 0; i < 8; i = i + 1) begin
-            crc_o = crc_o[15] ? ((crc_o << 1) ^ `OMNILOC_CRC_POLY) : (crc_o << 1);
-        end
+integer i;
+always @(*) begin
+    crc_o = crc_i ^ {data_i, 8'h00};
+    for (i = 0; i < 8; i = i + 1) begin
+        crc_o = crc_o[15] ? ((crc_o << 1) ^ `OMNILOC_CRC_POLY) : (crc_o << 1);
     end
+end
 
 // Only when this module is the proof's top (tests/formal/run_formal.sh defines FORMAL_TOP_<TOP>):
 // proven once for all inputs, it is a fact the modules that instantiate it may rely on, and carried

@@ -24,8 +24,8 @@
 `include "omniloc_regs.vh"
 
 module encoder_core #(
-    parameter CLK_HZ = `OMNILOC_PAPER_CLOCK_HZ,
-    parameter TICK_HZ = `OMNILOC_TICK_HZ,
+    parameter integer CLK_HZ = `OMNILOC_PAPER_CLOCK_HZ,
+    parameter integer TICK_HZ = `OMNILOC_TICK_HZ,
     parameter integer CHANNELS = `OMNILOC_CHANNELS,
     parameter integer BANK_IDX_W = $clog2(`OMNILOC_BODY_WINDOW_BYTES + 1)
 ) (

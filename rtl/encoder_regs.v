@@ -1,8 +1,9 @@
 // encoder_regs: register file of the encoder core, the window bank and its snapshot.
 //
 // Bus: a request (reg_rd_i or reg_wr_i, one cycle, with reg_addr_i/reg_wdata_i) is answered
-// in the next cycle by reg_ack_o with reg_rdata_o; reg_err_o comes with the ack when the address
-// is unknown, the register is read-only, the value is refused, or rd and wr are both high.
+// three cycles after it is presented (the "pipelined bus" section below) by reg_ack_o with
+// reg_rdata_o; reg_err_o comes with the ack when the address is unknown, the register is
+// read-only, the value is refused, or rd and wr are both high. One request a cycle is allowed.
 // A refused write changes nothing but STATUS.BAD_WRITE. Addresses, fields and their widths come from
 // the generated omniloc_regs.vh (single source of truth: common/regmap.json); the CLK_HZ/TICK_HZ
 // defaults are the paper's 40 MHz and 100 Hz.
@@ -28,8 +29,8 @@
 `include "omniloc_regs.vh"
 
 module encoder_regs #(
-    parameter CLK_HZ = `OMNILOC_PAPER_CLOCK_HZ,
-    parameter TICK_HZ = `OMNILOC_TICK_HZ,
+    parameter integer CLK_HZ = `OMNILOC_PAPER_CLOCK_HZ,
+    parameter integer TICK_HZ = `OMNILOC_TICK_HZ,
     parameter integer CHANNELS = `OMNILOC_CHANNELS,   // CONFIG.CHANNELS: the channels encoder_core built
     parameter integer BANK_IDX_W = $clog2(`OMNILOC_BODY_WINDOW_BYTES + 1)
 ) (
@@ -80,18 +81,18 @@ localparam integer BYTE_W = `OMNILOC_BODY_WINDOW_STATUS_W;
 localparam integer ST_W = `OMNILOC_STATUS_BITS;
 localparam [DATA_W-1:0] DEFAULT_PERIOD_CYCLES = CLK_HZ / TICK_HZ;
 localparam [DATA_W-1:0] PERIOD_MIN_CYCLES = `OMNILOC_PERIOD_MIN_CYCLES;
-localparam ILL_LSB = `OMNILOC_STATUS_ILLEGAL_LSB;
-localparam ILL_W = `OMNILOC_STATUS_ILLEGAL_W;
-localparam OVR_BIT = `OMNILOC_STATUS_OVERRUN_LSB;
-localparam BAD_BIT = `OMNILOC_STATUS_BAD_WRITE_LSB;
-localparam GYR_BIT = `OMNILOC_STATUS_GYRO_FAULT_LSB;
+localparam integer ILL_LSB = `OMNILOC_STATUS_ILLEGAL_LSB;
+localparam integer ILL_W = `OMNILOC_STATUS_ILLEGAL_W;
+localparam integer OVR_BIT = `OMNILOC_STATUS_OVERRUN_LSB;
+localparam integer BAD_BIT = `OMNILOC_STATUS_BAD_WRITE_LSB;
+localparam integer GYR_BIT = `OMNILOC_STATUS_GYRO_FAULT_LSB;
 localparam integer GSUM_W = `OMNILOC_GYRO_SUM_BITS;
 localparam integer GCNT_W = `OMNILOC_GYRO_COUNT_BITS;
 localparam integer GFLG_W = `OMNILOC_BODY_WINDOW_GYRO_FLAGS_W;
-localparam DEC_LSB = `OMNILOC_CONTROL_DECODE_LSB;
-localparam DEC_W = `OMNILOC_CONTROL_DECODE_W;
-localparam FLT_W = `OMNILOC_FILTER_LENGTH_W;
-localparam DIR_W = `OMNILOC_SNAP_DIR_DIR_W;
+localparam integer DEC_LSB = `OMNILOC_CONTROL_DECODE_LSB;
+localparam integer DEC_W = `OMNILOC_CONTROL_DECODE_W;
+localparam integer FLT_W = `OMNILOC_FILTER_LENGTH_W;
+localparam integer DIR_W = `OMNILOC_SNAP_DIR_DIR_W;
 localparam integer CFG_CH_W = `OMNILOC_CONFIG_CHANNELS_W;
 localparam integer ERR_W = `OMNILOC_ERROR_COUNT_BITS;
 localparam [CFG_CH_W-1:0] CHANNELS_FIELD = CHANNELS[CFG_CH_W-1:0];
@@ -163,13 +164,13 @@ assign win_status_o = win_status_q;
 localparam integer MUX_LO = 2;                   // words per group: 2^MUX_LO
 localparam integer MUX_HI = 3;                   // groups: 2^MUX_HI (32 words, addresses 0x00..0x1F)
 
-wire rd_i = reg_rd_i && !reg_wr_i;
-wire wr_i = reg_wr_i && !reg_rd_i;
+wire req_rd = reg_rd_i && !reg_wr_i;
+wire req_wr = reg_wr_i && !reg_rd_i;
 
 // Value checks of the writable registers: no bit above the register's fields, DECODE one of its values.
-wire [DEC_W-1:0] wdecode_i = reg_wdata_i[DEC_LSB +: DEC_W];
-wire decode_ok = (wdecode_i == `OMNILOC_CONTROL_DECODE_X4) || (wdecode_i == `OMNILOC_CONTROL_DECODE_X2)
-              || (wdecode_i == `OMNILOC_CONTROL_DECODE_X1);
+wire [DEC_W-1:0] req_wdecode = reg_wdata_i[DEC_LSB +: DEC_W];
+wire decode_ok = (req_wdecode == `OMNILOC_CONTROL_DECODE_X4) || (req_wdecode == `OMNILOC_CONTROL_DECODE_X2)
+              || (req_wdecode == `OMNILOC_CONTROL_DECODE_X1);
 wire control_ok = (reg_wdata_i[DATA_W-1:`OMNILOC_CONTROL_BITS] == {(DATA_W - `OMNILOC_CONTROL_BITS){1'b0}}) && decode_ok;
 wire filter_ok = (reg_wdata_i[DATA_W-1:`OMNILOC_FILTER_BITS] == {(DATA_W - `OMNILOC_FILTER_BITS){1'b0}});
 // period >= PERIOD_MIN_CYCLES, split so that no 32-bit carry chain is needed: any bit above the
@@ -178,12 +179,12 @@ localparam integer PMIN_W = $clog2(`OMNILOC_PERIOD_MIN_CYCLES + 1);
 wire period_ok = (reg_wdata_i[DATA_W-1:PMIN_W] != {(DATA_W - PMIN_W){1'b0}})
               || (reg_wdata_i[PMIN_W-1:0] >= PERIOD_MIN_CYCLES[PMIN_W-1:0]);
 
-reg known_i;
-reg writable_i;
+reg addr_known;
+reg addr_writable;
 always @(*) begin
-    known_i = `OMNILOC_ADDR_KNOWN(reg_addr_i) && (reg_addr_i != `OMNILOC_REG_LINK_ERRORS)
+    addr_known = `OMNILOC_ADDR_KNOWN(reg_addr_i) && (reg_addr_i != `OMNILOC_REG_LINK_ERRORS)
               && (reg_addr_i != `OMNILOC_REG_GYRO_STATE);
-    writable_i = `OMNILOC_ADDR_WRITABLE(reg_addr_i);
+    addr_writable = `OMNILOC_ADDR_WRITABLE(reg_addr_i);
 end
 
 // Stage R registers.
@@ -195,8 +196,8 @@ reg [MUX_LO+MUX_HI-1:0] rq_word;
 reg [DATA_W-1:0] rq_wdata;
 always @(posedge clk_i) begin
     // Data: no reset (only used with the valid bits).
-    rq_known      <= known_i;
-    rq_writable   <= writable_i;
+    rq_known      <= addr_known;
+    rq_writable   <= addr_writable;
     rq_control    <= (reg_addr_i == `OMNILOC_REG_CONTROL);
     rq_filter     <= (reg_addr_i == `OMNILOC_REG_FILTER);
     rq_period     <= (reg_addr_i == `OMNILOC_REG_PERIOD);
@@ -214,8 +215,8 @@ always @(posedge clk_i) begin
         rq_wr   <= 1'b0;
         rq_both <= 1'b0;
     end else begin
-        rq_rd   <= rd_i;
-        rq_wr   <= wr_i;
+        rq_rd   <= req_rd;
+        rq_wr   <= req_wr;
         rq_both <= reg_rd_i && reg_wr_i;
     end
 end

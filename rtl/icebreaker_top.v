@@ -36,26 +36,26 @@ module icebreaker_top #(
     output wire       LEDR_N
 );
 
-    // Power-on and button reset, synchronous to CLK.
-    reg [1:0] btn_sync_q = 2'b00;
-    reg [4:0] por_q = 5'd0;
-    always @(posedge CLK) begin
-        btn_sync_q <= {btn_sync_q[0], BTN_N};
-        if (!btn_sync_q[1]) por_q <= 5'd0;
-        else if (!por_q[4]) por_q <= por_q + 5'd1;
-    end
-    wire rst = !por_q[4];
+// Power-on and button reset, synchronous to CLK.
+reg [1:0] btn_sync_q = 2'b00;
+reg [4:0] por_q = 5'd0;
+always @(posedge CLK) begin
+    btn_sync_q <= {btn_sync_q[0], BTN_N};
+    if (!btn_sync_q[1]) por_q <= 5'd0;
+    else if (!por_q[4]) por_q <= por_q + 5'd1;
+end
+wire rst = !por_q[4];
 
-    wire activity, error;
-    omniloc_top #(.CLK_HZ(`OMNILOC_BOARD_CLOCK_HZ), .TICK_HZ(`OMNILOC_TICK_HZ), .BAUD(`OMNILOC_UART_BAUD),
-                  .CHANNELS(CHANNELS)) u_omniloc (
-        .clk_i(CLK), .rst_i(rst), .enc_a_i(ENC_A), .enc_b_i(ENC_B),
-        .uart_rx_i(RX), .uart_tx_o(TX),
-        .spi_sclk_o(GYRO_SCLK), .spi_mosi_o(GYRO_MOSI), .spi_miso_i(GYRO_MISO), .spi_cs_n_o(GYRO_CS_N),
-        .activity_o(activity), .error_o(error));
+wire activity, error;
+omniloc_top #(.CLK_HZ(`OMNILOC_BOARD_CLOCK_HZ), .TICK_HZ(`OMNILOC_TICK_HZ), .BAUD(`OMNILOC_UART_BAUD),
+              .CHANNELS(CHANNELS)) u_omniloc (
+    .clk_i(CLK), .rst_i(rst), .enc_a_i(ENC_A), .enc_b_i(ENC_B),
+    .uart_rx_i(RX), .uart_tx_o(TX),
+    .spi_sclk_o(GYRO_SCLK), .spi_mosi_o(GYRO_MOSI), .spi_miso_i(GYRO_MISO), .spi_cs_n_o(GYRO_CS_N),
+    .activity_o(activity), .error_o(error));
 
-    assign LEDG_N = !activity;
-    assign LEDR_N = !error;
+assign LEDG_N = !activity;
+assign LEDR_N = !error;
 
 endmodule
 

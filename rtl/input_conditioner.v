@@ -22,7 +22,7 @@
 `include "omniloc_regs.vh"
 
 module input_conditioner #(
-    parameter LEN_W = `OMNILOC_FILTER_LENGTH_W   // width of FILTER.LENGTH
+    parameter integer LEN_W = `OMNILOC_FILTER_LENGTH_W   // width of FILTER.LENGTH
 ) (
     input  wire             clk_i,
     input  wire             rst_i,

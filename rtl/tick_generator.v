@@ -20,8 +20,8 @@
 `include "omniloc_regs.vh"
 
 module tick_generator #(
-    parameter CLK_HZ = `OMNILOC_PAPER_CLOCK_HZ,
-    parameter TICK_HZ = `OMNILOC_TICK_HZ
+    parameter integer CLK_HZ = `OMNILOC_PAPER_CLOCK_HZ,
+    parameter integer TICK_HZ = `OMNILOC_TICK_HZ
 ) (
     input  wire        clk_i,
     input  wire        rst_i,

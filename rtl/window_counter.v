@@ -22,7 +22,7 @@
 `include "omniloc_regs.vh"
 
 module window_counter #(
-    parameter W = `OMNILOC_DATA_W   // the register width: counts and positions wrap at 2^W
+    parameter integer W = `OMNILOC_DATA_W   // the register width: counts and positions wrap at 2^W
 ) (
     input  wire         clk_i,
     input  wire         rst_i,

@@ -30,11 +30,13 @@
 `timescale 1ns / 1ps
 `default_nettype none
 
+`include "omniloc_regs.vh"
+
 module gyro_ctrl #(
-    parameter integer CLK_HZ = 12_000_000,       // clk_i frequency
-    parameter integer SCLK_HZ = 3_000_000,       // SPI clock (the part allows up to 24 MHz)
-    parameter integer ODR_HZ = 1000,             // gyro output data rate: 1000..32000 (table)
-    parameter integer FS_DPS = 2000,             // gyro full scale: 2000, 1000, 500, 250, 125, 62, 31, 15
+    parameter integer CLK_HZ = `OMNILOC_BOARD_CLOCK_HZ,  // clk_i frequency
+    parameter integer SCLK_HZ = `OMNILOC_GYRO_SCLK_HZ,   // SPI clock (the part allows up to 24 MHz)
+    parameter integer ODR_HZ = `OMNILOC_GYRO_ODR_HZ,     // gyro output data rate: 1000..32000 (table)
+    parameter integer FS_DPS = `OMNILOC_GYRO_FS_DPS,     // gyro full scale: 2000, 1000, 500, 250, 125, 62, 31, 15
     parameter integer COUNT_W = 8,               // bits of the per-window sample count
     parameter integer FCNT_W = 8,                // bits of the saturating fault counter
     parameter integer STUCK_N = 64,              // identical samples in a row that make a stuck value

@@ -23,9 +23,11 @@
 `timescale 1ns / 1ps
 `default_nettype none
 
+`include "omniloc_regs.vh"
+
 module spi_master #(
-    parameter integer CLK_HZ = 12_000_000,
-    parameter integer SCLK_HZ = 3_000_000
+    parameter integer CLK_HZ = `OMNILOC_BOARD_CLOCK_HZ,
+    parameter integer SCLK_HZ = `OMNILOC_GYRO_SCLK_HZ
 ) (
     input  wire       clk_i,
     input  wire       rst_i,

@@ -72,7 +72,7 @@ void SimCamera::on_truth(double t_ms) {
   // Frame k can be rendered once the log holds a sample at or after its time (truth interpolates).
   for (; static_cast<double>(next_job_k_) * period_ms_ <= t_ms; ++next_job_k_) {
     const double t = static_cast<double>(next_job_k_) * period_ms_;
-    if (t >= stop_ms_) continue;
+    if (stop_ms_ && t >= *stop_ms_) continue;
     const auto pose = truth_.truth(t);
     if (!pose) continue;
     RenderOptions o = options_;
@@ -88,7 +88,9 @@ void SimCamera::on_truth(double t_ms) {
 
 std::optional<CameraFrame> SimCamera::poll(double now_ms) {
   const double lead_ms = delayed_ ? latency_ms_ : 0.0;  // no frame is handed over sooner
-  const double kd = std::floor(std::min(now_ms - lead_ms, truth_.latest_ms()) / period_ms_);
+  const std::optional<double> latest_ms = truth_.latest_ms();
+  if (!latest_ms) return std::nullopt;  // no truth yet: nothing exposed
+  const double kd = std::floor(std::min(now_ms - lead_ms, *latest_ms) / period_ms_);
   if (kd < 0) return std::nullopt;
   auto k = static_cast<std::int64_t>(kd);
   // The newest frame handed over by now (the jitter can hold the last exposed one back).
@@ -99,7 +101,7 @@ std::optional<CameraFrame> SimCamera::poll(double now_ms) {
     return std::nullopt;
   }
   const double t = static_cast<double>(k) * period_ms_;
-  if (t >= stop_ms_) return std::nullopt;
+  if (stop_ms_ && t >= *stop_ms_) return std::nullopt;
   std::unique_lock lock(worker_->mu);
   // Frames before k that were never polled are dropped, rendered or not.
   std::erase_if(worker_->jobs, [k](const Worker::Job& j) { return j.k < k; });

@@ -24,7 +24,7 @@ void run_simulation(World& world, const OmniRenderer& renderer, const SimRunOpti
 void run_simulation(World& world, const FrameRender& renderer, const SimRunOptions& options,
                     const std::function<void(const SimWindow&)>& on_window,
                     const std::function<void(const SimFrame&)>& on_frame) {
-  const double clock_hz = world.config().robot.clock_hz;
+  const double clock_hz = world.config().clock_hz;
   const double window_ms = static_cast<double>(world.config().window_cycles) * 1000.0 / clock_hz;
   const double end_s =
       options.max_duration_s > 0.0 ? options.max_duration_s : world.trajectory().duration_s();

@@ -18,9 +18,7 @@ WorldConfig timed(const RobotConfig& robot, std::uint64_t seed) {
   WorldConfig c;
   c.robot = robot;
   c.seed = seed;
-  c.step_cycles = cycles_for(robot.clock_hz, 1.0);
-  c.window_cycles = cycles_for(robot.clock_hz, robot.window_period_ms);
-  c.first_window_end_cycles = c.window_cycles;
+  c.set_clock(c.clock_hz);
   return c;
 }
 
@@ -34,6 +32,13 @@ Eigen::Vector2d bump_gradient(const CarpetBump& b, const Eigen::Vector2d& p) {
 }
 
 }  // namespace
+
+void WorldConfig::set_clock(double hz, double window_period_ms) {
+  clock_hz = hz;
+  step_cycles = cycles_for(hz, 1.0);
+  window_cycles = cycles_for(hz, window_period_ms);
+  first_window_end_cycles = window_cycles;
+}
 
 WorldConfig WorldConfig::noise_free(const RobotConfig& robot, std::uint64_t seed) {
   WorldConfig c = timed(robot, seed);
@@ -119,7 +124,7 @@ World::World(const WorldConfig& config, Trajectory trajectory)
 }
 
 double World::time_s() const {
-  return static_cast<double>(span_.end_cycle) / config_.robot.clock_hz;
+  return static_cast<double>(span_.end_cycle) / config_.clock_hz;
 }
 
 bool World::finished() const {
@@ -141,8 +146,7 @@ TrajectorySample World::reference(double t_s) const {
 void World::kidnap(const Pose2& to) {
   // K(p) = to + R(dk) (p - here); the reference map becomes K o (current map).
   const double dk = angle_diff_deg(to.yaw_deg, pose_.yaw_deg);
-  const Eigen::Vector2d here(pose_.x_cm, pose_.y_cm);
-  ref_shift_ = Eigen::Vector2d(to.x_cm, to.y_cm) + robot_to_field(ref_shift_ - here, dk);
+  ref_shift_ = to.position_cm() + robot_to_field(ref_shift_ - pose_.position_cm(), dk);
   ref_yaw_deg_ += dk;
   pose_ = {to.x_cm, to.y_cm, pose_.yaw_deg + dk};
   gyro_.step(dk, 0.0, rng_);
@@ -150,7 +154,7 @@ void World::kidnap(const Pose2& to) {
 }
 
 void World::step() {
-  const double clock = config_.robot.clock_hz;
+  const double clock = config_.clock_hz;
   const std::int64_t c0 = span_.end_cycle;
   const std::int64_t c1 = c0 + config_.step_cycles;
   const double t0 = static_cast<double>(c0) / clock;
@@ -166,8 +170,7 @@ void World::step() {
     const TrajectorySample now = reference(t0);
     const TrajectorySample mid = reference(t0 + 0.5 * dt);
     const double k = config_.tracking_gain_per_s;
-    v_field = mid.velocity_cm_per_s +
-              k * Eigen::Vector2d(now.pose.x_cm - pose_.x_cm, now.pose.y_cm - pose_.y_cm);
+    v_field = mid.velocity_cm_per_s + k * (now.pose.position_cm() - pose_.position_cm());
     omega_deg = mid.yaw_rate_deg_per_s + k * angle_diff_deg(now.pose.yaw_deg, pose_.yaw_deg);
   }
   const Eigen::Vector2d v_body = field_to_robot(v_field, pose_.yaw_deg + 0.5 * omega_deg * dt);
@@ -231,9 +234,8 @@ void World::step() {
 
   prev_pose_ = pose_;
   prev_distance_cm_ = distance_cm_;
-  pose_.x_cm += dp.x();
-  pose_.y_cm += dp.y();
-  pose_.yaw_deg += rad_to_deg(dth);
+  pose_ = pose_.shifted(dp);
+  pose_.yaw_deg += rad_to_deg(dth);  // unwrapped: the truth's yaw is wrapped when it is reported
   distance_cm_ += dp.norm();
   prev_gyro_raw_deg_ = gyro_.raw_yaw_deg();
   gyro_.step(rad_to_deg(dth), dt, rng_);
@@ -248,7 +250,7 @@ SimWindow World::next_window() {
   SimWindow out;
   out.t_end_cycles = c;
   out.window.seq = seq_++;
-  out.window.t_end_ms = static_cast<double>(c) * 1000.0 / config_.robot.clock_hz;
+  out.window.t_end_ms = static_cast<double>(c) * 1000.0 / config_.clock_hz;
   for (int w = 0; w < 4; ++w) {
     const auto i = static_cast<std::size_t>(w);
     const std::int64_t count =
@@ -258,9 +260,7 @@ SimWindow World::next_window() {
   }
   out.window.gyro_yaw_deg =
       gyro_.report(prev_gyro_raw_deg_ + f * (gyro_.raw_yaw_deg() - prev_gyro_raw_deg_));
-  out.truth = {prev_pose_.x_cm + f * (pose_.x_cm - prev_pose_.x_cm),
-               prev_pose_.y_cm + f * (pose_.y_cm - prev_pose_.y_cm),
-               wrap_deg(prev_pose_.yaw_deg + f * (pose_.yaw_deg - prev_pose_.yaw_deg))};
+  out.truth = interpolate(prev_pose_, pose_, f);  // a step turns far less than half a turn
   out.truth_distance_cm = prev_distance_cm_ + f * (distance_cm_ - prev_distance_cm_);
   out.slip_wheels = slip_mask_;
   out.bump_wheels = bump_mask_;

@@ -87,7 +87,6 @@ TEST(BoardSession, IdentifiesConfiguresForTheRobotsDecodingAndUnwrapsTime) {
     Script s = good_board();
     BoardSessionOptions o;
     o.decoding = decoding;
-    o.window_period_ms = 10.0;
     BoardSession session(std::make_unique<ScriptedTransport>(s), o);
     EXPECT_EQ(session.identity().clock_hz, 12e6);
     EXPECT_EQ(session.identity().period_cycles, 120'000u);

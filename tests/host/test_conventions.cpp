@@ -136,6 +136,23 @@ TEST(Pose2Algebra, InterpolationIsLinearAndTakesTheShortArcAcrossTheSeam) {
   EXPECT_LE(interpolate(a, b, 0.5).yaw_deg, 180.0);
 }
 
+// A field-frame shift moves along the field's axes whatever the heading (unlike `*`, which moves
+// along the pose's own): (100, 50, 90) shifted by (10, 0) is (110, 50, 90), while * (10, 0, 0)
+// gives (100, 60, 90). with_yaw keeps the position and wraps the heading.
+TEST(Pose2Algebra, FieldFrameShiftAndNewHeadingByHand) {
+  const Pose2 a{100.0, 50.0, 90.0};
+  expect_pose_near(a.shifted({10.0, 0.0}), {110.0, 50.0, 90.0});
+  expect_pose_near(a * Pose2{10.0, 0.0, 0.0}, {100.0, 60.0, 90.0});
+  expect_pose_near(a.shifted({-3.0, 4.5}).shifted({3.0, -4.5}), a);
+  expect_pose_near(a.with_yaw(190.0), {100.0, 50.0, -170.0});
+  // The localizer's anchor carried forward: the anchor moves as the odometry did, in the field
+  // frame, and takes the odometry's heading.
+  const Pose2 odo_then{20.0, 30.0, 45.0}, odo_now{25.0, 28.0, 60.0};
+  const Pose2 carried =
+      a.shifted(odo_now.position_cm() - odo_then.position_cm()).with_yaw(odo_now.yaw_deg);
+  expect_pose_near(carried, {105.0, 48.0, 60.0});
+}
+
 TEST(Pose2Algebra, DistanceAndYawDifference) {
   EXPECT_DOUBLE_EQ(distance_cm(Pose2{1.0, 2.0, 0.0}, Pose2{4.0, 6.0, 90.0}),
                    5.0);  // 3-4-5, heading ignored

@@ -280,7 +280,10 @@ TEST(DaemonConfig, HelpListsEveryKeyAsAFlagWithItsDefault) {
   for (std::string flag : kEveryKey) {
     for (char& ch : flag)
       if (ch == '_') ch = '-';
-    EXPECT_NE(help.find("--" + flag + " "), std::string::npos) << flag << "\n" << help;
+    // "--udp-port NUMBER", or a switch's "--record-overwrite, --no-record-overwrite".
+    const bool listed = help.find("--" + flag + " ") != std::string::npos ||
+                        help.find("--" + flag + ",") != std::string::npos;
+    EXPECT_TRUE(listed) << flag << "\n" << help;
   }
   EXPECT_NE(help.find("--config"), std::string::npos);
   EXPECT_NE(help.find("UDP port the poses are sent to"), std::string::npos);
@@ -289,6 +292,23 @@ TEST(DaemonConfig, HelpListsEveryKeyAsAFlagWithItsDefault) {
   EXPECT_NE(help.find("\"\""), std::string::npos);  // an empty default is shown as ""
   for (const char* gone : {"--board ", "--sim-", "sim |"})
     EXPECT_EQ(help.find(gone), std::string::npos) << gone;
+}
+
+// A switch (a boolean key) is a flag: --record-overwrite sets it, --no-record-overwrite undoes a
+// config file's true, and --help shows no value for it (it once read "NUMBER=false").
+TEST(DaemonConfig, SwitchesAreFlags) {
+  EXPECT_FALSE(parse_flags({}).record_overwrite);
+  EXPECT_TRUE(parse_flags({"--record-overwrite"}).record_overwrite);
+  const auto p = test::write_file("overwrite.json", R"({"record_overwrite": true})");
+  EXPECT_TRUE(parse_flags({"--config", p.string()}).record_overwrite);
+  EXPECT_FALSE(parse_flags({"--config", p.string(), "--no-record-overwrite"}).record_overwrite);
+  EXPECT_FALSE(parse_flags({"--no-record-overwrite", "--config", p.string()}).record_overwrite);
+  // A value after the flag is a stray argument, refused by the parser.
+  EXPECT_EQ(flag_error({"--record-overwrite", "true"}).rfind("usage: ", 0), 0u);
+  const std::string help = CommandLine().app.help();
+  for (const char* shown : {"NUMBER=false", "NUMBER=true", "=false", "=true"})
+    EXPECT_EQ(help.find(shown), std::string::npos) << shown << "\n" << help;
+  EXPECT_NE(help.find("--no-record-overwrite"), std::string::npos) << help;
 }
 
 // Issue 17.3: log levels from the key table (--log-level, the config file) and -v / -q on top.

@@ -51,14 +51,14 @@ TEST(DaemonPublish, DatagramTextIsExactlyTheDocumentedSchema) {
       R"("vx_cm_s":120.50,"vy_cm_s":-3.25,"omega_deg_s":45.00,"mono_ms":98765.432,"wall_ms":1796280000123.500,)"
       R"("status":"ok"})");
   PoseMessage global = sample_message();  // the last image result came from a global search
-  global.search_range_cm = -1;
+  global.search_range_cm.reset();
   EXPECT_NE(
       omniloc::daemon::pose_json(global).find(R"("match_error":7.250,"search_range_cm":-1.0,)"),
       std::string::npos)
       << omniloc::daemon::pose_json(global);
   PoseMessage none = sample_message();
-  none.match_error = -1;
-  none.search_range_cm = -1;
+  none.match_error.reset();
+  none.search_range_cm.reset();
   none.source = "a\"b";
   none.status = DaemonStatus::kDegraded;
   none.t_uncertainty_ms.reset();  // not a board time: the key is left out
@@ -190,7 +190,7 @@ TEST(DaemonPublish, StatusLineShowsEveryFigure) {
   s.y_cm = 275.06;
   s.yaw_deg = -90.0;
   s.source = "odometry";
-  s.match_error = -1;
+  s.match_error.reset();
   s.uncertainty_cm = 3.25;
   s.gyro_drift_deg_per_s = -0.0124;
   s.windows_per_s = 100;

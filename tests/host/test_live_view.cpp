@@ -61,7 +61,7 @@ daemon::DaemonModels small_models() {
   return m;  // no database: the live view never matches
 }
 
-daemon::PoseEvent pose_at(double t_ms, double x_cm, double y_cm, double error) {
+daemon::PoseEvent pose_at(double t_ms, double x_cm, double y_cm, std::optional<double> error) {
   daemon::PoseEvent e;
   e.message.seq = static_cast<std::uint64_t>(t_ms / 10.0);
   e.message.t_ms = t_ms;
@@ -151,7 +151,7 @@ TEST(LiveState, PathErrorsAndPoseTextFollowTheDatagrams) {
   EXPECT_LE(k["path"].size(), 401u);
   EXPECT_GE(k["errors"][0][0].get<double>(), 40000.0 - 30000.0);
   // A pose without a fix (starting) is not put on the path, and the page is told there is none.
-  auto starting = pose_at(40010.0, 0.0, 0.0, -1.0);
+  auto starting = pose_at(40010.0, 0.0, 0.0, std::nullopt);
   starting.message.status = daemon::DaemonStatus::kStarting;
   s.on_pose(starting);
   EXPECT_FALSE(Json::parse(s.state_json())["has_pose"].get<bool>());

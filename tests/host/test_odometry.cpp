@@ -266,18 +266,20 @@ TEST(PaperOdometry, RotationInPlaceMovesTheRobot) {
   EXPECT_NEAR(len, 20.0 * th, 1e-3);
 }
 
-// Eq. (10) assumes T = 0.01 s in "res x 0.01": with a nominal 8 ms window the distance scales by
-// 0.8.
-TEST(PaperOdometry, Equation10UsesTheNominalPeriod) {
-  RobotConfig r;
-  r.window_period_ms = 8.0;
-  PaperOdometry p(r);
-  p.reset({0.0, 0.0, 0.0});
+// Eq. (10) assumes T = 0.01 s in "res x 0.01", the board's window period, whatever the window's
+// timestamps say: a window that lasted 8 ms moves the paper variant as far as one of 10 ms.
+TEST(PaperOdometry, Equation10UsesTheBoardsWindowPeriod) {
+  const RobotConfig r;
   const double th = deg_to_rad(1.0);
-  (void)p.update(win(0, 8.0, counts_for(r, 0.0, 0.0, th), 1.0));
-  const double d_i = counts_for(r, 0.0, 0.0, th)[0] * cm_per_count(r) * 0.8;
-  EXPECT_NEAR(std::hypot(p.estimate().pose.x_cm, p.estimate().pose.y_cm),
-              2.0 * (d_i - 20.0 * th / 2.0), 1e-9);
+  const auto travel_after_first_window = [&](double t_end_ms) {
+    PaperOdometry p(r);
+    p.reset({0.0, 0.0, 0.0});
+    (void)p.update(win(0, t_end_ms, counts_for(r, 0.0, 0.0, th), 1.0));
+    return std::hypot(p.estimate().pose.x_cm, p.estimate().pose.y_cm);
+  };
+  const double d_i = counts_for(r, 0.0, 0.0, th)[0] * cm_per_count(r);
+  EXPECT_NEAR(travel_after_first_window(8.0), 2.0 * (d_i - 20.0 * th / 2.0), 1e-9);
+  EXPECT_EQ(travel_after_first_window(8.0), travel_after_first_window(10.0));
 }
 
 }  // namespace

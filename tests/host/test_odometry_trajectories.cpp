@@ -250,11 +250,11 @@ TEST(OdometryTrajectories, WheelYawCrossChecksTheGyro) {
 // Windows of 8 ms on a 39.75 MHz clock (the iCE40 PLL's nearest to 40 MHz): the correct variant
 // takes time from the timestamps; the paper variant's eq. (10) keeps T = 10 ms and 0.01.
 TEST(OdometryTrajectories, OtherWindowPeriodAndClock) {
-  RobotConfig sim_robot;
-  sim_robot.window_period_ms = 8.0;
-  sim_robot.clock_hz = 39.75e6;
-  const RobotConfig host_robot;  // believes the nominal 10 ms
-  World world(WorldConfig::noise_free(sim_robot, 8), make_trajectory("random_walk", 8));
+  const RobotConfig robot;
+  auto sim_config = WorldConfig::noise_free(robot, 8);
+  sim_config.set_clock(39.75e6, 8.0);  // the host believes the register map's 10 ms
+  const RobotConfig& host_robot = robot;
+  World world(sim_config, make_trajectory("random_walk", 8));
   EXPECT_EQ(world.config().window_cycles, 318'000);
   Odometry odo(host_robot);
   PaperOdometry paper(host_robot);

@@ -293,19 +293,27 @@ TEST_F(RecordingFiles, PosesCsvRoundTrip) {
   b.match_error = 7.5;
   b.search_range_cm = 20.0;
   w.write(b);
+  LocalizedPose c = b;  // an image result of a global search: no search range
+  c.t_ms = 30.0;
+  c.match_error = 3.25;
+  c.search_range_cm.reset();
+  w.write(c);
   w.close();
   std::ifstream in(p);
   std::string header;
   std::getline(in, header);
   EXPECT_EQ(header, "t_ms,x_cm,y_cm,yaw_deg,source,match_error,search_range_cm");
   const auto rows = read_poses_csv(p);
-  ASSERT_EQ(rows.size(), 2u);
+  ASSERT_EQ(rows.size(), 3u);
   EXPECT_EQ(rows[0].source, PoseSource::kNone);
-  EXPECT_TRUE(std::isinf(rows[0].match_error));
+  EXPECT_FALSE(rows[0].match_error);  // written "inf"
+  EXPECT_FALSE(rows[0].search_range_cm);
   EXPECT_EQ(rows[1].source, PoseSource::kIntegrated);
   EXPECT_EQ(rows[1].pose.yaw_deg, -3.125);
   EXPECT_EQ(rows[1].match_error, 7.5);
   EXPECT_EQ(rows[1].search_range_cm, 20.0);
+  EXPECT_EQ(rows[2].match_error, 3.25);
+  EXPECT_FALSE(rows[2].search_range_cm);  // written -1
 }
 
 // Issue 16 item 4: reusing a record dir silently replaced the previous recording and left its old

@@ -27,7 +27,6 @@ using test::error_of;
 const std::vector<std::string> kEveryKey = {"wheel_radius_cm",         "center_to_wheel_cm",
                                             "motor_angle_deg",         "gear_ratio",
                                             "counts_per_rev",          "decoding",
-                                            "window_period_ms",        "clock_hz",
                                             "slip_threshold_cm_per_s", "wheel_noise_cm_per_sqrt_cm",
                                             "max_accel_cm_per_s2",     "odometry_noise_fraction",
                                             "gyro_arw_deg_per_sqrt_s"};
@@ -39,8 +38,6 @@ const std::string kEveryKeyJson = R"({
   "gear_ratio": 14,
   "counts_per_rev": 512,
   "decoding": 2,
-  "window_period_ms": 20,
-  "clock_hz": 12000000,
   "slip_threshold_cm_per_s": 7.5,
   "wheel_noise_cm_per_sqrt_cm": 0.02,
   "max_accel_cm_per_s2": 350,
@@ -59,7 +56,6 @@ TEST(RobotConfig, ShippedDefaultFileIsTheStructDefaultsEveryKey) {
   EXPECT_TRUE(c == RobotConfig{});
   // The documented values (docs/ODOMETRY.md): one wheel turn = 500 x 4 x 19 counts (issue 7).
   EXPECT_DOUBLE_EQ(counts_per_wheel_turn(c), 38000.0);
-  EXPECT_DOUBLE_EQ(c.clock_hz, 40.0e6);
 }
 
 TEST(RobotConfig, EveryKeyReachesItsMember) {
@@ -72,8 +68,6 @@ TEST(RobotConfig, EveryKeyReachesItsMember) {
   EXPECT_EQ(c.gear_ratio, 14.0);
   EXPECT_EQ(c.counts_per_rev, 512);
   EXPECT_EQ(c.decoding, 2);
-  EXPECT_EQ(c.window_period_ms, 20.0);
-  EXPECT_EQ(c.clock_hz, 12.0e6);
   EXPECT_EQ(c.slip_threshold_cm_per_s, 7.5);
   EXPECT_EQ(c.wheel_noise_cm_per_sqrt_cm, 0.02);
   EXPECT_EQ(c.max_accel_cm_per_s2, 350.0);
@@ -135,16 +129,13 @@ TEST(RobotConfig, BadValuesNameTheFileFieldAndValue) {
            "not valid JSON"},
           {test::replaced(v, "\"gear_ratio\": 19", "\"gear_ratio\": 1e400"), "gear_ratio",
            "number out of range: beyond a double (got 1e400)"},
-          {test::replaced(v, "\"decoding\": 4", "\"decoding\": 4, \"window_period_ms\": -10"),
-           "window_period_ms", "must be in [0.1, 1000] ms (got -10)"},
-          // Issue 16 item 6: a window of 1e-300 ms was accepted (every count a speed of ~1e300
-          // cm/s).
-          {test::replaced(v, "\"decoding\": 4", "\"decoding\": 4, \"window_period_ms\": 1e-300"),
-           "window_period_ms", "must be in [0.1, 1000] ms (got 1e-300)"},
-          {test::replaced(v, "\"decoding\": 4", "\"decoding\": 4, \"window_period_ms\": 1e6"),
-           "window_period_ms", "must be in [0.1, 1000] ms (got 1000000)"},
-          {test::replaced(v, "\"decoding\": 4", "\"decoding\": 4, \"clock_hz\": 1e-3"), "clock_hz",
-           "must be in [1e3, 1e10] Hz (got 0.001)"},
+          // The window period and the board clock are the board's (its PERIOD register and the
+          // register map's tick rate), no longer robot settings: a file that still sets them is
+          // refused naming the key.
+          {test::replaced(v, "\"decoding\": 4", "\"decoding\": 4, \"window_period_ms\": 10"),
+           "window_period_ms", "unknown key"},
+          {test::replaced(v, "\"decoding\": 4", "\"decoding\": 4, \"clock_hz\": 40000000"),
+           "clock_hz", "unknown key"},
           {test::replaced(v, "\"decoding\": 4",
                           "\"decoding\": 4, \"slip_threshold_cm_per_s\": 1e9"),
            "slip_threshold_cm_per_s", "must be at most 10000 cm/s (got 1000000000)"},
@@ -296,8 +287,6 @@ TEST(WheelLayout, ListedRobotRoundTripsThroughTheKeyTable) {
   EXPECT_EQ(keys, (std::vector<std::string>{"decoding", "wheels"}));
   const config::Document doc = config::parse_json_text(block.dump(), "meta.json");
   RobotConfig back = parse_robot_config(doc.root());
-  back.window_period_ms = c.window_period_ms;
-  back.clock_hz = c.clock_hz;
   EXPECT_TRUE(back == c);
   // And the shorthand still writes exactly the six contract keys.
   const config::Json six =

@@ -76,11 +76,8 @@ class GoldenQuadrature final : public omniloc::sim::EncoderSource {
 inline omniloc::sim::WorldConfig board_world(std::uint64_t seed) {
   using omniloc::sim::BoardSim;
   auto robot = omniloc::load_named_robot_config("default");
-  robot.clock_hz = static_cast<double>(BoardSim::kClockHz);
   auto config = omniloc::sim::WorldConfig::noise_free(robot, seed);
-  config.step_cycles = BoardSim::kClockHz / 1000;
-  config.window_cycles = BoardSim::kClockHz / 100;
-  config.first_window_end_cycles = config.window_cycles;
+  config.set_clock(static_cast<double>(BoardSim::kClockHz));
   config.random_encoder_phase = false;
   return config;
 }

@@ -56,6 +56,15 @@ inline void add_daemon_options(CLI::App& app, DaemonCommandLine& cl) {
     const config::Json v = *k.write(defaults);
     const std::string shown = v.is_string() ? "\"" + v.get<std::string>() + "\"" : v.dump();
     std::optional<std::string>* slot = &cl.values[i];
+    if (k.kind == config::Kind::kBoolean) {
+      // A switch is a flag (--record-overwrite), with --no-... to undo a config file's true.
+      const std::string name = flag_of(k.name);
+      app.add_flag_function(
+          "--" + name + ",!--no-" + name,
+          [slot](std::int64_t count) { *slot = count > 0 ? "true" : "false"; },
+          std::string(k.help) + " (default " + shown + ")");
+      continue;
+    }
     app.add_option_function<std::string>(
            flag_names_of(k.name), [slot](const std::string& text) { *slot = text; },
            std::string(k.help))

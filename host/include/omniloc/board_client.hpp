@@ -34,8 +34,8 @@ struct BoardClientOptions {
   /// wire at 1 Mbaud; the bridge's latency timer (1 ms) and USB scheduling dominate.
   std::chrono::milliseconds response_timeout{50};
   int attempts = 4;  ///< sends per request before giving up
-  std::size_t telemetry_queue =
-      1024;  ///< telemetry frames kept while nobody polls (oldest dropped)
+  /// telemetry frames kept while nobody polls (oldest dropped)
+  std::size_t telemetry_queue = 1024;
 };
 
 struct BoardClientCounters {

@@ -34,8 +34,8 @@ struct BoardIdentity {
   std::uint32_t control = 0;        ///< CONTROL as found (before the session configured it)
   std::uint32_t period_cycles = 0;  ///< PERIOD: board cycles per window
   double clock_hz = 0.0;  ///< board clock derived from PERIOD and the robot's window period
-  int channels =
-      regmap::kChannels;  ///< CONFIG.CHANNELS: encoder channels the board counts (3 or 4)
+  /// CONFIG.CHANNELS: encoder channels the board counts (3 or 4)
+  int channels = regmap::kChannels;
 
   [[nodiscard]] std::string version_text() const;  ///< "1.0.0"
 };
@@ -44,8 +44,8 @@ struct BoardIdentity {
 /// and both versions when the ID is wrong or the register map is not version_compatible with the
 /// host's (a patch difference, or a minor one from 1.0 on, is accepted: the host checks
 /// `version_differs()` to warn), or when CONFIG.CHANNELS is not 3 or 4.
-[[nodiscard]] BoardIdentity identify_board(BoardClient& client, double window_period_ms,
-                                           const std::string& where);
+/// The clock is PERIOD's reset value times the register map's tick rate (PERIOD = clock / TICK_HZ).
+[[nodiscard]] BoardIdentity identify_board(BoardClient& client, const std::string& where);
 
 /// True if a board of register-map version `board` can serve a host of version `host`: the same
 /// major version and, before 1.0 (where every minor version may change the layout), the same minor.
@@ -59,10 +59,9 @@ struct BoardIdentity {
 [[nodiscard]] std::uint32_t control_decode_for(int decoding);
 
 struct BoardSessionOptions {
-  int decoding = 4;                ///< the robot's quadrature decoding (robot config)
-  double window_period_ms = 10.0;  ///< the robot's window period, to turn PERIOD into the clock
-  bool configure = true;           ///< write CONTROL (enable, decoding, streaming) at open
-  int wheels = 0;                  ///< the robot's wheel count (wheel_count); 0 = not checked
+  int decoding = 4;       ///< the robot's quadrature decoding (robot config)
+  bool configure = true;  ///< write CONTROL (enable, decoding, streaming) at open
+  int wheels = 0;         ///< the robot's wheel count (wheel_count); 0 = not checked
   BoardClientOptions client;
 };
 

@@ -93,11 +93,9 @@ class ControlSocket {
   [[nodiscard]] std::optional<Datagram> receive();
   /// Sends `reply` to the datagram's sender; a failure is counted, never thrown.
   void reply(const Datagram& to, std::string_view reply);
-  [[nodiscard]] std::uint64_t reply_failures() const { return reply_failures_; }
 
  private:
   int fd_ = -1;
-  std::uint64_t reply_failures_ = 0;
 };
 
 }  // namespace omniloc::control

@@ -45,6 +45,13 @@ struct Pose2 {
   [[nodiscard]] Eigen::Vector2d operator*(const Eigen::Vector2d& p_local_cm) const;
   /// The pose that undoes this one: p * p.inverse() and p.inverse() * p are the identity.
   [[nodiscard]] Pose2 inverse() const;
+  /// Moved by a displacement given in the parent (field) frame, the heading kept: a field-frame
+  /// shift, where `*` would move along this pose's own axes. The yaw is left as it is.
+  [[nodiscard]] Pose2 shifted(const Eigen::Vector2d& d_parent_cm) const {
+    return {x_cm + d_parent_cm.x(), y_cm + d_parent_cm.y(), yaw_deg};
+  }
+  /// The same position with the heading yaw_deg (wrapped).
+  [[nodiscard]] Pose2 with_yaw(double new_yaw_deg) const;
   friend bool operator==(const Pose2&, const Pose2&) = default;
 };
 

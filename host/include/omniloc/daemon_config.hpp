@@ -53,8 +53,8 @@ struct DaemonConfig {
   std::string ros2_frame_id = "map";        ///< frame_id of the poses: the field frame, in metres
   // --- live view (docs/DAEMON.md "Live view"; needs a build with cpp-httplib) ---
   int http_port = 0;  ///< TCP port of the live view's web page; 0: off
-  std::string http_address =
-      "127.0.0.1";  ///< IPv4 address it listens on (0.0.0.0: every interface)
+  /// IPv4 address it listens on (0.0.0.0: every interface)
+  std::string http_address = "127.0.0.1";
 
   /// Checks ranges; throws ConfigError "<at>.<key>: <why> (got <value>)".
   void validate(const config::Origin& at) const;

@@ -31,9 +31,10 @@ struct PoseMessage {
   double y_cm = 0.0;
   double yaw_deg = 0.0;
   std::string source;  ///< the localizer's source of this pose ("image", "odometry", ...)
-  double match_error =
-      -1.0;  ///< normalised match error of the last image result used; < 0: none (key omitted)
-  double search_range_cm = -1;  ///< search range of that image result; < 0: none (key omitted)
+  /// Normalised match error of the last image result used; none: no image result (key omitted).
+  std::optional<double> match_error;
+  /// Search range of that image result; none: a global search (sent as -1 beside a match_error).
+  std::optional<double> search_range_cm;
   double uncertainty_cm = 0.0;  ///< 1-sigma position uncertainty
   double uncertainty_yaw_deg = 0.0;
   double vx_cm_s = 0.0;  ///< robot-frame velocity (+x forward, +y left) from the odometry
@@ -80,7 +81,7 @@ struct StatusSnapshot {
   DaemonStatus status = DaemonStatus::kStarting;
   double x_cm = 0.0, y_cm = 0.0, yaw_deg = 0.0;
   std::string source;
-  double match_error = -1.0;
+  std::optional<double> match_error;  ///< none: no image result ("err=-")
   double uncertainty_cm = 0.0;
   double gyro_drift_deg_per_s = 0.0;  ///< drift correction the localizer learnt from the images
   double windows_per_s = 0.0;         ///< encoder windows received over the last period

@@ -82,9 +82,6 @@ struct FuzzyResult {
 /// Nearest of `ranges_cm` (ties, within 1e-9 cm, go to the larger).
 [[nodiscard]] double snap_to_ranges(double value_cm, const std::vector<double>& ranges_cm);
 
-/// config.validate(source).
-void validate_fuzzy_config(const FuzzyConfig& config, const std::string& source);
-
 /// Reads {"speed_max_cm_per_s", "speed_terms": {"VL": [a,b,c,d], "L": ..., "H": ..., "VH": ...},
 /// "range_max_cm", "range_terms": {...}, "rules": {"VL": "VL", ...}, "resolution_cm",
 /// "snap_ranges_cm": [...]} (every key required) from a parsed JSON node and validates it; errors

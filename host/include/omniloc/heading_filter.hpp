@@ -11,6 +11,8 @@
 // the measurement to correct(). Time is the board's (ms), angles degrees.
 #pragma once
 
+#include <optional>
+
 namespace omniloc {
 
 struct HeadingFilterConfig {
@@ -42,7 +44,7 @@ class HeadingFilter {
 
   HeadingFilterConfig config_;
   double rate_deg_per_s_ = 0.0;
-  double last_fix_ms_ = -1e300;
+  std::optional<double> last_fix_ms_;
 };
 
 }  // namespace omniloc

@@ -44,9 +44,6 @@ struct Scan {
   /// Where ray k's view ends (px from the image centre, exclusive): its crossings are the ones
   /// below it. kRayHidden: nothing seen; kRayToViewEnd: seen to the end of the view.
   std::array<std::uint8_t, kScanRays> ray_end_px{};
-  [[nodiscard]] bool ray_seen(int k) const {
-    return ray_end_px[static_cast<std::size_t>(k)] != kRayHidden;
-  }
   /// Rays that saw anything (ray_end_px > 0).
   [[nodiscard]] int rays_valid() const;
 };

@@ -29,6 +29,7 @@
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -44,8 +45,8 @@ struct LiveViewOptions {
   std::string address = "127.0.0.1";  ///< dotted IPv4 address to listen on
   int port = 0;  ///< TCP port; 0: any free port (LiveViewServer::port() says which)
   double frame_min_period_ms = 200.0;  ///< the overlay image is made at most this often (wall time)
-  double frame_keep_period_ms =
-      100.0;                      ///< a camera frame is copied at most this often (daemon time)
+  /// a camera frame is copied at most this often (daemon time)
+  double frame_keep_period_ms = 100.0;
   double path_s = 20.0;           ///< the path shown: this many seconds of daemon time ...
   double path_step_ms = 50.0;     ///< ... a point every this many ms
   double error_history_s = 30.0;  ///< match errors shown: this many seconds, ...
@@ -105,14 +106,14 @@ class LiveState {
   std::string status_line_;
   std::uint64_t frames_ = 0;  // frames seen
   cv::Mat frame_;             // the last frame kept (a copy; never written after it is kept)
-  double frame_t_ms_ = -1e300;
-  std::uint64_t frame_seq_ = 0;     // frames kept
-  daemon::PoseMessage frame_pose_;  // the pose when it was kept
+  std::optional<double> frame_t_ms_;  // none: no frame kept yet
+  std::uint64_t frame_seq_ = 0;       // frames kept
+  daemon::PoseMessage frame_pose_;    // the pose when it was kept
   bool frame_has_pose_ = false;
   // The last overlay, what it was made from, and its encodings (made on demand).
   cv::Mat overlay_;
-  std::uint64_t overlay_seq_ = 0;  // frame_seq_ it was drawn from (0: none yet)
-  double overlay_wall_ms_ = -1e300;
+  std::uint64_t overlay_seq_ = 0;          // frame_seq_ it was drawn from (0: none yet)
+  std::optional<double> overlay_wall_ms_;  // steady clock when drawn (none: no overlay yet)
   std::uint64_t encoded_ = 0;
   ExtractionReport overlay_report_;
   double overlay_t_ms_ = 0.0;

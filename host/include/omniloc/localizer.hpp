@@ -67,23 +67,23 @@ struct LocalizerConfig {
   /// E_TH 20.
   MatchCost match_cost = MatchOptions{}.cost;
   int crossing_cap_px = MatchOptions{}.crossing_cap_px;  ///< kBounded: cap C of one crossing's cost
-  double e_th =
-      8.0;  ///< match threshold on the normalised error (kBounded: px per crossing; paper: 20)
-  double ambiguity_ratio =
-      MatchOptions{}.ambiguity_ratio;  ///< ambiguous when 2nd error <= ratio * best
-  double reset_period_ms = 125.0;      ///< odometry origin reset period (paper: 125 ms)
+  /// match threshold on the normalised error (kBounded: px per crossing; paper: 20)
+  double e_th = 8.0;
+  /// ambiguous when 2nd error <= ratio * best
+  double ambiguity_ratio = MatchOptions{}.ambiguity_ratio;
+  double reset_period_ms = 125.0;  ///< odometry origin reset period (paper: 125 ms)
   double history_ms = 1000.0;  ///< odometry history kept for late frames; older frames are dropped
   int scan_rays_per_degree = 2;  ///< on_image(): robot-frame scan step (for re-rotating by yaw)
   // --- kFull only ---
   Refinement refinement = Refinement::kRayCast;  ///< kRayCast: E_TH judged at the refined position
   double min_range_cm = 10.0;  ///< local search at least this wide (0 would pin to one grid point)
   bool refuse_ambiguous = true;  ///< a global result flagged ambiguous is never accepted
-  double image_sigma_cm =
-      2.0;  ///< a fix's position uncertainty when its match gives none (MatchResult::sigma_cm)
+  /// a fix's position uncertainty when its match gives none (MatchResult::sigma_cm)
+  double image_sigma_cm = 2.0;
   double image_sigma_yaw_deg = 0.5;
   int lost_after_bad_frames = 30;  ///< this many bad results in a row -> lost (0.5 s at 60 Hz)
-  double check_period_ms =
-      100.0;  ///< cross-check by global search at least this often while tracking
+  /// cross-check by global search at least this often while tracking
+  double check_period_ms = 100.0;
   double disagree_min_cm = 30.0;  ///< global vs tracked pose farther than max(this, k sigma) ...
   double disagree_sigmas = 4.0;   ///< ... (k) with the global result clearly better ...
   double disagree_error_ratio = 0.7;  ///< ... (global error < ratio * local error) ...
@@ -144,8 +144,8 @@ struct LocalizerPolicy {
   double min_range_cm = 0.0;    ///< the local search is at least this wide (kFull: min_range_cm)
   bool cross_check = false;     ///< a global search checks the tracked pose (lost detection)
   bool correct_yaw = false;  ///< the image heading filter at origin resets (kFull, yaw_correction)
-  bool keep_anchor_on_reject =
-      false;                 ///< a bad result keeps the last good image (paper: P_IL <- P_E)
+  /// a bad result keeps the last good image (paper: P_IL <- P_E)
+  bool keep_anchor_on_reject = false;
   bool detect_lost = false;  ///< lost_after_bad_frames bad results in a row -> lost
   [[nodiscard]] static LocalizerPolicy of(const LocalizerConfig& config);
 };
@@ -168,13 +168,14 @@ struct LocalizedPose {
   std::uint32_t seq = 0;
   Pose2 pose;
   PoseSource source = PoseSource::kNone;
-  double match_error = kNoError;  ///< last image result's normalised error (inf: none yet)
-  double search_range_cm = 0.0;   ///< range of the last local search (-1 after a global search)
-  double sigma_xy_cm = 0.0;       ///< 1-sigma position uncertainty
+  /// The last image result's normalised error (none: no image matched yet).
+  std::optional<double> match_error;
+  /// The range of that result's local search (none: it came from a global search, or none yet).
+  std::optional<double> search_range_cm;
+  double sigma_xy_cm = 0.0;  ///< 1-sigma position uncertainty
   double sigma_yaw_deg = 0.0;
-  double image_age_ms = 0.0;  ///< t_ms minus the time of the last image applied (inf: none)
-  bool slip = false;          ///< the odometry saw a wheel slip in this window
-  double vx_cm_s = 0.0;       ///< robot-frame velocity from the odometry's last window
+  bool slip = false;     ///< the odometry saw a wheel slip in this window
+  double vx_cm_s = 0.0;  ///< robot-frame velocity from the odometry's last window
   double vy_cm_s = 0.0;
   double omega_deg_s = 0.0;  ///< yaw rate over the last window (the gyro's)
 };
@@ -217,8 +218,8 @@ struct LocalizerStats {
   int lost_events = 0;
   int yaw_corrections = 0;
   int decided_by_side = 0;  ///< ambiguous global results decided by the kick-off rule (set_side)
-  int heading_alignments_dropped =
-      0;  ///< a relative gyro's alignment forgotten after failed searches
+  /// a relative gyro's alignment forgotten after failed searches
+  int heading_alignments_dropped = 0;
 };
 
 class Localizer {
@@ -371,6 +372,9 @@ class Localizer {
   [[nodiscard]] MatchResult local_match(const Frame& frame, double range_cm) const;
   [[nodiscard]] double search_range_cm(double speed_cm_per_s) const;
   void note_global(FrameReport& rep, const SingleFrameResult& global);
+  /// Keeps an image result's error and its local search range (none: a global search) for the
+  /// poses that follow.
+  void note_image_result(double error, std::optional<double> range_cm);
 
   // --- odometry history ---
   [[nodiscard]] bool covered(double t_ms) const;
@@ -398,8 +402,8 @@ class Localizer {
   MatchOptions match_options_;
   GoalColourModels goal_colours_;
   std::optional<GoalColour> side_;  ///< the defended goal's colour (set_side)
-  HeadingTrust trust_ =
-      HeadingTrust::kAbsolute;    ///< set_heading_trust (gyro_yaw_known false: kNone)
+  /// set_heading_trust (gyro_yaw_known false: kNone)
+  HeadingTrust trust_ = HeadingTrust::kAbsolute;
   bool heading_aligned_ = false;  ///< kRelative: a fix has aligned the gyro with the field since
   int bad_aligned_searches_ = 0;  ///< failed global searches in a row at the aligned heading
   bool kickoff_pending_ = false;  ///< set_side given and no fix since: the kick-off rule applies
@@ -414,11 +418,10 @@ class Localizer {
   std::vector<FrameReport> reports_;
   State state_ = State::kSearching;
   Anchor anchor_;
-  double last_reset_ms_ = -1e300;
-  double last_check_ms_ = -1e300;
-  double last_image_ms_ = -1e300;
-  double last_error_ = kNoError;
-  double last_range_cm_ = 0.0;
+  std::optional<double> last_reset_ms_;  ///< the odometry origin's last reset (none yet)
+  std::optional<double> last_check_ms_;  ///< the last cross-check (none yet)
+  std::optional<double> last_error_;     ///< LocalizedPose::match_error
+  std::optional<double> last_range_cm_;  ///< LocalizedPose::search_range_cm
   bool last_good_ = false;
   bool applied_this_window_ = false;
   bool trimmed_ = false;  // history has lost its first windows: older frames are dropped

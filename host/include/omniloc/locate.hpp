@@ -41,8 +41,8 @@ struct SingleFrameResult {
   Pose2 pose;             ///< the chosen candidate (yaw: the given heading, or the one found)
   MatchResult match;      ///< at pose; error is the judged error (see locate.hpp)
   bool accepted = false;  ///< error < E_TH and not refused as ambiguous
-  bool ambiguous =
-      false;  ///< the position is still ambiguous after the goal cue (the twin stands elsewhere)
+  /// the position is still ambiguous after the goal cue (the twin stands elsewhere)
+  bool ambiguous = false;
   /// The twin stands at (nearly) the same position, at the opposite heading: the robot is near the
   /// centre of the point-symmetric field and the goal cue did not decide. The position is known,
   /// the heading only up to 180 deg (a Localizer without a heading refuses it; `locate` accepts

@@ -63,8 +63,8 @@ struct SlipReport {
   int wheel = 0;              ///< 1..wheel count when detected, else 0
   double magnitude_cm = 0.0;  ///< wheel travel not explained by the robot's motion (signed)
   double magnitude_cm_per_s = 0.0;
-  double residual_cm_per_s =
-      0.0;  ///< norm of the wheels' LS residual with the gyro's rotation, per second
+  /// norm of the wheels' LS residual with the gyro's rotation, per second
+  double residual_cm_per_s = 0.0;
   double threshold_cm_per_s = 0.0;  ///< what the residual was compared with in this window
   /// Wheel-only rotation rate (LS, no gyro) minus the gyro's yaw rate. With three wheels this is
   /// all the check has: the residual is |n . J_theta| times it (n: the normal of the translation

@@ -102,12 +102,12 @@ struct DecoderCounters {
   std::uint64_t bad_crc = 0;       ///< candidates whose CRC did not match
   std::uint64_t bad_length = 0;    ///< candidates whose LEN did not match their TYPE's body size
   std::uint64_t unknown_type = 0;  ///< candidates with a TYPE regmap.json does not define
-  std::uint64_t resync_bytes =
-      0;  ///< bytes discarded: garbage before a SYNC and the SYNC of each rejected candidate
+  /// bytes discarded: garbage before a SYNC and the SYNC of each rejected candidate
+  std::uint64_t resync_bytes = 0;
   std::uint64_t telemetry_gaps = 0;  ///< times the telemetry sequence skipped forward
   std::uint64_t telemetry_lost = 0;  ///< telemetry frames missing in those gaps
-  std::uint64_t telemetry_stale =
-      0;  ///< telemetry frames older than or equal to the last one (dropped)
+  /// telemetry frames older than or equal to the last one (dropped)
+  std::uint64_t telemetry_stale = 0;
   friend bool operator==(const DecoderCounters&, const DecoderCounters&) = default;
 };
 

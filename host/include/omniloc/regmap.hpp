@@ -44,6 +44,8 @@ inline constexpr std::uint32_t kUartBaud = 1000000u;
 inline constexpr std::uint32_t kTickHz = 100u;
 /// frame_rx ends a frame with a longer gap between two of its bytes as truncated (MALFORMED, detail 0xFF): 100 byte times at 1 Mbaud.
 inline constexpr std::uint32_t kFrameGapTimeoutUs = 1000u;
+/// The window period at reset (PERIOD = clock / TICK_HZ): the host's one definition of it.
+inline constexpr double kWindowPeriodMs = 1000.0 / kTickHz;
 
 /// A bit field inside a 32-bit register.
 struct Field {

@@ -30,12 +30,12 @@ inline constexpr int kMaxWheels = 4;  ///< EncoderWindow::counts has this many s
 /// Its encoder measures the speed of the robot's point under the wheel along the drive direction:
 /// V = u . (v + omega x p), p = distance (cos mount, sin mount), u = (cos drive, sin drive).
 struct WheelConfig {
-  double mount_angle_deg =
-      0.0;  ///< where the wheel sits: direction of its contact point from the centre
+  /// where the wheel sits: direction of its contact point from the centre
+  double mount_angle_deg = 0.0;
   double distance_cm = 0.0;  ///< centre to contact point
-  double drive_angle_deg =
-      90.0;  ///< direction the contact point moves for a positive count (tangential
-             ///< wheels: mount + 90 turning the robot counter-clockwise, mount - 90 reversed)
+  /// direction the contact point moves for a positive count (tangential
+  /// wheels: mount + 90 turning the robot counter-clockwise, mount - 90 reversed)
+  double drive_angle_deg = 90.0;
   double wheel_radius_cm = 5.0;
   double gear_ratio = 19.0;  ///< motor turns per wheel turn
   int counts_per_rev = 500;  ///< encoder cycles (lines) per motor turn
@@ -58,12 +58,10 @@ struct RobotConfig {
   std::vector<WheelConfig> wheels;
 
   // --- optional ---
-  double window_period_ms = 10.0;  ///< nominal board window (100 Hz); odometry uses timestamps
-  double clock_hz = 40.0e6;        ///< board clock (timestamps count its cycles)
-  double slip_threshold_cm_per_s =
-      5.0;  ///< LS residual rate above which a wheel is called slipping
-  double wheel_noise_cm_per_sqrt_cm =
-      0.01;  ///< random wheel travel noise; the threshold is at least 6 sigma
+  /// LS residual rate above which a wheel is called slipping
+  double slip_threshold_cm_per_s = 5.0;
+  /// random wheel travel noise; the threshold is at least 6 sigma
+  double wheel_noise_cm_per_sqrt_cm = 0.01;
   double max_accel_cm_per_s2 = 400.0;      ///< motion prior used to tell diagonal wheels apart
   double odometry_noise_fraction = 0.005;  ///< 1-sigma position uncertainty growth per cm driven
   double gyro_arw_deg_per_sqrt_s = 0.01;   ///< gyro angle random walk, for yaw uncertainty

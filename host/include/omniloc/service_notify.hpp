@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
 namespace omniloc {
@@ -19,14 +20,10 @@ class ServiceNotifier {
   void loop(double now_ms);
   void status(const std::string& line);
   void stopping();
-  /// 0 when the service manager asked for no watchdog (or there is none).
-  [[nodiscard]] std::uint64_t watchdog_interval_us() const { return watchdog_us_; }
-  [[nodiscard]] std::uint64_t watchdog_pings() const { return pings_; }
 
  private:
-  std::uint64_t watchdog_us_ = 0;
-  double last_ping_ms_ = -1e300;
-  std::uint64_t pings_ = 0;
+  std::uint64_t watchdog_us_ = 0;  ///< 0: the service manager asked for no watchdog
+  std::optional<double> last_ping_ms_;
 };
 
 }  // namespace omniloc

@@ -66,8 +66,8 @@ struct UsbBoardInfo {
   std::string manufacturer;
   std::string product;
   std::string serial;
-  bool is_omniloc =
-      false;          ///< product string matches the one the EEPROM of an omniloc board carries
+  /// product string matches the one the EEPROM of an omniloc board carries
+  bool is_omniloc = false;
   std::string error;  ///< why its strings could not be read (e.g. LIBUSB_ERROR_ACCESS), else empty
 };
 
@@ -79,8 +79,8 @@ struct UsbTransportOptions {
   std::chrono::milliseconds io_timeout{500};  ///< control and bulk-OUT transfers
   int in_transfers = 4;                       ///< bulk-IN transfers kept in flight
   int in_transfer_bytes = 4096;               ///< several 512-byte packets per transfer
-  std::size_t rx_buffer_bytes =
-      1 << 20;  ///< host-side buffer; beyond it bytes are dropped and counted
+  /// host-side buffer; beyond it bytes are dropped and counted
+  std::size_t rx_buffer_bytes = 1 << 20;
 };
 
 /// Lists every FT2232H (0403:6010) on the bus, omniloc boards flagged.

@@ -65,20 +65,20 @@ struct GoalHsv {
 /// The extraction's own thresholds ("vision": {"extraction": {...}}).
 struct ExtractionParams {
   int end_run_px = 4;  ///< this many "other" bins in a row end the ray (a line's fringe is 1-2 px)
-  int carpet_resume_px =
-      4;  ///< carpet bins in a row behind an end: an obstacle, not the carpet's end
+  /// carpet bins in a row behind an end: an obstacle, not the carpet's end
+  int carpet_resume_px = 4;
   int resume_within_px = 40;  ///< ... looked for this far behind the end (a ball, a low robot)
   double obstacle_window_deg = 30.0;  ///< an end this far inside the median end of the rays within
   int obstacle_step_px = 8;  ///< +- window is an obstacle (a tall one hides the carpet behind it)
-  double edge_fraction =
-      0.5;  ///< a line's edge: where it first reaches this fraction from carpet to peak
+  /// a line's edge: where it first reaches this fraction from carpet to peak
+  double edge_fraction = 0.5;
   int carpet_mean_px = 8;  ///< length (px) of the running carpet mean along a ray
   int sectors = 16;        ///< light-following sectors around the image centre
-  double light_follow =
-      0.5;  ///< per frame, each sector's level moves this fraction towards what it saw
+  /// per frame, each sector's level moves this fraction towards what it saw
+  double light_follow = 0.5;
   double light_range = 2.0;  ///< a sector's level stays within [ref / range, ref * range]
-  double val_sigmas =
-      4.0;  ///< estimated val_step = this many robust sigmas of the carpet's brightness
+  /// estimated val_step = this many robust sigmas of the carpet's brightness
+  double val_sigmas = 4.0;
   double sat_sigmas = 2.0;    ///< estimated sat_step = this many robust sigmas of its saturation
   double min_val_step = 6.0;  ///< floors of the estimated steps (8-bit quantisation and noise)
   double min_sat_step = 4.0;
@@ -174,8 +174,8 @@ struct CarpetSearch {
 /// One end of a ray that is not the carpet's end: a blob on the carpet (robot, person, ball).
 struct ObstacleBlob {
   int first_ray = 0, last_ray = 0;  ///< bearing-scan ray indices (last may wrap below first)
-  int near_radius_px =
-      0;  ///< the smallest end radius among its rays (a sample index, line_scan.hpp)
+  /// the smallest end radius among its rays (a sample index, line_scan.hpp)
+  int near_radius_px = 0;
 };
 
 struct ExtractionReport {

@@ -47,8 +47,7 @@ std::uint32_t control_decode_for(int decoding) {
   }
 }
 
-BoardIdentity identify_board(BoardClient& client, double window_period_ms,
-                             const std::string& where) {
+BoardIdentity identify_board(BoardClient& client, const std::string& where) {
   BoardIdentity b;
   b.id = client.read_register(regmap::kRegId);
   if (b.id != regmap::kIdValue) {
@@ -76,10 +75,10 @@ BoardIdentity identify_board(BoardClient& client, double window_period_ms,
                              " (a damaged or foreign bitstream)");
   }
   b.control = client.read_register(regmap::kRegControl);
-  // PERIOD counts board cycles per window: with the robot's window period it gives the board's
-  // clock, which the timestamps count.
+  // PERIOD counts board cycles per window; nothing on the host writes it, so it holds its reset
+  // value clock / TICK_HZ, which gives the board's clock (what the timestamps count).
   b.period_cycles = client.read_register(regmap::kRegPeriod);
-  b.clock_hz = b.period_cycles * (1000.0 / window_period_ms);
+  b.clock_hz = static_cast<double>(b.period_cycles) * regmap::kTickHz;
   return b;
 }
 
@@ -102,7 +101,7 @@ BoardSession::BoardSession(std::unique_ptr<Transport> transport, const BoardSess
     : transport_(std::move(transport)) {
   if (!transport_) throw std::invalid_argument("BoardSession: no transport");
   client_ = std::make_unique<BoardClient>(*transport_, options.client);
-  identity_ = identify_board(*client_, options.window_period_ms, describe());
+  identity_ = identify_board(*client_, describe());
   // A robot's wheels must match the board's encoder channels (robot_config.hpp).
   if (options.wheels != 0)
     if (auto why = board_channel_mismatch(identity_.channels, options.wheels))

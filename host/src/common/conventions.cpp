@@ -44,6 +44,10 @@ Pose2 Pose2::inverse() const {
   return {t.x(), t.y(), wrap_deg(-yaw_deg)};
 }
 
+Pose2 Pose2::with_yaw(double new_yaw_deg) const {
+  return {x_cm, y_cm, wrap_deg(new_yaw_deg)};
+}
+
 Pose2 interpolate(const Pose2& a, const Pose2& b, double f) {
   return {a.x_cm + f * (b.x_cm - a.x_cm), a.y_cm + f * (b.y_cm - a.y_cm),
           interpolate_deg(a.yaw_deg, b.yaw_deg, f)};

@@ -203,9 +203,10 @@ std::optional<ControlSocket::Datagram> ControlSocket::receive() {
 void ControlSocket::reply(const Datagram& to, std::string_view reply) {
   sockaddr_in a{};
   std::memcpy(&a, to.from, sizeof a);
-  if (::sendto(fd_, reply.data(), reply.size(), MSG_DONTWAIT, reinterpret_cast<const sockaddr*>(&a),
-               sizeof a) < 0)
-    ++reply_failures_;
+  // A reply that cannot be sent (the client gone, a full socket buffer) is lost like any UDP
+  // datagram: the client asks again after its timeout, and the daemon's loop must not wait.
+  (void)::sendto(fd_, reply.data(), reply.size(), MSG_DONTWAIT,
+                 reinterpret_cast<const sockaddr*>(&a), sizeof a);
 }
 
 }  // namespace omniloc::control

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "omniloc/board_session.hpp"
 #include "omniloc/control.hpp"
 #include "omniloc/recording.hpp"
+#include "omniloc/regmap.hpp"
 
 namespace omniloc::daemon {
 namespace {
@@ -23,7 +25,7 @@ namespace {
 constexpr double kBoardSilentMs = 250.0;
 // While the board is gone, a degraded pose goes out every window period, so consumers see the
 // state.
-constexpr double kDegradedTickMs = 10.0;
+constexpr double kDegradedTickMs = regmap::kWindowPeriodMs;
 constexpr std::chrono::milliseconds kTelemetryWait{20};
 constexpr std::size_t kMaxQueuedAtOpen = 1024;  // the board client's telemetry queue
 
@@ -57,11 +59,11 @@ struct Daemon::Impl {
   std::string last_open_error;
 
   // Camera.
-  double last_frame_ms = -1e300;  // daemon time of the newest frame given to the localizer
+  std::optional<double> last_frame_ms;  // daemon time of the newest frame given to the localizer
   bool camera_fresh = false;
 
   // Output.
-  double last_window_t_ms = -1e300;
+  std::optional<double> last_window_t_ms;
   std::uint64_t seq = 0;
   DaemonReport report;
   PoseMessage last_message;
@@ -148,9 +150,13 @@ struct Daemon::Impl {
     if (!io.camera) return DaemonStatus::kOdometryOnly;
     if (!localizer.has_fix()) return DaemonStatus::kStarting;
     if (localizer.lost()) return DaemonStatus::kLost;
-    if (!io.camera || now_ms - last_frame_ms > config.camera_timeout_ms)
-      return DaemonStatus::kOdometryOnly;
+    if (!camera_fresh_at(now_ms)) return DaemonStatus::kOdometryOnly;
     return DaemonStatus::kOk;
+  }
+
+  /// A frame reached the localizer within the camera timeout.
+  bool camera_fresh_at(double now_ms) const {
+    return last_frame_ms && now_ms - *last_frame_ms <= config.camera_timeout_ms;
   }
 
   // t_uncertainty_ms none: t_ms is not a board time (no board: the daemon's own clock).
@@ -164,8 +170,8 @@ struct Daemon::Impl {
     m.y_cm = lp.pose.y_cm;
     m.yaw_deg = lp.pose.yaw_deg;
     m.source = pose_source_name(lp.source);
-    m.match_error = std::isfinite(lp.match_error) ? lp.match_error : -1.0;
-    m.search_range_cm = std::isfinite(lp.match_error) ? lp.search_range_cm : -1.0;
+    m.match_error = lp.match_error;
+    m.search_range_cm = lp.search_range_cm;
     m.uncertainty_cm = lp.sigma_xy_cm;
     m.uncertainty_yaw_deg = lp.sigma_yaw_deg;
     m.vx_cm_s = lp.vx_cm_s;
@@ -191,7 +197,6 @@ struct Daemon::Impl {
       BoardSessionOptions o;
       o.decoding = models.robot.decoding;
       o.wheels = wheel_count(models.robot);  // refuses a board whose encoder channels differ
-      o.window_period_ms = models.robot.window_period_ms;
       client = std::make_unique<BoardSession>(io.open_board(), o);
       if (version_differs(client->identity()))
         io.logger.warning("board register map " + client->identity().version_text() +
@@ -275,8 +280,8 @@ struct Daemon::Impl {
     const double board_ms = scaled_board_ms(w);
     last_mark = BoardTimeMark{w.raw.timestamp_cycles, board_ms, now, client->identity().clock_hz};
     EncoderWindow ew = w.to_encoder_window(clock_at.host_ms - w.board_ms);
-    if (ew.t_end_ms <= last_window_t_ms)
-      ew.t_end_ms = last_window_t_ms + 1e-3;  // the localizer needs increasing times
+    if (last_window_t_ms && ew.t_end_ms <= *last_window_t_ms)
+      ew.t_end_ms = *last_window_t_ms + 1e-3;  // the localizer needs increasing times
     last_window_t_ms = ew.t_end_ms;
     ew.gyro_yaw_deg = io.heading->gyro_yaw_deg(ew);
     // How far the heading can be trusted is the heading source's to say, window by window: the
@@ -322,7 +327,7 @@ struct Daemon::Impl {
         ++report.frames;
       }
     }
-    const bool fresh = now_ms - last_frame_ms <= config.camera_timeout_ms;
+    const bool fresh = camera_fresh_at(now_ms);
     if (camera_fresh && !fresh && !board_gone) {
       ++report.camera_losses;
       io.logger.warning("camera stopped delivering (" + io.camera->describe() + "): odometry only");
@@ -449,7 +454,7 @@ struct Daemon::Impl {
                         {"heading", io.heading->describe()},
                         {"heading_known", localizer.heading_known()}};
     if (!record_dir.empty()) j["record_dir"] = record_dir;
-    if (last_message.match_error >= 0) j["match_error"] = last_message.match_error;
+    if (last_message.match_error) j["match_error"] = *last_message.match_error;
     return j;
   }
 

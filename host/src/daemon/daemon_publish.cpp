@@ -87,11 +87,11 @@ std::string pose_json(const PoseMessage& m) {
   put_string(out, m.source);
   // Absent rather than null: every key present is a number (docs/DAEMON.md). The two come together:
   // a search range of -1 says the last image result came from a global search.
-  if (m.match_error >= 0) {
+  if (m.match_error) {
     out += ",\"match_error\":";
-    put_number(out, m.match_error, 3);
+    put_number(out, *m.match_error, 3);
     out += ",\"search_range_cm\":";
-    put_number(out, m.search_range_cm, 1);
+    put_number(out, m.search_range_cm.value_or(-1.0), 1);
   }
   out += ",\"uncertainty_cm\":";
   put_number(out, m.uncertainty_cm, 3);
@@ -156,10 +156,10 @@ void UdpPublisher::send(std::string_view datagram) {
 std::string status_line(const StatusSnapshot& s) {
   char buf[448];
   char err[32];
-  if (s.match_error < 0)
-    std::snprintf(err, sizeof err, "-");
+  if (s.match_error)
+    std::snprintf(err, sizeof err, "%.1f", *s.match_error);
   else
-    std::snprintf(err, sizeof err, "%.1f", s.match_error);
+    std::snprintf(err, sizeof err, "-");
   std::snprintf(
       buf, sizeof buf,
       "t=%.1fs %s pose=(%.1f,%.1f,%.1f) src=%s err=%s sigma=%.1fcm drift=%+.3fdeg/s win=%.0f/s "

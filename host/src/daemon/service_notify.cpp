@@ -16,9 +16,8 @@ void ServiceNotifier::ready() {
 
 void ServiceNotifier::loop(double now_ms) {
   if (watchdog_us_ == 0) return;
-  if (now_ms - last_ping_ms_ < static_cast<double>(watchdog_us_) / 2000.0) return;
+  if (last_ping_ms_ && now_ms - *last_ping_ms_ < static_cast<double>(watchdog_us_) / 2000.0) return;
   last_ping_ms_ = now_ms;
-  ++pings_;
   sd_notify(0, "WATCHDOG=1");
 }
 

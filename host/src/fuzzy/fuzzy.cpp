@@ -151,10 +151,6 @@ void FuzzyConfig::validate(const Origin& at) const {
   }
 }
 
-void validate_fuzzy_config(const FuzzyConfig& c, const std::string& source) {
-  c.validate(source);
-}
-
 namespace {
 
 const config::Choices<FuzzyTerm>& term_choices() {

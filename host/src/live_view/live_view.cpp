@@ -73,10 +73,10 @@ void LiveState::on_pose(const daemon::PoseEvent& e) {
   while (!path_.empty() &&
          (path_.front().t_ms < t - options_.path_s * 1000.0 || path_.front().t_ms > t))
     path_.pop_front();
-  if (e.message.match_error >= 0 &&
+  if (e.message.match_error &&
       (errors_.empty() || t - errors_.back().t_ms >= options_.error_step_ms ||
        t < errors_.back().t_ms))
-    errors_.push_back({t, e.message.match_error});
+    errors_.push_back({t, *e.message.match_error});
   while (!errors_.empty() &&
          (errors_.front().t_ms < t - options_.error_history_s * 1000.0 || errors_.front().t_ms > t))
     errors_.pop_front();
@@ -86,8 +86,8 @@ void LiveState::on_frame(const daemon::CameraFrame& f) {
   {
     const std::lock_guard lock(mutex_);
     ++frames_;
-    if (f.bgr.empty() ||
-        (f.t_ms >= frame_t_ms_ && f.t_ms - frame_t_ms_ < options_.frame_keep_period_ms))
+    if (f.bgr.empty() || (frame_t_ms_ && f.t_ms >= *frame_t_ms_ &&
+                          f.t_ms - *frame_t_ms_ < options_.frame_keep_period_ms))
       return;
   }
   cv::Mat copy = f.bgr.clone();  // outside the lock: the server may be reading the previous one
@@ -135,7 +135,7 @@ std::string LiveState::state_json() const {
   j["poses"] = poses_;
   j["frames"] = frames_;
   nlohmann::ordered_json frame;
-  frame["t_ms"] = frame_seq_ > 0 ? number(frame_t_ms_) : nlohmann::ordered_json(nullptr);
+  frame["t_ms"] = frame_t_ms_ ? number(*frame_t_ms_) : nlohmann::ordered_json(nullptr);
   frame["seq"] = frame_seq_;
   frame["overlay_t_ms"] = encoded_ > 0 ? number(overlay_t_ms_) : nlohmann::ordered_json(nullptr);
   frame["usable"] = overlay_report_.usable;
@@ -182,15 +182,15 @@ bool LiveState::refresh_overlay() {
   double t_ms = 0.0;
   {
     const std::lock_guard lock(mutex_);
-    if (frame_seq_ == 0) return false;
-    if (overlay_seq_ != 0 && (frame_seq_ == overlay_seq_ ||
-                              steady_ms() - overlay_wall_ms_ < options_.frame_min_period_ms))
+    if (!frame_t_ms_) return false;
+    if (overlay_wall_ms_ && (frame_seq_ == overlay_seq_ ||
+                             steady_ms() - *overlay_wall_ms_ < options_.frame_min_period_ms))
       return true;
     bgr = frame_;  // shares the pixels; on_frame replaces frame_, never writes into it
     pose = frame_pose_;
     with_pose = frame_has_pose_;
     seq = frame_seq_;
-    t_ms = frame_t_ms_;
+    t_ms = *frame_t_ms_;
   }
   // The frame as the localizer sees it (its line extraction, the goal observation), drawn by the
   // overlay `omniloc locate --overlay` makes, with the field model at the daemon's pose.

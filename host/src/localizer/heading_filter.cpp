@@ -8,7 +8,8 @@
 namespace omniloc {
 
 double HeadingFilter::recent_gap_s(double t_ms) const {
-  const double dt_s = (t_ms - last_fix_ms_) / 1000.0;
+  if (!last_fix_ms_) return 0.0;
+  const double dt_s = (t_ms - *last_fix_ms_) / 1000.0;
   return dt_s > 0.0 && dt_s <= config_.max_rate_gap_s ? dt_s : 0.0;
 }
 

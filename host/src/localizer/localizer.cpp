@@ -147,8 +147,8 @@ LocalizerPolicy LocalizerPolicy::of(const LocalizerConfig& c) {
 }
 
 Pose2 Localizer::Anchor::carried_to(const Pose2& odometry_now) const {
-  return {pose.x_cm + (odometry_now.x_cm - odometry_at_t.x_cm),
-          pose.y_cm + (odometry_now.y_cm - odometry_at_t.y_cm), odometry_now.yaw_deg};
+  return pose.shifted(odometry_now.position_cm() - odometry_at_t.position_cm())
+      .with_yaw(odometry_now.yaw_deg);
 }
 
 Localizer::Localizer(const LocalizerConfig& config, const RobotConfig& robot,
@@ -239,8 +239,10 @@ void Localizer::reset_origin_at(double t_ms, const Pose2& pose, double sigma_xy_
   auto k = after == history_.begin() ? history_.begin() : std::prev(after);
   const Pose2 at_t = odometry_pose_at(t_ms, nullptr, nullptr);
   const Pose2 at_k = k->odometry.estimate().pose;
-  const Pose2 origin{pose.x_cm - (at_t.x_cm - at_k.x_cm), pose.y_cm - (at_t.y_cm - at_k.y_cm),
-                     wrap_deg(pose.yaw_deg - angle_diff_deg(at_t.yaw_deg, at_k.yaw_deg))};
+  // The origin at window k that the odometry carries to `pose` at t_ms: `pose` shifted back by
+  // the field-frame displacement (and turned back by the heading change) from k to t.
+  const Pose2 origin = pose.shifted(at_k.position_cm() - at_t.position_cm())
+                           .with_yaw(pose.yaw_deg - yaw_difference_deg(at_t, at_k));
   Odometry o = k->odometry;
   o.reset(origin, sigma_xy_cm, sigma_yaw_deg);
   k->odometry = o;
@@ -343,8 +345,8 @@ void Localizer::resync() {
   pending_.clear();
   trimmed_ = false;
   anchor_.valid = false;
-  last_reset_ms_ = -1e300;
-  last_check_ms_ = -1e300;
+  last_reset_ms_.reset();
+  last_check_ms_.reset();
   disagree_run_ = 0;
 }
 
@@ -515,9 +517,7 @@ void Localizer::track(const Frame& frame, FrameReport& rep) {
   rep.error = m.error;
   rep.search_range_cm = range;
   rep.predicted_offset_cm = (m.position_cm - frame.predicted.position_cm()).norm();
-  last_error_ = m.error;
-  last_range_cm_ = range;
-  last_image_ms_ = frame.t_ms;
+  note_image_result(m.error, range);
   bool good = m.error < config_.e_th;
   // A disagreement found by the worker's check of an earlier frame runs on: the local result is
   // not trusted until a check agrees again (the inline check refuses the frame it contradicts).
@@ -540,7 +540,8 @@ Localizer::CrossCheck Localizer::cross_check(const Frame& frame, const MatchResu
   // a bad result alone is not the only symptom. Checked on a bad result, while a disagreement
   // runs, and at least every check_period_ms.
   const bool good = local.error < config_.e_th;
-  if (good && disagree_run_ == 0 && frame.t_ms - last_check_ms_ < config_.check_period_ms)
+  if (good && disagree_run_ == 0 && last_check_ms_ &&
+      frame.t_ms - *last_check_ms_ < config_.check_period_ms)
     return CrossCheck::kNotRun;
   last_check_ms_ = frame.t_ms;
   const CheckContext checked{frame.t_ms, frame.predicted.position_cm(), frame.predicted_sigma_cm,
@@ -617,7 +618,7 @@ void Localizer::accept(const Frame& frame, const MatchResult& local, FrameReport
   applied_this_window_ = true;
   rep.outcome = FrameOutcome::kAccepted;
   Pose2 pose{local.position_cm.x(), local.position_cm.y(), frame.odometry.yaw_deg};
-  if (frame.t_ms - last_reset_ms_ >= config_.reset_period_ms - 1e-6) {
+  if (!last_reset_ms_ || frame.t_ms - *last_reset_ms_ >= config_.reset_period_ms - 1e-6) {
     double sigma_yaw = odometry_.estimate().sigma_yaw_deg;
     if (policy_.correct_yaw) {
       if (const std::optional<double> y =
@@ -654,7 +655,6 @@ void Localizer::relocalize(double t_ms, const SingleFrameResult& global, FrameRe
   disagree_run_ = 0;
   last_good_ = true;
   applied_this_window_ = true;
-  last_image_ms_ = t_ms;
   ++stats_.relocalizations;
   kickoff_pending_ = false;  // the kick-off rule has served (or was not needed)
   heading_aligned_ = true;   // a relative gyro holds the fix's heading from here
@@ -693,8 +693,13 @@ void Localizer::note_global(FrameReport& rep, const SingleFrameResult& global) {
   rep.yaw_deg = global.pose.yaw_deg;
   rep.error = global.match.error;
   rep.search_range_cm = -1.0;
-  last_error_ = global.match.error;
-  last_range_cm_ = -1.0;
+  note_image_result(global.match.error, std::nullopt);
+}
+
+void Localizer::note_image_result(double error, std::optional<double> range_cm) {
+  // An error of kNoError compared nothing: no result to report.
+  last_error_ = std::isfinite(error) ? std::optional(error) : std::nullopt;
+  last_range_cm_ = last_error_ ? range_cm : std::nullopt;
 }
 
 std::optional<double> Localizer::corrected_yaw(double t_ms, const BearingScan& bearings,
@@ -728,7 +733,6 @@ LocalizedPose Localizer::make_pose(const EncoderWindow& window) {
   p.omega_deg_s = e.yaw_rate_deg_per_s;
   p.match_error = last_error_;
   p.search_range_cm = last_range_cm_;
-  p.image_age_ms = anchor_.valid && anchor_.t_ms > 0.0 ? window.t_end_ms - anchor_.t_ms : kNoError;
   p.sigma_yaw_deg = e.sigma_yaw_deg;
   p.pose = anchor_.valid ? anchor_.carried_to(e.pose) : e.pose;
   p.sigma_xy_cm = anchor_.valid ? anchor_sigma_cm(e.pose) : e.sigma_xy_cm;

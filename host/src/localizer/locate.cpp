@@ -53,8 +53,8 @@ Candidate refine_second(const LocalizerConfig& config, const FieldGeometry& fiel
 // within the ambiguity ratio once refined (or replaces the best when clearly better).
 struct Contender {
   Candidate candidate;
-  bool replaces_best =
-      false;  ///< clearly better than the best: the best is dropped, nothing is ambiguous
+  /// clearly better than the best: the best is dropped, nothing is ambiguous
+  bool replaces_best = false;
 };
 
 std::optional<Contender> contender(const LocalizerConfig& config, const FieldGeometry& field,

@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "omniloc/regmap.hpp"
+
 namespace omniloc {
 namespace {
 
@@ -186,7 +188,8 @@ void Odometry::reset(const Pose2& pose, double sigma_xy_cm, double sigma_yaw_deg
 
 const OdometryEstimate& Odometry::update(const EncoderWindow& window) {
   check_window(window, "Odometry");
-  double dt_s = config_.window_period_ms / 1000.0;  // only the very first window has no start time
+  // Only the very first window has no start time: it is taken to last the board's window period.
+  double dt_s = regmap::kWindowPeriodMs / 1000.0;
   if (have_window_) {
     dt_s = (window.t_end_ms - last_t_ms_) / 1000.0;
     if (!(dt_s > 0.0)) {
@@ -228,9 +231,7 @@ const OdometryEstimate& Odometry::update(const EncoderWindow& window) {
   const double step_cm = delta_field.norm();
 
   est_.t_ms = window.t_end_ms;
-  est_.pose.x_cm += delta_field.x();
-  est_.pose.y_cm += delta_field.y();
-  est_.pose.yaw_deg = wrap_deg(window.gyro_yaw_deg + yaw_offset_deg_);
+  est_.pose = est_.pose.shifted(delta_field).with_yaw(window.gyro_yaw_deg + yaw_offset_deg_);
   est_.speed_cm_per_s = step_cm / dt_s;
   est_.yaw_rate_deg_per_s = dyaw_deg / dt_s;
   est_.vx_cm_per_s = body.x() / dt_s;

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "omniloc/odometry.hpp"
+#include "omniloc/regmap.hpp"
 
 namespace omniloc {
 
@@ -28,8 +29,9 @@ void PaperOdometry::reset(const Pose2& pose) {
 }
 
 const OdometryEstimate& PaperOdometry::update(const EncoderWindow& window) {
-  // The paper's FPGA has a fixed sample period T; eq. (10) divides by res x 0.01 (T = 10 ms).
-  const double t_s = config_.window_period_ms / 1000.0;
+  // The paper's FPGA has a fixed sample period T; eq. (10) divides by res x 0.01 (T = 10 ms, the
+  // board's window period).
+  const double t_s = regmap::kWindowPeriodMs / 1000.0;
   const double res = static_cast<double>(config_.counts_per_rev) * config_.decoding;
   const double n = config_.gear_ratio;
   const double r = config_.wheel_radius_cm;
@@ -53,9 +55,9 @@ const OdometryEstimate& PaperOdometry::update(const EncoderWindow& window) {
   const double yaw_deg = wrap_deg(window.gyro_yaw_deg + yaw_offset_deg_);
   const double theta_g_term = heading_ == PaperHeading::kGyroYaw ? yaw_deg : theta_g_deg;
   if (length > 0.0) {
-    const double theta_e = std::atan(sy / sx) + deg_to_rad(theta_g_term);  // (14)
-    est_.pose.x_cm += length * std::cos(theta_e);                          // (15)
-    est_.pose.y_cm += length * std::sin(theta_e);                          // (15)
+    const double theta_e = std::atan(sy / sx) + deg_to_rad(theta_g_term);      // (14)
+    est_.pose = est_.pose.shifted(length * Eigen::Vector2d(std::cos(theta_e),  // (15)
+                                                           std::sin(theta_e)));
   }
   est_.t_ms = window.t_end_ms;
   est_.pose.yaw_deg = yaw_deg;

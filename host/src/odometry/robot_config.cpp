@@ -129,8 +129,6 @@ const config::KeyTable<RobotConfig>& robot_config_keys() {
       shorthand("counts_per_rev", &RobotConfig::counts_per_rev),
       key("decoding", &RobotConfig::decoding, Need::kRequired),
       // --- optional ---
-      key("window_period_ms", &RobotConfig::window_period_ms),
-      key("clock_hz", &RobotConfig::clock_hz),
       key("slip_threshold_cm_per_s", &RobotConfig::slip_threshold_cm_per_s),
       key("wheel_noise_cm_per_sqrt_cm", &RobotConfig::wheel_noise_cm_per_sqrt_cm),
       key("max_accel_cm_per_s2", &RobotConfig::max_accel_cm_per_s2),
@@ -248,9 +246,6 @@ void RobotConfig::validate(const config::Origin& at) const {
   const auto positive = [&](double v, const char* field) {
     require(std::isfinite(v) && v > 0.0, at / field, "must be > 0", v);
   };
-  const auto non_negative = [&](double v, const char* field) {
-    require(std::isfinite(v) && v >= 0.0, at / field, "must be >= 0", v);
-  };
   if (wheels.empty()) {
     positive(wheel_radius_cm, "wheel_radius_cm");
     positive(center_to_wheel_cm, "center_to_wheel_cm");
@@ -283,10 +278,6 @@ void RobotConfig::validate(const config::Origin& at) const {
   const auto in_range = [&](double v, const char* field, double lo, double hi, const char* why) {
     require(std::isfinite(v) && v >= lo && v <= hi, at / field, why, v);
   };
-  // The board's window is 0.1 ms .. 1 s (a window of 1e-300 ms once turned every count into a
-  // speed of 1e300 cm/s); its clock 1 kHz .. 10 GHz.
-  in_range(window_period_ms, "window_period_ms", 0.1, 1000.0, "must be in [0.1, 1000] ms");
-  in_range(clock_hz, "clock_hz", 1e3, 1e10, "must be in [1e3, 1e10] Hz");
   positive(slip_threshold_cm_per_s, "slip_threshold_cm_per_s");
   in_range(slip_threshold_cm_per_s, "slip_threshold_cm_per_s", 0.0, 10000.0,
            "must be at most 10000 cm/s");

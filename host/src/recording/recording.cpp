@@ -185,8 +185,12 @@ std::vector<LocalizedPose> read_poses_csv(const fs::path& path) {
              const auto s = parse_pose_source(f[4]);
              if (!s) fail_at(path, line, "column 'source': unknown source '" + f[4] + "'");
              p.source = *s;
-             p.match_error = parse_double(f[5], path, line, "match_error");
-             p.search_range_cm = parse_double(f[6], path, line, "search_range_cm");
+             // No image result yet: "inf"; a global search's range: -1 (PosesCsvWriter).
+             if (const double e = parse_double(f[5], path, line, "match_error"); std::isfinite(e))
+               p.match_error = e;
+             if (const double r = parse_double(f[6], path, line, "search_range_cm");
+                 p.match_error && r >= 0.0)
+               p.search_range_cm = r;
              out.push_back(p);
            });
   return out;
@@ -674,18 +678,17 @@ PosesCsvWriter::PosesCsvWriter(const fs::path& path)
 PosesCsvWriter::~PosesCsvWriter() = default;
 
 void PosesCsvWriter::write(const LocalizedPose& p) {
-  // inf/nan are spelled "inf"/"nan" (read_poses_csv accepts them): no image result yet.
-  auto num = [](double v, char* buf, std::size_t n) {
-    if (std::isnan(v))
-      std::snprintf(buf, n, "nan");
-    else if (std::isinf(v))
-      std::snprintf(buf, n, "inf");
+  // No image result yet is spelled "inf" (read_poses_csv accepts it); the range of a global search
+  // -1, as before the columns were optional.
+  auto num = [](std::optional<double> v, const char* none, char* buf, std::size_t n) {
+    if (v)
+      std::snprintf(buf, n, "%.3f", *v);
     else
-      std::snprintf(buf, n, "%.3f", v);
+      std::snprintf(buf, n, "%s", none);
   };
   char e[32], r[32], row[256];
-  num(p.match_error, e, sizeof e);
-  num(p.search_range_cm, r, sizeof r);
+  num(p.match_error, "inf", e, sizeof e);
+  num(p.search_range_cm, p.match_error ? "-1.000" : "0.000", r, sizeof r);
   std::snprintf(row, sizeof row, "%.3f,%.3f,%.3f,%.3f,%s,%s,%s\n", p.t_ms, p.pose.x_cm, p.pose.y_cm,
                 p.pose.yaw_deg, pose_source_name(p.source), e, r);
   file_.write_row(row);

@@ -98,8 +98,8 @@ ReplayResult replay_recording(const Recording& rec, const LocalizerConfig& confi
     }
     const auto t = truth_at(rec.truth, p.t_ms);
     if (!t) continue;
-    pos.push_back(std::hypot(p.pose.x_cm - t->x_cm, p.pose.y_cm - t->y_cm));
-    yaw.push_back(std::abs(angle_diff_deg(p.pose.yaw_deg, t->yaw_deg)));
+    pos.push_back(distance_cm(p.pose, *t));
+    yaw.push_back(std::abs(yaw_difference_deg(p.pose, *t)));
   }
   if (!pos.empty()) {
     out.position_error_cm = summarize_errors(pos);

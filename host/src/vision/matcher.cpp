@@ -16,6 +16,11 @@ namespace omniloc {
 
 namespace {
 
+// The pattern searches of the refinements (refine_match_reference, refine_match_previous): each
+// move lowers the error strictly and stays within the reach, so a walk ends; this cap only guards
+// against options that would make it absurdly long (a min step of 1e-300).
+constexpr int kMaxRefineSteps = 10'000;
+
 struct Window {
   int i0, i1, j0, j1;  // inclusive
 };
@@ -247,12 +252,9 @@ void refine_match_reference(const FieldGeometry& field, const CameraModel& camer
                     : error_at(field, camera, p, pos, opt, scan.bearing_offset_deg);
   const Eigen::Vector2d steps[] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
   const double limit = opt.refine_reach_cm;
-  // Each move lowers the error strictly and stays within `limit`, so the walk ends; the cap only
-  // guards against options that would make it absurdly long (a min step of 1e-300).
-  constexpr int kMaxSteps = 10'000;
   int steps_taken = 0;
   for (double step = opt.refine_start_step_cm;
-       step >= opt.refine_min_step_cm - 1e-9 && steps_taken < kMaxSteps; ++steps_taken) {
+       step >= opt.refine_min_step_cm - 1e-9 && steps_taken < kMaxRefineSteps; ++steps_taken) {
     Eigen::Vector2d best_pos = pos;
     for (const auto& d : steps) {
       const Eigen::Vector2d q = pos + step * d;
@@ -533,11 +535,9 @@ void refine_match_previous(const FieldGeometry& field, const CameraModel& camera
   // A pattern search as refine_match_reference, except that once the centre is the best of its
   // four neighbours, the V fitted through them along each axis (the shape of the bounded cost
   // near its minimum, as interpolate_match) proposes a point below the step before it halves.
-  constexpr int kMaxSteps =
-      10'000;  // each move lowers the error strictly; this only bounds absurd options
   int steps_taken = 0;
   for (double step = opt.refine_start_step_cm;
-       step >= opt.refine_min_step_cm - 1e-9 && steps_taken < kMaxSteps; ++steps_taken) {
+       step >= opt.refine_min_step_cm - 1e-9 && steps_taken < kMaxRefineSteps; ++steps_taken) {
     double e[4];  // +x, -x, +y, -y
     const Eigen::Vector2d dirs[] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
     int best_dir = -1;

@@ -29,8 +29,8 @@ struct SimRunOptions {
 };
 
 struct SimFrame {
-  double t_ms =
-      0.0;  ///< when the image was taken (the first physics-step end at or after the nominal time)
+  /// when the image was taken (the first physics-step end at or after the nominal time)
+  double t_ms = 0.0;
   Pose2 truth;  ///< true pose then (yaw wrapped)
   cv::Mat bgr;
 };

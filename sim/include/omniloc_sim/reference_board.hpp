@@ -32,8 +32,8 @@
 namespace omniloc::sim {
 
 struct ReferenceBoardConfig {
-  std::uint32_t clk_hz =
-      regmap::kBoardClockHz;  ///< the iCEBreaker's clock, as the Verilated board (sim::BoardSim)
+  /// the iCEBreaker's clock, as the Verilated board (sim::BoardSim)
+  std::uint32_t clk_hz = regmap::kBoardClockHz;
   std::uint32_t tick_hz = regmap::kTickHz;
   std::uint32_t initial_timestamp_cycles = 0;
   std::array<std::uint32_t, regmap::kChannels> initial_position{};  ///< to exercise wrap-around

@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <limits>
+#include <optional>
 #include <random>
 
 namespace omniloc::sim {
@@ -79,19 +81,21 @@ class UsbArrivals {
       if (host_end_ms >= burst_start_ms_)
         lat += c_.burst_extra_ms;  // the host or the bridge stalled
     }
-    last_ = std::max(last_, host_end_ms + lat);
-    return last_;
+    // Arrivals keep their order (a later window never overtakes an earlier one).
+    last_ = std::max(last_.value_or(host_end_ms + lat), host_end_ms + lat);
+    return *last_;
   }
 
  private:
   void schedule_burst(double after_ms) {
     std::exponential_distribution<double> e(1.0 / (c_.burst_every_s * 1000.0));
-    burst_start_ms_ = c_.burst_every_s > 0.0 ? after_ms + e(rng_) : 1e300;
+    burst_start_ms_ = c_.burst_every_s > 0.0 ? after_ms + e(rng_) : kNever;
   }
   SimClockConfig c_;
   std::mt19937_64 rng_;
-  double burst_start_ms_ = 1e300;
-  double last_ = -1e300;
+  static constexpr double kNever = std::numeric_limits<double>::infinity();
+  double burst_start_ms_ = kNever;
+  std::optional<double> last_;  // the last arrival handed out (none yet)
 };
 
 /// A camera's hand-over latency and drops.

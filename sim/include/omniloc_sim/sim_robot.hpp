@@ -54,8 +54,10 @@ class SimTruthLog final : public HeadingSource {
     if (!s) return std::nullopt;
     return s->truth;
   }
-  [[nodiscard]] double latest_ms() const {
-    return samples_.empty() ? -1e300 : samples_.back().t_ms;
+  /// The newest truth sample's time (none: no sample yet).
+  [[nodiscard]] std::optional<double> latest_ms() const {
+    if (samples_.empty()) return std::nullopt;
+    return samples_.back().t_ms;
   }
 
  private:
@@ -128,9 +130,9 @@ class SimCamera final : public FrameSource {
   SimTruthLog& truth_;
   double period_ms_;
   RenderOptions options_;
-  std::int64_t last_k_ = -1;     // last frame handed out
-  std::int64_t next_job_k_ = 0;  // next frame to start rendering
-  double stop_ms_ = 1e300;
+  std::int64_t last_k_ = -1;       // last frame handed out
+  std::int64_t next_job_k_ = 0;    // next frame to start rendering
+  std::optional<double> stop_ms_;  // the camera stops exposing from here (none: never)
   bool delayed_ = false;
   double latency_ms_ = 0.0, jitter_ms_ = 0.0, drop_ = 0.0;
   std::uint64_t delay_seed_ = 0;

@@ -33,11 +33,8 @@ namespace omniloc::sim {
 /// encoders starting at AB = 00 as the board's decoders do after reset.
 [[nodiscard]] inline WorldConfig board_world_config(RobotConfig robot, std::uint64_t seed,
                                                     const PlayingArea& area = fira_robosot_area()) {
-  robot.clock_hz = static_cast<double>(BoardSim::kClockHz);
   auto wc = WorldConfig::default_noise(robot, seed, area);
-  wc.step_cycles = BoardSim::kClockHz / 1000;
-  wc.window_cycles = BoardSim::kClockHz / 100;
-  wc.first_window_end_cycles = wc.window_cycles;
+  wc.set_clock(static_cast<double>(BoardSim::kClockHz));
   wc.random_encoder_phase = false;
   return wc;
 }

@@ -19,6 +19,7 @@
 
 #include "omniloc/conventions.hpp"
 #include "omniloc/odometry.hpp"
+#include "omniloc/regmap.hpp"
 #include "omniloc/robot_config.hpp"
 #include "omniloc_sim/gyro.hpp"
 #include "omniloc_sim/trajectory.hpp"
@@ -60,6 +61,9 @@ struct EncoderNoise {
 struct WorldConfig {
   RobotConfig robot;
   std::uint64_t seed = 1;
+  /// The simulated board's clock, whose cycles the window timestamps count: the simulator's own
+  /// (the host learns a real board's from its PERIOD register). The paper's 40 MHz by default.
+  double clock_hz = regmap::kPaperClockHz;
   std::int64_t step_cycles = 40'000;     ///< physics step (1 ms at 40 MHz)
   std::int64_t window_cycles = 400'000;  ///< board window (10 ms at 40 MHz)
   std::int64_t first_window_end_cycles = 400'000;
@@ -71,7 +75,12 @@ struct WorldConfig {
   bool random_encoder_phase = true;  ///< start each encoder at a random quarter-step phase
   double tracking_gain_per_s = 2.0;  ///< feedback pulling the robot back onto the reference
 
-  /// Quantisation only: no encoder noise, gyro only quantised, no faults. Timing from `robot`.
+  /// Retimes the world to a board clock: 1 ms physics steps and windows of `window_period_ms`
+  /// (the register map's window period unless a test asks for another), the first window ending
+  /// one window period after the start.
+  void set_clock(double clock_hz, double window_period_ms = regmap::kWindowPeriodMs);
+
+  /// Quantisation only: no encoder noise, gyro only quantised, no faults. At the default clock.
   [[nodiscard]] static WorldConfig noise_free(const RobotConfig& robot, std::uint64_t seed = 1);
   /// The default noise of issue 5: encoder scale and rolling noise, a realistic gyro, a few bumps
   /// on `area`'s playing field.

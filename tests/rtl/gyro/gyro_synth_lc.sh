@@ -4,7 +4,7 @@
 # board's UP5K only because the standalone module has more ports than the SG48 has pins; the logic
 # cell (LUT4 + carry + flip-flop) is the same on both families. Fails if the count exceeds MAX_LC.
 #
-# usage: gyro_synth_lc.sh OUTDIR MAX_LC FILE...
+# usage: gyro_synth_lc.sh OUTDIR MAX_LC [-IDIR] FILE...   (read_verilog's arguments)
 set -euo pipefail
 if [[ $# -lt 3 ]]; then
   echo "usage: $0 OUTDIR MAX_LC FILE..." >&2
