@@ -138,6 +138,65 @@ void Icm42688::produce_sample() {
   }
 }
 
+// CS falls: a transaction starts (refused within 1 ms of the soft reset).
+void Icm42688::begin_transaction(double t) {
+  if (reset_time_s_ >= 0.0 && t - reset_time_s_ < kResetBusyS) {
+    violation("SPI access within 1 ms of the soft reset");
+  }
+  bits_ = 0;
+  in_ = 0;
+  read_ = false;
+  read_addrs_.clear();
+  read_values_.clear();
+  miso_ = false;
+}
+
+// CS rises: the transaction ends; a soft reset written during it takes effect, and a sample
+// taken during it reaches the registers.
+void Icm42688::end_transaction(double t) {
+  if (reset_pending_) {
+    reset_pending_ = false;
+    reset_registers();
+    reset_time_s_ = t;
+    mode_change_time_s_ = -1.0;
+    ++soft_resets_;
+  }
+  if (sample_pending_) {
+    sample_pending_ = false;
+    const auto u = static_cast<std::uint16_t>(produced_.back().value);
+    regs_[kGyroDataZ1] = static_cast<std::uint8_t>(u >> 8);
+    regs_[kGyroDataZ0] = static_cast<std::uint8_t>(u & 0xFF);
+    regs_[kIntStatus] |= kDataRdyInt;
+  }
+}
+
+// A whole byte clocked in: the address byte, a written byte, or (reading) the next register
+// loaded, a completed GYRO_DATA_Z1/Z0 pair logged.
+void Icm42688::byte_boundary() {
+  if (bits_ == 8) {
+    read_ = (in_ & 0x80) != 0;
+    addr_ = in_ & 0x7F;
+  } else if (!read_) {
+    write_reg(addr_, in_);
+    addr_ = (addr_ + 1) & 0x7F;
+  } else {
+    // The byte loaded at the previous byte boundary has been clocked out completely.
+    const std::size_t n = read_addrs_.size();
+    if (n >= 2 && read_addrs_[n - 2] == kGyroDataZ1 && read_addrs_[n - 1] == kGyroDataZ0) {
+      const auto v = static_cast<std::int16_t>(
+          static_cast<std::uint16_t>((read_values_[n - 2] << 8) | read_values_[n - 1]));
+      if (!params_.keep_logs) reads_.clear();
+      reads_.push_back({v, cycle_});
+    }
+  }
+  if (read_) {
+    out_ = read_reg(addr_);
+    read_addrs_.push_back(addr_);
+    read_values_.push_back(out_);
+    addr_ = (addr_ + 1) & 0x7F;
+  }
+}
+
 bool Icm42688::step(bool cs_n, bool sclk, bool mosi) {
   const double t = time_s();
   // ODR instants: the sample is taken now; it reaches the registers now or when CS rises.
@@ -145,63 +204,14 @@ bool Icm42688::step(bool cs_n, bool sclk, bool mosi) {
     produce_sample();
     next_sample_s_ += 1.0 / odr_hz();
   }
-
-  if (prev_cs_n_ && !cs_n) {  // CS falls: a transaction starts
-    if (reset_time_s_ >= 0.0 && t - reset_time_s_ < kResetBusyS) {
-      violation("SPI access within 1 ms of the soft reset");
-    }
-    bits_ = 0;
-    in_ = 0;
-    read_ = false;
-    read_addrs_.clear();
-    read_values_.clear();
-    miso_ = false;
-  }
-  if (!prev_cs_n_ && cs_n) {  // CS rises: the transaction ends
-    if (reset_pending_) {
-      reset_pending_ = false;
-      reset_registers();
-      reset_time_s_ = t;
-      mode_change_time_s_ = -1.0;
-      ++soft_resets_;
-    }
-    if (sample_pending_) {
-      sample_pending_ = false;
-      const auto u = static_cast<std::uint16_t>(produced_.back().value);
-      regs_[kGyroDataZ1] = static_cast<std::uint8_t>(u >> 8);
-      regs_[kGyroDataZ0] = static_cast<std::uint8_t>(u & 0xFF);
-      regs_[kIntStatus] |= kDataRdyInt;
-    }
-  }
+  if (prev_cs_n_ && !cs_n) begin_transaction(t);
+  if (!prev_cs_n_ && cs_n) end_transaction(t);
   if (!cs_n && !prev_cs_n_) {
     if (sclk && !prev_sclk_) {  // rising edge: MOSI sampled
       if (mosi != prev_mosi_) violation("MOSI changed with the rising SCLK edge (no setup time)");
       in_ = static_cast<std::uint8_t>((in_ << 1) | (mosi ? 1 : 0));
       ++bits_;
-      if (bits_ % 8 == 0) {
-        if (bits_ == 8) {
-          read_ = (in_ & 0x80) != 0;
-          addr_ = in_ & 0x7F;
-        } else if (!read_) {
-          write_reg(addr_, in_);
-          addr_ = (addr_ + 1) & 0x7F;
-        } else {
-          // The byte loaded at the previous byte boundary has been clocked out completely.
-          const std::size_t n = read_addrs_.size();
-          if (n >= 2 && read_addrs_[n - 2] == kGyroDataZ1 && read_addrs_[n - 1] == kGyroDataZ0) {
-            const auto v = static_cast<std::int16_t>(
-                static_cast<std::uint16_t>((read_values_[n - 2] << 8) | read_values_[n - 1]));
-            if (!params_.keep_logs) reads_.clear();
-            reads_.push_back({v, cycle_});
-          }
-        }
-        if (read_) {
-          out_ = read_reg(addr_);
-          read_addrs_.push_back(addr_);
-          read_values_.push_back(out_);
-          addr_ = (addr_ + 1) & 0x7F;
-        }
-      }
+      if (bits_ % 8 == 0) byte_boundary();
     } else if (!sclk && prev_sclk_ && read_ && bits_ >= 8) {  // falling edge: next MISO bit
       miso_ = (out_ & 0x80) != 0;
       out_ = static_cast<std::uint8_t>(out_ << 1);

@@ -350,15 +350,25 @@ RenderOptions realistic(std::uint64_t seed) {
   return o;
 }
 
-Scene realistic_scene(const FieldGeometry& f, const Pose2& pose, const RenderOptions& opt) {
-  const RealismOptions& r = opt.realism;
-  Scene sc;
-  std::mt19937_64 rng(opt.seed * 0x2545F4914F6CDD1Dull + 17);
-  std::uniform_real_distribution<double> u01(0.0, 1.0);
-  auto uni = [&](double a, double b) { return a + (b - a) * u01(rng); };
+namespace {
+
+// The scene's random draws, in one sequence: every step below draws from it in turn, so their
+// order is the scene's seed.
+struct SceneDraws {
+  std::mt19937_64 rng;
+  std::uniform_real_distribution<double> u01{0.0, 1.0};
+  double uni(double a, double b) { return a + (b - a) * u01(rng); }
+};
+
+// The room's floor beyond the carpet: [-m0, X + m1] x [-m2, Y + m3].
+struct Room {
+  double m0, m1, m2, m3, X, Y;
+};
+
+// Room: each wall 60..250 cm beyond the carpet, bright, middling or dark, textured.
+Room add_room_walls(Scene& sc, const FieldGeometry& f, const RealismOptions& r, SceneDraws& d) {
   const double X = f.total_x_cm(), Y = f.total_y_cm();
-  // Room: each wall 60..250 cm beyond the carpet, bright, middling or dark, textured.
-  const double m0 = uni(60, 250), m1 = uni(60, 250), m2 = uni(60, 250), m3 = uni(60, 250);
+  const double m0 = d.uni(60, 250), m1 = d.uni(60, 250), m2 = d.uni(60, 250), m3 = d.uni(60, 250);
   const Eigen::Vector2d c00(-m0, -m2), c10(X + m1, -m2), c11(X + m1, Y + m3), c01(-m0, Y + m3);
   const std::vector<cv::Vec3f>& palette = r.look.walls;
   if (palette.empty()) throw std::invalid_argument("SceneLook: no wall colours");
@@ -367,8 +377,12 @@ Scene realistic_scene(const FieldGeometry& f, const Pose2& pose, const RenderOpt
   for (const auto& [a, b] :
        {std::pair{c00, c10}, std::pair{c10, c11}, std::pair{c11, c01}, std::pair{c01, c00}})
     sc.panels.push_back(
-        {a, b, r.wall_height_cm, palette[static_cast<std::size_t>(uni(0, n_walls))], true});
-  // Goal boxes: back wall and two sides behind each goal line, painted.
+        {a, b, r.wall_height_cm, palette[static_cast<std::size_t>(d.uni(0, n_walls))], true});
+  return {m0, m1, m2, m3, X, Y};
+}
+
+// Goal boxes: back wall and two sides behind each goal line, painted.
+void add_goal_boxes(Scene& sc, const FieldGeometry& f, const RealismOptions& r) {
   const double cy = f.centre_cm().y(), gw = f.goal.width_cm / 2.0, gd = f.goal.depth_cm;
   const GoalColour at_max = colour_at_x_max(f, r);
   for (const bool x_max : {false, true}) {
@@ -380,56 +394,84 @@ Scene realistic_scene(const FieldGeometry& f, const Pose2& pose, const RenderOpt
     sc.panels.push_back({{xg, cy - gw}, {xb, cy - gw}, r.goal_height_cm, paint, false});
     sc.panels.push_back({{xg, cy + gw}, {xb, cy + gw}, r.goal_height_cm, paint, false});
   }
+}
+
+// A column of radius rad at q keeps clear of the robot (at p) and of the columns placed so far.
+bool clear_of(const Scene& sc, const Eigen::Vector2d& p, const Eigen::Vector2d& q, double rad) {
+  if ((q - p).norm() < rad + 35.0) return false;
+  for (const auto& c : sc.columns)
+    if ((c.position_cm - q).norm() < c.radius_cm + rad + 10.0) return false;
+  return true;
+}
+
+// count columns made by make(q) on the room's floor off the carpet (people, furniture).
+template <typename Make>
+void add_off_carpet(Scene& sc, const Room& room, const Eigen::Vector2d& p, int count, SceneDraws& d,
+                    Make make) {
+  const double m0 = room.m0, m1 = room.m1, m2 = room.m2, m3 = room.m3, X = room.X, Y = room.Y;
+  for (int k = 0, attempt = 0; k < count && attempt < 2000; ++attempt) {
+    const Eigen::Vector2d q(d.uni(-m0, X + m1), d.uni(-m2, Y + m3));
+    Column c = make(q);
+    const bool in_room = q.x() - c.radius_cm > -m0 && q.x() + c.radius_cm < X + m1 &&
+                         q.y() - c.radius_cm > -m2 && q.y() + c.radius_cm < Y + m3;
+    const bool off_carpet = q.x() < -c.radius_cm || q.x() > X + c.radius_cm ||
+                            q.y() < -c.radius_cm || q.y() > Y + c.radius_cm;
+    if (!in_room || !off_carpet || !clear_of(sc, p, q, c.radius_cm)) continue;
+    sc.columns.push_back(c);
+    ++k;
+  }
+}
+
+// Robots: dark bodies, some with a coloured top (team markers), 60..250 cm away on the carpet.
+void add_robots(Scene& sc, const FieldGeometry& f, const RealismOptions& r,
+                const Eigen::Vector2d& p, SceneDraws& d) {
+  const cv::Vec3f dark = r.look.robot_dark;
+  const cv::Vec3f tops[] = {dark, {180, 40, 200}, {200, 190, 40}, {60, 60, 200}};
+  for (int k = 0, attempt = 0; k < r.robots && attempt < 2000; ++attempt) {
+    const double dist = d.uni(60, 250), a = d.uni(0, 2 * kPi);
+    const Eigen::Vector2d q = p + dist * Eigen::Vector2d(std::cos(a), std::sin(a));
+    if (!on_look_carpet(f, r.look, q) || !clear_of(sc, p, q, 22.0)) continue;
+    sc.columns.push_back(
+        {q, 22.0, d.uni(55, 75), dark, tops[static_cast<int>(d.uni(0, 3.999))], false});
+    ++k;
+  }
+}
+
+// The ball 45..160 cm away on the carpet, clear of the robots.
+void add_ball(Scene& sc, const FieldGeometry& f, const RealismOptions& r, const Eigen::Vector2d& p,
+              SceneDraws& d) {
+  for (int attempt = 0; attempt < 2000; ++attempt) {
+    const double dist = d.uni(45, 160), a = d.uni(0, 2 * kPi);
+    const Eigen::Vector2d q = p + dist * Eigen::Vector2d(std::cos(a), std::sin(a));
+    if (!on_look_carpet(f, r.look, q) || !clear_of(sc, p, q, 11.0)) continue;
+    sc.columns.push_back({q, 11.0, 21.0, r.look.ball, r.look.ball, false});
+    sc.ball_cm = q;
+    break;
+  }
+}
+
+}  // namespace
+
+Scene realistic_scene(const FieldGeometry& f, const Pose2& pose, const RenderOptions& opt) {
+  const RealismOptions& r = opt.realism;
+  Scene sc;
+  SceneDraws d{std::mt19937_64(opt.seed * 0x2545F4914F6CDD1Dull + 17)};
+  auto uni = [&](double a, double b) { return d.uni(a, b); };
+  const Room room = add_room_walls(sc, f, r, d);
+  add_goal_boxes(sc, f, r);
   const Eigen::Vector2d p(pose.x_cm, pose.y_cm);
-  auto clear_of = [&](const Eigen::Vector2d& q, double rad) {
-    if ((q - p).norm() < rad + 35.0) return false;
-    for (const auto& c : sc.columns)
-      if ((c.position_cm - q).norm() < c.radius_cm + rad + 10.0) return false;
-    return true;
-  };
-  auto on_floor_ring = [&](int count, auto make) {
-    for (int k = 0, attempt = 0; k < count && attempt < 2000; ++attempt) {
-      const Eigen::Vector2d q(uni(-m0, X + m1), uni(-m2, Y + m3));
-      Column c = make(q);
-      const bool in_room = q.x() - c.radius_cm > -m0 && q.x() + c.radius_cm < X + m1 &&
-                           q.y() - c.radius_cm > -m2 && q.y() + c.radius_cm < Y + m3;
-      const bool off_carpet = q.x() < -c.radius_cm || q.x() > X + c.radius_cm ||
-                              q.y() < -c.radius_cm || q.y() > Y + c.radius_cm;
-      if (!in_room || !off_carpet || !clear_of(q, c.radius_cm)) continue;
-      sc.columns.push_back(c);
-      ++k;
-    }
-  };
   const cv::Vec3f dark = r.look.robot_dark;
   for (const auto& o : opt.obstacles)
     sc.columns.push_back({o.position_cm, o.radius_cm, 60.0, dark, dark, false});
-  // Robots: dark bodies, some with a coloured top (team markers), 60..250 cm away on the carpet.
-  const cv::Vec3f tops[] = {dark, {180, 40, 200}, {200, 190, 40}, {60, 60, 200}};
-  for (int k = 0, attempt = 0; k < r.robots && attempt < 2000; ++attempt) {
-    const double d = uni(60, 250), a = uni(0, 2 * kPi);
-    const Eigen::Vector2d q = p + d * Eigen::Vector2d(std::cos(a), std::sin(a));
-    if (!on_look_carpet(f, r.look, q) || !clear_of(q, 22.0)) continue;
-    sc.columns.push_back(
-        {q, 22.0, uni(55, 75), dark, tops[static_cast<int>(uni(0, 3.999))], false});
-    ++k;
-  }
-  if (r.ball) {
-    for (int attempt = 0; attempt < 2000; ++attempt) {
-      const double d = uni(45, 160), a = uni(0, 2 * kPi);
-      const Eigen::Vector2d q = p + d * Eigen::Vector2d(std::cos(a), std::sin(a));
-      if (!on_look_carpet(f, r.look, q) || !clear_of(q, 11.0)) continue;
-      sc.columns.push_back({q, 11.0, 21.0, r.look.ball, r.look.ball, false});
-      sc.ball_cm = q;
-      break;
-    }
-  }
-  on_floor_ring(r.people, [&](const Eigen::Vector2d& q) {
+  add_robots(sc, f, r, p, d);
+  if (r.ball) add_ball(sc, f, r, p, d);
+  add_off_carpet(sc, room, p, r.people, d, [&](const Eigen::Vector2d& q) {
     const cv::Vec3f shirt(static_cast<float>(uni(20, 230)), static_cast<float>(uni(20, 230)),
                           static_cast<float>(uni(20, 230)));
     return Column{q, 22.0, uni(160, 185), cv::Vec3f(60, 40, 30), shirt, false};
   });
-  on_floor_ring(r.furniture, [&](const Eigen::Vector2d& q) {
-    const bool bright = u01(rng) < 0.5;
+  add_off_carpet(sc, room, p, r.furniture, d, [&](const Eigen::Vector2d& q) {
+    const bool bright = d.u01(d.rng) < 0.5;
     const cv::Vec3f c = bright ? cv::Vec3f(210, 212, 215) : cv::Vec3f(40, 52, 70);
     return Column{q, uni(30, 55), uni(70, 120), c, c, true};
   });
@@ -500,6 +542,185 @@ RealisticRenderer::RealisticRenderer(FieldGeometry field, TrueOptics optics)
   }
 }
 
+namespace {
+
+// Ceiling lights: the floor is brighter under them (+-light_unevenness).
+struct CeilingLights {
+  std::vector<Eigen::Vector2d> at;
+  double unevenness = 0.0;
+  [[nodiscard]] float operator()(const Eigen::Vector2d& q) const {
+    double g = 0.0;
+    for (const auto& l : at)
+      g = std::max(g, std::exp(-(q - l).squaredNorm() / (2.0 * 280.0 * 280.0)));
+    return static_cast<float>(1.0 - unevenness + 2.0 * unevenness * g);
+  }
+};
+
+CeilingLights ceiling_lights(const FieldGeometry& f, const RenderOptions& opt) {
+  std::mt19937_64 rng(opt.seed * 0x9E3779B97F4A7C15ull + 5);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  CeilingLights lights;
+  lights.unevenness = opt.realism.light_unevenness;
+  for (int k = 0; k < 3; ++k)
+    lights.at.emplace_back(u01(rng) * f.total_x_cm(), u01(rng) * f.total_y_cm());
+  return lights;
+}
+
+// The nearest thing a scene ray from the viewpoint (height h, at p, horizontal direction dir,
+// falling cot cm per cm) meets: the floor, a wall or goal panel, a column's side or its top.
+Hit nearest_hit(const Scene& sc, const Eigen::Vector2d& p, const Eigen::Vector2d& dir, double cot,
+                double h) {
+  Hit hit;
+  if (cot > 1e-9) hit = {Hit::kFloor, h / cot, -1, 0.0, 0.0};
+  for (std::size_t i = 0; i < sc.panels.size(); ++i) {
+    const Panel& pn = sc.panels[i];
+    const Eigen::Vector2d e = pn.b_cm - pn.a_cm, w = pn.a_cm - p;
+    const double den = dir.x() * e.y() - dir.y() * e.x();
+    if (std::abs(den) < 1e-12) continue;
+    const double t = (w.x() * e.y() - w.y() * e.x()) / den;
+    const double s = (w.x() * dir.y() - w.y() * dir.x()) / den;
+    if (t <= 0.0 || t >= hit.t || s < 0.0 || s > 1.0) continue;
+    const double z = h - t * cot;
+    if (z < 0.0 || z > pn.height_cm) continue;
+    hit = {Hit::kPanel, t, static_cast<int>(i), s * e.norm(), z};
+  }
+  for (std::size_t i = 0; i < sc.columns.size(); ++i) {
+    const Column& c = sc.columns[i];
+    const Eigen::Vector2d fvec = c.position_cm - p;
+    const double along = fvec.dot(dir);
+    const double perp2 = fvec.squaredNorm() - along * along;
+    const double r2 = c.radius_cm * c.radius_cm;
+    if (perp2 > r2 || along + c.radius_cm <= 0.0) continue;
+    const double half = std::sqrt(r2 - perp2);
+    const double t_near = std::max(0.0, along - half), t_far = along + half;
+    if (t_near >= hit.t) continue;
+    const double z_near = h - t_near * cot;
+    if (z_near >= 0.0 && z_near <= c.height_cm) {
+      hit = {Hit::kColumnSide, t_near, static_cast<int>(i), std::atan2(fvec.y(), fvec.x()), z_near};
+    } else if (z_near > c.height_cm && cot > 1e-9) {
+      const double t_top = (h - c.height_cm) / cot;
+      if (t_top >= t_near && t_top <= t_far && t_top < hit.t)
+        hit = {Hit::kColumnTop, t_top, static_cast<int>(i), 0.0, c.height_cm};
+    }
+  }
+  return hit;
+}
+
+// What one frame's scene rays are shaded with: the same for every pixel.
+struct SceneShading {
+  const FieldGeometry& field;
+  const Scene& sc;
+  const SceneLook& lk;
+  Eigen::Vector2d p;
+  GoalColour at_max;
+  std::uint64_t tex_seed;
+  CeilingLights light;
+};
+
+// The floor at q: a goal box's paint, the carpet (lines, texture) or the floor beyond, lit.
+cv::Vec3f floor_colour(const SceneShading& s, const Eigen::Vector2d& q, float footprint_cm) {
+  cv::Vec3f colour;
+  bool x_max = false;
+  if (s.lk.goals && in_goal_box(s.field, q, x_max)) {
+    colour = goal_paint(s.lk, x_max ? s.at_max : other(s.at_max)) * 0.85f;
+  } else if (on_look_carpet(s.field, s.lk, q)) {
+    colour = carpet_colour(s.field, s.sc, s.lk, q, footprint_cm, s.tex_seed);
+  } else {
+    colour =
+        s.lk.floor_beyond *
+        (0.8f + 0.4f * static_cast<float>(cell_hash(std::lround(q.x() / 20.0),
+                                                    std::lround(q.y() / 20.0), s.tex_seed + 1)));
+  }
+  colour *= s.light(q);
+  return colour;
+}
+
+// The colour of what a scene ray hits (the ceiling when nothing).
+cv::Vec3f hit_colour(const SceneShading& s, const Hit& hit, const Eigen::Vector2d& dir,
+                     float footprint_cm) {
+  switch (hit.type) {
+    case Hit::kNone:
+      return s.lk.ceiling;
+    case Hit::kFloor:
+      return floor_colour(s, s.p + hit.t * dir, footprint_cm);
+    case Hit::kPanel: {
+      const Panel& pn = s.sc.panels[static_cast<std::size_t>(hit.index)];
+      return pn.colour * (pn.textured
+                              ? block_factor(hit.s, hit.z, 45.0, 35.0,
+                                             s.tex_seed + 3 + static_cast<std::uint64_t>(hit.index))
+                              : 1.0f);
+    }
+    case Hit::kColumnSide: {
+      const Column& c = s.sc.columns[static_cast<std::size_t>(hit.index)];
+      cv::Vec3f colour = hit.z > 0.5 * c.height_cm ? c.top_colour : c.colour;
+      if (c.textured)
+        colour *= block_factor(hit.s * 50.0, hit.z, 30.0, 25.0,
+                               s.tex_seed + 101 + static_cast<std::uint64_t>(hit.index));
+      return colour;
+    }
+    case Hit::kColumnTop:
+      return s.sc.columns[static_cast<std::size_t>(hit.index)].top_colour * 1.1f;
+  }
+  return cv::Vec3f();
+}
+
+// Vignetting and the options' linear brightness gradient across the image.
+struct PixelGain {
+  double vignetting, strength, gd, half_diag;
+  Eigen::Vector2d centre;
+  [[nodiscard]] float operator()(int u, int v, float radius_frac) const {
+    float gain = static_cast<float>(1.0 - vignetting * std::min(1.0f, radius_frac) *
+                                              std::min(1.0f, radius_frac));
+    if (strength != 0.0) {
+      const double along =
+          ((u - centre.x()) * std::cos(gd) + (v - centre.y()) * std::sin(gd)) / half_diag;
+      gain *= static_cast<float>(1.0 + strength * along);
+    }
+    return gain;
+  }
+};
+
+// Lateral colour: red and blue imaged at slightly different magnifications about the centre.
+void lateral_colour(cv::Mat3f& img, const TrueOptics& o, double chromatic_px_at_rim) {
+  std::vector<cv::Mat> ch;
+  cv::split(img, ch);
+  const double k = chromatic_px_at_rim / o.mirror_radius_px;
+  for (const auto& [index, sign] : {std::pair{0, 1.0}, std::pair{2, -1.0}}) {
+    cv::Mat1f mx(img.size()), my(img.size());
+    for (int v = 0; v < img.rows; ++v)
+      for (int u = 0; u < img.cols; ++u) {
+        mx(v, u) = static_cast<float>(o.centre_px.x() + (u - o.centre_px.x()) * (1.0 - sign * k));
+        my(v, u) = static_cast<float>(o.centre_px.y() + (v - o.centre_px.y()) * (1.0 - sign * k));
+      }
+    cv::Mat out;
+    cv::remap(ch[static_cast<std::size_t>(index)], out, mx, my, cv::INTER_LINEAR,
+              cv::BORDER_REPLICATE);
+    ch[static_cast<std::size_t>(index)] = out;
+  }
+  cv::merge(ch, img);
+}
+
+// The camera's own degradations after the optics: blur, sensor noise, 8 bits, JPEG.
+cv::Mat camera_output(cv::Mat3f& img, const RenderOptions& opt) {
+  if (opt.blur) cv::GaussianBlur(img, img, cv::Size(3, 3), 0.8);
+  if (opt.noise_sigma > 0.0) {
+    cv::Mat3f noise(img.size());
+    cv::RNG nrng(opt.seed);
+    nrng.fill(noise, cv::RNG::NORMAL, cv::Scalar::all(0.0), cv::Scalar::all(opt.noise_sigma));
+    img += noise;
+  }
+  cv::Mat out;
+  img.convertTo(out, CV_8UC3);
+  if (opt.realism.jpeg_quality > 0) {
+    std::vector<std::uint8_t> buf;
+    cv::imencode(".jpg", out, buf, {cv::IMWRITE_JPEG_QUALITY, opt.realism.jpeg_quality});
+    out = cv::imdecode(buf, cv::IMREAD_COLOR);
+  }
+  return out;
+}
+
+}  // namespace
+
 cv::Mat RealisticRenderer::render(const Pose2& pose, const RenderOptions& opt) const {
   return render(pose, opt, realistic_scene(field_, pose, opt));
 }
@@ -513,25 +734,17 @@ cv::Mat RealisticRenderer::render(const Pose2& pose, const RenderOptions& opt,
   const RealismOptions& rz = opt.realism;
   const SceneLook& lk = rz.look;
   const bool cast = lk.colour_cast != cv::Vec3f(1.0f, 1.0f, 1.0f);
-  const double h = o.viewpoint_height_cm;
-  const Eigen::Vector2d p(pose.x_cm, pose.y_cm);
   const double cy = std::cos(deg_to_rad(pose.yaw_deg)), sy = std::sin(deg_to_rad(pose.yaw_deg));
-  const GoalColour at_max = colour_at_x_max(field_, rz);
-  // Ceiling lights: the floor is brighter under them (+-light_unevenness).
-  std::mt19937_64 rng(opt.seed * 0x9E3779B97F4A7C15ull + 5);
-  std::uniform_real_distribution<double> u01(0.0, 1.0);
-  std::vector<Eigen::Vector2d> lights;
-  for (int k = 0; k < 3; ++k)
-    lights.emplace_back(u01(rng) * field_.total_x_cm(), u01(rng) * field_.total_y_cm());
-  auto light = [&](const Eigen::Vector2d& q) {
-    double g = 0.0;
-    for (const auto& l : lights)
-      g = std::max(g, std::exp(-(q - l).squaredNorm() / (2.0 * 280.0 * 280.0)));
-    return static_cast<float>(1.0 - rz.light_unevenness + 2.0 * rz.light_unevenness * g);
-  };
-  const std::uint64_t tex_seed = opt.seed * 31 + 7;
-  const double gd = deg_to_rad(opt.gradient_direction_deg);
-  const double half_diag = 0.5 * std::hypot(o.width_px, o.height_px);
+  const SceneShading shading{field_,
+                             sc,
+                             lk,
+                             Eigen::Vector2d(pose.x_cm, pose.y_cm),
+                             colour_at_x_max(field_, rz),
+                             opt.seed * 31 + 7,
+                             ceiling_lights(field_, opt)};
+  const PixelGain gain_at{rz.vignetting, opt.gradient_strength,
+                          deg_to_rad(opt.gradient_direction_deg),
+                          0.5 * std::hypot(o.width_px, o.height_px), o.centre_px};
 
   cv::Mat3f img(o.height_px, o.width_px);
   for (int v = 0; v < o.height_px; ++v) {
@@ -559,130 +772,17 @@ cv::Mat RealisticRenderer::render(const Pose2& pose, const RenderOptions& opt,
           break;
         case Kind::kScene: {
           const Eigen::Vector2d dir(cy * pr.dx - sy * pr.dy, sy * pr.dx + cy * pr.dy);
-          const double cot = pr.cot;
-          Hit hit;
-          if (cot > 1e-9) hit = {Hit::kFloor, h / cot, -1, 0.0, 0.0};
-          for (std::size_t i = 0; i < sc.panels.size(); ++i) {
-            const Panel& pn = sc.panels[i];
-            const Eigen::Vector2d e = pn.b_cm - pn.a_cm, w = pn.a_cm - p;
-            const double den = dir.x() * e.y() - dir.y() * e.x();
-            if (std::abs(den) < 1e-12) continue;
-            const double t = (w.x() * e.y() - w.y() * e.x()) / den;
-            const double s = (w.x() * dir.y() - w.y() * dir.x()) / den;
-            if (t <= 0.0 || t >= hit.t || s < 0.0 || s > 1.0) continue;
-            const double z = h - t * cot;
-            if (z < 0.0 || z > pn.height_cm) continue;
-            hit = {Hit::kPanel, t, static_cast<int>(i), s * e.norm(), z};
-          }
-          for (std::size_t i = 0; i < sc.columns.size(); ++i) {
-            const Column& c = sc.columns[i];
-            const Eigen::Vector2d fvec = c.position_cm - p;
-            const double along = fvec.dot(dir);
-            const double perp2 = fvec.squaredNorm() - along * along;
-            const double r2 = c.radius_cm * c.radius_cm;
-            if (perp2 > r2 || along + c.radius_cm <= 0.0) continue;
-            const double half = std::sqrt(r2 - perp2);
-            const double t_near = std::max(0.0, along - half), t_far = along + half;
-            if (t_near >= hit.t) continue;
-            const double z_near = h - t_near * cot;
-            if (z_near >= 0.0 && z_near <= c.height_cm) {
-              hit = {Hit::kColumnSide, t_near, static_cast<int>(i), std::atan2(fvec.y(), fvec.x()),
-                     z_near};
-            } else if (z_near > c.height_cm && cot > 1e-9) {
-              const double t_top = (h - c.height_cm) / cot;
-              if (t_top >= t_near && t_top <= t_far && t_top < hit.t)
-                hit = {Hit::kColumnTop, t_top, static_cast<int>(i), 0.0, c.height_cm};
-            }
-          }
-          switch (hit.type) {
-            case Hit::kNone:
-              colour = lk.ceiling;
-              break;
-            case Hit::kFloor: {
-              const Eigen::Vector2d q = p + hit.t * dir;
-              bool x_max = false;
-              if (lk.goals && in_goal_box(field_, q, x_max)) {
-                colour = goal_paint(lk, x_max ? at_max : other(at_max)) * 0.85f;
-              } else if (on_look_carpet(field_, lk, q)) {
-                colour = carpet_colour(field_, sc, lk, q, pr.footprint_cm, tex_seed);
-              } else {
-                colour = lk.floor_beyond *
-                         (0.8f + 0.4f * static_cast<float>(cell_hash(std::lround(q.x() / 20.0),
-                                                                     std::lround(q.y() / 20.0),
-                                                                     tex_seed + 1)));
-              }
-              colour *= light(q);
-              break;
-            }
-            case Hit::kPanel: {
-              const Panel& pn = sc.panels[static_cast<std::size_t>(hit.index)];
-              colour =
-                  pn.colour *
-                  (pn.textured ? block_factor(hit.s, hit.z, 45.0, 35.0,
-                                              tex_seed + 3 + static_cast<std::uint64_t>(hit.index))
-                               : 1.0f);
-              break;
-            }
-            case Hit::kColumnSide: {
-              const Column& c = sc.columns[static_cast<std::size_t>(hit.index)];
-              colour = hit.z > 0.5 * c.height_cm ? c.top_colour : c.colour;
-              if (c.textured)
-                colour *= block_factor(hit.s * 50.0, hit.z, 30.0, 25.0,
-                                       tex_seed + 101 + static_cast<std::uint64_t>(hit.index));
-              break;
-            }
-            case Hit::kColumnTop:
-              colour = sc.columns[static_cast<std::size_t>(hit.index)].top_colour * 1.1f;
-              break;
-          }
+          const Hit hit = nearest_hit(sc, shading.p, dir, pr.cot, o.viewpoint_height_cm);
+          colour = hit_colour(shading, hit, dir, pr.footprint_cm);
           break;
         }
       }
-      float gain = static_cast<float>(1.0 - rz.vignetting * std::min(1.0f, pr.radius_frac) *
-                                                std::min(1.0f, pr.radius_frac));
-      if (opt.gradient_strength != 0.0) {
-        const double along =
-            ((u - o.centre_px.x()) * std::cos(gd) + (v - o.centre_px.y()) * std::sin(gd)) /
-            half_diag;
-        gain *= static_cast<float>(1.0 + opt.gradient_strength * along);
-      }
+      const float gain = gain_at(u, v, pr.radius_frac);
       row[u] = cast ? cv::Vec3f(colour.mul(lk.colour_cast)) * gain : colour * gain;
     }
   }
-  // Lateral colour: red and blue imaged at slightly different magnifications about the centre.
-  if (rz.chromatic_px_at_rim != 0.0) {
-    std::vector<cv::Mat> ch;
-    cv::split(img, ch);
-    const double k = rz.chromatic_px_at_rim / o.mirror_radius_px;
-    for (const auto& [index, sign] : {std::pair{0, 1.0}, std::pair{2, -1.0}}) {
-      cv::Mat1f mx(img.size()), my(img.size());
-      for (int v = 0; v < img.rows; ++v)
-        for (int u = 0; u < img.cols; ++u) {
-          mx(v, u) = static_cast<float>(o.centre_px.x() + (u - o.centre_px.x()) * (1.0 - sign * k));
-          my(v, u) = static_cast<float>(o.centre_px.y() + (v - o.centre_px.y()) * (1.0 - sign * k));
-        }
-      cv::Mat out;
-      cv::remap(ch[static_cast<std::size_t>(index)], out, mx, my, cv::INTER_LINEAR,
-                cv::BORDER_REPLICATE);
-      ch[static_cast<std::size_t>(index)] = out;
-    }
-    cv::merge(ch, img);
-  }
-  if (opt.blur) cv::GaussianBlur(img, img, cv::Size(3, 3), 0.8);
-  if (opt.noise_sigma > 0.0) {
-    cv::Mat3f noise(img.size());
-    cv::RNG nrng(opt.seed);
-    nrng.fill(noise, cv::RNG::NORMAL, cv::Scalar::all(0.0), cv::Scalar::all(opt.noise_sigma));
-    img += noise;
-  }
-  cv::Mat out;
-  img.convertTo(out, CV_8UC3);
-  if (rz.jpeg_quality > 0) {
-    std::vector<std::uint8_t> buf;
-    cv::imencode(".jpg", out, buf, {cv::IMWRITE_JPEG_QUALITY, rz.jpeg_quality});
-    out = cv::imdecode(buf, cv::IMREAD_COLOR);
-  }
-  return out;
+  if (rz.chromatic_px_at_rim != 0.0) lateral_colour(img, o, rz.chromatic_px_at_rim);
+  return camera_output(img, opt);
 }
 
 }  // namespace omniloc::sim

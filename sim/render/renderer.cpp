@@ -77,6 +77,36 @@ OmniRenderer::OmniRenderer(FieldGeometry field, CameraModel camera)
   }
 }
 
+namespace {
+
+// The floor at q seen from the robot at p: another robot standing in between, the floor beyond
+// the carpet, a white line or the carpet.
+cv::Vec3f floor_colour(const FieldGeometry& field, const WhiteLineIndex& lines,
+                       const std::vector<Obstacle>& obstacles, const Eigen::Vector2d& p,
+                       const Eigen::Vector2d& q) {
+  bool behind_robot = false;
+  for (const auto& o : obstacles) behind_robot = behind_robot || hidden_by(p, q, o);
+  if (behind_robot) return kRobot;
+  if (!on_carpet(field, q)) return kOutside;
+  return lines.is_white(q) ? kWhite : kCarpet;
+}
+
+// The sensor after the optics: noise, then blur, then 8 bits (saturating to 0..255).
+cv::Mat sensor_output(cv::Mat3f& img, const RenderOptions& opt) {
+  if (opt.noise_sigma > 0.0) {
+    cv::Mat3f noise(img.size());
+    cv::RNG rng(opt.seed);
+    rng.fill(noise, cv::RNG::NORMAL, cv::Scalar::all(0.0), cv::Scalar::all(opt.noise_sigma));
+    img += noise;
+  }
+  if (opt.blur) cv::GaussianBlur(img, img, cv::Size(3, 3), 0.8);
+  cv::Mat out;
+  img.convertTo(out, CV_8UC3);  // saturates to 0..255
+  return out;
+}
+
+}  // namespace
+
 cv::Mat OmniRenderer::render(const Pose2& pose, const RenderOptions& opt) const {
   if (opt.realism.enabled) {
     throw std::invalid_argument(
@@ -107,15 +137,7 @@ cv::Mat OmniRenderer::render(const Pose2& pose, const RenderOptions& opt) const 
         case Kind::kFloor: {
           const double rx = pr[u].x_cm, ry = pr[u].y_cm;
           const Eigen::Vector2d q(p.x() + c * rx - s * ry, p.y() + s * rx + c * ry);
-          bool behind_robot = false;
-          for (const auto& o : opt.obstacles) behind_robot = behind_robot || hidden_by(p, q, o);
-          if (behind_robot) {
-            colour = kRobot;
-          } else if (!on_carpet(field_, q)) {
-            colour = kOutside;
-          } else {
-            colour = lines_.is_white(q) ? kWhite : kCarpet;
-          }
+          colour = floor_colour(field_, lines_, opt.obstacles, p, q);
           break;
         }
       }
@@ -128,16 +150,7 @@ cv::Mat OmniRenderer::render(const Pose2& pose, const RenderOptions& opt) const 
       row[u] = colour;
     }
   }
-  if (opt.noise_sigma > 0.0) {
-    cv::Mat3f noise(img.size());
-    cv::RNG rng(opt.seed);
-    rng.fill(noise, cv::RNG::NORMAL, cv::Scalar::all(0.0), cv::Scalar::all(opt.noise_sigma));
-    img += noise;
-  }
-  if (opt.blur) cv::GaussianBlur(img, img, cv::Size(3, 3), 0.8);
-  cv::Mat out;
-  img.convertTo(out, CV_8UC3);  // saturates to 0..255
-  return out;
+  return sensor_output(img, opt);
 }
 
 cv::Mat render_omni(const FieldGeometry& field, const CameraModel& camera, const Pose2& pose,

@@ -98,71 +98,87 @@ struct Ft2232hModel::Impl {
     return static_cast<Impl*>(self)->ioctl(client) ? TRUE : FALSE;
   }
 
+  // USBDEVFS_GET_CAPABILITIES: what a current kernel's usbfs offers.
+  bool get_capabilities(UMockdevIoctlClient* client, UMockdevIoctlData* arg) {
+    UMockdevIoctlData* d = umockdev_ioctl_data_resolve(arg, 0, sizeof(guint32), nullptr);
+    const guint32 caps = USBDEVFS_CAP_BULK_SCATTER_GATHER | USBDEVFS_CAP_BULK_CONTINUATION |
+                         USBDEVFS_CAP_NO_PACKET_SIZE_LIM | USBDEVFS_CAP_REAP_AFTER_DISCONNECT |
+                         USBDEVFS_CAP_ZERO_PACKET;
+    std::memcpy(d->data, &caps, sizeof caps);
+    g_object_unref(d);
+    umockdev_ioctl_client_complete(client, 0, 0);
+    return true;
+  }
+
+  // USBDEVFS_GETDRIVER: ftdi_sio on interface 1 while bound and not detached.
+  bool get_driver(UMockdevIoctlClient* client, UMockdevIoctlData* arg) {
+    UMockdevIoctlData* d = umockdev_ioctl_data_resolve(arg, 0, sizeof(usbdevfs_getdriver), nullptr);
+    auto* g = reinterpret_cast<usbdevfs_getdriver*>(d->data);
+    const bool bound = cfg.kernel_driver_bound && !st.driver_detached && g->interface == 1;
+    if (bound) std::snprintf(g->driver, sizeof g->driver, "ftdi_sio");
+    g_object_unref(d);
+    umockdev_ioctl_client_complete(client, bound ? 0 : -1, bound ? 0 : ENODATA);
+    return true;
+  }
+
+  // USBDEVFS_IOCTL: the kernel driver detached (DISCONNECT) or attached again (CONNECT).
+  bool driver_ioctl(UMockdevIoctlClient* client, UMockdevIoctlData* arg) {
+    UMockdevIoctlData* d = umockdev_ioctl_data_resolve(arg, 0, sizeof(usbdevfs_ioctl), nullptr);
+    const auto* io = reinterpret_cast<const usbdevfs_ioctl*>(d->data);
+    int err = 0;
+    if (st.unplugged) {
+      err = ENODEV;
+    } else if (io->ioctl_code == static_cast<int>(USBDEVFS_DISCONNECT) && io->ifno == 1) {
+      if (!cfg.kernel_driver_bound || st.driver_detached) err = ENODATA;
+      st.driver_detached = true;
+    } else if (io->ioctl_code == static_cast<int>(USBDEVFS_CONNECT) && io->ifno == 1) {
+      st.driver_detached = false;
+    } else {
+      err = EINVAL;
+    }
+    g_object_unref(d);
+    umockdev_ioctl_client_complete(client, err ? -1 : 0, err);
+    return true;
+  }
+
+  // USBDEVFS_CLAIMINTERFACE / RELEASEINTERFACE of interface 1.
+  bool claim_or_release(UMockdevIoctlClient* client, UMockdevIoctlData* arg,
+                        unsigned long request) {
+    UMockdevIoctlData* d = umockdev_ioctl_data_resolve(arg, 0, sizeof(unsigned int), nullptr);
+    unsigned int ifno = 0;
+    std::memcpy(&ifno, d->data, sizeof ifno);
+    g_object_unref(d);
+    int err = 0;
+    if (st.unplugged) {
+      err = ENODEV;
+    } else if (request == USBDEVFS_CLAIMINTERFACE) {
+      // The kernel refuses a claim while ftdi_sio still owns the interface.
+      if (ifno == 1 && cfg.kernel_driver_bound && !st.driver_detached) {
+        err = EBUSY;
+      } else if (ifno == 1) {
+        st.interface_claimed = true;
+      }
+    } else if (ifno == 1) {
+      st.interface_claimed = false;
+    }
+    umockdev_ioctl_client_complete(client, err ? -1 : 0, err);
+    return true;
+  }
+
   bool ioctl(UMockdevIoctlClient* client) {
     const unsigned long request = umockdev_ioctl_client_get_request(client);
     UMockdevIoctlData* arg = umockdev_ioctl_client_get_arg(client);
     std::lock_guard lock(mu);
     switch (request) {
-      case USBDEVFS_GET_CAPABILITIES: {
-        UMockdevIoctlData* d = umockdev_ioctl_data_resolve(arg, 0, sizeof(guint32), nullptr);
-        const guint32 caps = USBDEVFS_CAP_BULK_SCATTER_GATHER | USBDEVFS_CAP_BULK_CONTINUATION |
-                             USBDEVFS_CAP_NO_PACKET_SIZE_LIM | USBDEVFS_CAP_REAP_AFTER_DISCONNECT |
-                             USBDEVFS_CAP_ZERO_PACKET;
-        std::memcpy(d->data, &caps, sizeof caps);
-        g_object_unref(d);
-        umockdev_ioctl_client_complete(client, 0, 0);
-        return true;
-      }
-      case USBDEVFS_GETDRIVER: {
-        UMockdevIoctlData* d =
-            umockdev_ioctl_data_resolve(arg, 0, sizeof(usbdevfs_getdriver), nullptr);
-        auto* g = reinterpret_cast<usbdevfs_getdriver*>(d->data);
-        const bool bound = cfg.kernel_driver_bound && !st.driver_detached && g->interface == 1;
-        if (bound) std::snprintf(g->driver, sizeof g->driver, "ftdi_sio");
-        g_object_unref(d);
-        umockdev_ioctl_client_complete(client, bound ? 0 : -1, bound ? 0 : ENODATA);
-        return true;
-      }
-      case USBDEVFS_IOCTL: {
-        UMockdevIoctlData* d = umockdev_ioctl_data_resolve(arg, 0, sizeof(usbdevfs_ioctl), nullptr);
-        const auto* io = reinterpret_cast<const usbdevfs_ioctl*>(d->data);
-        int err = 0;
-        if (st.unplugged) {
-          err = ENODEV;
-        } else if (io->ioctl_code == static_cast<int>(USBDEVFS_DISCONNECT) && io->ifno == 1) {
-          if (!cfg.kernel_driver_bound || st.driver_detached) err = ENODATA;
-          st.driver_detached = true;
-        } else if (io->ioctl_code == static_cast<int>(USBDEVFS_CONNECT) && io->ifno == 1) {
-          st.driver_detached = false;
-        } else {
-          err = EINVAL;
-        }
-        g_object_unref(d);
-        umockdev_ioctl_client_complete(client, err ? -1 : 0, err);
-        return true;
-      }
+      case USBDEVFS_GET_CAPABILITIES:
+        return get_capabilities(client, arg);
+      case USBDEVFS_GETDRIVER:
+        return get_driver(client, arg);
+      case USBDEVFS_IOCTL:
+        return driver_ioctl(client, arg);
       case USBDEVFS_CLAIMINTERFACE:
-      case USBDEVFS_RELEASEINTERFACE: {
-        UMockdevIoctlData* d = umockdev_ioctl_data_resolve(arg, 0, sizeof(unsigned int), nullptr);
-        unsigned int ifno = 0;
-        std::memcpy(&ifno, d->data, sizeof ifno);
-        g_object_unref(d);
-        int err = 0;
-        if (st.unplugged) {
-          err = ENODEV;
-        } else if (request == USBDEVFS_CLAIMINTERFACE) {
-          // The kernel refuses a claim while ftdi_sio still owns the interface.
-          if (ifno == 1 && cfg.kernel_driver_bound && !st.driver_detached) {
-            err = EBUSY;
-          } else if (ifno == 1) {
-            st.interface_claimed = true;
-          }
-        } else if (ifno == 1) {
-          st.interface_claimed = false;
-        }
-        umockdev_ioctl_client_complete(client, err ? -1 : 0, err);
-        return true;
-      }
+      case USBDEVFS_RELEASEINTERFACE:
+        return claim_or_release(client, arg, request);
       case USBDEVFS_SUBMITURB:
         return submit(client, arg);
       case USBDEVFS_REAPURB:

@@ -153,6 +153,77 @@ void World::kidnap(const Pose2& to) {
   kidnap_flag_ = true;
 }
 
+namespace {
+
+// The commanded field velocity and turn rate: the reference's velocity (mid-step) plus a gentle
+// pull back onto its path (gain k per second).
+void tracking_command(const TrajectorySample& now, const TrajectorySample& mid, const Pose2& pose,
+                      double k, Eigen::Vector2d& v_field, double& omega_deg) {
+  v_field = mid.velocity_cm_per_s + k * (now.pose.position_cm() - pose.position_cm());
+  omega_deg = mid.yaw_rate_deg_per_s + k * angle_diff_deg(now.pose.yaw_deg, pose.yaw_deg);
+}
+
+// Exact motion under a constant body twist over the step: the chord, in the field frame.
+Eigen::Vector2d twist_chord(const Eigen::Vector2d& v_body, double omega_rad, double dt,
+                            double yaw_deg) {
+  const double dth = omega_rad * dt;
+  const double a = std::abs(dth) < 1e-9 ? 1.0 : std::sin(dth) / dth;
+  const double b = std::abs(dth) < 1e-9 ? 0.5 * dth : (1.0 - std::cos(dth)) / dth;
+  const Eigen::Vector2d chord_body(dt * (a * v_body.x() - b * v_body.y()),
+                                   dt * (b * v_body.x() + a * v_body.y()));
+  return robot_to_field(chord_body, yaw_deg);
+}
+
+// Slip: extra spin in the wheel's direction of travel, for the part of the step [t0, t0 + dt] it
+// overlaps. Returns the mask of the wheels that slipped.
+std::uint8_t add_slips(const std::vector<SlipEvent>& slips, double t0, double dt,
+                       const Eigen::Vector4d& ground, Eigen::Vector4d& travel) {
+  std::uint8_t mask = 0;
+  for (const SlipEvent& s : slips) {
+    const double overlap = std::min(t0 + dt, s.start_s + s.duration_s) - std::max(t0, s.start_s);
+    if (overlap <= 0.0) continue;
+    const int w = s.wheel - 1;
+    const double sign = ground[w] < 0.0 ? -1.0 : 1.0;
+    travel[w] += sign * s.extra_speed_cm_per_s * overlap;
+    mask |= static_cast<std::uint8_t>(1u << w);
+  }
+  return mask;
+}
+
+// The robot's motion over a step, as the bumps need it: centre and heading at mid-step, body
+// velocity and turn rate.
+struct StepMotion {
+  Eigen::Vector2d centre;
+  double mid_yaw_deg;
+  Eigen::Vector2d v_body;
+  double omega_rad;
+};
+
+// Bumps: the wheel's path over the raised cosine is longer by sqrt(1 + slope^2). Returns the mask
+// of the wheels that went over one.
+std::uint8_t add_bumps(const std::vector<CarpetBump>& bumps, const World& world,
+                       const StepMotion& m, const Eigen::Vector4d& ground,
+                       Eigen::Vector4d& travel) {
+  std::uint8_t mask = 0;
+  for (int w = 0; w < world.wheels(); ++w) {
+    const Eigen::Vector2d p_body = world.wheel_position_cm(w);
+    const Eigen::Vector2d contact = m.centre + robot_to_field(p_body, m.mid_yaw_deg);
+    const Eigen::Vector2d v_contact = robot_to_field(
+        m.v_body + m.omega_rad * Eigen::Vector2d(-p_body.y(), p_body.x()), m.mid_yaw_deg);
+    const double speed = v_contact.norm();
+    if (speed <= 1e-9) continue;
+    for (const CarpetBump& bump : bumps) {
+      const double slope = bump_gradient(bump, contact).dot(v_contact / speed);
+      if (slope == 0.0) continue;
+      travel[w] += ground[w] * (std::sqrt(1.0 + slope * slope) - 1.0);
+      mask |= static_cast<std::uint8_t>(1u << w);
+    }
+  }
+  return mask;
+}
+
+}  // namespace
+
 void World::step() {
   const double clock = config_.clock_hz;
   const std::int64_t c0 = span_.end_cycle;
@@ -162,59 +233,25 @@ void World::step() {
   while (next_kidnap_ < config_.kidnaps.size() && config_.kidnaps[next_kidnap_].at_s < t0 + dt) {
     kidnap(config_.kidnaps[next_kidnap_++].to);
   }
-
-  // Command: the reference's velocity plus a gentle pull back onto its path.
   double omega_deg = 0.0;
   Eigen::Vector2d v_field(0.0, 0.0);
   if (t0 < trajectory_.duration_s()) {
     const TrajectorySample now = reference(t0);
     const TrajectorySample mid = reference(t0 + 0.5 * dt);
-    const double k = config_.tracking_gain_per_s;
-    v_field = mid.velocity_cm_per_s + k * (now.pose.position_cm() - pose_.position_cm());
-    omega_deg = mid.yaw_rate_deg_per_s + k * angle_diff_deg(now.pose.yaw_deg, pose_.yaw_deg);
+    tracking_command(now, mid, pose_, config_.tracking_gain_per_s, v_field, omega_deg);
   }
   const Eigen::Vector2d v_body = field_to_robot(v_field, pose_.yaw_deg + 0.5 * omega_deg * dt);
   const double omega_rad = deg_to_rad(omega_deg);
-
-  // Exact motion under a constant body twist over the step.
   const double dth = omega_rad * dt;
-  const double a = std::abs(dth) < 1e-9 ? 1.0 : std::sin(dth) / dth;
-  const double b = std::abs(dth) < 1e-9 ? 0.5 * dth : (1.0 - std::cos(dth)) / dth;
-  const Eigen::Vector2d chord_body(dt * (a * v_body.x() - b * v_body.y()),
-                                   dt * (b * v_body.x() + a * v_body.y()));
-  const Eigen::Vector2d dp = robot_to_field(chord_body, pose_.yaw_deg);
-
+  const Eigen::Vector2d dp = twist_chord(v_body, omega_rad, dt, pose_.yaw_deg);
   const Eigen::Vector4d ground =
       jacobian_ * Eigen::Vector3d(v_body.x(), v_body.y(), omega_rad) * dt;
   Eigen::Vector4d travel = ground;
-
-  // Slip: extra spin in the wheel's direction of travel, for the part of the step it overlaps.
-  for (const SlipEvent& s : config_.slips) {
-    const double overlap = std::min(t0 + dt, s.start_s + s.duration_s) - std::max(t0, s.start_s);
-    if (overlap <= 0.0) continue;
-    const int w = s.wheel - 1;
-    const double sign = ground[w] < 0.0 ? -1.0 : 1.0;
-    travel[w] += sign * s.extra_speed_cm_per_s * overlap;
-    slip_mask_ |= static_cast<std::uint8_t>(1u << w);
-  }
-  // Bumps: the wheel's path over the raised cosine is longer by sqrt(1 + slope^2).
+  slip_mask_ |= add_slips(config_.slips, t0, dt, ground, travel);
   if (!config_.bumps.empty()) {
-    const double mid_yaw = pose_.yaw_deg + 0.5 * rad_to_deg(dth);
-    const Eigen::Vector2d centre = Eigen::Vector2d(pose_.x_cm, pose_.y_cm) + 0.5 * dp;
-    for (int w = 0; w < wheels_; ++w) {
-      const Eigen::Vector2d p_body = wheel_position_cm(w);
-      const Eigen::Vector2d contact = centre + robot_to_field(p_body, mid_yaw);
-      const Eigen::Vector2d v_contact =
-          robot_to_field(v_body + omega_rad * Eigen::Vector2d(-p_body.y(), p_body.x()), mid_yaw);
-      const double speed = v_contact.norm();
-      if (speed <= 1e-9) continue;
-      for (const CarpetBump& bump : config_.bumps) {
-        const double slope = bump_gradient(bump, contact).dot(v_contact / speed);
-        if (slope == 0.0) continue;
-        travel[w] += ground[w] * (std::sqrt(1.0 + slope * slope) - 1.0);
-        bump_mask_ |= static_cast<std::uint8_t>(1u << w);
-      }
-    }
+    const StepMotion m{pose_.position_cm() + 0.5 * dp, pose_.yaw_deg + 0.5 * rad_to_deg(dth),
+                       v_body, omega_rad};
+    bump_mask_ |= add_bumps(config_.bumps, *this, m, ground, travel);
   }
   // Encoder errors, then the position in quarter-steps.
   std::normal_distribution<double> n(0.0, 1.0);
@@ -231,7 +268,6 @@ void World::step() {
     span_.end_pos[i] =
         std::llround(quarters_[i] * static_cast<double>(std::int64_t{1} << kFracBits));
   }
-
   prev_pose_ = pose_;
   prev_distance_cm_ = distance_cm_;
   pose_ = pose_.shifted(dp);

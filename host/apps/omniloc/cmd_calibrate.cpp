@@ -159,20 +159,11 @@ class DebugPictures {
   int written_ = 0, failed_ = 0;
 };
 
-int run_calibrate(const CalibrateArgs& a) {
+// The frames with their poses: one --pose per image, one for all, or none (the field's centre).
+// Returns 0, or the exit status after saying what is wrong.
+int read_frames(const CalibrateArgs& a, const std::vector<CalibrationFrame>& poses,
+                const FieldGeometry& field, std::vector<CalibrationFrame>& frames) {
   const std::vector<std::string>& images = a.images;
-  const std::string& out = a.out;
-  std::vector<CalibrationFrame> poses;
-  for (const auto& p : a.poses) poses.push_back(parse_pose(p));
-  if (!poses.empty() && poses.size() != 1 && poses.size() != images.size()) {
-    std::fprintf(
-        stderr,
-        "omniloc calibrate: %zu --pose for %zu images (give one per image, or one for all)\n",
-        poses.size(), images.size());
-    return 2;
-  }
-  const FieldGeometry field = load_field(a.field_name);
-  std::vector<CalibrationFrame> frames;
   for (std::size_t i = 0; i < images.size(); ++i) {
     CalibrationFrame f;
     if (!poses.empty())
@@ -190,43 +181,11 @@ int run_calibrate(const CalibrateArgs& a) {
                 f.yaw_deg ? std::to_string(*f.yaw_deg).c_str() : "unknown");
     frames.push_back(std::move(f));
   }
-  const auto t0 = std::chrono::steady_clock::now();
-  CalibrationOptions opt;
-  try {
-    opt.hints = hints_of(a);
-  } catch (const NumberError& e) {
-    std::fprintf(stderr, "omniloc calibrate: %s\n", e.what());
-    return 2;
-  }
-  opt.progress = [t0](const std::string& m) {
-    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::fprintf(stderr, "[%6.2f s] %s\n", s, m.c_str());
-  };
-  std::shared_ptr<DebugPictures> debug;
-  if (!a.debug_dir.empty()) {
-    debug = std::make_shared<DebugPictures>(a.debug_dir);
-    if (!debug->create()) return 1;
-    opt.step_pictures = [debug](const std::string& frame, const std::string& step,
-                                const cv::Mat& picture) { debug->write(frame, step, picture); };
-  }
-  CalibrationResult r;
-  try {
-    r = calibrate_camera(frames, field, opt);
-  } catch (const std::exception&) {
-    if (debug) debug->report();  // the pictures of the steps reached: where to look for the cause
-    throw;
-  }
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  {
-    std::ofstream f(out);
-    f << calibrated_camera_json(r, frames);
-    if (!f) {
-      std::fprintf(stderr, "omniloc calibrate: error: cannot write '%s'\n", out.c_str());
-      return 1;
-    }
-  }
-  (void)load_camera(out);  // read back with the project's reader
+  return 0;
+}
+
+// The camera found: centre, radial model, yaw offset and handedness, view, body and masts.
+void print_camera(const CalibrationResult& r) {
   const CameraModel& c = r.camera;
   std::printf("centre (%.2f, %.2f) px (rim (%.2f, %.2f) r %.1f px on %d/360 rays)\n",
               c.center_px.x(), c.center_px.y(), r.rim.centre_px.x(), r.rim.centre_px.y(),
@@ -249,8 +208,13 @@ int run_calibrate(const CalibrateArgs& a) {
               r.mirrored_ambiguous ? " (ambiguous: the other handedness fits as well)" : "");
   std::printf("view radius %.1f px, body radius %.1f px, %zu mast(s):", r.view_radius_px,
               c.body_radius_px, c.masts.size());
-  for (const auto& m : c.masts) std::printf(" %.1f+-%.1f deg", m.bearing_deg, m.half_width_deg);
+  for (const auto& mast : c.masts)
+    std::printf(" %.1f+-%.1f deg", mast.bearing_deg, mast.half_width_deg);
   std::printf("\n");
+}
+
+// The venue's goal colours, as measured.
+void print_goals(const CalibrationResult& r) {
   for (const auto& [name, g] :
        {std::pair{"blue", &r.goals.blue}, std::pair{"yellow", &r.goals.yellow}}) {
     if (*g) {
@@ -262,6 +226,11 @@ int run_calibrate(const CalibrateArgs& a) {
     }
   }
   std::printf("goal colour at x = max: %s\n", goal_colour_name(r.goal_colour_at_x_max));
+}
+
+// How well the camera fits each frame, the first frame's twin heading and the overall residual.
+void print_fits(const CalibrationResult& r, const std::vector<CalibrationFrame>& frames,
+                const std::string& out, double seconds) {
   for (std::size_t i = 0; i < r.fits.size(); ++i) {
     const auto& f = r.fits[i];
     std::printf(
@@ -284,16 +253,86 @@ int run_calibrate(const CalibrateArgs& a) {
   std::printf(
       "residual rms %.2f px (%.2f cm) over %.0f %% of the line pixels; wrote %s in %.2f s\n",
       r.rms_px, r.rms_cm, 100 * r.inlier_fraction, out.c_str(), seconds);
-  if (!a.overlay.empty()) {
-    for (std::size_t i = 0; i < frames.size(); ++i) {
-      const std::string p = numbered(a.overlay, i);
-      if (!cv::imwrite(p, calibration_overlay(frames[i], r.analyses[i], r.fits[i], r, field))) {
-        std::fprintf(stderr, "omniloc calibrate: error: cannot write overlay '%s'\n", p.c_str());
-        return 1;
-      }
-      std::printf("overlay %s\n", p.c_str());
+}
+
+// --overlay: each frame with the field's lines drawn through the camera. False when one cannot
+// be written (said on stderr).
+bool write_overlays(const CalibrateArgs& a, const std::vector<CalibrationFrame>& frames,
+                    const CalibrationResult& r, const FieldGeometry& field) {
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const std::string p = numbered(a.overlay, i);
+    if (!cv::imwrite(p, calibration_overlay(frames[i], r.analyses[i], r.fits[i], r, field))) {
+      std::fprintf(stderr, "omniloc calibrate: error: cannot write overlay '%s'\n", p.c_str());
+      return false;
+    }
+    std::printf("overlay %s\n", p.c_str());
+  }
+  return true;
+}
+
+// The calibration's options from the arguments: hints, progress on stderr timed from t0, and
+// the step pictures when --debug-dir is given (debug set). Returns 0 or the exit status.
+int calibration_options(const CalibrateArgs& a, std::chrono::steady_clock::time_point t0,
+                        CalibrationOptions& opt, std::shared_ptr<DebugPictures>& debug) {
+  try {
+    opt.hints = hints_of(a);
+  } catch (const NumberError& e) {
+    std::fprintf(stderr, "omniloc calibrate: %s\n", e.what());
+    return 2;
+  }
+  opt.progress = [t0](const std::string& m) {
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::fprintf(stderr, "[%6.2f s] %s\n", s, m.c_str());
+  };
+  if (!a.debug_dir.empty()) {
+    debug = std::make_shared<DebugPictures>(a.debug_dir);
+    if (!debug->create()) return 1;
+    opt.step_pictures = [debug](const std::string& frame, const std::string& step,
+                                const cv::Mat& picture) { debug->write(frame, step, picture); };
+  }
+  return 0;
+}
+
+int run_calibrate(const CalibrateArgs& a) {
+  const std::string& out = a.out;
+  std::vector<CalibrationFrame> poses;
+  for (const auto& p : a.poses) poses.push_back(parse_pose(p));
+  if (!poses.empty() && poses.size() != 1 && poses.size() != a.images.size()) {
+    std::fprintf(
+        stderr,
+        "omniloc calibrate: %zu --pose for %zu images (give one per image, or one for all)\n",
+        poses.size(), a.images.size());
+    return 2;
+  }
+  const FieldGeometry field = load_field(a.field_name);
+  std::vector<CalibrationFrame> frames;
+  if (const int status = read_frames(a, poses, field, frames); status != 0) return status;
+  const auto t0 = std::chrono::steady_clock::now();
+  CalibrationOptions opt;
+  std::shared_ptr<DebugPictures> debug;
+  if (const int status = calibration_options(a, t0, opt, debug); status != 0) return status;
+  CalibrationResult r;
+  try {
+    r = calibrate_camera(frames, field, opt);
+  } catch (const std::exception&) {
+    if (debug) debug->report();  // the pictures of the steps reached: where to look for the cause
+    throw;
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  {
+    std::ofstream f(out);
+    f << calibrated_camera_json(r, frames);
+    if (!f) {
+      std::fprintf(stderr, "omniloc calibrate: error: cannot write '%s'\n", out.c_str());
+      return 1;
     }
   }
+  (void)load_camera(out);  // read back with the project's reader
+  print_camera(r);
+  print_goals(r);
+  print_fits(r, frames, out, seconds);
+  if (!a.overlay.empty() && !write_overlays(a, frames, r, field)) return 1;
   if (!debug) return 0;
   debug->report();
   return debug->all_written() ? 0 : 1;

@@ -46,10 +46,8 @@ void print_header() {
               "count2", "count3", "dir", "stat", "lost", "badfrm", "resync", "lineerr", "retries");
 }
 
-int run_probe(const ProbeArgs& a) {
-  const bool once = a.once, enable = a.enable;
-  const std::uint64_t seconds = a.seconds;
-  const UsbTransportOptions& opt = a.opt;
+// The FT2232H boards on USB, one line each. False when none is an omniloc board (said on stderr).
+bool list_boards(const UsbTransportOptions& opt) {
   const auto boards = find_usb_boards(opt.product);
   int found = 0;
   for (const auto& b : boards) {
@@ -66,15 +64,16 @@ int run_probe(const ProbeArgs& a) {
         "the "
         "USB device readable by this user?\n",
         opt.product.c_str(), boards.size());
-    return 1;
+    return false;
   }
+  return true;
+}
 
+// The board's identity and registers as read (ID, version, CONFIG, CONTROL, STATUS, link and
+// channel errors, the gyro's state), warning when its register map differs from the host's.
+void print_registers(BoardSession& session) {
   namespace r = regmap;
-  BoardSessionOptions so;
-  so.configure = false;  // look, do not touch: CONTROL changes only with --enable, and is restored
-  BoardSession session(std::make_unique<UsbTransport>(opt), so);
   BoardClient& client = session.client();
-  Transport& usb = session.transport();
   const BoardIdentity& ident = session.identity();
   const std::uint32_t id = ident.id;
   const std::uint32_t version = ident.version;
@@ -82,7 +81,7 @@ int run_probe(const ProbeArgs& a) {
   const std::uint32_t period = ident.period_cycles;
   const std::uint32_t status = client.read_register(r::kRegStatus);
   const std::uint32_t link = client.read_register(r::kRegLinkErrors);
-  std::printf("%s\n", usb.status().description.c_str());
+  std::printf("%s\n", session.transport().status().description.c_str());
   std::printf("ID 0x%08X  register map %u.%u.%u (host speaks %u.%u.%u)\n", id,
               r::kVersionMajor.get(version), r::kVersionMinor.get(version),
               r::kVersionPatch.get(version), r::kVersionMajor.get(r::kVersionValue),
@@ -111,23 +110,11 @@ int run_probe(const ProbeArgs& a) {
   if (version_differs(ident)) {
     std::fprintf(stderr, "warning: the board's register map differs from the host's\n");
   }
+}
 
-  if (once) {
-    const auto w = client.snapshot();
-    print_header();
-    print_row(w, client.decoder_counters(), usb.status().counters, client.counters().retries);
-    return 0;
-  }
-
-  if (!r::kControlEnable.get(control)) {
-    if (!enable) {
-      std::fprintf(
-          stderr,
-          "CONTROL.ENABLE is 0: the board captures no windows; run with --enable to set it\n");
-      return 1;
-    }
-    client.write_register(r::kRegControl, r::kControlEnable.put(control, 1));
-  }
+// Streams telemetry, a row every 10th window, for `seconds` (0: until Ctrl-C). Returns the exit
+// status: 1 when the device is gone.
+int stream_rows(BoardClient& client, Transport& usb, std::uint64_t seconds) {
   std::signal(SIGINT, on_sigint);
   client.set_streaming(
       true);  // streaming on here, not in BoardSession: probe keeps the board's DECODE
@@ -150,6 +137,36 @@ int run_probe(const ProbeArgs& a) {
     std::fprintf(stderr, "omniloc probe: %s\n", e.what());
     return 1;  // the device is gone: nothing to restore
   }
+  return 0;
+}
+
+int run_probe(const ProbeArgs& a) {
+  const UsbTransportOptions& opt = a.opt;
+  if (!list_boards(opt)) return 1;
+  namespace r = regmap;
+  BoardSessionOptions so;
+  so.configure = false;  // look, do not touch: CONTROL changes only with --enable, and is restored
+  BoardSession session(std::make_unique<UsbTransport>(opt), so);
+  BoardClient& client = session.client();
+  Transport& usb = session.transport();
+  const std::uint32_t control = session.identity().control;
+  print_registers(session);
+  if (a.once) {
+    const auto w = client.snapshot();
+    print_header();
+    print_row(w, client.decoder_counters(), usb.status().counters, client.counters().retries);
+    return 0;
+  }
+  if (!r::kControlEnable.get(control)) {
+    if (!a.enable) {
+      std::fprintf(
+          stderr,
+          "CONTROL.ENABLE is 0: the board captures no windows; run with --enable to set it\n");
+      return 1;
+    }
+    client.write_register(r::kRegControl, r::kControlEnable.put(control, 1));
+  }
+  if (stream_rows(client, usb, a.seconds) != 0) return 1;
   client.write_register(r::kRegControl, control);  // streaming and ENABLE as they were
   std::signal(SIGINT, SIG_DFL);
   return 0;

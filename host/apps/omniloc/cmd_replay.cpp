@@ -27,51 +27,22 @@ void print_summary(const char* what, const char* unit, const ErrorSummary& s) {
               s.mean, s.median, s.p95, s.max, unit, s.count);
 }
 
-int run_replay(const ReplayArgs& a) {
-  const std::string& dir = a.dir;
-  const bool paper = a.paper;
-  const std::string out =
-      a.out.empty() ? (std::filesystem::path(dir) / "poses.csv").string() : a.out;
-  const Recording rec = load_recording(dir);
-  const FieldGeometry field = recording_field(rec);
+// The localizer's configuration: the named one, or with --paper the paper's (keeping the named
+// one's fuzzy rules).
+LocalizerConfig replay_config(const ReplayArgs& a) {
   LocalizerConfig config = load_localizer_config(a.config_name);
-  if (paper) {
+  if (a.paper) {
     const FuzzyConfig fuzzy = config.fuzzy;
     config = LocalizerConfig::paper();
     config.fuzzy = fuzzy;
   }
-  const std::filesystem::path cache =
-      a.db_path.empty() ? user_cache_dir() / feature_db_cache_name(field, rec.meta.camera)
-                        : std::filesystem::path(a.db_path);
-  const FeatureDb db = load_or_build_feature_db(
-      field, rec.meta.camera, cache,
-      [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); });
-  std::fprintf(stderr, "replaying %s: %zu windows, %zu frames%s, %s mode\n", dir.c_str(),
-               rec.windows.size(), rec.frames.size(), rec.truth.empty() ? "" : ", with truth",
-               paper ? "paper" : "full");
-  ReplaySettings settings;
-  if (a.heading != "recorded") settings.heading = parse_heading_trust(a.heading);
-  if (a.side != "unknown")
-    settings.side = a.side == "blue" ? GoalColour::kBlue : GoalColour::kYellow;
-  ReplayResult r;
-  try {
-    r = replay_recording(
-        rec, config, field, db,
-        [](std::size_t done, std::size_t total) {
-          std::fprintf(stderr, "\r  %zu / %zu events (%3.0f%%)", done, total,
-                       100.0 * static_cast<double>(done) / static_cast<double>(total));
-          if (done == total) std::fprintf(stderr, "\n");
-        },
-        settings);
-  } catch (const std::invalid_argument& e) {  // a side the field cannot place
-    std::fprintf(stderr, "omniloc replay: %s\n", e.what());
-    return 2;
-  }
-  PosesCsvWriter writer(out);
-  for (const LocalizedPose& p : r.poses) writer.write(p);
-  writer.close();
+  return config;
+}
+
+// What the replay found: the localizer's counts, the frames with no measurement, the first fix
+// and, with truth, the errors.
+void print_replay_result(const ReplayResult& r, const Recording& rec) {
   const LocalizerStats& s = r.stats;
-  std::printf("wrote %zu poses to %s\n", r.poses.size(), out.c_str());
   std::printf(
       "frames %d: accepted %d, rejected %d, ambiguous %d, dropped %d; global searches %d, "
       "relocalizations %d, lost events %d, origin resets %d; poses without a fix %zu\n",
@@ -101,6 +72,47 @@ int run_replay(const ReplayArgs& a) {
   } else if (!rec.truth.empty()) {
     std::printf("truth present but no pose with a fix inside its time span\n");
   }
+}
+
+int run_replay(const ReplayArgs& a) {
+  const std::string& dir = a.dir;
+  const std::string out =
+      a.out.empty() ? (std::filesystem::path(dir) / "poses.csv").string() : a.out;
+  const Recording rec = load_recording(dir);
+  const FieldGeometry field = recording_field(rec);
+  const LocalizerConfig config = replay_config(a);
+  const std::filesystem::path cache =
+      a.db_path.empty() ? user_cache_dir() / feature_db_cache_name(field, rec.meta.camera)
+                        : std::filesystem::path(a.db_path);
+  const FeatureDb db = load_or_build_feature_db(
+      field, rec.meta.camera, cache,
+      [](const std::string& s) { std::fprintf(stderr, "%s\n", s.c_str()); });
+  std::fprintf(stderr, "replaying %s: %zu windows, %zu frames%s, %s mode\n", dir.c_str(),
+               rec.windows.size(), rec.frames.size(), rec.truth.empty() ? "" : ", with truth",
+               a.paper ? "paper" : "full");
+  ReplaySettings settings;
+  if (a.heading != "recorded") settings.heading = parse_heading_trust(a.heading);
+  if (a.side != "unknown")
+    settings.side = a.side == "blue" ? GoalColour::kBlue : GoalColour::kYellow;
+  ReplayResult r;
+  try {
+    r = replay_recording(
+        rec, config, field, db,
+        [](std::size_t done, std::size_t total) {
+          std::fprintf(stderr, "\r  %zu / %zu events (%3.0f%%)", done, total,
+                       100.0 * static_cast<double>(done) / static_cast<double>(total));
+          if (done == total) std::fprintf(stderr, "\n");
+        },
+        settings);
+  } catch (const std::invalid_argument& e) {  // a side the field cannot place
+    std::fprintf(stderr, "omniloc replay: %s\n", e.what());
+    return 2;
+  }
+  PosesCsvWriter writer(out);
+  for (const LocalizedPose& p : r.poses) writer.write(p);
+  writer.close();
+  std::printf("wrote %zu poses to %s\n", r.poses.size(), out.c_str());
+  print_replay_result(r, rec);
   return 0;
 }
 

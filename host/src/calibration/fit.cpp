@@ -381,77 +381,104 @@ void initial_model(const CoarseHit& hit, FitState& st) {
   for (int k = 1; k < 4; ++k) st.b[rational ? 3 + k : k] = b(k);
 }
 
+// Every 10 px ring of radii weighs alike (square root of the inverse pixel count, 1/3..3): the
+// few lines near the body otherwise count for nothing against the many far ones.
+struct RingWeights {
+  const FitState& st;
+  std::vector<int> ring = std::vector<int>(64, 0);
+  int rings = 0, ring_total = 0;
+  [[nodiscard]] std::size_t ring_of(const Eigen::Vector2d& p) const {
+    return static_cast<std::size_t>(
+        std::min(63.0, std::hypot(p.x() - st.c[0], p.y() - st.c[1]) / 10.0));
+  }
+  [[nodiscard]] double weight(const Eigen::Vector2d& p) const {
+    return std::clamp(std::sqrt(static_cast<double>(ring_total) / std::max(1, rings) /
+                                std::max(1, ring[ring_of(p)])),
+                      1.0 / 3.0, 3.0);
+  }
+};
+
+RingWeights ring_weights(const FitState& st, const std::vector<FrameState>& fs) {
+  RingWeights rw{st};
+  for (const auto& s : fs)
+    for (const auto& p : s.analysis->line_pixels) ++rw.ring[rw.ring_of(p)];
+  for (int n : rw.ring) {
+    rw.rings += n > 0;
+    rw.ring_total += n;
+  }
+  return rw;
+}
+
+// One refinement's problem: a Huber-robust, ring-weighted cost per line pixel within `trunc` px
+// of the field model, against its nearest line point now. Returns how many pixels it holds.
+int add_pixel_costs(ceres::Problem& problem, FitState& st, std::vector<FrameState>& fs,
+                    double& shared_angle, const FieldDistance& fd, const RingWeights& rw,
+                    double trunc) {
+  int used = 0;
+  for (auto& s : fs) {
+    double* angle = s.frame->yaw_deg ? &shared_angle : &s.angle_rad;
+    const double alpha = *angle - s.yaw_rad;
+    const auto& lp = s.analysis->line_pixels;
+    const std::size_t stride = std::max<std::size_t>(1, lp.size() / 6000);
+    const double sign = st.mirrored ? -1.0 : 1.0;
+    for (std::size_t j = 0; j < lp.size(); j += stride) {
+      if (residual_px(st, alpha, s.frame->position_cm, lp[j], fd, nullptr) > trunc) continue;
+      const double du = sign * (lp[j].x() - st.c[0]), dv = st.c[1] - lp[j].y();
+      const double d = st.model().ground_cm(std::hypot(du, dv));
+      const double th = std::atan2(dv, du) - alpha;
+      const Eigen::Vector2d g =
+          s.frame->position_cm + d * Eigen::Vector2d(std::cos(th), std::sin(th));
+      auto* cost = new ceres::AutoDiffCostFunction<PixelCost, 2, 2, 7, 1>(
+          new PixelCost{lp[j].x(), lp[j].y(), sign, 1.0 / st.scale, s.yaw_rad, s.frame->position_cm,
+                        fd.nearest(g)});
+      const double w = rw.weight(lp[j]);
+      problem.AddResidualBlock(
+          cost, new ceres::ScaledLoss(new ceres::HuberLoss(1.0), w * w, ceres::TAKE_OWNERSHIP),
+          st.c, st.b, angle);
+      ++used;
+    }
+  }
+  return used;
+}
+
+// Solves one refinement's problem with the form's fixed terms held (the quartic's denominator,
+// the rational form's a2..a4); returns the final cost.
+double solve_refinement(ceres::Problem& problem, FitState& st) {
+  problem.SetManifold(st.b, new ceres::SubsetManifold(7, st.form == RadialForm::kQuartic
+                                                             ? std::vector<int>{4, 5, 6}
+                                                             : std::vector<int>{1, 2, 3}));
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = 50;
+  // Quiet: a step past the rational form's horizon fails to evaluate by design (PixelCost says
+  // so) and Ceres would warn about each on stderr; the progress callback reports the refinement.
+  so.logging_type = ceres::SILENT;
+  so.num_threads = 1;
+  ceres::Solver::Summary sum;
+  ceres::Solve(so, &problem, &sum);
+  return sum.final_cost;
+}
+
 // Robust refinement: Huber (1 px) on the image residual, pixels beyond a shrinking truncation
 // dropped, nearest line points re-associated between solves. Frames with a known heading share
 // one yaw offset (`shared_angle`); the others have their own heading term.
 void refine(FitState& st, std::vector<FrameState>& fs, double& shared_angle,
             const FieldDistance& fd, const std::function<void(const std::string&)>& say) {
   const double trunc_schedule[] = {8.0, 6.0, 4.0, 3.0, 3.0, 3.0, 3.0, 3.0, 3.0, 3.0, 3.0, 3.0};
-  auto ring_of = [&](const Eigen::Vector2d& p) {
-    return static_cast<std::size_t>(
-        std::min(63.0, std::hypot(p.x() - st.c[0], p.y() - st.c[1]) / 10.0));
-  };
   for (std::size_t it = 0; it < std::size(trunc_schedule); ++it) {
-    // Every 10 px ring of radii weighs alike (square root of the inverse pixel count, 1/3..3):
-    // the few lines near the body otherwise count for nothing against the many far ones.
-    std::vector<int> ring(64, 0);
-    for (const auto& s : fs)
-      for (const auto& p : s.analysis->line_pixels) ++ring[ring_of(p)];
-    int rings = 0, ring_total = 0;
-    for (int n : ring) {
-      rings += n > 0;
-      ring_total += n;
-    }
+    const RingWeights rw = ring_weights(st, fs);
     ceres::Problem problem;
-    int used = 0;
-    for (auto& s : fs) {
-      double* angle = s.frame->yaw_deg ? &shared_angle : &s.angle_rad;
-      const double alpha = *angle - s.yaw_rad;
-      const auto& lp = s.analysis->line_pixels;
-      const std::size_t stride = std::max<std::size_t>(1, lp.size() / 6000);
-      const double sign = st.mirrored ? -1.0 : 1.0;
-      for (std::size_t j = 0; j < lp.size(); j += stride) {
-        if (residual_px(st, alpha, s.frame->position_cm, lp[j], fd, nullptr) > trunc_schedule[it])
-          continue;
-        const double du = sign * (lp[j].x() - st.c[0]), dv = st.c[1] - lp[j].y();
-        const double d = st.model().ground_cm(std::hypot(du, dv));
-        const double th = std::atan2(dv, du) - alpha;
-        const Eigen::Vector2d g =
-            s.frame->position_cm + d * Eigen::Vector2d(std::cos(th), std::sin(th));
-        auto* cost = new ceres::AutoDiffCostFunction<PixelCost, 2, 2, 7, 1>(
-            new PixelCost{lp[j].x(), lp[j].y(), sign, 1.0 / st.scale, s.yaw_rad,
-                          s.frame->position_cm, fd.nearest(g)});
-        const double w = std::clamp(std::sqrt(static_cast<double>(ring_total) / std::max(1, rings) /
-                                              std::max(1, ring[ring_of(lp[j])])),
-                                    1.0 / 3.0, 3.0);
-        problem.AddResidualBlock(
-            cost, new ceres::ScaledLoss(new ceres::HuberLoss(1.0), w * w, ceres::TAKE_OWNERSHIP),
-            st.c, st.b, angle);
-        ++used;
-      }
-    }
+    const int used = add_pixel_costs(problem, st, fs, shared_angle, fd, rw, trunc_schedule[it]);
     if (used < 50) {
       throw std::runtime_error(fs.front().frame->name + ": nothing fits: only " +
                                std::to_string(used) +
                                " line pixels lie near the field model at the best coarse camera");
     }
-    // The form's fixed terms: the quartic's denominator, the rational form's a2..a4.
-    problem.SetManifold(st.b, new ceres::SubsetManifold(7, st.form == RadialForm::kQuartic
-                                                               ? std::vector<int>{4, 5, 6}
-                                                               : std::vector<int>{1, 2, 3}));
-    ceres::Solver::Options so;
-    so.linear_solver_type = ceres::DENSE_QR;
-    so.max_num_iterations = 50;
-    // Quiet: a step past the rational form's horizon fails to evaluate by design (PixelCost says
-    // so) and Ceres would warn about each on stderr; the progress callback reports the refinement.
-    so.logging_type = ceres::SILENT;
-    so.num_threads = 1;
-    ceres::Solver::Summary sum;
-    ceres::Solve(so, &problem, &sum);
+    const double final_cost = solve_refinement(problem, st);
     say("refinement " + std::to_string(it + 1) + "/" + std::to_string(std::size(trunc_schedule)) +
         ": " + std::to_string(used) + " pixels within " + std::to_string(trunc_schedule[it]) +
         " px, centre (" + std::to_string(st.c[0]) + ", " + std::to_string(st.c[1]) + "), cost " +
-        std::to_string(sum.final_cost));
+        std::to_string(final_cost));
   }
   for (auto& s : fs)
     if (s.frame->yaw_deg) s.angle_rad = shared_angle;
@@ -669,13 +696,13 @@ std::string decide_handedness(const std::vector<CalibrationFrame>& frames,
 }
 }  // namespace
 
-CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames,
-                                   const FieldGeometry& field, const CalibrationOptions& options) {
-  const std::function<void(const std::string&)> say = [&](const std::string& m) {
-    if (options.progress) options.progress(m);
-  };
-  check_frames(frames, field);
-  CalibrationResult res;
+namespace {
+
+using Say = std::function<void(const std::string&)>;
+
+// Steps 1-4 of every frame: rim, carpet, lines, body and masts.
+void analyse_frames(const std::vector<CalibrationFrame>& frames, const CalibrationOptions& options,
+                    const Say& say, CalibrationResult& res) {
   for (const auto& f : frames) {
     say(f.name + ": finding the mirror rim, carpet, lines, body and masts");
     res.analyses.push_back(analyse_frame(f.image, f.name, options.hints, options.step_pictures));
@@ -684,20 +711,15 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames,
         std::to_string(a.rim.centre_px.y()) + ") r " + std::to_string(a.rim.radius_px) + " px, " +
         std::to_string(a.line_pixels.size()) + " line pixels");
   }
-  res.handedness_from = decide_handedness(frames, field, options.hints.mirrored);
-  say("building the field's distance transform");
-  const FieldDistance fd(field);
-  const FrameAnalysis& a0 = res.analyses.front();
-  const double rv = a0.view_radius_px;
+}
 
-  const CoarseResult coarse = coarse_search(a0, frames.front(), fd, say);
-  if (options.step_pictures)
-    options.step_pictures(frames.front().name, "5-coarse",
-                          detail::coarse_picture(coarse.grid, kCoarseTruncPx));
+// The coarse search's handedness: 1 mirrored, 0 not. Within 3 %: the lines seen do not tell the
+// handedness (a view symmetric about the robot); the team's --mirrored then decides (and
+// overrides the lines when given).
+int coarse_handedness(const CoarseResult& coarse, const CalibrationOptions& options, double rv,
+                      const Say& say, CalibrationResult& res) {
   res.unmirrored_score = coarse.best[0].score;
   res.mirrored_score = coarse.best[1].score;
-  // Within 3 %: the lines seen do not tell the handedness (a view symmetric about the robot); the
-  // team's --mirrored then decides (and overrides the lines when given).
   res.mirrored_ambiguous = std::abs(res.mirrored_score - res.unmirrored_score) <
                            0.03 * std::min(res.mirrored_score, res.unmirrored_score);
   const int mir = options.hints.mirrored ? (*options.hints.mirrored ? 1 : 0)
@@ -709,16 +731,19 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames,
       " px) = " + std::to_string(hit.map.dv_cm) + " cm, shape " + std::to_string(hit.map.x) +
       ", truncated mean " + std::to_string(hit.score) + " px" +
       (res.mirrored_ambiguous ? " (handedness ambiguous)" : ""));
+  return mir;
+}
 
-  FitState st{};
-  st.c[0] = a0.rim.centre_px.x();
-  st.c[1] = a0.rim.centre_px.y();
-  st.scale = rv;
-  st.mirrored = mir == 1;
-  initial_model(hit, st);
+// Each frame's starting heading term: the coarse hit's for the first, the other frames' searched
+// with the first frame's mapping. Frames with a known heading share one yaw offset
+// (shared_angle, any_known set).
+std::vector<FrameState> initial_frames(const std::vector<CalibrationFrame>& frames,
+                                       const CalibrationResult& res, const CoarseHit& hit,
+                                       const FitState& st, const FieldDistance& fd,
+                                       double& shared_angle, bool& any_known) {
+  const FrameAnalysis& a0 = res.analyses.front();
+  const double rv = a0.view_radius_px;
   std::vector<FrameState> fs;
-  double shared_angle = 0.0;
-  bool any_known = false;
   for (std::size_t i = 0; i < frames.size(); ++i) {
     FrameState s{&frames[i], &res.analyses[i]};
     if (frames[i].yaw_deg) s.yaw_rad = deg_to_rad(*frames[i].yaw_deg);
@@ -737,30 +762,35 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames,
     }
     fs.push_back(s);
   }
-  res.inlier_threshold_px = 3.0;  // a 5 cm line far away is 1-2 px: 3 px is one line width off
-  // The view: where the carpet ends all round in every frame.
-  res.view_radius_px = rv;
+  return fs;
+}
+
+// Whether the model is monotonic over the lines' reach (and the view), with the line pixels'
+// radii from the centre, sorted, in line_r (the refusal below quotes them).
+bool monotonic_over_lines(const CalibrationResult& res, const FitState& st,
+                          std::vector<double>& line_r) {
+  line_r.clear();
   for (const auto& a : res.analyses)
-    res.view_radius_px = std::min(res.view_radius_px, a.view_radius_px);
-  std::vector<double> line_r;
-  const auto monotonic = [&] {
-    line_r.clear();
-    for (const auto& a : res.analyses)
-      for (const auto& p : a.line_pixels)
-        line_r.push_back(std::hypot(p.x() - st.c[0], p.y() - st.c[1]));
-    std::sort(line_r.begin(), line_r.end());
-    const RadialModel m = st.model();
-    return m.monotonic_up_to(std::max(line_r.empty() ? 0.0 : line_r.back(), res.view_radius_px)) &&
-           m.ground_cm(res.view_radius_px) > 0;
-  };
-  // The quartic first; where it turns over within the lines' reach (a mirror whose floor distance
-  // climbs towards its horizon, which no polynomial follows), the rational form from the same
-  // start.
+    for (const auto& p : a.line_pixels)
+      line_r.push_back(std::hypot(p.x() - st.c[0], p.y() - st.c[1]));
+  std::sort(line_r.begin(), line_r.end());
+  const RadialModel m = st.model();
+  return m.monotonic_up_to(std::max(line_r.empty() ? 0.0 : line_r.back(), res.view_radius_px)) &&
+         m.ground_cm(res.view_radius_px) > 0;
+}
+
+// The quartic first; where it turns over within the lines' reach (a mirror whose floor distance
+// climbs towards its horizon, which no polynomial follows), the rational form from the same
+// start.
+void fit_radial(FitState& st, std::vector<FrameState>& fs, double& shared_angle,
+                const CoarseHit& hit, const FieldDistance& fd, const CalibrationResult& res,
+                const Say& say) {
   const FitState start = st;
   const std::vector<FrameState> fs_start = fs;
   const double shared_start = shared_angle;
   refine(st, fs, shared_angle, fd, say);
-  if (!monotonic()) {
+  std::vector<double> line_r;
+  if (!monotonic_over_lines(res, st, line_r)) {
     say("the quartic turns over within the lines' reach: fitting the rational form (the mirror's "
         "horizon)");
     st = start;
@@ -770,28 +800,40 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames,
     initial_model(hit, st);
     refine(st, fs, shared_angle, fd, say);
   }
-  // Before the refusals below (non-monotonic model, too few inliers): their cause is in this
-  // picture.
-  if (options.step_pictures)
-    show_residuals(st, fs, fd, res.inlier_threshold_px, options.step_pictures);
-  res.radial = st.model();
-  if (!monotonic()) {
-    const double r_used = line_r.empty() ? 0.0 : line_r.back();
-    // Say where the lines were: a band of radii measures the mapping only there.
-    const auto pct = [&](double q) {
-      return static_cast<int>(
-          line_r[static_cast<std::size_t>(q * static_cast<double>(line_r.size() - 1))]);
-    };
-    throw std::runtime_error(
-        frames.front().name +
-        ": nothing fits: neither the quartic nor the rational radial model is monotonic over the " +
-        std::to_string(static_cast<int>(r_used)) +
-        " px the lines span (90 % of the line pixels lie between " + std::to_string(pct(0.05)) +
-        " and " + std::to_string(pct(0.95)) +
-        " px from the centre: add a frame where lines cross the view at other distances)");
-  }
-  measure_residuals(st, fs, fd, res);
-  // Most line pixels must lie on the model: otherwise the pose, the field or the frame is wrong.
+}
+
+// Neither form monotonic: say where the lines were, since a band of radii measures the mapping
+// only there.
+[[noreturn]] void refuse_non_monotonic(const std::vector<CalibrationFrame>& frames,
+                                       const std::vector<double>& line_r) {
+  const double r_used = line_r.empty() ? 0.0 : line_r.back();
+  const auto pct = [&](double q) {
+    return static_cast<int>(
+        line_r[static_cast<std::size_t>(q * static_cast<double>(line_r.size() - 1))]);
+  };
+  throw std::runtime_error(
+      frames.front().name +
+      ": nothing fits: neither the quartic nor the rational radial model is monotonic over the " +
+      std::to_string(static_cast<int>(r_used)) +
+      " px the lines span (90 % of the line pixels lie between " + std::to_string(pct(0.05)) +
+      " and " + std::to_string(pct(0.95)) +
+      " px from the centre: add a frame where lines cross the view at other distances)");
+}
+
+// The fit's start: the rim's centre, the first frame's view radius as the scale, the coarse
+// hit's mapping and handedness.
+FitState starting_state(const FrameAnalysis& a0, int mir, const CoarseHit& hit) {
+  FitState st{};
+  st.c[0] = a0.rim.centre_px.x();
+  st.c[1] = a0.rim.centre_px.y();
+  st.scale = a0.view_radius_px;
+  st.mirrored = mir == 1;
+  initial_model(hit, st);
+  return st;
+}
+
+// Most line pixels must lie on the model: otherwise the pose, the field or the frame is wrong.
+void refuse_few_inliers(const std::vector<CalibrationFrame>& frames, const CalibrationResult& res) {
   if (res.inlier_fraction < 0.4) {
     throw std::runtime_error(frames.front().name + ": nothing fits: only " +
                              std::to_string(static_cast<int>(100 * res.inlier_fraction)) +
@@ -799,11 +841,11 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames,
                              std::to_string(res.inlier_threshold_px) +
                              " px of the field model at the best camera (wrong pose or field?)");
   }
-  measured_radii(st, fs, fd, res);
-  build_camera(st, fs, any_known ? shared_angle : fs.front().angle_rad, frames.front().image.size(),
-               res);
-  self_check(frames, field, res);
-  // Twin of the first frame: its best coarse heading term at least 30 deg from the fitted one.
+}
+
+// Twin of the first frame: its best coarse heading term at least 30 deg from the fitted one.
+void find_twin(const CoarseResult& coarse, int mir, CalibrationResult& res) {
+  const CoarseHit& hit = coarse.best[mir];
   FrameFit& f0 = res.fits.front();
   f0.score = hit.score;
   f0.twin_score = 1e18;
@@ -816,6 +858,55 @@ CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames,
     f0.twin_score = sc[static_cast<std::size_t>(k)];
     f0.twin_yaw_deg = wrap_deg(f0.yaw_deg + f0.image_angle_of_field_x_deg - a_deg);
   }
+}
+
+}  // namespace
+
+CalibrationResult calibrate_camera(const std::vector<CalibrationFrame>& frames,
+                                   const FieldGeometry& field, const CalibrationOptions& options) {
+  const Say say = [&](const std::string& m) {
+    if (options.progress) options.progress(m);
+  };
+  check_frames(frames, field);
+  CalibrationResult res;
+  analyse_frames(frames, options, say, res);
+  res.handedness_from = decide_handedness(frames, field, options.hints.mirrored);
+  say("building the field's distance transform");
+  const FieldDistance fd(field);
+  const FrameAnalysis& a0 = res.analyses.front();
+  const double rv = a0.view_radius_px;
+
+  const CoarseResult coarse = coarse_search(a0, frames.front(), fd, say);
+  if (options.step_pictures)
+    options.step_pictures(frames.front().name, "5-coarse",
+                          detail::coarse_picture(coarse.grid, kCoarseTruncPx));
+  const int mir = coarse_handedness(coarse, options, rv, say, res);
+  const CoarseHit& hit = coarse.best[mir];
+
+  FitState st = starting_state(a0, mir, hit);
+  double shared_angle = 0.0;
+  bool any_known = false;
+  std::vector<FrameState> fs = initial_frames(frames, res, hit, st, fd, shared_angle, any_known);
+  res.inlier_threshold_px = 3.0;  // a 5 cm line far away is 1-2 px: 3 px is one line width off
+  // The view: where the carpet ends all round in every frame.
+  res.view_radius_px = rv;
+  for (const auto& a : res.analyses)
+    res.view_radius_px = std::min(res.view_radius_px, a.view_radius_px);
+  fit_radial(st, fs, shared_angle, hit, fd, res, say);
+  // Before the refusals below (non-monotonic model, too few inliers): their cause is in this
+  // picture.
+  if (options.step_pictures)
+    show_residuals(st, fs, fd, res.inlier_threshold_px, options.step_pictures);
+  res.radial = st.model();
+  if (std::vector<double> line_r; !monotonic_over_lines(res, st, line_r))
+    refuse_non_monotonic(frames, line_r);
+  measure_residuals(st, fs, fd, res);
+  refuse_few_inliers(frames, res);
+  measured_radii(st, fs, fd, res);
+  build_camera(st, fs, any_known ? shared_angle : fs.front().angle_rad, frames.front().image.size(),
+               res);
+  self_check(frames, field, res);
+  find_twin(coarse, mir, res);
   // The field is point-symmetric about its centre: from there (within the localizer's ambiguity
   // separation) the lines look the same at the offset 180 deg away, whatever the scores say. One
   // frame elsewhere tells them apart (the offset is shared).
@@ -856,28 +947,29 @@ nlohmann::ordered_json vision_json(const CalibrationResult& r) {
 }
 }  // namespace
 
-std::string calibrated_camera_json(const CalibrationResult& r,
+namespace {
+// Per frame: where it was taken, the heading found and how well the camera fits it.
+nlohmann::ordered_json frames_json(const CalibrationResult& r,
                                    const std::vector<CalibrationFrame>& frames) {
-  nlohmann::ordered_json j;
-  const CameraModel& c = r.camera;
-  j["description"] = "Calibrated by `omniloc calibrate` from " + std::to_string(frames.size()) +
-                     " frame(s); radius_lut samples the fitted radial model every 4 px and ends at "
-                     "the view radius "
-                     "(where the carpet ends all round). The \"calibration\" block records how; "
-                     "the camera reader ignores it.";
-  j["width"] = c.width_px;
-  j["height"] = c.height_px;
-  j["center_px"] = {c.center_px.x(), c.center_px.y()};
-  nlohmann::ordered_json lut = nlohmann::ordered_json::array();
-  for (const auto& m : c.radius_lut)
-    lut.push_back({std::round(m.radius_px * 1000) / 1000, std::round(m.ground_cm * 1000) / 1000});
-  j["radius_lut"] = lut;
-  j["yaw_offset_deg"] = c.yaw_offset_deg;
-  j["mirrored"] = c.mirrored;
-  nlohmann::ordered_json masts = nlohmann::ordered_json::array();
-  for (const auto& m : c.masts)
-    masts.push_back({{"bearing_deg", m.bearing_deg}, {"half_width_deg", m.half_width_deg}});
-  j["mask"] = {{"body_radius_px", c.body_radius_px}, {"masts", masts}};
+  nlohmann::ordered_json fr = nlohmann::ordered_json::array();
+  for (std::size_t i = 0; i < frames.size() && i < r.fits.size(); ++i) {
+    const auto& f = r.fits[i];
+    fr.push_back({{"image", frames[i].name},
+                  {"position_cm", {frames[i].position_cm.x(), frames[i].position_cm.y()}},
+                  {"yaw_deg", f.yaw_deg},
+                  {"yaw_given", f.yaw_given},
+                  {"rms_px", f.rms_px},
+                  {"line_pixels", f.line_pixels},
+                  {"inliers", f.inliers},
+                  {"line_recall", f.line_recall},
+                  {"recall_points", f.recall_points}});
+  }
+  return fr;
+}
+
+// The "calibration" block: how the camera was found (the camera reader ignores it).
+nlohmann::ordered_json calibration_json(const CalibrationResult& r,
+                                        const std::vector<CalibrationFrame>& frames) {
   nlohmann::ordered_json cal;
   cal["radial_model"] = {
       {"form", r.radial.rational() ? "rational: ground_cm = a1 x / (1 + e2 x^2 + e3 x^3 + e4 x^4)"
@@ -911,21 +1003,34 @@ std::string calibrated_camera_json(const CalibrationResult& r,
                      {"median_px", r.median_px},
                      {"inlier_fraction", r.inlier_fraction},
                      {"inlier_threshold_px", r.inlier_threshold_px}};
-  nlohmann::ordered_json fr = nlohmann::ordered_json::array();
-  for (std::size_t i = 0; i < frames.size() && i < r.fits.size(); ++i) {
-    const auto& f = r.fits[i];
-    fr.push_back({{"image", frames[i].name},
-                  {"position_cm", {frames[i].position_cm.x(), frames[i].position_cm.y()}},
-                  {"yaw_deg", f.yaw_deg},
-                  {"yaw_given", f.yaw_given},
-                  {"rms_px", f.rms_px},
-                  {"line_pixels", f.line_pixels},
-                  {"inliers", f.inliers},
-                  {"line_recall", f.line_recall},
-                  {"recall_points", f.recall_points}});
-  }
-  cal["frames"] = fr;
-  j["calibration"] = cal;
+  cal["frames"] = frames_json(r, frames);
+  return cal;
+}
+}  // namespace
+
+std::string calibrated_camera_json(const CalibrationResult& r,
+                                   const std::vector<CalibrationFrame>& frames) {
+  nlohmann::ordered_json j;
+  const CameraModel& c = r.camera;
+  j["description"] = "Calibrated by `omniloc calibrate` from " + std::to_string(frames.size()) +
+                     " frame(s); radius_lut samples the fitted radial model every 4 px and ends at "
+                     "the view radius "
+                     "(where the carpet ends all round). The \"calibration\" block records how; "
+                     "the camera reader ignores it.";
+  j["width"] = c.width_px;
+  j["height"] = c.height_px;
+  j["center_px"] = {c.center_px.x(), c.center_px.y()};
+  nlohmann::ordered_json lut = nlohmann::ordered_json::array();
+  for (const auto& m : c.radius_lut)
+    lut.push_back({std::round(m.radius_px * 1000) / 1000, std::round(m.ground_cm * 1000) / 1000});
+  j["radius_lut"] = lut;
+  j["yaw_offset_deg"] = c.yaw_offset_deg;
+  j["mirrored"] = c.mirrored;
+  nlohmann::ordered_json masts = nlohmann::ordered_json::array();
+  for (const auto& m : c.masts)
+    masts.push_back({{"bearing_deg", m.bearing_deg}, {"half_width_deg", m.half_width_deg}});
+  j["mask"] = {{"body_radius_px", c.body_radius_px}, {"masts", masts}};
+  j["calibration"] = calibration_json(r, frames);
   j["vision"] = vision_json(r);
   return j.dump(2) + "\n";
 }

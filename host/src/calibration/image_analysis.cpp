@@ -324,6 +324,243 @@ RimCircle rim_of(const cv::Mat& bgr, const AnalysisHints& hints, const std::stri
 
 }  // namespace
 
+namespace {
+
+// The frame's hue, saturation and value as float planes: the carpet and line tests compare them
+// with the carpet colour and with local averages.
+struct HsvPlanes {
+  cv::Mat1f hue, sat, val;
+};
+
+HsvPlanes hsv_planes(const cv::Mat& bgr) {
+  cv::Mat hsv;
+  cv::cvtColor(bgr, hsv, cv::COLOR_BGR2HSV);
+  HsvPlanes p;
+  std::vector<cv::Mat> ch;
+  cv::split(hsv, ch);
+  ch[0].convertTo(p.hue, CV_32F);
+  ch[1].convertTo(p.sat, CV_32F);
+  ch[2].convertTo(p.val, CV_32F);
+  return p;
+}
+
+// Carpet pixels inside the rim: within the carpet colour's hue, saturation and value bounds. The
+// float map weights the local averages below; the 8-bit mask is the analysis's output.
+cv::Mat1f carpet_pixels(const HsvPlanes& p, const RimCircle& rim, const CarpetColour& cc,
+                        cv::Mat& mask) {
+  cv::Mat1f carpet(p.hue.size(), 0.0f);
+  mask = cv::Mat::zeros(p.hue.size(), CV_8U);
+  for (int v = 0; v < p.hue.rows; ++v) {
+    for (int u = 0; u < p.hue.cols; ++u) {
+      if (std::hypot(u - rim.centre_px.x(), v - rim.centre_px.y()) > rim.radius_px) continue;
+      const double dh = std::abs(p.hue(v, u) - cc.hue);
+      if (std::min(dh, 180 - dh) <= cc.hue_half_width && p.sat(v, u) >= cc.sat_min &&
+          p.val(v, u) >= cc.val_min && p.val(v, u) <= cc.val_max) {
+        carpet(v, u) = 1.0f;
+        mask.at<std::uint8_t>(v, u) = 255;
+      }
+    }
+  }
+  return carpet;
+}
+
+// Local carpet brightness and saturation over a window four rim windows wide (several line
+// widths: the line itself never dominates it), from carpet pixels only, and how much of the
+// window is carpet.
+struct CarpetBackground {
+  cv::Mat1f val, sat, near_carpet;
+};
+
+CarpetBackground carpet_background(const HsvPlanes& p, const cv::Mat1f& carpet, int w) {
+  const int kb = 4 * w + 1;
+  CarpetBackground bg{normalised_box(p.val, carpet, kb), normalised_box(p.sat, carpet, kb), {}};
+  cv::boxFilter(carpet, bg.near_carpet, CV_32F, cv::Size(kb, kb));
+  return bg;
+}
+
+// The steps a line pixel stands out of the carpet by: from the carpet's own spread about its
+// local background, so a noisy carpet needs a clearer line.
+void set_line_steps(const HsvPlanes& p, const cv::Mat1f& carpet, const CarpetBackground& bg,
+                    CarpetColour& cc) {
+  std::vector<double> ev, es;
+  for (int v = 0; v < carpet.rows; v += 2)
+    for (int u = 0; u < carpet.cols; u += 2)
+      if (carpet(v, u) > 0) {
+        ev.push_back(p.val(v, u) - bg.val(v, u));
+        es.push_back(p.sat(v, u) - bg.sat(v, u));
+      }
+  // Four robust sigmas of the carpet's own spread (at least 2 levels: 8-bit quantisation).
+  cc.line_val_step = std::max(4.0 * robust_sigma(ev), 2.0);
+  // A grey carpet's saturation is noise: its lines are told by brightness alone.
+  cc.line_sat_step =
+      is_grey_carpet(cc.hue_half_width) ? 0.0 : std::max(2.0 * robust_sigma(es), 2.0);
+}
+
+// Line pixels: not carpet but among it, brighter and less saturated than the carpet round them.
+cv::Mat line_mask_of(const HsvPlanes& p, const cv::Mat1f& carpet, const CarpetBackground& bg,
+                     const RimCircle& rim, const CarpetColour& cc) {
+  cv::Mat mask = cv::Mat::zeros(carpet.size(), CV_8U);
+  for (int v = 0; v < carpet.rows; ++v) {
+    for (int u = 0; u < carpet.cols; ++u) {
+      // A fifth of the window carpet: the pixel is on (or in a line across) the carpet.
+      if (carpet(v, u) > 0 || bg.near_carpet(v, u) < 0.2f) continue;
+      if (std::hypot(u - rim.centre_px.x(), v - rim.centre_px.y()) > rim.radius_px) continue;
+      if (p.val(v, u) - bg.val(v, u) >= cc.line_val_step &&
+          bg.sat(v, u) - p.sat(v, u) >= cc.line_sat_step)
+        mask.at<std::uint8_t>(v, u) = 255;
+    }
+  }
+  return mask;
+}
+
+// Polar statistics about the rim centre: class per (angle, radius): 0 other, 1 carpet, 2 line.
+void classify_polar(detail::PolarClasses& polar, const RimCircle& rim, const cv::Mat& line_mask,
+                    const cv::Mat1f& carpet) {
+  const int nr = polar.radii_px;
+  for (int k = 0; k < kPolarAngles; ++k) {
+    const double a = deg_to_rad(k * 360.0 / kPolarAngles);
+    for (int r = 0; r < nr; ++r) {
+      const int u = static_cast<int>(std::lround(rim.centre_px.x() + r * std::cos(a)));
+      const int v = static_cast<int>(std::lround(rim.centre_px.y() - r * std::sin(a)));
+      if (u < 0 || v < 0 || u >= line_mask.cols || v >= line_mask.rows) continue;
+      polar.cls[static_cast<std::size_t>(k) * static_cast<std::size_t>(nr) +
+                static_cast<std::size_t>(r)] =
+          line_mask.at<std::uint8_t>(v, u) ? 2 : (carpet(v, u) > 0 ? 1 : 0);
+    }
+  }
+}
+
+// Body: inside the first radius where the floor is seen on 80 % as many angles as anywhere.
+// Returns the index of that radius; refuses a frame where no radius is a quarter floor.
+int body_radius_index(const detail::PolarClasses& polar, const std::string& ctx) {
+  const int nr = polar.radii_px;
+  std::vector<double> floor_frac(static_cast<std::size_t>(nr), 0.0);
+  for (int r = 0; r < nr; ++r) {
+    int n = 0;
+    for (int k = 0; k < kPolarAngles; ++k) n += polar.at(k, r) != 0;
+    floor_frac[static_cast<std::size_t>(r)] = static_cast<double>(n) / kPolarAngles;
+  }
+  const double fmax = *std::max_element(floor_frac.begin(), floor_frac.end());
+  if (fmax < 0.25)
+    throw std::runtime_error(ctx +
+                             ": no carpet: at no radius is a quarter of the circle carpet or line");
+  int body = 0;
+  while (body < nr && floor_frac[static_cast<std::size_t>(body)] < 0.8 * fmax) ++body;
+  return body;
+}
+
+// End of the carpet per angle: the first run of more than a rim window of "other" pixels.
+std::vector<double> carpet_ends(const detail::PolarClasses& polar, int body, int w) {
+  const int nr = polar.radii_px;
+  std::vector<double> end(kPolarAngles, nr);
+  for (int k = 0; k < kPolarAngles; ++k) {
+    int run = 0;
+    for (int r = body; r < nr; ++r) {
+      run = polar.at(k, r) == 0 ? run + 1 : 0;
+      if (run > w) {
+        end[static_cast<std::size_t>(k)] = r - run;
+        break;
+      }
+    }
+  }
+  return end;
+}
+
+// Masts: angles where most of [body, view] is neither carpet nor line (rods, the mast), smoothed
+// over three bins.
+void mark_masts(const detail::PolarClasses& polar, int body, int w, double view0,
+                std::vector<bool>& mast) {
+  std::vector<double> other(kPolarAngles, 0.0);
+  const int r0 = body + w / 2, r1 = std::max(r0 + 1, static_cast<int>(view0));
+  for (int k = 0; k < kPolarAngles; ++k) {
+    int n = 0;
+    for (int r = r0; r < r1; ++r) n += polar.at(k, r) == 0;
+    other[static_cast<std::size_t>(k)] = static_cast<double>(n) / (r1 - r0);
+  }
+  for (int k = 0; k < kPolarAngles; ++k) {
+    const double s = (other[static_cast<std::size_t>((k + kPolarAngles - 1) % kPolarAngles)] +
+                      other[static_cast<std::size_t>(k)] +
+                      other[static_cast<std::size_t>((k + 1) % kPolarAngles)]) /
+                     3.0;
+    mast[static_cast<std::size_t>(k)] = s >= 0.6;
+  }
+}
+
+// The mast bins as sectors (centre, half width) in image angle; the caller has checked that at
+// least one bin is open.
+std::vector<MastSector> mast_sectors(const std::vector<bool>& mast) {
+  std::vector<MastSector> sectors;
+  int start = 0;
+  while (mast[static_cast<std::size_t>(start)]) ++start;  // begin the sweep outside a sector
+  for (int i = 0; i < kPolarAngles; ++i) {
+    const int k = (start + i) % kPolarAngles;
+    if (!mast[static_cast<std::size_t>(k)] ||
+        mast[static_cast<std::size_t>((k + kPolarAngles - 1) % kPolarAngles)])
+      continue;
+    int len = 0;
+    while (mast[static_cast<std::size_t>((k + len) % kPolarAngles)]) ++len;
+    const double step = 360.0 / kPolarAngles;
+    // Half a bin each side for the sampling, one more bin of margin for the rod's soft edge.
+    sectors.push_back({wrap_deg((k + 0.5 * (len - 1)) * step), 0.5 * len * step + step});
+  }
+  return sectors;
+}
+
+// Line pixels for the fit: outside the body, before the carpet ends on their ray, not on a mast.
+std::vector<Eigen::Vector2d> fit_line_pixels(const FrameAnalysis& fa,
+                                             const std::vector<double>& end,
+                                             const std::vector<bool>& mast) {
+  std::vector<Eigen::Vector2d> pixels;
+  const RimCircle& rim = fa.rim;
+  for (int v = 0; v < fa.line_mask.rows; ++v) {
+    for (int u = 0; u < fa.line_mask.cols; ++u) {
+      if (!fa.line_mask.at<std::uint8_t>(v, u)) continue;
+      const double du = u - rim.centre_px.x(), dv = rim.centre_px.y() - v;
+      const double r = std::hypot(du, dv);
+      if (r < fa.body_radius_px + 1.0) continue;
+      double a = rad_to_deg(std::atan2(dv, du));
+      if (a < 0) a += 360.0;
+      const auto k = static_cast<std::size_t>(
+          std::min(kPolarAngles - 1, static_cast<int>(a * kPolarAngles / 360.0)));
+      if (mast[k] || r > end[k]) continue;
+      pixels.emplace_back(u, v);
+    }
+  }
+  return pixels;
+}
+
+// The polar half of the analysis: body and view radii, masts and the line pixels for the fit.
+// Fills fa (and mast) as it goes, so a refusal's picture shows what was measured before it.
+void analyse_polar(FrameAnalysis& fa, const detail::PolarClasses& polar, int w,
+                   std::vector<bool>& mast, const std::string& ctx) {
+  const int body = body_radius_index(polar, ctx);
+  fa.body_radius_px = body + 1.0;
+  const std::vector<double> end = carpet_ends(polar, body, w);
+  mark_masts(polar, body, w, percentile(end, 0.1), mast);
+  if (std::all_of(mast.begin(), mast.end(), [](bool b) { return b; })) {
+    throw std::runtime_error(
+        ctx + ": no carpet: every direction is hidden between the body and the end of the carpet");
+  }
+  fa.masts_image = mast_sectors(mast);
+  std::vector<double> open_end;
+  for (int k = 0; k < kPolarAngles; ++k)
+    if (!mast[static_cast<std::size_t>(k)]) open_end.push_back(end[static_cast<std::size_t>(k)]);
+  // The 10th percentile: the ball or a robot on a few rays does not pull the view in.
+  fa.view_radius_px = percentile(open_end, 0.1);
+  if (fa.view_radius_px <= fa.body_radius_px + 2 * w) {
+    throw std::runtime_error(ctx + ": no carpet ring: the carpet ends at " +
+                             std::to_string(fa.view_radius_px) + " px, at the robot's body (" +
+                             std::to_string(fa.body_radius_px) + " px)");
+  }
+  fa.line_pixels = fit_line_pixels(fa, end, mast);
+  if (fa.line_pixels.size() < 50) {
+    throw std::runtime_error(ctx + ": no lines: only " + std::to_string(fa.line_pixels.size()) +
+                             " line pixels on the carpet");
+  }
+}
+
+}  // namespace
+
 FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx, const AnalysisHints& hints,
                             const StepPictureSink& pictures) {
   // Drawn only when someone looks: a run without --debug-dir pays nothing.
@@ -333,74 +570,19 @@ FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx, const An
   FrameAnalysis fa;
   fa.rim = rim_of(bgr, hints, ctx);
   show("1-disc", [&] { return detail::disc_picture(bgr, fa.rim); });
-  const RimCircle& rim = fa.rim;
-  cv::Mat hsv;
-  cv::cvtColor(bgr, hsv, cv::COLOR_BGR2HSV);
-  CarpetColour& cc = fa.carpet;
-  cc = carpet_colour(bgr, rim, hints, ctx);
+  const HsvPlanes planes = hsv_planes(bgr);
+  fa.carpet = carpet_colour(bgr, fa.rim, hints, ctx);
   const int w = rim_window_px(bgr);
-
-  cv::Mat1f hue, sat, val;
-  {
-    std::vector<cv::Mat> ch;
-    cv::split(hsv, ch);
-    ch[0].convertTo(hue, CV_32F);
-    ch[1].convertTo(sat, CV_32F);
-    ch[2].convertTo(val, CV_32F);
-  }
-  cv::Mat1f carpet(bgr.size(), 0.0f);
-  fa.carpet_mask = cv::Mat::zeros(bgr.size(), CV_8U);
-  for (int v = 0; v < bgr.rows; ++v) {
-    for (int u = 0; u < bgr.cols; ++u) {
-      if (std::hypot(u - rim.centre_px.x(), v - rim.centre_px.y()) > rim.radius_px) continue;
-      const double dh = std::abs(hue(v, u) - cc.hue);
-      if (std::min(dh, 180 - dh) <= cc.hue_half_width && sat(v, u) >= cc.sat_min &&
-          val(v, u) >= cc.val_min && val(v, u) <= cc.val_max) {
-        carpet(v, u) = 1.0f;
-        fa.carpet_mask.at<std::uint8_t>(v, u) = 255;
-      }
-    }
-  }
+  const cv::Mat1f carpet = carpet_pixels(planes, fa.rim, fa.carpet, fa.carpet_mask);
   show("2-carpet", [&] { return fa.carpet_mask.clone(); });
-  // Local carpet brightness and saturation over a window four rim windows wide (several line
-  // widths: the line itself never dominates it), from carpet pixels only.
-  const int kb = 4 * w + 1;
-  const cv::Mat1f vbg = normalised_box(val, carpet, kb), sbg = normalised_box(sat, carpet, kb);
-  cv::Mat1f near_carpet;
-  cv::boxFilter(carpet, near_carpet, CV_32F, cv::Size(kb, kb));
-  std::vector<double> ev, es;
-  for (int v = 0; v < bgr.rows; v += 2)
-    for (int u = 0; u < bgr.cols; u += 2)
-      if (carpet(v, u) > 0) {
-        ev.push_back(val(v, u) - vbg(v, u));
-        es.push_back(sat(v, u) - sbg(v, u));
-      }
-  // Four robust sigmas of the carpet's own spread (at least 2 levels: 8-bit quantisation).
-  cc.line_val_step = std::max(4.0 * robust_sigma(ev), 2.0);
-  // A grey carpet's saturation is noise: its lines are told by brightness alone.
-  cc.line_sat_step =
-      is_grey_carpet(cc.hue_half_width) ? 0.0 : std::max(2.0 * robust_sigma(es), 2.0);
-  fa.line_mask = cv::Mat::zeros(bgr.size(), CV_8U);
-  for (int v = 0; v < bgr.rows; ++v) {
-    for (int u = 0; u < bgr.cols; ++u) {
-      // A fifth of the window carpet: the pixel is on (or in a line across) the carpet.
-      if (carpet(v, u) > 0 || near_carpet(v, u) < 0.2f) continue;
-      if (std::hypot(u - rim.centre_px.x(), v - rim.centre_px.y()) > rim.radius_px) continue;
-      if (val(v, u) - vbg(v, u) >= cc.line_val_step && sbg(v, u) - sat(v, u) >= cc.line_sat_step)
-        fa.line_mask.at<std::uint8_t>(v, u) = 255;
-    }
-  }
+  const CarpetBackground bg = carpet_background(planes, carpet, w);
+  set_line_steps(planes, carpet, bg, fa.carpet);
+  fa.line_mask = line_mask_of(planes, carpet, bg, fa.rim, fa.carpet);
   show("3-lines", [&] { return detail::lines_picture(bgr, fa.line_mask); });
 
-  // Polar statistics about the rim centre: class per (angle, radius): 0 other, 1 carpet, 2 line.
-  const int nr = static_cast<int>(rim.radius_px);
+  const int nr = static_cast<int>(fa.rim.radius_px);
   detail::PolarClasses polar{kPolarAngles, nr, {}};
-  std::vector<std::uint8_t>& cls = polar.cls;
-  cls.assign(static_cast<std::size_t>(kPolarAngles) * static_cast<std::size_t>(nr), 0);
-  auto at = [&](int k, int r) -> std::uint8_t& {
-    return cls[static_cast<std::size_t>(k) * static_cast<std::size_t>(nr) +
-               static_cast<std::size_t>(r)];
-  };
+  polar.cls.assign(static_cast<std::size_t>(kPolarAngles) * static_cast<std::size_t>(nr), 0);
   std::vector<bool> mast(kPolarAngles, false);
   // Picture 4 with what was measured: on a refusal below too (body, view or masts then 0 / none).
   const auto show_polar = [&] {
@@ -408,105 +590,8 @@ FrameAnalysis analyse_frame(const cv::Mat& bgr, const std::string& ctx, const An
          [&] { return detail::polar_picture(polar, fa.body_radius_px, fa.view_radius_px, mast); });
   };
   try {
-    for (int k = 0; k < kPolarAngles; ++k) {
-      const double a = deg_to_rad(k * 360.0 / kPolarAngles);
-      for (int r = 0; r < nr; ++r) {
-        const int u = static_cast<int>(std::lround(rim.centre_px.x() + r * std::cos(a)));
-        const int v = static_cast<int>(std::lround(rim.centre_px.y() - r * std::sin(a)));
-        if (u < 0 || v < 0 || u >= bgr.cols || v >= bgr.rows) continue;
-        at(k, r) = fa.line_mask.at<std::uint8_t>(v, u) ? 2 : (carpet(v, u) > 0 ? 1 : 0);
-      }
-    }
-    std::vector<double> floor_frac(static_cast<std::size_t>(nr), 0.0);
-    for (int r = 0; r < nr; ++r) {
-      int n = 0;
-      for (int k = 0; k < kPolarAngles; ++k) n += at(k, r) != 0;
-      floor_frac[static_cast<std::size_t>(r)] = static_cast<double>(n) / kPolarAngles;
-    }
-    const double fmax = *std::max_element(floor_frac.begin(), floor_frac.end());
-    if (fmax < 0.25)
-      throw std::runtime_error(
-          ctx + ": no carpet: at no radius is a quarter of the circle carpet or line");
-    // Body: inside the first radius where the floor is seen on 80 % as many angles as anywhere.
-    int body = 0;
-    while (body < nr && floor_frac[static_cast<std::size_t>(body)] < 0.8 * fmax) ++body;
-    fa.body_radius_px = body + 1.0;
-    // End of the carpet per angle: the first run of more than a rim window of "other" pixels.
-    std::vector<double> end(kPolarAngles, nr);
-    for (int k = 0; k < kPolarAngles; ++k) {
-      int run = 0;
-      for (int r = body; r < nr; ++r) {
-        run = at(k, r) == 0 ? run + 1 : 0;
-        if (run > w) {
-          end[static_cast<std::size_t>(k)] = r - run;
-          break;
-        }
-      }
-    }
-    const double view0 = percentile(end, 0.1);
-    // Masts: angles where most of [body, view] is neither carpet nor line (rods, the mast).
-    std::vector<double> other(kPolarAngles, 0.0);
-    const int r0 = body + w / 2, r1 = std::max(r0 + 1, static_cast<int>(view0));
-    for (int k = 0; k < kPolarAngles; ++k) {
-      int n = 0;
-      for (int r = r0; r < r1; ++r) n += at(k, r) == 0;
-      other[static_cast<std::size_t>(k)] = static_cast<double>(n) / (r1 - r0);
-    }
-    for (int k = 0; k < kPolarAngles; ++k) {
-      const double s = (other[static_cast<std::size_t>((k + kPolarAngles - 1) % kPolarAngles)] +
-                        other[static_cast<std::size_t>(k)] +
-                        other[static_cast<std::size_t>((k + 1) % kPolarAngles)]) /
-                       3.0;
-      mast[static_cast<std::size_t>(k)] = s >= 0.6;
-    }
-    if (std::all_of(mast.begin(), mast.end(), [](bool b) { return b; })) {
-      throw std::runtime_error(
-          ctx +
-          ": no carpet: every direction is hidden between the body and the end of the carpet");
-    }
-    int start = 0;
-    while (mast[static_cast<std::size_t>(start)]) ++start;  // begin the sweep outside a sector
-    for (int i = 0; i < kPolarAngles; ++i) {
-      const int k = (start + i) % kPolarAngles;
-      if (!mast[static_cast<std::size_t>(k)] ||
-          mast[static_cast<std::size_t>((k + kPolarAngles - 1) % kPolarAngles)])
-        continue;
-      int len = 0;
-      while (mast[static_cast<std::size_t>((k + len) % kPolarAngles)]) ++len;
-      const double step = 360.0 / kPolarAngles;
-      // Half a bin each side for the sampling, one more bin of margin for the rod's soft edge.
-      fa.masts_image.push_back({wrap_deg((k + 0.5 * (len - 1)) * step), 0.5 * len * step + step});
-    }
-    std::vector<double> open_end;
-    for (int k = 0; k < kPolarAngles; ++k)
-      if (!mast[static_cast<std::size_t>(k)]) open_end.push_back(end[static_cast<std::size_t>(k)]);
-    // The 10th percentile: the ball or a robot on a few rays does not pull the view in.
-    fa.view_radius_px = percentile(open_end, 0.1);
-    if (fa.view_radius_px <= fa.body_radius_px + 2 * w) {
-      throw std::runtime_error(ctx + ": no carpet ring: the carpet ends at " +
-                               std::to_string(fa.view_radius_px) + " px, at the robot's body (" +
-                               std::to_string(fa.body_radius_px) + " px)");
-    }
-    // Line pixels for the fit: outside the body, before the carpet ends on their ray, not on a
-    // mast.
-    for (int v = 0; v < bgr.rows; ++v) {
-      for (int u = 0; u < bgr.cols; ++u) {
-        if (!fa.line_mask.at<std::uint8_t>(v, u)) continue;
-        const double du = u - rim.centre_px.x(), dv = rim.centre_px.y() - v;
-        const double r = std::hypot(du, dv);
-        if (r < fa.body_radius_px + 1.0) continue;
-        double a = rad_to_deg(std::atan2(dv, du));
-        if (a < 0) a += 360.0;
-        const auto k = static_cast<std::size_t>(
-            std::min(kPolarAngles - 1, static_cast<int>(a * kPolarAngles / 360.0)));
-        if (mast[k] || r > end[k]) continue;
-        fa.line_pixels.emplace_back(u, v);
-      }
-    }
-    if (fa.line_pixels.size() < 50) {
-      throw std::runtime_error(ctx + ": no lines: only " + std::to_string(fa.line_pixels.size()) +
-                               " line pixels on the carpet");
-    }
+    classify_polar(polar, fa.rim, fa.line_mask, carpet);
+    analyse_polar(fa, polar, w, mast, ctx);
   } catch (const std::runtime_error&) {
     show_polar();
     throw;

@@ -483,6 +483,90 @@ struct Daemon::Impl {
     }
   }
 
+  // A session's first windows may be stale: the board streams on while the link is down, so
+  // windows wait in the link for the session to open and arrive at once. The clock model takes
+  // them all first (their lower envelope is the newest one), then gives each its time: on the very
+  // first connection that anchors on the newest one, after a reconnect the line from before holds.
+  void open_session(const SessionWindow& first, double arrival) {
+    DaemonClock& clock = *io.clock;
+    session_started = true;
+    std::vector<SessionWindow> queued{first};
+    while (queued.size() < kMaxQueuedAtOpen) {
+      auto more = client->next_window(std::chrono::milliseconds(0));
+      if (!more) break;
+      queued.push_back(*more);
+    }
+    const double read_at = clock.now_ms();
+    continue_board_time(queued.back(), read_at);
+    for (std::size_t i = 0; i < queued.size(); ++i)
+      (void)board_clock.add(scaled_board_ms(queued[i]), i == 0 ? arrival : read_at);
+    for (const SessionWindow& q : queued) {
+      BoardClockEstimate e = board_clock.map(scaled_board_ms(q));
+      e.host_ms = std::min(e.host_ms, read_at);
+      on_board_window(q, e);
+    }
+  }
+
+  // The next window from the board, if one comes; a silent or failing board is let go (and the
+  // degraded datagrams start at once).
+  void read_board(double& next_degraded_ms) {
+    DaemonClock& clock = *io.clock;
+    try {
+      if (const auto w = client->next_window(kTelemetryWait)) {
+        const double arrival = clock.now_ms();
+        if (!session_started)
+          open_session(*w, arrival);
+        else
+          on_board_window(*w, board_clock.add(scaled_board_ms(*w), arrival));
+      } else if (clock.now_ms() - last_window_clock_ms > kBoardSilentMs) {
+        throw TransportError(TransportErrorKind::kIo, "no telemetry for 250 ms");
+      }
+    } catch (const TransportError& e) {
+      lose_board(std::string(to_string(e.kind())) + ": " + e.what());
+      next_degraded_ms = clock.now_ms();
+    } catch (const BoardError& e) {
+      lose_board(e.what());
+      next_degraded_ms = clock.now_ms();
+    }
+  }
+
+  // Without a board: a connection attempt when due, else the degraded datagrams (a consumer
+  // tells "no board" / "board gone" from "daemon down" by them) and a wait. False while there is
+  // still no board.
+  bool connect_or_idle(double now, double start, double& next_degraded_ms) {
+    try_connect(now);
+    if (client) return true;
+    if (now >= next_degraded_ms) {
+      publish(last_localized, status(now), now, false);
+      next_degraded_ms = now + kDegradedTickMs;
+    }
+    status_tick(now, start);
+    io.clock->wait_ms(kDegradedTickMs);
+    return false;
+  }
+
+  // Why the loop should stop now ("signal", "duration"), or null to go on.
+  const char* stop_reason(const volatile std::sig_atomic_t* stop, double now, double start) const {
+    if (stop && *stop) return "signal";
+    if (config.duration_s > 0 && now - start >= config.duration_s * 1000.0) return "duration";
+    return nullptr;
+  }
+
+  // The run's end: streaming off, the recording closed, the report's totals.
+  DaemonReport finish_run(double start) {
+    if (client) {
+      if (const auto err = client->stop_streaming())
+        io.logger.warning("could not switch streaming off: " + *err);
+      count_link_errors();
+    }
+    close_recording();
+    report.run_ms = io.clock->now_ms() - start;
+    report.localizer = localizer.stats();
+    report.published = publisher.sent();
+    report.send_failed = publisher.failed();
+    return report;
+  }
+
   DaemonReport run(const volatile std::sig_atomic_t* stop) {
     DaemonClock& clock = *io.clock;
     const double start = clock.now_ms();
@@ -494,79 +578,16 @@ struct Daemon::Impl {
       const double now = clock.now_ms();
       if (io.observer.on_loop) io.observer.on_loop(now);
       poll_control();
-      if (stop && *stop) {
-        report.stop_reason = "signal";
+      if (const char* why = stop_reason(stop, now, start)) {
+        report.stop_reason = why;
         break;
       }
-      if (config.duration_s > 0 && now - start >= config.duration_s * 1000.0) {
-        report.stop_reason = "duration";
-        break;
-      }
-      if (!client) {
-        try_connect(now);
-        if (!client) {
-          // A consumer tells "no board" / "board gone" from "daemon down" by these datagrams.
-          if (now >= next_degraded_ms) {
-            publish(last_localized, status(now), now, false);
-            next_degraded_ms = now + kDegradedTickMs;
-          }
-          status_tick(now, start);
-          clock.wait_ms(kDegradedTickMs);
-          continue;
-        }
-      }
-      try {
-        if (const auto w = client->next_window(kTelemetryWait)) {
-          const double arrival = clock.now_ms();
-          if (!session_started) {
-            // A session's first windows may be stale: the board streams on while the link is down,
-            // so windows wait in the link for the session to open and arrive at once. The clock
-            // model takes them all first (their lower envelope is the newest one), then gives each
-            // its time: on the very first connection that anchors on the newest one, after a
-            // reconnect the line from before holds.
-            session_started = true;
-            std::vector<SessionWindow> queued{*w};
-            while (queued.size() < kMaxQueuedAtOpen) {
-              auto more = client->next_window(std::chrono::milliseconds(0));
-              if (!more) break;
-              queued.push_back(*more);
-            }
-            const double read_at = clock.now_ms();
-            continue_board_time(queued.back(), read_at);
-            for (std::size_t i = 0; i < queued.size(); ++i)
-              (void)board_clock.add(scaled_board_ms(queued[i]), i == 0 ? arrival : read_at);
-            for (const SessionWindow& q : queued) {
-              BoardClockEstimate e = board_clock.map(scaled_board_ms(q));
-              e.host_ms = std::min(e.host_ms, read_at);
-              on_board_window(q, e);
-            }
-          } else {
-            on_board_window(*w, board_clock.add(scaled_board_ms(*w), arrival));
-          }
-        } else if (clock.now_ms() - last_window_clock_ms > kBoardSilentMs) {
-          throw TransportError(TransportErrorKind::kIo, "no telemetry for 250 ms");
-        }
-      } catch (const TransportError& e) {
-        lose_board(std::string(to_string(e.kind())) + ": " + e.what());
-        next_degraded_ms = clock.now_ms();
-      } catch (const BoardError& e) {
-        lose_board(e.what());
-        next_degraded_ms = clock.now_ms();
-      }
+      if (!client && !connect_or_idle(now, start, next_degraded_ms)) continue;
+      read_board(next_degraded_ms);
       poll_camera(clock.now_ms());
       status_tick(clock.now_ms(), start);
     }
-    if (client) {
-      if (const auto err = client->stop_streaming())
-        io.logger.warning("could not switch streaming off: " + *err);
-      count_link_errors();
-    }
-    close_recording();
-    report.run_ms = clock.now_ms() - start;
-    report.localizer = localizer.stats();
-    report.published = publisher.sent();
-    report.send_failed = publisher.failed();
-    return report;
+    return finish_run(start);
   }
 };
 

@@ -30,11 +30,9 @@ void no_cache(httplib::Response& res) {
   res.set_header("Cache-Control", "no-store");
 }
 
-}  // namespace
-
-LiveViewServer::LiveViewServer(LiveState& state, const LiveViewOptions& options)
-    : impl_(std::make_unique<Impl>()) {
-  httplib::Server& s = impl_->server;
+// The server's limits: four workers, one request per connection, short timeouts, small requests
+// (the page only GETs), and the port never shared with another daemon.
+void configure(httplib::Server& s) {
   s.new_task_queue = [] { return new httplib::ThreadPool(4); };
   s.set_keep_alive_max_count(1);
   // SO_REUSEADDR only: httplib's default adds SO_REUSEPORT, with which a second daemon on the same
@@ -46,6 +44,11 @@ LiveViewServer::LiveViewServer(LiveState& state, const LiveViewOptions& options)
   s.set_read_timeout(2, 0);
   s.set_write_timeout(2, 0);
   s.set_payload_max_length(4096);  // the page only GETs
+}
+
+// The page and what it polls: the JSON documents (503 before the first pose) and the camera's
+// frame (503 before the first frame), none of them cached.
+void add_routes(httplib::Server& s, LiveState& state) {
   s.Get("/", [](const httplib::Request&, httplib::Response& res) {
     const std::string_view page = LiveState::page_html();
     res.set_content(page.data(), page.size(), "text/html; charset=utf-8");
@@ -81,6 +84,15 @@ LiveViewServer::LiveViewServer(LiveState& state, const LiveViewOptions& options)
   };
   s.Get("/frame.jpg", image(&LiveState::frame_jpeg, "image/jpeg"));
   s.Get("/frame.png", image(&LiveState::frame_png, "image/png"));
+}
+
+}  // namespace
+
+LiveViewServer::LiveViewServer(LiveState& state, const LiveViewOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  httplib::Server& s = impl_->server;
+  configure(s);
+  add_routes(s, state);
   const std::string where =
       "live view: http://" + options.address + ":" + std::to_string(options.port) + "/";
   if (options.port == 0) {

@@ -84,30 +84,42 @@ std::optional<Contender> contender(const LocalizerConfig& config, const FieldGeo
 
 }  // namespace
 
+namespace {
+// The global search's best: over every heading when none is known (second_yaw_deg the runner-up's
+// heading), else at the heading given (the scan at_yaw, made when not given), refined.
+Candidate best_candidate(const FieldGeometry& field, const CameraModel& camera, const FeatureDb& db,
+                         const BearingScan& bearings, std::optional<double> yaw_deg,
+                         const FieldScan* at_yaw, const MatchOptions& opt, double& second_yaw_deg) {
+  Candidate best;
+  if (!yaw_deg) {
+    const PoseMatch pm = global_search_any_yaw(db, field, camera, bearings, kAnyYawStepDeg, opt);
+    best = {{pm.match.position_cm.x(), pm.match.position_cm.y(), pm.yaw_deg}, pm.match};
+    second_yaw_deg = pm.second_yaw_deg;
+    return best;
+  }
+  FieldScan made;
+  if (at_yaw == nullptr) {
+    made = make_field_scan(bearings, *yaw_deg);
+    at_yaw = &made;
+  }
+  best.match = global_search(db, *at_yaw, opt);
+  apply_refinement(db, field, camera, *at_yaw, best.match, opt);
+  best.pose = {best.match.position_cm.x(), best.match.position_cm.y(), at_yaw->yaw_deg};
+  second_yaw_deg = at_yaw->yaw_deg;
+  return best;
+}
+}  // namespace
+
 SingleFrameResult locate_frame(const LocalizerConfig& config, const FieldGeometry& field,
                                const CameraModel& camera, const FeatureDb& db,
                                const BearingScan& bearings, std::optional<double> yaw_deg,
                                const GoalObservation* goals, const FieldScan* at_yaw) {
   const MatchOptions opt = match_options_of(config);
   SingleFrameResult r;
-  Candidate best;
   double second_yaw_deg = 0.0;
-  if (!yaw_deg) {
-    const PoseMatch pm = global_search_any_yaw(db, field, camera, bearings, kAnyYawStepDeg, opt);
-    best = {{pm.match.position_cm.x(), pm.match.position_cm.y(), pm.yaw_deg}, pm.match};
-    second_yaw_deg = pm.second_yaw_deg;
-    r.yaw_searched = true;
-  } else {
-    FieldScan made;
-    if (at_yaw == nullptr) {
-      made = make_field_scan(bearings, *yaw_deg);
-      at_yaw = &made;
-    }
-    best.match = global_search(db, *at_yaw, opt);
-    apply_refinement(db, field, camera, *at_yaw, best.match, opt);
-    best.pose = {best.match.position_cm.x(), best.match.position_cm.y(), at_yaw->yaw_deg};
-    second_yaw_deg = at_yaw->yaw_deg;
-  }
+  r.yaw_searched = !yaw_deg;
+  Candidate best =
+      best_candidate(field, camera, db, bearings, yaw_deg, at_yaw, opt, second_yaw_deg);
   best.match.error = judged_error(config, best.match);
   std::optional<Contender> found;
   if (best.match.cell >= 0)

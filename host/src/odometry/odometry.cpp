@@ -186,19 +186,45 @@ void Odometry::reset(const Pose2& pose, double sigma_xy_cm, double sigma_yaw_deg
   est_.wheel_yaw_deg = est_.pose.yaw_deg;
 }
 
-const OdometryEstimate& Odometry::update(const EncoderWindow& window) {
-  check_window(window, "Odometry");
-  // Only the very first window has no start time: it is taken to last the board's window period.
-  double dt_s = regmap::kWindowPeriodMs / 1000.0;
-  if (have_window_) {
-    dt_s = (window.t_end_ms - last_t_ms_) / 1000.0;
+namespace {
+
+// The window's span: from the previous window's end (the very first window has no start time: it
+// is taken to last the board's window period). A window not after the previous one is refused.
+double window_span_s(const EncoderWindow& window, bool have_window, double last_t_ms,
+                     double period_ms) {
+  double dt_s = period_ms / 1000.0;
+  if (have_window) {
+    dt_s = (window.t_end_ms - last_t_ms) / 1000.0;
     if (!(dt_s > 0.0)) {
       std::ostringstream os;
       os << "Odometry: window seq " << window.seq << " ends at " << window.t_end_ms
-         << " ms, not after the previous window (" << last_t_ms_ << " ms)";
+         << " ms, not after the previous window (" << last_t_ms << " ms)";
       throw std::invalid_argument(os.str());
     }
   }
+  return dt_s;
+}
+
+// Uncertainty: a fraction of the wheel travel, the heading uncertainty acting on it, and the
+// whole slip magnitude (the isolation may have picked the wrong wheel of a diagonal pair).
+// `turn_cm` is the wheels' rotational travel R * |dtheta|: wheel errors also displace the centre
+// while turning on the spot.
+void grow_uncertainty(OdometryEstimate& est, const RobotConfig& config, double dt_s, double step_cm,
+                      double turn_cm, const SlipReport& slip) {
+  est.sigma_yaw_deg =
+      std::sqrt(est.sigma_yaw_deg * est.sigma_yaw_deg +
+                config.gyro_arw_deg_per_sqrt_s * config.gyro_arw_deg_per_sqrt_s * dt_s);
+  est.sigma_xy_cm += config.odometry_noise_fraction * (step_cm + turn_cm) +
+                     deg_to_rad(est.sigma_yaw_deg) * step_cm +
+                     (slip.detected ? std::abs(slip.magnitude_cm) : 0.0);
+  est.slip = slip;
+}
+
+}  // namespace
+
+const OdometryEstimate& Odometry::update(const EncoderWindow& window) {
+  check_window(window, "Odometry");
+  const double dt_s = window_span_s(window, have_window_, last_t_ms_, regmap::kWindowPeriodMs);
   if (!have_window_ && start_pose_pending_ && window.heading_trust != HeadingTrust::kAbsolute) {
     // A start pose given before the first window, and a heading that is not the field's: the
     // board's gyro (or the wheels) starts at 0 (gyro_heading.hpp), so the start yaw is the offset,
@@ -238,18 +264,7 @@ const OdometryEstimate& Odometry::update(const EncoderWindow& window) {
   est_.vy_cm_per_s = body.y() / dt_s;
   est_.distance_cm += step_cm;
   est_.wheel_yaw_deg = wrap_deg(est_.wheel_yaw_deg + rad_to_deg(wheel_dyaw_rad));
-  // Uncertainty: a fraction of the wheel travel, the heading uncertainty acting on it, and the
-  // whole slip magnitude (the isolation may have picked the wrong wheel of a diagonal pair).
-  est_.sigma_yaw_deg =
-      std::sqrt(est_.sigma_yaw_deg * est_.sigma_yaw_deg +
-                config_.gyro_arw_deg_per_sqrt_s * config_.gyro_arw_deg_per_sqrt_s * dt_s);
-  // Wheel errors also displace the centre while turning on the spot, so the growth uses the
-  // wheels' rotational travel R * |dtheta| as well as the centre's path.
-  est_.sigma_xy_cm +=
-      config_.odometry_noise_fraction * (step_cm + mean_distance_cm_ * std::abs(dyaw_rad)) +
-      deg_to_rad(est_.sigma_yaw_deg) * step_cm +
-      (slip.detected ? std::abs(slip.magnitude_cm) : 0.0);
-  est_.slip = slip;
+  grow_uncertainty(est_, config_, dt_s, step_cm, mean_distance_cm_ * std::abs(dyaw_rad), slip);
 
   last_velocity_field_ = delta_field / dt_s;
   last_t_ms_ = window.t_end_ms;

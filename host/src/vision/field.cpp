@@ -16,66 +16,85 @@ constexpr double kMaxBorderCm = 1000.0;
 constexpr double kMaxLineWidthCm = 50.0;
 }  // namespace
 
-void FieldSpec::validate(const config::Origin& at) const {
+namespace {
+
+void positive(double v, const config::Origin& f) {
+  config::require(v > 0.0, f, "must be > 0", v);
+}
+void non_negative(double v, const config::Origin& f) {
+  config::require(v >= 0.0, f, "must be >= 0", v);
+}
+
+// The field's size and line width: positive, and bounded so that a typo cannot ask for an
+// impossible database.
+void validate_size(const FieldSpec& s, const config::Origin& at) {
   using config::require;
-  const auto positive = [&](double v, const config::Origin& f) {
-    require(v > 0.0, f, "must be > 0", v);
-  };
-  const auto non_negative = [&](double v, const config::Origin& f) {
-    require(v >= 0.0, f, "must be >= 0", v);
-  };
-  require(!name.empty(), at / "name", "must not be empty", config::show(name));
-  positive(field_length_cm, at / "field_length_cm");
-  positive(field_width_cm, at / "field_width_cm");
-  non_negative(border_cm, at / "border_cm");
-  positive(line_width_cm, at / "line_width_cm");
+  require(!s.name.empty(), at / "name", "must not be empty", config::show(s.name));
+  positive(s.field_length_cm, at / "field_length_cm");
+  positive(s.field_width_cm, at / "field_width_cm");
+  non_negative(s.border_cm, at / "border_cm");
+  positive(s.line_width_cm, at / "line_width_cm");
   // Bounds far beyond any robot-soccer field (MSL is 22 x 14 m), so that a typo cannot ask for a
   // database of 10^6 x 10^6 points (a length of 1e7 cm ended in std::bad_alloc).
-  require(field_length_cm <= kMaxFieldSideCm, at / "field_length_cm",
-          "must be at most 5000 cm (50 m)", field_length_cm);
-  require(field_width_cm <= kMaxFieldSideCm, at / "field_width_cm",
-          "must be at most 5000 cm (50 m)", field_width_cm);
-  require(border_cm <= kMaxBorderCm, at / "border_cm", "must be at most 1000 cm", border_cm);
+  require(s.field_length_cm <= kMaxFieldSideCm, at / "field_length_cm",
+          "must be at most 5000 cm (50 m)", s.field_length_cm);
+  require(s.field_width_cm <= kMaxFieldSideCm, at / "field_width_cm",
+          "must be at most 5000 cm (50 m)", s.field_width_cm);
+  require(s.border_cm <= kMaxBorderCm, at / "border_cm", "must be at most 1000 cm", s.border_cm);
   // A line is a few cm wide; 1000 cm would paint the whole field white.
-  require(line_width_cm <= kMaxLineWidthCm, at / "line_width_cm", "must be at most 50 cm",
-          line_width_cm);
-  const double L = field_length_cm, W = field_width_cm;
-  non_negative(centre_circle_radius_cm, at / "centre_circle_radius_cm");
-  require(centre_circle_radius_cm < W / 2.0, at / "centre_circle_radius_cm",
-          "must be < field_width_cm / 2", centre_circle_radius_cm);
-  non_negative(corner_arc_radius_cm, at / "corner_arc_radius_cm");
-  require(corner_arc_radius_cm < W / 2.0, at / "corner_arc_radius_cm",
-          "must be < field_width_cm / 2", corner_arc_radius_cm);
-  positive(goal.width_cm, at / "goal" / "width_cm");
-  require(goal.width_cm < W, at / "goal" / "width_cm", "must be < field_width_cm", goal.width_cm);
-  positive(goal.depth_cm, at / "goal" / "depth_cm");
+  require(s.line_width_cm <= kMaxLineWidthCm, at / "line_width_cm", "must be at most 50 cm",
+          s.line_width_cm);
+}
+
+// The circles, the goal and the areas in front of it: each fits its half of the field.
+void validate_markings(const FieldSpec& s, const config::Origin& at) {
+  using config::require;
+  const double L = s.field_length_cm, W = s.field_width_cm;
+  non_negative(s.centre_circle_radius_cm, at / "centre_circle_radius_cm");
+  require(s.centre_circle_radius_cm < W / 2.0, at / "centre_circle_radius_cm",
+          "must be < field_width_cm / 2", s.centre_circle_radius_cm);
+  non_negative(s.corner_arc_radius_cm, at / "corner_arc_radius_cm");
+  require(s.corner_arc_radius_cm < W / 2.0, at / "corner_arc_radius_cm",
+          "must be < field_width_cm / 2", s.corner_arc_radius_cm);
+  positive(s.goal.width_cm, at / "goal" / "width_cm");
+  require(s.goal.width_cm < W, at / "goal" / "width_cm", "must be < field_width_cm",
+          s.goal.width_cm);
+  positive(s.goal.depth_cm, at / "goal" / "depth_cm");
   // The goal box stands on the carpet's border behind the goal line, inside the field frame.
-  require(goal.depth_cm <= border_cm, at / "goal" / "depth_cm", "must be <= border_cm",
-          goal.depth_cm);
+  require(s.goal.depth_cm <= s.border_cm, at / "goal" / "depth_cm", "must be <= border_cm",
+          s.goal.depth_cm);
   for (const auto& [key, area] :
-       {std::pair{"goal_area", &goal_area}, std::pair{"penalty_area", &penalty_area}}) {
+       {std::pair{"goal_area", &s.goal_area}, std::pair{"penalty_area", &s.penalty_area}}) {
     non_negative(area->depth_cm, at / key / "depth_cm");
     require(area->depth_cm < L / 2.0, at / key / "depth_cm", "must be < field_length_cm / 2",
             area->depth_cm);
     non_negative(area->width_cm, at / key / "width_cm");
     require(area->width_cm < W, at / key / "width_cm", "must be < field_width_cm", area->width_cm);
   }
-  non_negative(penalty_arc.radius_cm, at / "penalty_arc" / "radius_cm");
-  non_negative(penalty_arc.centre_from_goal_line_cm,
+  non_negative(s.penalty_arc.radius_cm, at / "penalty_arc" / "radius_cm");
+  non_negative(s.penalty_arc.centre_from_goal_line_cm,
                at / "penalty_arc" / "centre_from_goal_line_cm");
-  require(penalty_arc.centre_from_goal_line_cm + penalty_arc.radius_cm < L / 2.0,
+  require(s.penalty_arc.centre_from_goal_line_cm + s.penalty_arc.radius_cm < L / 2.0,
           at / "penalty_arc",
           "arc must stay within its half of the field (centre_from_goal_line_cm + radius_cm < "
           "field_length_cm / 2)",
-          penalty_arc.centre_from_goal_line_cm + penalty_arc.radius_cm);
+          s.penalty_arc.centre_from_goal_line_cm + s.penalty_arc.radius_cm);
+}
+
+}  // namespace
+
+void FieldSpec::validate(const config::Origin& at) const {
+  validate_size(*this, at);
+  validate_markings(*this, at);
   if (marks_from_centre_cm.empty()) return;
+  const double L = field_length_cm, W = field_width_cm;
   positive(mark_radius_cm, at / "marks" / "radius_cm");
   for (std::size_t i = 0; i < marks_from_centre_cm.size(); ++i) {
     const Eigen::Vector2d& d = marks_from_centre_cm[i];
-    require(std::abs(d.x()) + mark_radius_cm < L / 2.0 + 1e-9 &&
-                std::abs(d.y()) + mark_radius_cm < W / 2.0,
-            (at / "marks" / "from_centre_cm")[i], "lies outside the playing area",
-            config::show({d.x(), d.y()}));
+    config::require(std::abs(d.x()) + mark_radius_cm < L / 2.0 + 1e-9 &&
+                        std::abs(d.y()) + mark_radius_cm < W / 2.0,
+                    (at / "marks" / "from_centre_cm")[i], "lies outside the playing area",
+                    config::show({d.x(), d.y()}));
   }
 }
 
@@ -440,94 +459,101 @@ RayCaster::RayCaster(const FieldGeometry& field) : half_width_cm_(field.line_wid
   discs_ = field.discs;
 }
 
-void RayCaster::intervals(const Eigen::Vector2d& o, const Eigen::Vector2d& u, double t_lo,
-                          double t_hi, std::vector<WhiteInterval>& out) const {
-  out.clear();
-  const double h = half_width_cm_;
-  for (const auto& sg : segs_) {
-    if (!ray_near(o, u, t_lo, t_hi, sg.mid, sg.bound)) continue;
-    const Eigen::Vector2d ao = o - sg.a;
-    // Slab test in the segment's frame: along in [-h, len + h], across in [-h, h].
-    double enter = t_lo, exit = t_hi;
-    const double p_along = ao.dot(sg.ex), d_along = u.dot(sg.ex);
-    const double p_across = sg.ex.x() * ao.y() - sg.ex.y() * ao.x(),
-                 d_across = sg.ex.x() * u.y() - sg.ex.y() * u.x();
-    bool hit = true;
-    for (const auto& [p, d, lo, hi] :
-         {std::tuple{p_along, d_along, -h, sg.len + h}, std::tuple{p_across, d_across, -h, h}}) {
-      if (std::abs(d) < 1e-12) {
-        if (p < lo || p > hi) hit = false;
-        continue;
-      }
-      double ta = (lo - p) / d, tb = (hi - p) / d;
-      if (ta > tb) std::swap(ta, tb);
-      enter = std::max(enter, ta);
-      exit = std::min(exit, tb);
+namespace {
+
+// A segment's white band as a ray interval: the slab test in the segment's frame, along in
+// [-h, len + h], across in [-h, h]. (RayCaster::Seg, private: deduced.)
+void segment_interval(const auto& sg, const Eigen::Vector2d& o, const Eigen::Vector2d& u,
+                      double t_lo, double t_hi, double h, std::vector<WhiteInterval>& out) {
+  const Eigen::Vector2d ao = o - sg.a;
+  double enter = t_lo, exit = t_hi;
+  const double p_along = ao.dot(sg.ex), d_along = u.dot(sg.ex);
+  const double p_across = sg.ex.x() * ao.y() - sg.ex.y() * ao.x(),
+               d_across = sg.ex.x() * u.y() - sg.ex.y() * u.x();
+  bool hit = true;
+  for (const auto& [p, d, lo, hi] :
+       {std::tuple{p_along, d_along, -h, sg.len + h}, std::tuple{p_across, d_across, -h, h}}) {
+    if (std::abs(d) < 1e-12) {
+      if (p < lo || p > hi) hit = false;
+      continue;
     }
-    if (hit) push_clipped(enter, exit, t_lo, t_hi, out);
+    double ta = (lo - p) / d, tb = (hi - p) / d;
+    if (ta > tb) std::swap(ta, tb);
+    enter = std::max(enter, ta);
+    exit = std::min(exit, tb);
   }
-  for (const auto& d : discs_) {
-    if (!ray_near(o, u, t_lo, t_hi, d.centre_cm, d.radius_cm)) continue;
-    double t0 = 0, t1 = 0;
-    if (circle_hits(o, u, d.centre_cm, d.radius_cm, t0, t1) == 2)
-      push_clipped(t0, t1, t_lo, t_hi, out);
+  if (hit) push_clipped(enter, exit, t_lo, t_hi, out);
+}
+
+// Inside the arc's annulus sector? Sweeps up to 180 deg by two cross products, longer ones by
+// angle. (RayCaster::Arc, private: deduced.)
+bool in_arc_band(const auto& pa, double h, const Eigen::Vector2d& p) {
+  const FieldArc& a = pa.arc;
+  const Eigen::Vector2d d = p - a.centre_cm;
+  const double r2 = d.squaredNorm();
+  const double r_in = std::max(0.0, a.radius_cm - h), r_out = a.radius_cm + h;
+  if (r2 < r_in * r_in || r2 > r_out * r_out) return false;
+  if (pa.full) return true;
+  if (pa.half_or_less) {
+    return pa.e_start.x() * d.y() - pa.e_start.y() * d.x() >= 0.0 &&
+           d.x() * pa.e_end.y() - d.y() * pa.e_end.x() >= 0.0;
   }
-  for (const auto& pa : arcs_) {
-    const FieldArc& a = pa.arc;
-    if (!ray_near(o, u, t_lo, t_hi, a.centre_cm, a.radius_cm + h)) continue;
-    // Inside the annulus sector? Sweeps up to 180 deg by two cross products, longer ones by angle.
-    auto inside = [&](const Eigen::Vector2d& p) {
-      const Eigen::Vector2d d = p - a.centre_cm;
-      const double r2 = d.squaredNorm();
-      const double r_in = std::max(0.0, a.radius_cm - h), r_out = a.radius_cm + h;
-      if (r2 < r_in * r_in || r2 > r_out * r_out) return false;
-      if (pa.full) return true;
-      if (pa.half_or_less) {
-        return pa.e_start.x() * d.y() - pa.e_start.y() * d.x() >= 0.0 &&
-               d.x() * pa.e_end.y() - d.y() * pa.e_end.x() >= 0.0;
-      }
-      return angle_in_sweep(rad_to_deg(std::atan2(d.y(), d.x())), a);
-    };
-    // Candidate boundaries: both circles of the annulus and the two radial end cuts; every piece
-    // between consecutive candidates is wholly in or out, decided at its midpoint.
-    double cand[8];
-    int n = 0;
-    cand[n++] = t_lo;
-    double t0 = 0, t1 = 0;
-    if (circle_hits(o, u, a.centre_cm, a.radius_cm + h, t0, t1) == 2) {
-      cand[n++] = t0;
-      cand[n++] = t1;
-    }
-    if (a.radius_cm > h && circle_hits(o, u, a.centre_cm, a.radius_cm - h, t0, t1) == 2) {
-      cand[n++] = t0;
-      cand[n++] = t1;
-    }
-    if (!pa.full) {
-      for (const Eigen::Vector2d* e : {&pa.e_start, &pa.e_end}) {
-        const double den = u.x() * e->y() - u.y() * e->x();
-        if (std::abs(den) < 1e-12) continue;
-        const Eigen::Vector2d f = a.centre_cm - o;
-        cand[n++] = (f.x() * e->y() - f.y() * e->x()) / den;
-      }
-    }
-    for (int i = 2; i < n;
-         ++i) {  // insertion sort of at most 6 values (cand[0] = t_lo stays first)
-      for (int k = i; k > 1 && cand[k - 1] > cand[k]; --k) std::swap(cand[k - 1], cand[k]);
-    }
-    double prev = t_lo;
-    double run_start = -1.0;
-    bool in_run = false;
-    for (int i = 1; i <= n; ++i) {
-      const double next = i < n ? std::clamp(cand[i], t_lo, t_hi) : t_hi;
-      if (next <= prev) continue;
-      const bool in = inside(o + u * (0.5 * (prev + next)));
-      if (in && !in_run) run_start = prev;
-      if (!in && in_run) push_clipped(run_start, prev, t_lo, t_hi, out);
-      in_run = in;
-      prev = next;
-    }
-    if (in_run) push_clipped(run_start, t_hi, t_lo, t_hi, out);
+  return angle_in_sweep(rad_to_deg(std::atan2(d.y(), d.x())), a);
+}
+
+// Candidate boundaries of the arc's band along the ray: both circles of the annulus and the two
+// radial end cuts, sorted after cand[0] = t_lo. Returns the count (at most 7).
+int arc_candidates(const auto& pa, const Eigen::Vector2d& o, const Eigen::Vector2d& u, double t_lo,
+                   double h, double (&cand)[8]) {
+  const FieldArc& a = pa.arc;
+  int n = 0;
+  cand[n++] = t_lo;
+  double t0 = 0, t1 = 0;
+  if (circle_hits(o, u, a.centre_cm, a.radius_cm + h, t0, t1) == 2) {
+    cand[n++] = t0;
+    cand[n++] = t1;
   }
+  if (a.radius_cm > h && circle_hits(o, u, a.centre_cm, a.radius_cm - h, t0, t1) == 2) {
+    cand[n++] = t0;
+    cand[n++] = t1;
+  }
+  if (!pa.full) {
+    for (const Eigen::Vector2d* e : {&pa.e_start, &pa.e_end}) {
+      const double den = u.x() * e->y() - u.y() * e->x();
+      if (std::abs(den) < 1e-12) continue;
+      const Eigen::Vector2d f = a.centre_cm - o;
+      cand[n++] = (f.x() * e->y() - f.y() * e->x()) / den;
+    }
+  }
+  for (int i = 2; i < n; ++i) {  // insertion sort of at most 6 values (cand[0] = t_lo stays first)
+    for (int k = i; k > 1 && cand[k - 1] > cand[k]; --k) std::swap(cand[k - 1], cand[k]);
+  }
+  return n;
+}
+
+// An arc's white band as ray intervals: every piece between consecutive candidate boundaries is
+// wholly in or out, decided at its midpoint.
+void arc_intervals(const auto& pa, const Eigen::Vector2d& o, const Eigen::Vector2d& u, double t_lo,
+                   double t_hi, double h, std::vector<WhiteInterval>& out) {
+  double cand[8];
+  const int n = arc_candidates(pa, o, u, t_lo, h, cand);
+  double prev = t_lo;
+  double run_start = -1.0;
+  bool in_run = false;
+  for (int i = 1; i <= n; ++i) {
+    const double next = i < n ? std::clamp(cand[i], t_lo, t_hi) : t_hi;
+    if (next <= prev) continue;
+    const bool in = in_arc_band(pa, h, o + u * (0.5 * (prev + next)));
+    if (in && !in_run) run_start = prev;
+    if (!in && in_run) push_clipped(run_start, prev, t_lo, t_hi, out);
+    in_run = in;
+    prev = next;
+  }
+  if (in_run) push_clipped(run_start, t_hi, t_lo, t_hi, out);
+}
+
+// The intervals sorted by entry, overlapping ones merged.
+void merge_intervals(std::vector<WhiteInterval>& out) {
   std::sort(out.begin(), out.end(),
             [](const WhiteInterval& x, const WhiteInterval& y) { return x.enter_cm < y.enter_cm; });
   std::size_t w = 0;
@@ -539,6 +565,29 @@ void RayCaster::intervals(const Eigen::Vector2d& o, const Eigen::Vector2d& u, do
     }
   }
   out.resize(w);
+}
+
+}  // namespace
+
+void RayCaster::intervals(const Eigen::Vector2d& o, const Eigen::Vector2d& u, double t_lo,
+                          double t_hi, std::vector<WhiteInterval>& out) const {
+  out.clear();
+  const double h = half_width_cm_;
+  for (const auto& sg : segs_) {
+    if (!ray_near(o, u, t_lo, t_hi, sg.mid, sg.bound)) continue;
+    segment_interval(sg, o, u, t_lo, t_hi, h, out);
+  }
+  for (const auto& d : discs_) {
+    if (!ray_near(o, u, t_lo, t_hi, d.centre_cm, d.radius_cm)) continue;
+    double t0 = 0, t1 = 0;
+    if (circle_hits(o, u, d.centre_cm, d.radius_cm, t0, t1) == 2)
+      push_clipped(t0, t1, t_lo, t_hi, out);
+  }
+  for (const auto& pa : arcs_) {
+    if (!ray_near(o, u, t_lo, t_hi, pa.arc.centre_cm, pa.arc.radius_cm + h)) continue;
+    arc_intervals(pa, o, u, t_lo, t_hi, h, out);
+  }
+  merge_intervals(out);
 }
 
 void white_intervals(const FieldGeometry& field, const Eigen::Vector2d& o, const Eigen::Vector2d& u,

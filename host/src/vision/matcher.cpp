@@ -325,52 +325,36 @@ class LinearisedCaster {
 
   [[nodiscard]] const Eigen::Vector2d& centre() const { return centre_; }
 
-  /// The position's covariance at q from the error surface's curvature (Gauss-Newton) and the
-  /// residuals themselves: every scan crossing within cap_px of a modelled run entry gives a
-  /// residual r = d - entry(q) and the entry's gradient g (px per cm). H = sum g g^T is the
-  /// surface's curvature. Neighbouring rays cross the same line and share its error (blur, width,
-  /// the camera model), so the residuals are not independent: the covariance is the cluster-robust
-  /// (sandwich) form H^-1 (sum over sectors s_c s_c^T) H^-1, s_c = sum of g r over a sector of
-  /// kSectorRays rays, with r taken about the residuals' median (the integer rounding's constant
-  /// offset) and clipped at 3 robust spreads (a spurious crossing within the cap is not noise).
-  /// Rays the model does not hold (cast exactly) are left out. nullopt with fewer than
-  /// kMinCrossings crossings or a singular H.
-  [[nodiscard]] std::optional<Eigen::Matrix2d> covariance(const Eigen::Vector2d& q,
-                                                          const PreparedScan& scan,
-                                                          int cap_px) const {
-    const Eigen::Vector2d d = q - centre_;
-    struct Term {
-      int sector;
-      double r;
-      Eigen::Vector2d g;
-    };
-    std::vector<Term> terms;
-    Eigen::Matrix2d h = Eigen::Matrix2d::Zero();
-    for (int k = 0; k < kScanRays; ++k) {
-      if (exact_[static_cast<std::size_t>(k)]) continue;
-      for (int n = 0; n < kCrossingsPerRay; ++n) {
-        const auto slot = static_cast<std::size_t>(k * kCrossingsPerRay + n);
-        const int seen = scan.radii[slot];
-        if (seen == kNoCrossing || seen >= scan.end[slot]) continue;
-        double nearest = kNoError;
-        Eigen::Vector2d g{0.0, 0.0};
-        for (int i = first_[static_cast<std::size_t>(k)];
-             i < first_[static_cast<std::size_t>(k) + 1]; ++i) {
-          const Run& r = runs_[static_cast<std::size_t>(i)];
-          const double at = r.enter_px + r.enter_g.dot(d);
-          if (at < k0_ || at > k1_) continue;  // no entry the scan could see
-          if (std::abs(seen - at) < std::abs(nearest)) {
-            nearest = seen - at;
-            g = r.enter_g;
-          }
-        }
-        if (!(std::abs(nearest) <= cap_px)) continue;
-        terms.push_back({k / kSectorRays, nearest, g});
-        h += g * g.transpose();
+  /// One crossing's term of the covariance: its 10-degree sector, its residual (seen - model, px)
+  /// and the model entry's gradient.
+  struct Term {
+    int sector;
+    double r;
+    Eigen::Vector2d g;
+  };
+
+  /// The model's entry on ray k nearest the crossing seen at `seen` px, from a point d from the
+  /// centre: seen - entry (kNoError: no entry the scan could see), its gradient in g.
+  [[nodiscard]] double nearest_entry(int k, int seen, const Eigen::Vector2d& d,
+                                     Eigen::Vector2d& g) const {
+    double nearest = kNoError;
+    for (int i = first_[static_cast<std::size_t>(k)]; i < first_[static_cast<std::size_t>(k) + 1];
+         ++i) {
+      const Run& r = runs_[static_cast<std::size_t>(i)];
+      const double at = r.enter_px + r.enter_g.dot(d);
+      if (at < k0_ || at > k1_) continue;  // no entry the scan could see
+      if (std::abs(seen - at) < std::abs(nearest)) {
+        nearest = seen - at;
+        g = r.enter_g;
       }
     }
-    if (static_cast<int>(terms.size()) < kMinCrossings || std::abs(h.determinant()) < 1e-12)
-      return std::nullopt;
+    return nearest;
+  }
+
+  /// The sandwich H^-1 B H^-1 over the terms: each sector's score summed from residuals about
+  /// their median, clipped at 3 robust spreads. nullopt with fewer than three sectors scoring.
+  [[nodiscard]] static std::optional<Eigen::Matrix2d> robust_sandwich(
+      const std::vector<Term>& terms, const Eigen::Matrix2d& h) {
     const auto median = [](std::vector<double> v) {
       const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
       std::nth_element(v.begin(), mid, v.end());
@@ -395,6 +379,40 @@ class LinearisedCaster {
     if (sectors < 3) return std::nullopt;
     const Eigen::Matrix2d hi = h.inverse();
     return static_cast<double>(sectors) / (sectors - 1) * hi * b * hi;
+  }
+
+  /// The position's covariance at q from the error surface's curvature (Gauss-Newton) and the
+  /// residuals themselves: every scan crossing within cap_px of a modelled run entry gives a
+  /// residual r = d - entry(q) and the entry's gradient g (px per cm). H = sum g g^T is the
+  /// surface's curvature. Neighbouring rays cross the same line and share its error (blur, width,
+  /// the camera model), so the residuals are not independent: the covariance is the cluster-robust
+  /// (sandwich) form H^-1 (sum over sectors s_c s_c^T) H^-1, s_c = sum of g r over a sector of
+  /// kSectorRays rays, with r taken about the residuals' median (the integer rounding's constant
+  /// offset) and clipped at 3 robust spreads (a spurious crossing within the cap is not noise).
+  /// Rays the model does not hold (cast exactly) are left out. nullopt with fewer than
+  /// kMinCrossings crossings or a singular H.
+  [[nodiscard]] std::optional<Eigen::Matrix2d> covariance(const Eigen::Vector2d& q,
+                                                          const PreparedScan& scan,
+                                                          int cap_px) const {
+    const Eigen::Vector2d d = q - centre_;
+    std::vector<Term> terms;
+    Eigen::Matrix2d h = Eigen::Matrix2d::Zero();
+    for (int k = 0; k < kScanRays; ++k) {
+      if (exact_[static_cast<std::size_t>(k)]) continue;
+      for (int n = 0; n < kCrossingsPerRay; ++n) {
+        const auto slot = static_cast<std::size_t>(k * kCrossingsPerRay + n);
+        const int seen = scan.radii[slot];
+        if (seen == kNoCrossing || seen >= scan.end[slot]) continue;
+        Eigen::Vector2d g{0.0, 0.0};
+        const double nearest = nearest_entry(k, seen, d, g);
+        if (!(std::abs(nearest) <= cap_px)) continue;
+        terms.push_back({k / kSectorRays, nearest, g});
+        h += g * g.transpose();
+      }
+    }
+    if (static_cast<int>(terms.size()) < kMinCrossings || std::abs(h.determinant()) < 1e-12)
+      return std::nullopt;
+    return robust_sandwich(terms, h);
   }
 
   /// The expected scan at q (kFeatureBytes radii).
@@ -517,6 +535,45 @@ void set_covariance(MatchResult& r, const std::optional<Eigen::Matrix2d>& cov, d
 }
 }  // namespace
 
+namespace {
+// One step of the pattern search at `step`: to the best of the four neighbours when one is lower
+// (false: the step stays); else, the centre being the best of its neighbours, to the point the V
+// fitted through them along each axis proposes below the step, if lower (true: the step halves).
+template <class Within>
+bool pattern_step(ProbeErrors& error_of, const Within& within, double step, Eigen::Vector2d& pos,
+                  double& best) {
+  double e[4];  // +x, -x, +y, -y
+  const Eigen::Vector2d dirs[] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+  int best_dir = -1;
+  double best_e = best;
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Vector2d q = pos + step * dirs[k];
+    e[k] = within(q) ? error_of(q) : kNoError;
+    if (e[k] < best_e) {
+      best_e = e[k];
+      best_dir = k;
+    }
+  }
+  if (best_dir >= 0) {
+    pos += step * dirs[best_dir];
+    best = best_e;
+    return false;
+  }
+  const auto offset = [&](double em, double ep) {
+    return std::isfinite(em) && std::isfinite(ep) ? equiangular_offset(em, best, ep) : 0.0;
+  };
+  const Eigen::Vector2d q = pos + step * Eigen::Vector2d(offset(e[1], e[0]), offset(e[3], e[2]));
+  if (q != pos && within(q)) {
+    const double eq = error_of(q);
+    if (eq < best) {
+      best = eq;
+      pos = q;
+    }
+  }
+  return true;
+}
+}  // namespace
+
 void refine_match_previous(const FieldGeometry& field, const CameraModel& camera,
                            const FieldScan& scan, MatchResult& r, const MatchOptions& opt) {
   if (r.cell < 0 || r.rays_used == 0) return;
@@ -538,35 +595,7 @@ void refine_match_previous(const FieldGeometry& field, const CameraModel& camera
   int steps_taken = 0;
   for (double step = opt.refine_start_step_cm;
        step >= opt.refine_min_step_cm - 1e-9 && steps_taken < kMaxRefineSteps; ++steps_taken) {
-    double e[4];  // +x, -x, +y, -y
-    const Eigen::Vector2d dirs[] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
-    int best_dir = -1;
-    double best_e = best;
-    for (int k = 0; k < 4; ++k) {
-      const Eigen::Vector2d q = pos + step * dirs[k];
-      e[k] = within(q) ? error_of(q) : kNoError;
-      if (e[k] < best_e) {
-        best_e = e[k];
-        best_dir = k;
-      }
-    }
-    if (best_dir >= 0) {
-      pos += step * dirs[best_dir];
-      best = best_e;
-      continue;
-    }
-    const auto offset = [&](double em, double ep) {
-      return std::isfinite(em) && std::isfinite(ep) ? equiangular_offset(em, best, ep) : 0.0;
-    };
-    const Eigen::Vector2d q = pos + step * Eigen::Vector2d(offset(e[1], e[0]), offset(e[3], e[2]));
-    if (q != pos && within(q)) {
-      const double eq = error_of(q);
-      if (eq < best) {
-        best = eq;
-        pos = q;
-      }
-    }
-    step /= 2.0;
+    if (pattern_step(error_of, within, step, pos, best)) step /= 2.0;
   }
   // The walk ran on the model: the error at its end is cast exactly, and the start kept if that
   // is no better.

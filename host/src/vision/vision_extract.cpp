@@ -212,6 +212,198 @@ __attribute__((target("avx2"))) inline __m256i gather8(const int* base, const st
                            base[at[5]], base[at[6]], base[at[7]]);
 }
 
+// The stages below are inlined into walk_group_avx2 (always_inline): its state stays in registers.
+
+// walk_group_avx2's constants: per lane (bins, value window) and broadcast.
+struct GroupConsts {
+  __m256i bins, one, m255, vmin_m1, vmax_p1, vstep, sstep, flag_min, end_run_m1, c32, c128, not63;
+  __m256i none_lane, wide_bit, alpha, resume_m1, look_reach, bins_m2;
+  __m128i shift;
+};
+
+__attribute__((target("avx2"), always_inline)) inline GroupConsts group_consts(
+    const LockConsts& k, const LockLanes& ln) {
+  GroupConsts c;
+  c.bins = load8(ln.bins);
+  c.one = _mm256_set1_epi32(1);
+  c.m255 = _mm256_set1_epi32(255);
+  c.vmin_m1 = _mm256_sub_epi32(load8(ln.vmin), c.one);
+  c.vmax_p1 = _mm256_add_epi32(load8(ln.vmax), c.one);
+  c.vstep = _mm256_set1_epi32(k.val_step_q + 255);
+  c.sstep = _mm256_set1_epi32(k.sat_step_q);
+  c.flag_min = _mm256_set1_epi32(0xffff);
+  c.end_run_m1 = _mm256_set1_epi32(k.end_run_px - 1);
+  c.c32 = _mm256_set1_epi32(32);
+  c.c128 = _mm256_set1_epi32(128);
+  c.not63 = _mm256_set1_epi32(~63);
+  // One "none" slot per lane: back-to-back increments of one counter would wait on each other.
+  c.none_lane = _mm256_setr_epi32(kHistNone, kHistNone + 1, kHistNone + 2, kHistNone + 3,
+                                  kHistNone + 4, kHistNone + 5, kHistNone + 6, kHistNone + 7);
+  c.wide_bit = _mm256_set1_epi32(static_cast<int>(kHistWide | 255u | (255u << 12)));
+  c.shift = _mm_cvtsi32_si128(k.alpha_shift >= 0 ? k.alpha_shift : 0);
+  c.alpha = _mm256_set1_epi32(k.alpha_q);
+  c.resume_m1 = _mm256_set1_epi32(k.carpet_resume_px - 1);
+  c.look_reach = _mm256_set1_epi32(k.resume_within_px - k.end_run_px);
+  c.bins_m2 = _mm256_sub_epi32(c.bins, _mm256_set1_epi32(2));
+  return c;
+}
+
+// The lanes' state through the walk: running means (Q8) and the line test's bounds (v >= v_line_min
+// <=> v > vl, s <= s_line_max <=> sl > s), alive (not ended), the end run, the counts and sums,
+// the line bits of the current 32 steps, and the look behind an end (lanes looking for the carpet
+// up to their last step to look at, the run of carpet bins, whether it was found).
+struct GroupState {
+  __m256i vref, sref, vl, sl, alive, other_run, walked, end_step, ncarpet, sum_v, sum_s, bits;
+  __m256i looking, look_last, resume, resumed;
+};
+
+__attribute__((target("avx2"), always_inline)) inline void set_bounds8(GroupState& st,
+                                                                       const GroupConsts& c) {
+  st.vl = _mm256_sub_epi32(_mm256_srai_epi32(_mm256_add_epi32(st.vref, c.vstep), 8), c.one);
+  st.sl = _mm256_add_epi32(_mm256_srai_epi32(_mm256_sub_epi32(st.sref, c.sstep), 8), c.one);
+}
+
+__attribute__((target("avx2"), always_inline)) inline GroupState group_start(const LockLanes& ln,
+                                                                             const GroupConsts& c) {
+  GroupState st;
+  st.vref = load8(ln.vref);
+  st.sref = load8(ln.sref);
+  set_bounds8(st, c);
+  st.alive = _mm256_set1_epi32(-1);
+  st.other_run = st.walked = _mm256_setzero_si256();
+  st.end_step = _mm256_set1_epi32(-1);
+  st.ncarpet = st.sum_v = st.sum_s = st.bits = _mm256_setzero_si256();
+  st.looking = st.look_last = st.resume = st.resumed = _mm256_setzero_si256();
+  return st;
+}
+
+// One step's two pixels per lane: V, S, line (above both bounds) and of the carpet's colour
+// (raw: flag and value window, line or not).
+struct StepPixels {
+  __m256i v0, v1, s0, s1, line0, line1, raw0, raw1;
+};
+
+__attribute__((target("avx2"), always_inline)) inline StepPixels classify8(__m256i c0, __m256i c1,
+                                                                           const GroupState& st,
+                                                                           const GroupConsts& c) {
+  StepPixels p;
+  p.v0 = _mm256_and_si256(c0, c.m255);
+  p.v1 = _mm256_and_si256(c1, c.m255);
+  p.s0 = _mm256_and_si256(_mm256_srli_epi32(c0, 8), c.m255);
+  p.s1 = _mm256_and_si256(_mm256_srli_epi32(c1, 8), c.m255);
+  p.line0 = _mm256_and_si256(_mm256_cmpgt_epi32(p.v0, st.vl), _mm256_cmpgt_epi32(st.sl, p.s0));
+  p.line1 = _mm256_and_si256(_mm256_cmpgt_epi32(p.v1, st.vl), _mm256_cmpgt_epi32(st.sl, p.s1));
+  p.raw0 = _mm256_and_si256(
+      _mm256_and_si256(_mm256_cmpgt_epi32(c0, c.flag_min), _mm256_cmpgt_epi32(p.v0, c.vmin_m1)),
+      _mm256_cmpgt_epi32(c.vmax_p1, p.v0));
+  p.raw1 = _mm256_and_si256(
+      _mm256_and_si256(_mm256_cmpgt_epi32(c1, c.flag_min), _mm256_cmpgt_epi32(p.v1, c.vmin_m1)),
+      _mm256_cmpgt_epi32(c.vmax_p1, p.v1));
+  return p;
+}
+
+// Looking behind an end: any pixel of the carpet's colour makes the bin carpet; a lane stops
+// looking when the run is long enough or its last step is reached.
+__attribute__((target("avx2"), always_inline)) inline void look_behind8(GroupState& st,
+                                                                        const StepPixels& p,
+                                                                        __m256i look, __m256i sv,
+                                                                        const GroupConsts& c) {
+  st.resume = _mm256_blendv_epi8(
+      st.resume,
+      _mm256_and_si256(_mm256_add_epi32(st.resume, c.one), _mm256_or_si256(p.raw0, p.raw1)), look);
+  const __m256i found = _mm256_and_si256(look, _mm256_cmpgt_epi32(st.resume, c.resume_m1));
+  st.resumed = _mm256_or_si256(st.resumed, found);
+  st.looking = _mm256_and_si256(_mm256_andnot_si256(found, st.looking),
+                                _mm256_cmpgt_epi32(st.look_last, sv));
+}
+
+// The histogram word of a carpet bin's rounded deviations (dv, ds in Q8): narrow when both lie in
+// [-32, 31], wide otherwise; the lane's "none" slot for any other bin.
+__attribute__((target("avx2"), always_inline)) inline __m256i hist_word8(__m256i dv, __m256i ds,
+                                                                         __m256i carpet,
+                                                                         const GroupConsts& c) {
+  const __m256i dvr = _mm256_srai_epi32(_mm256_add_epi32(dv, c.c128), 8),
+                dsr = _mm256_srai_epi32(_mm256_add_epi32(ds, c.c128), 8);
+  const __m256i dv32 = _mm256_add_epi32(dvr, c.c32), ds32 = _mm256_add_epi32(dsr, c.c32);
+  const __m256i narrow_ok = _mm256_cmpeq_epi32(
+      _mm256_and_si256(_mm256_or_si256(dv32, ds32), c.not63), _mm256_setzero_si256());
+  const __m256i narrow = _mm256_or_si256(_mm256_slli_epi32(dv32, 6), ds32);
+  // kHistWide | (dv + 255) | (ds + 255) << 12: dv + 255 and ds + 255 lie in 0..510.
+  const __m256i wide =
+      _mm256_add_epi32(c.wide_bit, _mm256_add_epi32(dvr, _mm256_slli_epi32(dsr, 12)));
+  return _mm256_blendv_epi8(c.none_lane, _mm256_blendv_epi8(wide, narrow, narrow_ok), carpet);
+}
+
+// The carpet lanes' running means move by alpha of the deviation (a shift when alpha is a power
+// of two), the bounds with them; their sums and counts grow.
+__attribute__((target("avx2"), always_inline)) inline void move_means8(
+    GroupState& st, __m256i carpet, __m256i dv, __m256i ds, __m256i bv, __m256i bs,
+    const LockConsts& k, const GroupConsts& c) {
+  __m256i step_v, step_s;
+  if (k.alpha_shift >= 0) {
+    step_v = _mm256_sra_epi32(dv, c.shift);
+    step_s = _mm256_sra_epi32(ds, c.shift);
+  } else {
+    step_v = _mm256_srai_epi32(_mm256_mullo_epi32(dv, c.alpha), 8);
+    step_s = _mm256_srai_epi32(_mm256_mullo_epi32(ds, c.alpha), 8);
+  }
+  st.vref = _mm256_add_epi32(st.vref, _mm256_and_si256(carpet, step_v));
+  st.sref = _mm256_add_epi32(st.sref, _mm256_and_si256(carpet, step_s));
+  set_bounds8(st, c);
+  st.sum_v = _mm256_add_epi32(st.sum_v, _mm256_and_si256(carpet, bv));
+  st.sum_s = _mm256_add_epi32(st.sum_s, _mm256_and_si256(carpet, bs));
+  st.ncarpet = _mm256_sub_epi32(st.ncarpet, carpet);
+}
+
+// The end run: "other" bins in a row; a lane whose run reaches end_run_px ends at this step and
+// looks behind it over the steps after this one up to min(bins - 2, end + resume_within_px - 1)
+// (a bin counts once its successor is reached within resume_within_px, as walk_fast).
+__attribute__((target("avx2"), always_inline)) inline void end_run8(GroupState& st, __m256i other,
+                                                                    __m256i sv,
+                                                                    const GroupConsts& c) {
+  st.other_run = _mm256_and_si256(_mm256_add_epi32(st.other_run, c.one), other);
+  const __m256i ended = _mm256_and_si256(other, _mm256_cmpgt_epi32(st.other_run, c.end_run_m1));
+  st.end_step = _mm256_blendv_epi8(st.end_step, sv, ended);
+  st.alive = _mm256_andnot_si256(ended, st.alive);
+  const __m256i last = _mm256_min_epi32(c.bins_m2, _mm256_add_epi32(sv, c.look_reach));
+  st.look_last = _mm256_blendv_epi8(st.look_last, last, ended);
+  st.looking = _mm256_or_si256(st.looking, _mm256_and_si256(ended, _mm256_cmpgt_epi32(last, sv)));
+}
+
+// Step s of the lanes still walking (act) or looking behind their end (look): the bins decided,
+// the records written (rec, hist), the means, the end run and the line bits.
+__attribute__((target("avx2"), always_inline)) inline void walk_step8(
+    GroupState& st, const StepPixels& p, __m256i act, __m256i look, int s, const LockConsts& k,
+    const GroupConsts& c, std::uint32_t* rec, std::uint32_t* hist) {
+  const __m256i sv = _mm256_set1_epi32(s);
+  const __m256i any_line = _mm256_or_si256(p.line0, p.line1);
+  // A pixel of the carpet's colour (cp: and not line).
+  const __m256i cp0 = _mm256_andnot_si256(p.line0, p.raw0),
+                cp1 = _mm256_andnot_si256(p.line1, p.raw1);
+  look_behind8(st, p, look, sv, c);
+  const __m256i any_cp = _mm256_or_si256(cp0, cp1);
+  const __m256i line = _mm256_and_si256(any_line, act);
+  const __m256i carpet = _mm256_andnot_si256(any_line, _mm256_and_si256(any_cp, act));
+  const __m256i other = _mm256_andnot_si256(_mm256_or_si256(any_line, any_cp), act);
+  const __m256i bv = _mm256_blendv_epi8(p.v0, p.v1, cp1), bs = _mm256_blendv_epi8(p.s0, p.s1, cp1);
+  const __m256i dv = _mm256_sub_epi32(_mm256_slli_epi32(bv, 8), st.vref),
+                ds = _mm256_sub_epi32(_mm256_slli_epi32(bs, 8), st.sref);
+  // The bin as seen, before the means move.
+  const __m256i line_v = _mm256_and_si256(
+      line, _mm256_max_epi32(_mm256_and_si256(p.line0, p.v0), _mm256_and_si256(p.line1, p.v1)));
+  const __m256i r =
+      _mm256_or_si256(_mm256_or_si256(_mm256_max_epi32(p.v0, p.v1), _mm256_slli_epi32(line_v, 8)),
+                      _mm256_slli_epi32(st.vref, 16));
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(rec + 8 * s), r);
+  const __m256i h = hist_word8(dv, ds, carpet, c);
+  if (k.histogram) _mm256_storeu_si256(reinterpret_cast<__m256i*>(hist + 8 * s), h);
+  move_means8(st, carpet, dv, ds, bv, bs, k, c);
+  st.walked = _mm256_sub_epi32(st.walked, act);
+  end_run8(st, other, sv, c);
+  st.bits = _mm256_or_si256(
+      st.bits, _mm256_and_si256(line, _mm256_set1_epi32(static_cast<int>(1u << (s & 31)))));
+}
+
 // Returns the steps walked (every lane has ended or run out of bins after them).
 __attribute__((target("avx2"))) int walk_group_avx2(const std::uint32_t* code,
                                                     const std::int32_t* pixel0,
@@ -220,134 +412,30 @@ __attribute__((target("avx2"))) int walk_group_avx2(const std::uint32_t* code,
                                                     std::uint32_t* rec, std::uint32_t* hist,
                                                     std::uint32_t* line_bits) {
   const auto* code_i = reinterpret_cast<const int*>(code);
-  const __m256i bins = load8(ln.bins);
-  const __m256i one = _mm256_set1_epi32(1), m255 = _mm256_set1_epi32(255);
-  __m256i vref = load8(ln.vref), sref = load8(ln.sref);
-  const __m256i vmin_m1 = _mm256_sub_epi32(load8(ln.vmin), one),
-                vmax_p1 = _mm256_add_epi32(load8(ln.vmax), one);
-  const __m256i vstep = _mm256_set1_epi32(k.val_step_q + 255),
-                sstep = _mm256_set1_epi32(k.sat_step_q);
-  // v >= v_line_min <=> v > vl, s <= s_line_max <=> sl > s.
-  __m256i vl = _mm256_sub_epi32(_mm256_srai_epi32(_mm256_add_epi32(vref, vstep), 8), one);
-  __m256i sl = _mm256_add_epi32(_mm256_srai_epi32(_mm256_sub_epi32(sref, sstep), 8), one);
-  const __m256i flag_min = _mm256_set1_epi32(0xffff);
-  const __m256i end_run_m1 = _mm256_set1_epi32(k.end_run_px - 1);
-  const __m256i c32 = _mm256_set1_epi32(32), c128 = _mm256_set1_epi32(128),
-                not63 = _mm256_set1_epi32(~63);
-  // One "none" slot per lane: back-to-back increments of one counter would wait on each other.
-  const __m256i none_lane =
-      _mm256_setr_epi32(kHistNone, kHistNone + 1, kHistNone + 2, kHistNone + 3, kHistNone + 4,
-                        kHistNone + 5, kHistNone + 6, kHistNone + 7);
-  const __m256i wide_bit = _mm256_set1_epi32(static_cast<int>(kHistWide | 255u | (255u << 12)));
-  const __m128i shift = _mm_cvtsi32_si128(k.alpha_shift >= 0 ? k.alpha_shift : 0);
-  const __m256i alpha = _mm256_set1_epi32(k.alpha_q);
-  __m256i alive = _mm256_set1_epi32(-1), other_run = _mm256_setzero_si256(),
-          walked = _mm256_setzero_si256();
-  __m256i end_step = _mm256_set1_epi32(-1), ncarpet = _mm256_setzero_si256();
-  __m256i sum_v = _mm256_setzero_si256(), sum_s = _mm256_setzero_si256(),
-          bits = _mm256_setzero_si256();
-  // Behind an end: lanes looking for the carpet up to their last step to look at, the run of carpet
-  // bins.
-  __m256i looking = _mm256_setzero_si256(), look_last = _mm256_setzero_si256(),
-          resume = _mm256_setzero_si256();
-  __m256i resumed = _mm256_setzero_si256();
-  const __m256i resume_m1 = _mm256_set1_epi32(k.carpet_resume_px - 1);
-  const __m256i look_reach = _mm256_set1_epi32(k.resume_within_px - k.end_run_px);
-  const __m256i bins_m2 = _mm256_sub_epi32(bins, _mm256_set1_epi32(2));
+  const GroupConsts c = group_consts(k, ln);
+  GroupState st = group_start(ln, c);
   int s = 0;
   for (; s < steps; ++s) {
     const __m256i sv = _mm256_set1_epi32(s);
-    const __m256i act = _mm256_and_si256(alive, _mm256_cmpgt_epi32(bins, sv));
-    const __m256i look = _mm256_andnot_si256(_mm256_cmpgt_epi32(sv, look_last), looking);
+    const __m256i act = _mm256_and_si256(st.alive, _mm256_cmpgt_epi32(c.bins, sv));
+    const __m256i look = _mm256_andnot_si256(_mm256_cmpgt_epi32(sv, st.look_last), st.looking);
     if (_mm256_testz_si256(_mm256_or_si256(act, look), _mm256_or_si256(act, look))) break;
-    const __m256i c0 = gather8(code_i, pixel0 + 8 * s), c1 = gather8(code_i, pixel1 + 8 * s);
-    const __m256i v0 = _mm256_and_si256(c0, m255), v1 = _mm256_and_si256(c1, m255);
-    const __m256i s0 = _mm256_and_si256(_mm256_srli_epi32(c0, 8), m255),
-                  s1 = _mm256_and_si256(_mm256_srli_epi32(c1, 8), m255);
-    const __m256i line0 = _mm256_and_si256(_mm256_cmpgt_epi32(v0, vl), _mm256_cmpgt_epi32(sl, s0));
-    const __m256i line1 = _mm256_and_si256(_mm256_cmpgt_epi32(v1, vl), _mm256_cmpgt_epi32(sl, s1));
-    const __m256i any_line = _mm256_or_si256(line0, line1);
-    // A pixel of the carpet's colour (cp: and not line).
-    const __m256i raw0 = _mm256_and_si256(
-        _mm256_and_si256(_mm256_cmpgt_epi32(c0, flag_min), _mm256_cmpgt_epi32(v0, vmin_m1)),
-        _mm256_cmpgt_epi32(vmax_p1, v0));
-    const __m256i raw1 = _mm256_and_si256(
-        _mm256_and_si256(_mm256_cmpgt_epi32(c1, flag_min), _mm256_cmpgt_epi32(v1, vmin_m1)),
-        _mm256_cmpgt_epi32(vmax_p1, v1));
-    const __m256i cp0 = _mm256_andnot_si256(line0, raw0), cp1 = _mm256_andnot_si256(line1, raw1);
-    // Looking behind an end: any pixel of the carpet's colour makes the bin carpet.
-    resume = _mm256_blendv_epi8(
-        resume, _mm256_and_si256(_mm256_add_epi32(resume, one), _mm256_or_si256(raw0, raw1)), look);
-    const __m256i found = _mm256_and_si256(look, _mm256_cmpgt_epi32(resume, resume_m1));
-    resumed = _mm256_or_si256(resumed, found);
-    looking =
-        _mm256_and_si256(_mm256_andnot_si256(found, looking), _mm256_cmpgt_epi32(look_last, sv));
-    const __m256i any_cp = _mm256_or_si256(cp0, cp1);
-    const __m256i line = _mm256_and_si256(any_line, act);
-    const __m256i carpet = _mm256_andnot_si256(any_line, _mm256_and_si256(any_cp, act));
-    const __m256i other = _mm256_andnot_si256(_mm256_or_si256(any_line, any_cp), act);
-    const __m256i bv = _mm256_blendv_epi8(v0, v1, cp1), bs = _mm256_blendv_epi8(s0, s1, cp1);
-    const __m256i dv = _mm256_sub_epi32(_mm256_slli_epi32(bv, 8), vref),
-                  ds = _mm256_sub_epi32(_mm256_slli_epi32(bs, 8), sref);
-    // The bin as seen, before the means move.
-    const __m256i line_v = _mm256_and_si256(
-        line, _mm256_max_epi32(_mm256_and_si256(line0, v0), _mm256_and_si256(line1, v1)));
-    const __m256i r =
-        _mm256_or_si256(_mm256_or_si256(_mm256_max_epi32(v0, v1), _mm256_slli_epi32(line_v, 8)),
-                        _mm256_slli_epi32(vref, 16));
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(rec + 8 * s), r);
-    const __m256i dvr = _mm256_srai_epi32(_mm256_add_epi32(dv, c128), 8),
-                  dsr = _mm256_srai_epi32(_mm256_add_epi32(ds, c128), 8);
-    const __m256i dv32 = _mm256_add_epi32(dvr, c32), ds32 = _mm256_add_epi32(dsr, c32);
-    const __m256i narrow_ok = _mm256_cmpeq_epi32(
-        _mm256_and_si256(_mm256_or_si256(dv32, ds32), not63), _mm256_setzero_si256());
-    const __m256i narrow = _mm256_or_si256(_mm256_slli_epi32(dv32, 6), ds32);
-    // kHistWide | (dv + 255) | (ds + 255) << 12: dv + 255 and ds + 255 lie in 0..510.
-    const __m256i wide =
-        _mm256_add_epi32(wide_bit, _mm256_add_epi32(dvr, _mm256_slli_epi32(dsr, 12)));
-    const __m256i h =
-        _mm256_blendv_epi8(none_lane, _mm256_blendv_epi8(wide, narrow, narrow_ok), carpet);
-    if (k.histogram) _mm256_storeu_si256(reinterpret_cast<__m256i*>(hist + 8 * s), h);
-    __m256i step_v, step_s;
-    if (k.alpha_shift >= 0) {
-      step_v = _mm256_sra_epi32(dv, shift);
-      step_s = _mm256_sra_epi32(ds, shift);
-    } else {
-      step_v = _mm256_srai_epi32(_mm256_mullo_epi32(dv, alpha), 8);
-      step_s = _mm256_srai_epi32(_mm256_mullo_epi32(ds, alpha), 8);
-    }
-    vref = _mm256_add_epi32(vref, _mm256_and_si256(carpet, step_v));
-    sref = _mm256_add_epi32(sref, _mm256_and_si256(carpet, step_s));
-    vl = _mm256_sub_epi32(_mm256_srai_epi32(_mm256_add_epi32(vref, vstep), 8), one);
-    sl = _mm256_add_epi32(_mm256_srai_epi32(_mm256_sub_epi32(sref, sstep), 8), one);
-    sum_v = _mm256_add_epi32(sum_v, _mm256_and_si256(carpet, bv));
-    sum_s = _mm256_add_epi32(sum_s, _mm256_and_si256(carpet, bs));
-    ncarpet = _mm256_sub_epi32(ncarpet, carpet);
-    walked = _mm256_sub_epi32(walked, act);
-    other_run = _mm256_and_si256(_mm256_add_epi32(other_run, one), other);
-    const __m256i ended = _mm256_and_si256(other, _mm256_cmpgt_epi32(other_run, end_run_m1));
-    end_step = _mm256_blendv_epi8(end_step, sv, ended);
-    alive = _mm256_andnot_si256(ended, alive);
-    // The look behind covers the steps after this one up to min(bins - 2, end + resume_within_px -
-    // 1) (a bin counts once its successor is reached within resume_within_px, as walk_fast).
-    const __m256i last = _mm256_min_epi32(bins_m2, _mm256_add_epi32(sv, look_reach));
-    look_last = _mm256_blendv_epi8(look_last, last, ended);
-    looking = _mm256_or_si256(looking, _mm256_and_si256(ended, _mm256_cmpgt_epi32(last, sv)));
-    bits = _mm256_or_si256(
-        bits, _mm256_and_si256(line, _mm256_set1_epi32(static_cast<int>(1u << (s & 31)))));
+    const StepPixels p =
+        classify8(gather8(code_i, pixel0 + 8 * s), gather8(code_i, pixel1 + 8 * s), st, c);
+    walk_step8(st, p, act, look, s, k, c, rec, hist);
     if ((s & 31) == 31) {
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(line_bits + 8 * (s >> 5)), bits);
-      bits = _mm256_setzero_si256();
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(line_bits + 8 * (s >> 5)), st.bits);
+      st.bits = _mm256_setzero_si256();
     }
   }
   if ((s & 31) != 0)
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(line_bits + 8 * (s >> 5)), bits);
-  store8(ln.walked, walked);
-  store8(ln.end_step, end_step);
-  store8(ln.carpet, ncarpet);
-  store8(ln.sum_v, sum_v);
-  store8(ln.sum_s, sum_s);
-  store8(ln.resumed, resumed);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(line_bits + 8 * (s >> 5)), st.bits);
+  store8(ln.walked, st.walked);
+  store8(ln.end_step, st.end_step);
+  store8(ln.carpet, st.ncarpet);
+  store8(ln.sum_v, st.sum_v);
+  store8(ln.sum_s, st.sum_s);
+  store8(ln.resumed, st.resumed);
   return s;
 }
 #endif
@@ -445,6 +533,12 @@ struct WhiteRun {
     const float edge = cp + (half - vp) / (vk - vp) * (ck - cp);
     return edge <= static_cast<float>(b - 1) + 1e-4f;
   }
+  // A run on ray j of the table (its bin centres).
+  static WhiteRun of_ray(const LineExtractor::RayTable& t, int j) {
+    WhiteRun run;
+    run.on_ray(t, j);
+    return run;
+  }
   void on_ray(const LineExtractor::RayTable& t, int j) {
     if (!t.bins_ok || t.bin_centre.size() != t.bin_pixel.size()) return;
     const auto a = static_cast<std::size_t>(j);
@@ -491,6 +585,362 @@ void finish_ray(int end, bool carpet_resumes, int carpet_bins, int k0, const Ext
     if (out[c] != kNoCrossing && out[c] >= ray_end) out[c] = kNoCrossing;
   for (int c = 0; c < kCrossingsPerRay; ++c) rep.crossings += out[c] != kNoCrossing;
 }
+
+// What every ray's walk keeps fixed over a frame: the database's gap rule (expected_features),
+// the running mean's weight alpha_q / 256, the line steps in Q8, the end run and the edge rule.
+struct WalkRules {
+  int min_gap, alpha_q, val_step_q, sat_step_q, end_run_px, k0;
+  float edge_fraction;
+};
+
+WalkRules walk_rules(const ExtractionParams& x, int val_step, int sat_step, int k0) {
+  return {ScanParams{}.min_gap_px,
+          std::max(1, static_cast<int>(std::lround(256.0 / x.carpet_mean_px))),
+          val_step << 8,
+          sat_step << 8,
+          x.end_run_px,
+          k0,
+          static_cast<float>(x.edge_fraction)};
+}
+
+// A carpet bin's deviation (Q8) from the running mean as its deviation histogram's bin (rounded,
+// offset by 255, clamped to 0..510).
+inline std::size_t dev_bin(int d_q) {
+  return static_cast<std::size_t>(std::clamp(((d_q + 128) >> 8) + 255, 0, 510));
+}
+
+// One ray's walk, bin by bin, as walk_rays and walk_fast make it: the running carpet means in
+// 8-bit fixed point (Q8: integer arithmetic on every carpet bin) with the line test as two integer
+// bounds recomputed when the means move, the gap since the last line bin, the run of "other" bins
+// that ends the ray (end: its first bin, < 0 while none), and the ray's carpet sums for the light.
+struct RayWalk {
+  int vref_q, sref_q;
+  int val_step_q, sat_step_q;
+  int v_line_min = 0, s_line_max = 0;
+  int gap = 0, other_run = 0, carpet_bins = 0, end = -1;
+  int prev_bin = -1, prev_v = 0;  // the last closed bin that was not line, and its brightest pixel
+  long sum_v = 0, sum_s = 0, count = 0;
+
+  RayWalk(double sector_val, double sector_sat, const WalkRules& k)
+      : vref_q(static_cast<int>(std::lround(256.0 * sector_val))),
+        sref_q(static_cast<int>(std::lround(256.0 * sector_sat))),
+        val_step_q(k.val_step_q),
+        sat_step_q(k.sat_step_q) {
+    set_bounds();
+  }
+  void set_bounds() {
+    v_line_min = (vref_q + val_step_q + 255) >> 8;  // ceil
+    s_line_max = (sref_q - sat_step_q) >> 8;        // floor (arithmetic shift)
+  }
+  [[nodiscard]] bool is_line(int v, int s) const { return v >= v_line_min && s <= s_line_max; }
+  // A line bin: opens the white run (after the gap) or extends it.
+  void line(WhiteRun& run, int bin, int line_v, const WalkRules& k) {
+    run.add(bin, line_v, gap, k.min_gap, prev_bin, prev_v, vref_q);
+    gap = 0;
+    other_run = 0;
+  }
+  // A bin that is not line (any_v: its brightest pixel) closes the white run, writing its crossing.
+  void not_line(WhiteRun& run, std::uint8_t* out, int& found, int bin, int any_v,
+                const WalkRules& k) {
+    run.finish(out, found, k.edge_fraction, k.k0, k.min_gap);
+    prev_bin = bin;
+    prev_v = any_v;
+    ++gap;
+  }
+  // A carpet bin (V and S of its last carpet pixel): the means move by step(deviation), the
+  // deviations (Q8, before the move) are returned for the histograms.
+  template <class Step>
+  void carpet(int b_v, int b_s, const Step& step, int& dv_q, int& ds_q) {
+    other_run = 0;
+    ++carpet_bins;
+    dv_q = (b_v << 8) - vref_q;
+    ds_q = (b_s << 8) - sref_q;
+    vref_q += step(dv_q);
+    sref_q += step(ds_q);
+    set_bounds();
+    sum_v += b_v;
+    sum_s += b_s;
+    ++count;
+  }
+  // Another bin: true when it completes the end run (end set to the run's first bin).
+  bool other(int bin, int end_run_px) {
+    if (++other_run < end_run_px) return false;
+    end = bin - other_run + 1;
+    return true;
+  }
+};
+
+// The ray's carpet sums into its sector's (LineExtractor::Frame, private: deduced).
+void add_ray_sums(auto& fr, std::size_t sec, const RayWalk& w) {
+  fr.sum_v[sec] += static_cast<double>(w.sum_v);
+  fr.sum_s[sec] += static_cast<double>(w.sum_s);
+  fr.count[sec] += w.count;
+}
+
+// The bin of the per-pixel walk being read: whether a pixel of it is line (and the brightest
+// such), whether one has the carpet's colour (and the last such pixel's V and S), its brightest
+// pixel.
+struct PixelBin {
+  int bin = -1;
+  bool line = false, carpet = false;
+  int v = 0, s = 0, line_v = 0, any_v = 0;
+  void open(int b) {
+    bin = b;
+    line = carpet = false;
+    line_v = 0;
+    any_v = 0;
+  }
+  void add(int pv, int ps, bool is_line, bool is_carpet) {
+    any_v = std::max(any_v, pv);
+    if (is_line) {
+      line = true;
+      line_v = std::max(line_v, pv);
+    } else if (is_carpet) {
+      carpet = true;
+      v = pv;
+      s = ps;
+    }
+  }
+};
+
+// Obstacle or the carpet's end (walk_rays): does the carpet resume behind the blob? The table's
+// entries from i on, up to resume_within_px bins past the end; a bin counts once its successor's
+// first pixel is reached, any carpet pixel (is_carpet(i)) makes it carpet. Returns the run of
+// carpet bins found (up to carpet_resume_px).
+template <class IsCarpet>
+int carpet_run_behind(const LineExtractor::RayTable& t, std::int32_t i, std::int32_t i1, int end,
+                      const ExtractionParams& x, const IsCarpet& is_carpet) {
+  int resume = 0, cur = -1;
+  bool cur_carpet = false;
+  const int look_to = end + x.resume_within_px;
+  for (; i < i1 && resume < x.carpet_resume_px; ++i) {
+    const int bi = t.bin[static_cast<std::size_t>(i)];
+    if (bi > look_to) break;
+    if (bi != cur) {
+      if (cur >= 0) resume = cur_carpet ? resume + 1 : 0;
+      cur = bi;
+      cur_carpet = false;
+    }
+    cur_carpet = is_carpet(i) || cur_carpet;
+  }
+  return resume;
+}
+
+// A bin of the code plane as walk_fast reads it: both its pixels' V and S and whether each has the
+// carpet's hue and saturation (code_pixels' word: V | S << 8 | carpet hue << 16).
+struct CodedBin {
+  int v0, s0, v1, s1;
+  bool hue0, hue1;
+};
+
+inline CodedBin coded_bin(const std::uint32_t* code, const std::int32_t* bp, const std::int16_t* bs,
+                          std::int32_t k) {
+  const std::uint32_t c0 = code[bp[k]], c1 = code[bp[k] + bs[k]];
+  return {static_cast<int>(c0 & 255u),
+          static_cast<int>((c0 >> 8) & 255u),
+          static_cast<int>(c1 & 255u),
+          static_cast<int>((c1 >> 8) & 255u),
+          (c0 >> 16) != 0,
+          (c1 >> 16) != 0};
+}
+
+// Ray j's bins in the table's bin arrays: [b0, b1), the first being bin first_bin of the ray.
+struct RayBins {
+  std::int32_t b0, b1;
+  int first_bin;
+};
+
+RayBins ray_bins(const LineExtractor::RayTable& t, int j) {
+  const auto a = static_cast<std::size_t>(j);
+  return {t.bin_begin[a], t.bin_begin[a + 1], t.first_bin[a]};
+}
+
+// The deviation histograms in four interleaved copies (by bin), summed at the end: neighbouring
+// carpet bins mostly deviate alike, and one counter incremented back to back stalls on its own
+// store.
+struct DevHistograms {
+  std::array<std::array<int, 512>, 4> v{}, s{};
+  void count(int bin, int dv_q, int ds_q) {
+    const auto copy = static_cast<std::size_t>(bin & 3);
+    ++v[copy][dev_bin(dv_q)];
+    ++s[copy][dev_bin(ds_q)];
+  }
+  void add_to(std::array<int, 511>& dev_v, std::array<int, 511>& dev_s) const {
+    for (std::size_t b = 0; b < 511; ++b) {
+      dev_v[b] += v[0][b] + v[1][b] + v[2][b] + v[3][b];
+      dev_s[b] += s[0][b] + s[1][b] + s[2][b] + s[3][b];
+    }
+  }
+};
+
+// Behind the end (walk_fast): a bin counts once the next one is reached within resume_within_px
+// (as the per-pixel walk commits a bin at its successor's first pixel); any carpet pixel makes it
+// carpet. Bins from k on; returns the run of carpet bins found (up to carpet_resume_px).
+int coded_carpet_run_behind(const std::uint32_t* code, const LineExtractor::RayTable& t,
+                            std::int32_t k, const RayBins& r, int end, const ExtractionParams& x,
+                            int vmin, int vmax) {
+  const std::int32_t b0 = r.b0, b1 = r.b1;
+  const int first_bin = r.first_bin;
+  const std::int32_t* bp = t.bin_pixel.data();
+  const std::int16_t* bs = t.bin_second.data();
+  int resume = 0;
+  const int look_to = end + x.resume_within_px;
+  for (; k + 1 < b1 && resume < x.carpet_resume_px; ++k) {
+    if (first_bin + (k + 1 - b0) > look_to) break;
+    const CodedBin b = coded_bin(code, bp, bs, k);
+    const bool carpet =
+        (b.hue0 && b.v0 >= vmin && b.v0 <= vmax) || (b.hue1 && b.v1 >= vmin && b.v1 <= vmax);
+    resume = carpet ? resume + 1 : 0;
+  }
+  return resume;
+}
+
+// The running mean's step for a deviation d_q (Q8): alpha_q / 256 of it. The weight is 1/8 for the
+// default carpet_mean_px: a shift then replaces the multiply on the walk's serial chain
+// (floor((d * 2^a) / 256) = d >> (8 - a)).
+struct MeanStep {
+  int alpha_q, alpha_shift = -1;
+  explicit MeanStep(int alpha) : alpha_q(alpha) {
+    for (int a = 0; a <= 8; ++a)
+      if (alpha_q == 1 << a) alpha_shift = 8 - a;
+  }
+  int operator()(int d_q) const {
+    return alpha_shift >= 0 ? d_q >> alpha_shift : (d_q * alpha_q) >> 8;
+  }
+};
+
+// The frame's carpet fraction: carpet bins of the bins walked.
+double carpet_fraction(long bins_carpet, long bins_seen) {
+  return bins_seen > 0 ? static_cast<double>(bins_carpet) / static_cast<double>(bins_seen) : 0.0;
+}
+
+#ifdef OMNILOC_HAVE_X86
+// Each sector's starting carpet means in Q8, for the lanes. False when one does not fit the
+// record's 16 bits (the mean stays within [0, max(start, 255 * 256)]).
+bool lane_start_means(const std::vector<double>& sector_val, const std::vector<double>& sector_sat,
+                      std::vector<std::int32_t>& vref0, std::vector<std::int32_t>& sref0) {
+  const std::size_t sectors = sector_val.size();
+  vref0.assign(sectors, 0);
+  sref0.assign(sectors, 0);
+  for (std::size_t k = 0; k < sectors; ++k) {
+    const long v = std::lround(256.0 * sector_val[k]), sat = std::lround(256.0 * sector_sat[k]);
+    if (v < 0 || v > 65535 || sat < -65535 || sat > 65535) return false;
+    vref0[k] = static_cast<std::int32_t>(v);
+    sref0[k] = static_cast<std::int32_t>(sat);
+  }
+  return true;
+}
+
+// The lockstep walk's constants for a frame (walk_fast's rules, the look behind an end).
+LockConsts lock_consts(const ExtractionParams& x, const WalkRules& k, bool histogram) {
+  LockConsts kc;
+  kc.val_step_q = k.val_step_q;
+  kc.sat_step_q = k.sat_step_q;
+  kc.end_run_px = x.end_run_px;
+  kc.carpet_resume_px = x.carpet_resume_px;
+  kc.histogram = histogram;
+  kc.resume_within_px = x.resume_within_px;
+  kc.alpha_q = k.alpha_q;
+  kc.alpha_shift = MeanStep(k.alpha_q).alpha_shift;
+  return kc;
+}
+
+// What the lockstep walk writes per step and lane, for the longest group of the table, and the
+// narrow histogram in a copy per lane (neighbouring rays deviate alike at the same step, and
+// back-to-back increments of one counter wait on each other).
+struct LockRecords {
+  std::vector<std::uint32_t> rec, hist, line_bits;
+  std::vector<std::array<int, kHistNone + 8>> narrow =
+      std::vector<std::array<int, kHistNone + 8>>(8);
+  explicit LockRecords(const LineExtractor::RayTable& t) {
+    int max_steps = 0;
+    for (std::size_t g = 0; g + 1 < t.lock_begin.size(); ++g)
+      max_steps = std::max(max_steps, t.lock_begin[g + 1] - t.lock_begin[g]);
+    const auto words = static_cast<std::size_t>(8 * (max_steps + 32));
+    rec.assign(words, 0);
+    hist.assign(words, 0);
+    line_bits.assign(words / 32 + 8, 0);
+  }
+};
+
+// Group g's lanes: each ray's bins, its sector's starting means and value window (a lane without
+// a ray: sector 0's). (LineExtractor::Frame, private: deduced.)
+void load_lanes(LockLanes& ln, const LineExtractor::RayTable& t, std::size_t g,
+                const std::vector<std::int32_t>& vref0, const std::vector<std::int32_t>& sref0,
+                const auto& fr) {
+  for (std::size_t l = 0; l < 8; ++l) {
+    const int j = t.lock_ray[8 * g + l];
+    const auto sec =
+        j < 0 ? std::size_t{0} : static_cast<std::size_t>(t.sector[static_cast<std::size_t>(j)]);
+    ln.bins[l] = t.lock_bins[8 * g + l];
+    ln.vref[l] = vref0[sec];
+    ln.sref[l] = sref0[sec];
+    ln.vmin[l] = fr.vmin[sec];
+    ln.vmax[l] = fr.vmax[sec];
+  }
+}
+
+// The group's deviation histograms, from the lanes whose rays sample them: a wide word straight
+// into the frame's, a narrow one into its lane's copy.
+void count_lane_histograms(auto& fr, LockRecords& rc, const LineExtractor::RayTable& t,
+                           std::size_t g, int ran, int n) {
+  for (std::size_t l = 0; l < 8; ++l) {
+    const int j = t.lock_ray[8 * g + l];
+    if (j < 0 || !histogram_ray(j, n)) continue;
+    for (int st = 0; st < ran; ++st) {
+      const std::uint32_t w = rc.hist[8 * static_cast<std::size_t>(st) + l];
+      if ((w & kHistWide) != 0) {
+        ++fr.dev_v[w & 4095u];
+        ++fr.dev_s[(w >> 12) & 4095u];
+      } else {
+        ++rc.narrow[l][w];
+      }
+    }
+  }
+}
+
+// Lane l's crossings (ray j, `walked` bins): the white runs from the line bins it recorded, as
+// walk_fast makes them. Returns how many were written to out.
+int lane_crossings(std::uint8_t* out, const LineExtractor::RayTable& t, int j, std::size_t l,
+                   int walked, const LockRecords& rc, const WalkRules& k) {
+  const int first_bin = t.first_bin[static_cast<std::size_t>(j)];
+  WhiteRun run;
+  run.on_ray(t, j);
+  int found = 0, last = -1;
+  for (int w = 0; 32 * w < walked; ++w) {
+    for (std::uint32_t m = rc.line_bits[8 * static_cast<std::size_t>(w) + l]; m != 0; m &= m - 1) {
+      const int st = 32 * w + __builtin_ctz(m);
+      const std::uint32_t r = rc.rec[8 * static_cast<std::size_t>(st) + l];
+      const int line_v = static_cast<int>((r >> 8) & 255u), vref_q = static_cast<int>(r >> 16);
+      if (run.open && st != last + 1) run.finish(out, found, k.edge_fraction, k.k0, k.min_gap);
+      if (!run.open) {
+        const int prev_v =
+            st > 0 ? static_cast<int>(rc.rec[8 * static_cast<std::size_t>(st - 1) + l] & 255u) : 0;
+        run.add(first_bin + st, line_v, st - last - 1, k.min_gap, st > 0 ? first_bin + st - 1 : -1,
+                prev_v, vref_q);
+      } else {
+        run.add(first_bin + st, line_v, 0, k.min_gap, -1, 0, vref_q);
+      }
+      last = st;
+    }
+  }
+  run.finish(out, found, k.edge_fraction, k.k0, k.min_gap);
+  return found;
+}
+
+// The lanes' narrow histogram copies into the frame's: word (dv + 32) * 64 + ds + 32.
+void merge_narrow(auto& fr, const LockRecords& rc) {
+  for (int a = 0; a < 64; ++a) {
+    for (int b = 0; b < 64; ++b) {
+      const auto at = static_cast<std::size_t>(a * 64 + b);
+      int c = 0;
+      for (const auto& copy : rc.narrow) c += copy[at];
+      fr.dev_v[static_cast<std::size_t>(a - 32 + 255)] += c;
+      fr.dev_s[static_cast<std::size_t>(b - 32 + 255)] += c;
+    }
+  }
+}
+#endif
 
 }  // namespace
 
@@ -684,127 +1134,62 @@ template <class Pixel>
 void LineExtractor::walk_rays(const RayTable& t, BearingScan& scan, ExtractionReport& rep,
                               Frame& fr, Pixel px) const {
   const ExtractionParams& x = vision_.extraction;
-  const int min_gap = ScanParams{}.min_gap_px;  // the database's gap rule (expected_features)
-  const int alpha_q = std::max(1, static_cast<int>(std::lround(256.0 / x.carpet_mean_px)));
-  const int val_step_q = fr.val_step << 8, sat_step_q = fr.sat_step << 8;
+  const WalkRules k = walk_rules(x, fr.val_step, fr.sat_step, k0_);
+  const auto step = [alpha_q = k.alpha_q](int d_q) { return (d_q * alpha_q) >> 8; };
   const int n = static_cast<int>(t.hidden.size());
   long bins_seen = 0, bins_carpet = 0;
   for (int j = 0; j < n; ++j) {
     std::uint8_t* out = start_ray(t.hidden[static_cast<std::size_t>(j)], j, scan, rep);
     if (out == nullptr) continue;
     const bool sampled = histogram_ray(j, n);
-    const int sec = t.sector[static_cast<std::size_t>(j)];
-    const int vmin = fr.vmin[static_cast<std::size_t>(sec)],
-              vmax = fr.vmax[static_cast<std::size_t>(sec)];
-    // Running carpet means in 8-bit fixed point (Q8): integer arithmetic on every carpet bin.
-    int vref_q = static_cast<int>(std::lround(256.0 * sector_val_[static_cast<std::size_t>(sec)]));
-    int sref_q = static_cast<int>(std::lround(256.0 * sector_sat_[static_cast<std::size_t>(sec)]));
-    long ray_sum_v = 0, ray_sum_s = 0, ray_count = 0;
-    // The line test as two integer bounds, recomputed when the running carpet mean moves.
-    int v_line_min = 0, s_line_max = 0;
-    auto set_bounds = [&]() {
-      v_line_min = (vref_q + val_step_q + 255) >> 8;  // ceil
-      s_line_max = (sref_q - sat_step_q) >> 8;        // floor (arithmetic shift)
-    };
-    set_bounds();
-    int found = 0, gap = 0, other_run = 0, carpet_bins = 0, end = -1;
-    int bin = -1;
-    bool b_line = false, b_carpet = false;
-    int b_v = 0, b_s = 0, b_line_v = 0, b_any_v = 0;
-    int prev_bin = -1,
-        prev_v = 0;  // the last closed bin that was not line, and its brightest pixel
-    WhiteRun run;
-    run.on_ray(t, j);
-    const auto edge_fraction = static_cast<float>(x.edge_fraction);
+    const auto sec = static_cast<std::size_t>(t.sector[static_cast<std::size_t>(j)]);
+    const int vmin = fr.vmin[sec], vmax = fr.vmax[sec];
+    RayWalk w(sector_val_[sec], sector_sat_[sec], k);
+    WhiteRun run = WhiteRun::of_ray(t, j);
+    int found = 0;
+    PixelBin b;
     // One bin decided: crossing (line entry after the gap), carpet (updates the running mean), or
     // other.
     auto close_bin = [&]() {
       ++bins_seen;
-      if (b_line) {
-        run.add(bin, b_line_v, gap, min_gap, prev_bin, prev_v, vref_q);
-        gap = 0;
-        other_run = 0;
-        return;
-      }
-      run.finish(out, found, edge_fraction, k0_, min_gap);
-      prev_bin = bin;
-      prev_v = b_any_v;
-      if (b_carpet) {
-        ++gap;
-        other_run = 0;
-        ++carpet_bins;
-        ++bins_carpet;
-        const int dv_q = (b_v << 8) - vref_q, ds_q = (b_s << 8) - sref_q;
-        if (sampled) {
-          ++fr.dev_v[static_cast<std::size_t>(std::clamp(((dv_q + 128) >> 8) + 255, 0, 510))];
-          ++fr.dev_s[static_cast<std::size_t>(std::clamp(((ds_q + 128) >> 8) + 255, 0, 510))];
-        }
-        vref_q += (dv_q * alpha_q) >> 8;
-        sref_q += (ds_q * alpha_q) >> 8;
-        set_bounds();
-        ray_sum_v += b_v;
-        ray_sum_s += b_s;
-        ++ray_count;
-      } else {
-        ++gap;
-        if (++other_run >= x.end_run_px) end = bin - other_run + 1;
+      if (b.line) return w.line(run, b.bin, b.line_v, k);
+      w.not_line(run, out, found, b.bin, b.any_v, k);
+      if (!b.carpet) return (void)w.other(b.bin, k.end_run_px);
+      ++bins_carpet;
+      int dv_q = 0, ds_q = 0;
+      w.carpet(b.v, b.s, step, dv_q, ds_q);
+      if (sampled) {
+        ++fr.dev_v[dev_bin(dv_q)];
+        ++fr.dev_s[dev_bin(ds_q)];
       }
     };
     const std::int32_t i1 = t.begin[static_cast<std::size_t>(j) + 1];
     std::int32_t i = t.begin[static_cast<std::size_t>(j)];
     for (; i < i1; ++i) {
       const int bi = t.bin[static_cast<std::size_t>(i)];
-      if (bi != bin) {
-        if (bin >= 0) {
+      if (bi != b.bin) {
+        if (b.bin >= 0) {
           close_bin();
-          if (end >= 0) break;
+          if (w.end >= 0) break;
         }
-        bin = bi;
-        b_line = b_carpet = false;
-        b_line_v = 0;
-        b_any_v = 0;
+        b.open(bi);
       }
       int v, s;
       const bool carpet = px(i, vmin, vmax, v, s);
-      b_any_v = std::max(b_any_v, v);
-      if (v >= v_line_min && s <= s_line_max) {
-        b_line = true;
-        b_line_v = std::max(b_line_v, v);
-      } else if (carpet) {
-        b_carpet = true;
-        b_v = v;
-        b_s = s;
-      }
+      b.add(v, s, w.is_line(v, s), carpet);
     }
-    if (end < 0 && bin >= 0) close_bin();
-    run.finish(out, found, edge_fraction, k0_, min_gap);
-    fr.sum_v[static_cast<std::size_t>(sec)] += static_cast<double>(ray_sum_v);
-    fr.sum_s[static_cast<std::size_t>(sec)] += static_cast<double>(ray_sum_s);
-    fr.count[static_cast<std::size_t>(sec)] += ray_count;
-    // Obstacle or the carpet's end: does the carpet resume behind the blob?
-    int resume = 0;
-    if (end >= 0) {
-      int cur = -1;
-      bool cur_carpet = false;
-      const int look_to = end + x.resume_within_px;
-      for (; i < i1 && resume < x.carpet_resume_px; ++i) {
-        const int bi = t.bin[static_cast<std::size_t>(i)];
-        if (bi > look_to) break;
-        if (bi != cur) {
-          if (cur >= 0) resume = cur_carpet ? resume + 1 : 0;
-          cur = bi;
-          cur_carpet = false;
-        }
-        int v, s;
-        cur_carpet = px(i, vmin, vmax, v, s) || cur_carpet;
-      }
-    }
-    finish_ray(end, resume >= x.carpet_resume_px, carpet_bins, k0_, x, out,
+    if (w.end < 0 && b.bin >= 0) close_bin();
+    run.finish(out, found, k.edge_fraction, k.k0, k.min_gap);
+    add_ray_sums(fr, sec, w);
+    const int resume = w.end < 0 ? 0 : carpet_run_behind(t, i, i1, w.end, x, [&](std::int32_t e) {
+      int v, s;
+      return px(e, vmin, vmax, v, s);
+    });
+    finish_ray(w.end, resume >= x.carpet_resume_px, w.carpet_bins, k0_, x, out,
                scan.ray_end_px[static_cast<std::size_t>(j)],
                rep.carpet_end_px[static_cast<std::size_t>(j)], rep);
   }
-  rep.carpet_fraction =
-      bins_seen > 0 ? static_cast<double>(bins_carpet) / static_cast<double>(bins_seen) : 0.0;
+  rep.carpet_fraction = carpet_fraction(bins_carpet, bins_seen);
 }
 
 // Reference: every pixel converted from BGR on every ray that touches it (OpenCV's integer HSV).
@@ -876,122 +1261,45 @@ bool LineExtractor::walk_lockstep(const RayTable& t, BearingScan& scan, Extracti
   if (!cpu_has_avx2() || t.lock_begin.size() < 2 || x.carpet_resume_px < 1 ||
       x.resume_within_px < 1)
     return false;
-  const std::size_t sectors = sector_val_.size();
-  std::vector<std::int32_t> vref0(sectors), sref0(sectors);
-  for (std::size_t k = 0; k < sectors; ++k) {
-    const long v = std::lround(256.0 * sector_val_[k]), sat = std::lround(256.0 * sector_sat_[k]);
-    if (v < 0 || v > 65535 || sat < -65535 || sat > 65535)
-      return false;  // the mean stays within [0, max(start, 255 * 256)]
-    vref0[k] = static_cast<std::int32_t>(v);
-    sref0[k] = static_cast<std::int32_t>(sat);
-  }
-  LockConsts kc;
-  kc.val_step_q = fr.val_step << 8;
-  kc.sat_step_q = fr.sat_step << 8;
-  kc.end_run_px = x.end_run_px;
-  kc.carpet_resume_px = x.carpet_resume_px;
-  kc.histogram = !vision_.line_contrast;  // adapt() reads the histograms only to estimate the steps
-  kc.resume_within_px = x.resume_within_px;
-  kc.alpha_q = std::max(1, static_cast<int>(std::lround(256.0 / x.carpet_mean_px)));
-  for (int a = 0; a <= 8; ++a)
-    if (kc.alpha_q == 1 << a) kc.alpha_shift = 8 - a;
-  const int min_gap = ScanParams{}.min_gap_px;
-  const int k0 = k0_;
-  const auto edge_fraction = static_cast<float>(x.edge_fraction);
+  std::vector<std::int32_t> vref0, sref0;
+  if (!lane_start_means(sector_val_, sector_sat_, vref0, sref0)) return false;
+  const WalkRules k = walk_rules(x, fr.val_step, fr.sat_step, k0_);
+  // adapt() reads the histograms only to estimate the steps.
+  const LockConsts kc = lock_consts(x, k, !vision_.line_contrast);
   const int n = static_cast<int>(t.hidden.size());
   for (int j = 0; j < n; ++j)
     if (t.hidden[static_cast<std::size_t>(j)]) (void)start_ray(true, j, scan, rep);
-  const std::size_t groups = t.lock_begin.size() - 1;
-  int max_steps = 0;
-  for (std::size_t g = 0; g < groups; ++g)
-    max_steps = std::max(max_steps, t.lock_begin[g + 1] - t.lock_begin[g]);
-  const auto words = static_cast<std::size_t>(8 * (max_steps + 32));
-  std::vector<std::uint32_t> rec(words), hist(words), line_bits(words / 32 + 8);
-  // The narrow histogram in a copy per lane (neighbouring rays deviate alike at the same step, and
-  // back-to-back increments of one counter wait on each other).
-  std::vector<std::array<int, kHistNone + 8>> narrow(8);
+  LockRecords rc(t);
   long bins_seen = 0, bins_carpet = 0;
   LockLanes ln;
-  const std::uint32_t* code = code_.data();
-  for (std::size_t g = 0; g < groups; ++g) {
-    for (std::size_t l = 0; l < 8; ++l) {
-      const int j = t.lock_ray[8 * g + l];
-      const auto sec =
-          j < 0 ? std::size_t{0} : static_cast<std::size_t>(t.sector[static_cast<std::size_t>(j)]);
-      ln.bins[l] = t.lock_bins[8 * g + l];
-      ln.vref[l] = vref0[sec];
-      ln.sref[l] = sref0[sec];
-      ln.vmin[l] = fr.vmin[sec];
-      ln.vmax[l] = fr.vmax[sec];
-    }
+  for (std::size_t g = 0; g + 1 < t.lock_begin.size(); ++g) {
+    load_lanes(ln, t, g, vref0, sref0, fr);
     const std::int32_t first = t.lock_begin[g], steps = t.lock_begin[g + 1] - first;
     const int ran =
-        walk_group_avx2(code, t.lock_pixel0.data() + 8 * static_cast<std::size_t>(first),
+        walk_group_avx2(code_.data(), t.lock_pixel0.data() + 8 * static_cast<std::size_t>(first),
                         t.lock_pixel1.data() + 8 * static_cast<std::size_t>(first), steps, kc, ln,
-                        rec.data(), hist.data(), line_bits.data());
-    for (std::size_t l = 0; kc.histogram && l < 8; ++l) {
-      const int j = t.lock_ray[8 * g + l];
-      if (j < 0 || !histogram_ray(j, n)) continue;
-      for (int st = 0; st < ran; ++st) {
-        const std::uint32_t w = hist[8 * static_cast<std::size_t>(st) + l];
-        if ((w & kHistWide) != 0) {
-          ++fr.dev_v[w & 4095u];
-          ++fr.dev_s[(w >> 12) & 4095u];
-        } else {
-          ++narrow[l][w];
-        }
-      }
-    }
+                        rc.rec.data(), rc.hist.data(), rc.line_bits.data());
+    if (kc.histogram) count_lane_histograms(fr, rc, t, g, ran, n);
     for (std::size_t l = 0; l < 8; ++l) {
       const int j = t.lock_ray[8 * g + l];
       if (j < 0) continue;
       std::uint8_t* out = start_ray(false, j, scan, rep);
-      const int first_bin = t.first_bin[static_cast<std::size_t>(j)];
-      const int walked = ln.walked[l];
-      WhiteRun run;
-      run.on_ray(t, j);
-      int found = 0, last = -1;
-      for (int w = 0; 32 * w < walked; ++w) {
-        for (std::uint32_t m = line_bits[8 * static_cast<std::size_t>(w) + l]; m != 0; m &= m - 1) {
-          const int st = 32 * w + __builtin_ctz(m);
-          const std::uint32_t r = rec[8 * static_cast<std::size_t>(st) + l];
-          const int line_v = static_cast<int>((r >> 8) & 255u), vref_q = static_cast<int>(r >> 16);
-          if (run.open && st != last + 1) run.finish(out, found, edge_fraction, k0, min_gap);
-          if (!run.open) {
-            const int prev_v =
-                st > 0 ? static_cast<int>(rec[8 * static_cast<std::size_t>(st - 1) + l] & 255u) : 0;
-            run.add(first_bin + st, line_v, st - last - 1, min_gap,
-                    st > 0 ? first_bin + st - 1 : -1, prev_v, vref_q);
-          } else {
-            run.add(first_bin + st, line_v, 0, min_gap, -1, 0, vref_q);
-          }
-          last = st;
-        }
-      }
-      run.finish(out, found, edge_fraction, k0, min_gap);
+      (void)lane_crossings(out, t, j, l, ln.walked[l], rc, k);
       const auto sec = static_cast<std::size_t>(t.sector[static_cast<std::size_t>(j)]);
-      bins_seen += walked;
+      bins_seen += ln.walked[l];
       bins_carpet += ln.carpet[l];
       fr.sum_v[sec] += static_cast<double>(ln.sum_v[l]);
       fr.sum_s[sec] += static_cast<double>(ln.sum_s[l]);
       fr.count[sec] += ln.carpet[l];
+      const int first_bin = t.first_bin[static_cast<std::size_t>(j)];
       const int end = ln.end_step[l] >= 0 ? first_bin + ln.end_step[l] - x.end_run_px + 1 : -1;
-      finish_ray(end, ln.resumed[l] != 0, ln.carpet[l], k0, x, out,
+      finish_ray(end, ln.resumed[l] != 0, ln.carpet[l], k.k0, x, out,
                  scan.ray_end_px[static_cast<std::size_t>(j)],
                  rep.carpet_end_px[static_cast<std::size_t>(j)], rep);
     }
   }
-  for (int a = 0; a < 64; ++a) {
-    for (int b = 0; b < 64; ++b) {
-      const auto at = static_cast<std::size_t>(a * 64 + b);
-      int c = 0;
-      for (const auto& copy : narrow) c += copy[at];
-      fr.dev_v[static_cast<std::size_t>(a - 32 + 255)] += c;
-      fr.dev_s[static_cast<std::size_t>(b - 32 + 255)] += c;
-    }
-  }
-  rep.carpet_fraction =
-      bins_seen > 0 ? static_cast<double>(bins_carpet) / static_cast<double>(bins_seen) : 0.0;
+  merge_narrow(fr, rc);
+  rep.carpet_fraction = carpet_fraction(bins_carpet, bins_seen);
   return true;
 #else
   (void)t;
@@ -1008,120 +1316,57 @@ void LineExtractor::walk_fast(const RayTable& t, BearingScan& scan, ExtractionRe
                               Frame& fr) const {
   const ExtractionParams& x = vision_.extraction;
   const std::uint32_t* code = code_.data();
-  const int min_gap = ScanParams{}.min_gap_px;
-  const int alpha_q = std::max(1, static_cast<int>(std::lround(256.0 / x.carpet_mean_px)));
-  const int val_step_q = fr.val_step << 8, sat_step_q = fr.sat_step << 8;
+  // Read once: the histograms' int stores could alias the parameters' ints, forcing reloads.
+  const WalkRules k = walk_rules(x, fr.val_step, fr.sat_step, k0_);
+  const MeanStep step(k.alpha_q);
   const int n = static_cast<int>(t.hidden.size());
   long bins_seen = 0, bins_carpet = 0;
-  // The deviation histograms in four interleaved copies, summed at the end: neighbouring carpet
-  // bins mostly deviate alike, and one counter incremented back to back stalls on its own store.
-  std::array<std::array<int, 512>, 4> hist_v{}, hist_s{};
-  // The running mean's weight alpha_q / 256 is 1/8 for the default carpet_mean_px: a shift then
-  // replaces the multiply on the walk's serial chain (floor((d * 2^a) / 256) = d >> (8 - a)).
-  int alpha_shift = -1;
-  for (int a = 0; a <= 8; ++a)
-    if (alpha_q == 1 << a) alpha_shift = 8 - a;
-  auto step_mean = [alpha_q, alpha_shift](int d_q) {
-    return alpha_shift >= 0 ? d_q >> alpha_shift : (d_q * alpha_q) >> 8;
-  };
-  // Read once: the histograms' int stores could alias the parameters' ints, forcing reloads.
-  const int end_run_px = x.end_run_px, k0 = k0_;
-  const float edge_fraction = static_cast<float>(x.edge_fraction);
+  DevHistograms hist;  // four interleaved copies
+  const std::int32_t* bp = t.bin_pixel.data();
+  const std::int16_t* bs = t.bin_second.data();
   for (int j = 0; j < n; ++j) {
     std::uint8_t* out = start_ray(t.hidden[static_cast<std::size_t>(j)], j, scan, rep);
     if (out == nullptr) continue;
     const bool sampled = histogram_ray(j, n);
-    const int sec = t.sector[static_cast<std::size_t>(j)];
-    const int vmin = fr.vmin[static_cast<std::size_t>(sec)],
-              vmax = fr.vmax[static_cast<std::size_t>(sec)];
-    int vref_q = static_cast<int>(std::lround(256.0 * sector_val_[static_cast<std::size_t>(sec)]));
-    int sref_q = static_cast<int>(std::lround(256.0 * sector_sat_[static_cast<std::size_t>(sec)]));
-    long ray_sum_v = 0, ray_sum_s = 0, ray_count = 0;
-    int v_line_min = (vref_q + val_step_q + 255) >> 8, s_line_max = (sref_q - sat_step_q) >> 8;
-    int found = 0, gap = 0, other_run = 0, carpet_bins = 0, end = -1;
-    int prev_bin = -1, prev_v = 0;
-    WhiteRun run;
-    run.on_ray(t, j);
-    const std::int32_t b0 = t.bin_begin[static_cast<std::size_t>(j)],
-                       b1 = t.bin_begin[static_cast<std::size_t>(j) + 1];
-    const int first_bin = t.first_bin[static_cast<std::size_t>(j)];
-    const std::int32_t* bp = t.bin_pixel.data();
-    const std::int16_t* bs = t.bin_second.data();
-    std::int32_t k = b0;
-    for (; k < b1; ++k) {
-      const int bin = first_bin + (k - b0);
-      const std::uint32_t c0 = code[bp[k]], c1 = code[bp[k] + bs[k]];
-      const int v0 = static_cast<int>(c0 & 255u), s0 = static_cast<int>((c0 >> 8) & 255u);
-      const int v1 = static_cast<int>(c1 & 255u), s1 = static_cast<int>((c1 >> 8) & 255u);
-      const bool line0 = v0 >= v_line_min && s0 <= s_line_max,
-                 line1 = v1 >= v_line_min && s1 <= s_line_max;
-      const bool carpet1 = !line1 && (c1 >> 16) != 0 && v1 >= vmin && v1 <= vmax;
-      const bool carpet0 = !line0 && (c0 >> 16) != 0 && v0 >= vmin && v0 <= vmax;
+    const auto sec = static_cast<std::size_t>(t.sector[static_cast<std::size_t>(j)]);
+    const int vmin = fr.vmin[sec], vmax = fr.vmax[sec];
+    RayWalk w(sector_val_[sec], sector_sat_[sec], k);
+    WhiteRun run = WhiteRun::of_ray(t, j);
+    int found = 0;
+    const RayBins r = ray_bins(t, j);
+    std::int32_t kb = r.b0;
+    for (; kb < r.b1; ++kb) {
+      const int bin = r.first_bin + (kb - r.b0);
+      const CodedBin c = coded_bin(code, bp, bs, kb);
+      const bool line0 = w.is_line(c.v0, c.s0), line1 = w.is_line(c.v1, c.s1);
+      const bool carpet1 = !line1 && c.hue1 && c.v1 >= vmin && c.v1 <= vmax;
+      const bool carpet0 = !line0 && c.hue0 && c.v0 >= vmin && c.v0 <= vmax;
       ++bins_seen;
       if (line0 || line1) {
-        run.add(bin, std::max(line0 ? v0 : 0, line1 ? v1 : 0), gap, min_gap, prev_bin, prev_v,
-                vref_q);
-        gap = 0;
-        other_run = 0;
+        w.line(run, bin, std::max(line0 ? c.v0 : 0, line1 ? c.v1 : 0), k);
         continue;
       }
-      run.finish(out, found, edge_fraction, k0, min_gap);
-      prev_bin = bin;
-      prev_v = std::max(v0, v1);
-      ++gap;
+      w.not_line(run, out, found, bin, std::max(c.v0, c.v1), k);
       if (carpet0 || carpet1) {
-        const int b_v = carpet1 ? v1 : v0, b_s = carpet1 ? s1 : s0;  // the bin's last carpet pixel
-        other_run = 0;
-        ++carpet_bins;
         ++bins_carpet;
-        const int dv_q = (b_v << 8) - vref_q, ds_q = (b_s << 8) - sref_q;
-        if (sampled) {
-          const auto copy = static_cast<std::size_t>(bin & 3);
-          ++hist_v[copy][static_cast<std::size_t>(std::clamp(((dv_q + 128) >> 8) + 255, 0, 510))];
-          ++hist_s[copy][static_cast<std::size_t>(std::clamp(((ds_q + 128) >> 8) + 255, 0, 510))];
-        }
-        vref_q += step_mean(dv_q);
-        sref_q += step_mean(ds_q);
-        v_line_min = (vref_q + val_step_q + 255) >> 8;
-        s_line_max = (sref_q - sat_step_q) >> 8;
-        ray_sum_v += b_v;
-        ray_sum_s += b_s;
-        ++ray_count;
-      } else if (++other_run >= end_run_px) {
-        end = bin - other_run + 1;
-        ++k;
+        int dv_q = 0, ds_q = 0;  // the bin's last carpet pixel
+        w.carpet(carpet1 ? c.v1 : c.v0, carpet1 ? c.s1 : c.s0, step, dv_q, ds_q);
+        if (sampled) hist.count(bin, dv_q, ds_q);
+      } else if (w.other(bin, k.end_run_px)) {
+        ++kb;
         break;
       }
     }
-    run.finish(out, found, edge_fraction, k0, min_gap);
-    fr.sum_v[static_cast<std::size_t>(sec)] += static_cast<double>(ray_sum_v);
-    fr.sum_s[static_cast<std::size_t>(sec)] += static_cast<double>(ray_sum_s);
-    fr.count[static_cast<std::size_t>(sec)] += ray_count;
-    // Behind the end: a bin counts once the next one is reached within resume_within_px (as the
-    // per-pixel walk commits a bin at its successor's first pixel); any carpet pixel makes it
-    // carpet.
-    int resume = 0;
-    if (end >= 0) {
-      const int look_to = end + x.resume_within_px;
-      for (; k + 1 < b1 && resume < x.carpet_resume_px; ++k) {
-        if (first_bin + (k + 1 - b0) > look_to) break;
-        const std::uint32_t c0 = code[bp[k]], c1 = code[bp[k] + bs[k]];
-        const int v0 = static_cast<int>(c0 & 255u), v1 = static_cast<int>(c1 & 255u);
-        const bool carpet = ((c0 >> 16) != 0 && v0 >= vmin && v0 <= vmax) ||
-                            ((c1 >> 16) != 0 && v1 >= vmin && v1 <= vmax);
-        resume = carpet ? resume + 1 : 0;
-      }
-    }
-    finish_ray(end, resume >= x.carpet_resume_px, carpet_bins, k0, x, out,
+    run.finish(out, found, k.edge_fraction, k.k0, k.min_gap);
+    add_ray_sums(fr, sec, w);
+    const int resume =
+        w.end < 0 ? 0 : coded_carpet_run_behind(code, t, kb, r, w.end, x, vmin, vmax);
+    finish_ray(w.end, resume >= x.carpet_resume_px, w.carpet_bins, k.k0, x, out,
                scan.ray_end_px[static_cast<std::size_t>(j)],
                rep.carpet_end_px[static_cast<std::size_t>(j)], rep);
   }
-  for (std::size_t b = 0; b < 511; ++b) {
-    fr.dev_v[b] += hist_v[0][b] + hist_v[1][b] + hist_v[2][b] + hist_v[3][b];
-    fr.dev_s[b] += hist_s[0][b] + hist_s[1][b] + hist_s[2][b] + hist_s[3][b];
-  }
-  rep.carpet_fraction =
-      bins_seen > 0 ? static_cast<double>(bins_carpet) / static_cast<double>(bins_seen) : 0.0;
+  hist.add_to(fr.dev_v, fr.dev_s);
+  rep.carpet_fraction = carpet_fraction(bins_carpet, bins_seen);
 }
 
 // Follows the light: each sector's carpet level moves light_follow of the way to this frame's mean
@@ -1279,101 +1524,79 @@ BearingScan LineExtractor::extract_impl(const cv::Mat& bgr, int rpd, ExtractionR
   return scan;
 }
 
-BearingScan LineExtractor::extract_once(const cv::Mat& bgr, int rpd, ExtractionReport* report,
-                                        Walk how) {
-  const bool fast = how != Walk::kReference;
+namespace {
+
+// The frame must be what the camera model describes, and the ray count in range: a wrong image
+// would walk rays off its edge.
+void check_extract_input(const cv::Mat& bgr, int rpd, int width_px, int height_px) {
   if (bgr.empty()) throw std::invalid_argument("extract: empty image");
   if (bgr.type() != CV_8UC3)
     throw std::invalid_argument("extract: image must be 8-bit BGR (CV_8UC3), got type " +
                                 std::to_string(bgr.type()));
-  if (bgr.cols != width_px_ || bgr.rows != height_px_) {
+  if (bgr.cols != width_px || bgr.rows != height_px) {
     throw std::invalid_argument("extract: image is " + std::to_string(bgr.cols) + " x " +
                                 std::to_string(bgr.rows) + " but the camera model expects " +
-                                std::to_string(width_px_) + " x " + std::to_string(height_px_));
+                                std::to_string(width_px) + " x " + std::to_string(height_px));
   }
   if (rpd < 1 || rpd > kMaxRaysPerDegree)
     throw std::invalid_argument("extract: rays_per_degree must be 1..20, got " +
                                 std::to_string(rpd));
-  ExtractionReport local;
-  ExtractionReport& rep = report != nullptr ? *report : local;
-  rep = ExtractionReport{};
-  const int n = kScanRays * rpd;
+}
+
+// A scan of n rays with no crossings, every ray hidden until walked.
+BearingScan empty_scan(int rpd, int n) {
   BearingScan scan;
   scan.rays_per_degree = rpd;
   scan.radii_px.assign(static_cast<std::size_t>(n) * kCrossingsPerRay, kNoCrossing);
   scan.ray_end_px.assign(static_cast<std::size_t>(n), kRayHidden);
-  rep.carpet_end_px.assign(static_cast<std::size_t>(n), 0);
-  rep.carpet_estimated = !vision_.carpet_hsv;
-  if (!ensure_carpet(bgr, &rep.reason)) return scan;
-  const ExtractionParams& x = vision_.extraction;
-  const auto sectors = static_cast<std::size_t>(x.sectors);
-  const bool first = sector_val_.size() != sectors;
-  if (first) {
-    sector_val_.assign(sectors, ref_val_);
-    // Before any frame: the middle of the saturation range above sat_min (measured by pass one).
-    sector_sat_.assign(sectors, 0.5 * (carpet_->sat_min + 255.0));
-  }
+  return scan;
+}
+
+// Which of OpenCV's 180 hues are the carpet's (within its half width, round the circle).
+std::array<bool, 180> carpet_hues(const CarpetHsv& carpet) {
+  std::array<bool, 180> ok{};
   for (int i = 0; i < 180; ++i) {
-    const double dh = std::abs(i - carpet_->hue);
-    hue_ok_[static_cast<std::size_t>(i)] = std::min(dh, 180.0 - dh) <= carpet_->hue_half_width;
+    const double dh = std::abs(i - carpet.hue);
+    ok[static_cast<std::size_t>(i)] = std::min(dh, 180.0 - dh) <= carpet.hue_half_width;
   }
-  const RayTable& t = table(rpd, bgr.step[0]);
-  // The code plane pays when the rays touch more pixels than it converts (4 rays per degree: 2x;
-  // at 1 ray per degree the rays skip most pixels beyond ~60 px and the scalar per-pixel walk is
-  // cheaper). With AVX2 it always pays: the plane converts 8 pixels at a time and the lockstep walk
-  // needs it (2 rays per degree, 1280 x 1024: 1.0 ms with it, 1.8 ms without, bench_frame_path).
+  return ok;
+}
+
+// The code plane pays when the rays touch more pixels than it converts (4 rays per degree: 2x;
+// at 1 ray per degree the rays skip most pixels beyond ~60 px and the scalar per-pixel walk is
+// cheaper). With AVX2 it always pays: the plane converts 8 pixels at a time and the lockstep walk
+// needs it (2 rays per degree, 1280 x 1024: 1.0 ms with it, 1.8 ms without, bench_frame_path).
+bool code_plane_pays(const LineExtractor::RayTable& t, LineExtractor::Walk how) {
   long plane_px = 0;
   for (std::size_t row = 0; row < t.row_u0.size(); ++row)
     plane_px += std::max(0, t.row_u1[row] - t.row_u0[row] + 1);
-  const bool coded =
-      fast && t.bins_ok &&
-      (static_cast<long>(t.pixel.size()) >= plane_px || (how == Walk::kFast && cpu_has_avx2()));
-  if (coded) {
-    const int sat_min = static_cast<int>(std::ceil(carpet_->sat_min));
-    if (how == Walk::kBinWalk || !code_pixels_avx2(bgr, t, sat_min)) code_pixels(bgr, t, sat_min);
+  return how != LineExtractor::Walk::kReference && t.bins_ok &&
+         (static_cast<long>(t.pixel.size()) >= plane_px ||
+          (how == LineExtractor::Walk::kFast && cpu_has_avx2()));
+}
+
+// A pass's thresholds: each sector's carpet value window scaled by its light, the saturation
+// floor and the line steps (LineExtractor::Frame, private: deduced).
+void start_frame(auto& fr, std::size_t sectors, const std::vector<double>& sector_val,
+                 double ref_val, const CarpetHsv& carpet, const LineContrast& c) {
+  fr.vmin.resize(sectors);
+  fr.vmax.resize(sectors);
+  for (std::size_t k = 0; k < sectors; ++k) {
+    const double f = sector_val[k] / ref_val;
+    fr.vmin[k] = static_cast<int>(std::floor(carpet.val_min * f));
+    fr.vmax[k] = static_cast<int>(std::ceil(std::min(255.0, carpet.val_max * f)));
   }
-  // The first frame is walked twice: once to measure the light and the carpet's spread, then with
-  // them.
-  for (int pass = first ? 0 : 1; pass < 2; ++pass) {
-    Frame fr;
-    fr.vmin.resize(sectors);
-    fr.vmax.resize(sectors);
-    for (std::size_t k = 0; k < sectors; ++k) {
-      const double f = sector_val_[k] / ref_val_;
-      fr.vmin[k] = static_cast<int>(std::floor(carpet_->val_min * f));
-      fr.vmax[k] = static_cast<int>(std::ceil(std::min(255.0, carpet_->val_max * f)));
-    }
-    fr.sum_v.assign(sectors, 0.0);
-    fr.sum_s.assign(sectors, 0.0);
-    fr.count.assign(sectors, 0);
-    fr.sat_min = static_cast<int>(std::ceil(carpet_->sat_min));
-    const LineContrast c = contrast_.value_or(LineContrast{});
-    fr.val_step = std::max(1, static_cast<int>(std::lround(c.val_step)));
-    fr.sat_step = static_cast<int>(std::lround(c.sat_step));
-    rep = ExtractionReport{};
-    rep.carpet_end_px.assign(static_cast<std::size_t>(n), 0);
-    rep.carpet_estimated = !vision_.carpet_hsv;
-    rep.contrast = c;
-    if (coded) {
-      if (how == Walk::kBinWalk || !walk_lockstep(t, scan, rep, fr)) walk_fast(t, scan, rep, fr);
-    } else {
-      walk(bgr, t, scan, rep, fr);
-    }
-    if (pass == 0) {
-      const double keep = vision_.extraction.light_follow;
-      vision_.extraction.light_follow = 1.0;  // the first measurement is taken whole
-      adapt(fr);
-      vision_.extraction.light_follow = keep;
-    } else {
-      adapt(fr);
-    }
-  }
-  rep.carpet = *carpet_;
-  if (fast)
-    mark_tall_obstacles_fast(scan, rep);
-  else
-    mark_tall_obstacles(scan, rep);
-  // Obstacle blobs: neighbouring rays ended on the carpet at similar radii.
+  fr.sum_v.assign(sectors, 0.0);
+  fr.sum_s.assign(sectors, 0.0);
+  fr.count.assign(sectors, 0);
+  fr.sat_min = static_cast<int>(std::ceil(carpet.sat_min));
+  fr.val_step = std::max(1, static_cast<int>(std::lround(c.val_step)));
+  fr.sat_step = static_cast<int>(std::lround(c.sat_step));
+}
+
+// Obstacle blobs: neighbouring rays ended on the carpet at similar radii (a blob through ray 0
+// is joined with the one ending at the last ray).
+void group_obstacles(const BearingScan& scan, int n, ExtractionReport& rep) {
   for (int j = 0; j < n; ++j) {
     const auto e = scan.ray_end_px[static_cast<std::size_t>(j)];
     const bool obstacle = e != kRayHidden && e != kRayToViewEnd &&
@@ -1398,22 +1621,86 @@ BearingScan LineExtractor::extract_once(const cv::Mat& bgr, int rpd, ExtractionR
         std::min(rep.obstacles.front().near_radius_px, rep.obstacles.back().near_radius_px);
     rep.obstacles.pop_back();
   }
-  const int total = n - static_cast<int>(std::count(t.hidden.begin(), t.hidden.end(), true));
+}
+
+// Why the frame is not usable (rep.reason; empty: usable) of the `total` rays not hidden.
+// Returns true when too little of the view is carpet.
+bool judge_frame(const ExtractionParams& x, int total, ExtractionReport& rep) {
   if (rep.carpet_fraction < x.min_carpet_fraction) {
     rep.reason =
         "no carpet: " + std::to_string(static_cast<int>(std::lround(100 * rep.carpet_fraction))) +
         " % of the view is carpet (at least " +
         std::to_string(static_cast<int>(std::lround(100 * x.min_carpet_fraction))) + " % needed)";
-    if (rep.carpet_estimated) {
-      carpet_.reset();  // estimated from something else: estimate again on the next frame
-      sector_val_.clear();
-    }
-  } else if (rep.rays_seen < x.min_rays_seen * total) {
+    return true;
+  }
+  if (rep.rays_seen < x.min_rays_seen * total) {
     rep.reason = "too few rays see the carpet: " + std::to_string(rep.rays_seen) + " of " +
                  std::to_string(total);
   } else if (rep.crossings < x.min_crossings) {
     rep.reason = "too few line crossings: " + std::to_string(rep.crossings) + " (at least " +
                  std::to_string(x.min_crossings) + ")";
+  }
+  return false;
+}
+
+}  // namespace
+
+BearingScan LineExtractor::extract_once(const cv::Mat& bgr, int rpd, ExtractionReport* report,
+                                        Walk how) {
+  check_extract_input(bgr, rpd, width_px_, height_px_);
+  ExtractionReport local;
+  ExtractionReport& rep = report != nullptr ? *report : local;
+  rep = ExtractionReport{};
+  const int n = kScanRays * rpd;
+  BearingScan scan = empty_scan(rpd, n);
+  rep.carpet_end_px.assign(static_cast<std::size_t>(n), 0);
+  rep.carpet_estimated = !vision_.carpet_hsv;
+  if (!ensure_carpet(bgr, &rep.reason)) return scan;
+  const ExtractionParams& x = vision_.extraction;
+  const auto sectors = static_cast<std::size_t>(x.sectors);
+  const bool first = sector_val_.size() != sectors;
+  if (first) {
+    sector_val_.assign(sectors, ref_val_);
+    // Before any frame: the middle of the saturation range above sat_min (measured by pass one).
+    sector_sat_.assign(sectors, 0.5 * (carpet_->sat_min + 255.0));
+  }
+  hue_ok_ = carpet_hues(*carpet_);
+  const RayTable& t = table(rpd, bgr.step[0]);
+  const bool coded = code_plane_pays(t, how);
+  if (coded) {
+    const int sat_min = static_cast<int>(std::ceil(carpet_->sat_min));
+    if (how == Walk::kBinWalk || !code_pixels_avx2(bgr, t, sat_min)) code_pixels(bgr, t, sat_min);
+  }
+  // The first frame is walked twice: once to measure the light and the carpet's spread, then with
+  // them.
+  for (int pass = first ? 0 : 1; pass < 2; ++pass) {
+    Frame fr;
+    const LineContrast c = contrast_.value_or(LineContrast{});
+    start_frame(fr, sectors, sector_val_, ref_val_, *carpet_, c);
+    rep = ExtractionReport{};
+    rep.carpet_end_px.assign(static_cast<std::size_t>(n), 0);
+    rep.carpet_estimated = !vision_.carpet_hsv;
+    rep.contrast = c;
+    if (coded) {
+      if (how == Walk::kBinWalk || !walk_lockstep(t, scan, rep, fr)) walk_fast(t, scan, rep, fr);
+    } else {
+      walk(bgr, t, scan, rep, fr);
+    }
+    const double keep = vision_.extraction.light_follow;
+    if (pass == 0) vision_.extraction.light_follow = 1.0;  // the first measurement is taken whole
+    adapt(fr);
+    vision_.extraction.light_follow = keep;
+  }
+  rep.carpet = *carpet_;
+  if (how != Walk::kReference)
+    mark_tall_obstacles_fast(scan, rep);
+  else
+    mark_tall_obstacles(scan, rep);
+  group_obstacles(scan, n, rep);
+  const int total = n - static_cast<int>(std::count(t.hidden.begin(), t.hidden.end(), true));
+  if (judge_frame(x, total, rep) && rep.carpet_estimated) {
+    carpet_.reset();  // estimated from something else: estimate again on the next frame
+    sector_val_.clear();
   }
   rep.usable = rep.reason.empty();
   return scan;

@@ -220,19 +220,22 @@ double robust_sigma(std::vector<double> v) {
   return 1.4826 * percentile(std::move(v), 0.5);
 }
 
-std::optional<CarpetColour> carpet_colour_from_samples(const std::vector<cv::Vec3b>& samples,
-                                                       std::string* why, bool allow_grey) {
+namespace {
+
+// The samples in the histogram's peak cell or next to it (8 deg hue, 16 levels of S and V), their
+// hue unwrapped around the peak.
+struct PeakCluster {
+  std::vector<double> hs, ss, vs;
+};
+
+PeakCluster peak_cluster(const std::vector<cv::Vec3b>& samples) {
   constexpr int kHb = 45, kSb = 16, kVb = 16;  // 8 deg hue, 16 levels of S and V
-  if (samples.empty()) {
-    if (why) *why = "no carpet: no pixels next to the robot";
-    return std::nullopt;
-  }
   std::vector<int> hist(kHb * kSb * kVb, 0);
   for (const auto& p : samples)
     ++hist[static_cast<std::size_t>((p[0] / 4) * kSb * kVb + (p[1] / 16) * kVb + p[2] / 16)];
   const auto peak = static_cast<int>(std::max_element(hist.begin(), hist.end()) - hist.begin());
   const int ph = peak / (kSb * kVb), ps = (peak / kVb) % kSb, pv = peak % kVb;
-  std::vector<double> hs, ss, vs;
+  PeakCluster c;
   for (const auto& p : samples) {
     const int dh = std::abs(p[0] / 4 - ph);
     if (std::min(dh, kHb - dh) <= 1 && std::abs(p[1] / 16 - ps) <= 1 &&
@@ -240,11 +243,43 @@ std::optional<CarpetColour> carpet_colour_from_samples(const std::vector<cv::Vec
       double h = p[0];
       if (h - ph * 4 > 90) h -= 180;  // unwrap around the peak
       if (ph * 4 - h > 90) h += 180;
-      hs.push_back(h);
-      ss.push_back(p[1]);
-      vs.push_back(p[2]);
+      c.hs.push_back(h);
+      c.ss.push_back(p[1]);
+      c.vs.push_back(p[2]);
     }
   }
+  return c;
+}
+
+// Grey: the hue of a barely saturated pixel is noise (it scatters the histogram's peak), so the
+// samples (one colour cluster already) are judged whole and the window is of brightness alone.
+// nullopt when they are saturated enough to be a colour.
+std::optional<CarpetColour> grey_carpet(const std::vector<cv::Vec3b>& samples) {
+  std::vector<double> all_s, all_v;
+  for (const auto& p : samples) {
+    all_s.push_back(p[1]);
+    all_v.push_back(p[2]);
+  }
+  if (!(percentile(all_s, 0.5) < 20.0)) return std::nullopt;
+  CarpetColour g;
+  g.hue_half_width = 90.0;
+  g.median_sat = percentile(all_s, 0.5);
+  g.median_val = percentile(all_v, 0.5);
+  g.val_min = 0.5 * g.median_val;
+  g.val_max = std::min(255.0, 1.5 * g.median_val);
+  return g;
+}
+
+}  // namespace
+
+std::optional<CarpetColour> carpet_colour_from_samples(const std::vector<cv::Vec3b>& samples,
+                                                       std::string* why, bool allow_grey) {
+  if (samples.empty()) {
+    if (why) *why = "no carpet: no pixels next to the robot";
+    return std::nullopt;
+  }
+  const PeakCluster pc = peak_cluster(samples);
+  const std::vector<double>&hs = pc.hs, &ss = pc.ss, &vs = pc.vs;
   CarpetColour c;
   c.hue = std::fmod(percentile(hs, 0.5) + 180.0, 180.0);
   c.median_sat = percentile(ss, 0.5);
@@ -258,22 +293,7 @@ std::optional<CarpetColour> carpet_colour_from_samples(const std::vector<cv::Vec
   c.val_min = 0.5 * c.median_val;
   c.val_max = std::min(255.0, 1.5 * c.median_val);
   if (allow_grey) {
-    // Grey: the hue of a barely saturated pixel is noise (it scatters the histogram's peak), so the
-    // samples (one colour cluster already) are judged whole and the window is of brightness alone.
-    std::vector<double> all_s, all_v;
-    for (const auto& p : samples) {
-      all_s.push_back(p[1]);
-      all_v.push_back(p[2]);
-    }
-    if (percentile(all_s, 0.5) < 20.0) {
-      CarpetColour g;
-      g.hue_half_width = 90.0;
-      g.median_sat = percentile(all_s, 0.5);
-      g.median_val = percentile(all_v, 0.5);
-      g.val_min = 0.5 * g.median_val;
-      g.val_max = std::min(255.0, 1.5 * g.median_val);
-      return g;
-    }
+    if (auto g = grey_carpet(samples)) return g;
   }
   if (static_cast<double>(hs.size()) < 0.05 * static_cast<double>(samples.size()) ||
       c.median_sat < 20.0) {

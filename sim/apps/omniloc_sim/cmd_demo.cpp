@@ -349,6 +349,52 @@ int verdict(const DemoObserver& ob, const DemoOptions& o, const daemon::DaemonRe
   return 0;
 }
 
+// The simulated robot of the demo drive: its seed and camera, a slip of wheel 2 and a kidnapping
+// where the drive puts them.
+sim::SimRobotOptions demo_robot_options(const DemoOptions& o, const sim::DemoDrive& drive) {
+  sim::SimRobotOptions so;
+  so.seed = o.seed;
+  so.camera = o.camera;
+  so.camera_fps = o.camera_hz;
+  so.slips.push_back(sim::SlipEvent{2, drive.slip_s, 0.5, 40.0});
+  so.kidnaps.push_back(sim::KidnapEvent{drive.kidnap_s, drive.kidnap_to});
+  return so;
+}
+
+// What is about to run: the robot, the camera, the seed and the drive's events.
+void print_demo_plan(double ready_s, const DemoOptions& o, const sim::SimulatedRobot& robot,
+                     const sim::DemoDrive& drive) {
+  std::printf(
+      "demo: database ready after %.1f s; simulating %.0f s with the robot's daemon: %s; camera "
+      "%.0f Hz, "
+      "seed %llu\n",
+      ready_s, o.duration_s, robot.describe().c_str(), o.camera ? o.camera_hz : 0.0,
+      static_cast<unsigned long long>(o.seed));
+  std::printf(
+      "demo: drive of %.0f cm: slip of wheel 2 at %.1f s (0.5 s, +40 cm/s), kidnapping at %.2f s "
+      "to "
+      "(%.0f, %.0f, %.0f deg)\n",
+      drive.trajectory.length_cm(), drive.slip_s, drive.kidnap_s, drive.kidnap_to.x_cm,
+      drive.kidnap_to.y_cm, drive.kidnap_to.yaw_deg);
+}
+
+// How fast the simulation ran: board cycles per wall second, frames rendered, CPU time.
+template <typename Elapsed>
+void print_throughput(const sim::SimulatedRobot& robot, const DemoObserver& observer,
+                      const Elapsed& elapsed, double cpu_s) {
+  const double board_s = static_cast<double>(robot.board_cycles()) / sim::BoardSim::kClockHz;
+  std::printf(
+      "  board: %.0f M cycles (%.1f s simulated) in %.1f s wall, %.2f M cycles/s; %d frames "
+      "rendered\n",
+      static_cast<double>(robot.board_cycles()) / 1e6, board_s, elapsed(),
+      static_cast<double>(robot.board_cycles()) / 1e6 / std::max(1e-9, elapsed()),
+      observer.frames());
+  std::printf(
+      "  CPU time of the run: %.1f s (board, daemon and observer on one thread, rendering on the "
+      "camera's worker)\n",
+      cpu_s);
+}
+
 int run_demo(const DemoOptions& o) {
   const auto wall0 = Clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - wall0).count(); };
@@ -366,25 +412,8 @@ int run_demo(const DemoOptions& o) {
   // gyro is relative (docs/GYRO.md), and on the point-symmetric field a global search without a
   // heading cannot tell the robot from its twin.
   m.initial_pose = drive.trajectory.start();
-  sim::SimRobotOptions so;
-  so.seed = o.seed;
-  so.camera = o.camera;
-  so.camera_fps = o.camera_hz;
-  so.slips.push_back(sim::SlipEvent{2, drive.slip_s, 0.5, 40.0});
-  so.kidnaps.push_back(sim::KidnapEvent{drive.kidnap_s, drive.kidnap_to});
-  sim::SimulatedRobot robot(m, drive.trajectory, so);
-  std::printf(
-      "demo: database ready after %.1f s; simulating %.0f s with the robot's daemon: %s; camera "
-      "%.0f Hz, "
-      "seed %llu\n",
-      elapsed(), o.duration_s, robot.describe().c_str(), o.camera ? o.camera_hz : 0.0,
-      static_cast<unsigned long long>(o.seed));
-  std::printf(
-      "demo: drive of %.0f cm: slip of wheel 2 at %.1f s (0.5 s, +40 cm/s), kidnapping at %.2f s "
-      "to "
-      "(%.0f, %.0f, %.0f deg)\n",
-      drive.trajectory.length_cm(), drive.slip_s, drive.kidnap_s, drive.kidnap_to.x_cm,
-      drive.kidnap_to.y_cm, drive.kidnap_to.yaw_deg);
+  sim::SimulatedRobot robot(m, drive.trajectory, demo_robot_options(o, drive));
+  print_demo_plan(elapsed(), o, robot, drive);
 
   const std::string csv_path = o.out_dir + "/errors.csv";
   std::FILE* csv = std::fopen(csv_path.c_str(), "w");
@@ -404,17 +433,7 @@ int run_demo(const DemoOptions& o) {
   if (std::fclose(csv) != 0 || !csv_ok) throw std::runtime_error(csv_path + ": write failed");
 
   print_summary(observer, drive, o, r);
-  const double board_s = static_cast<double>(robot.board_cycles()) / sim::BoardSim::kClockHz;
-  std::printf(
-      "  board: %.0f M cycles (%.1f s simulated) in %.1f s wall, %.2f M cycles/s; %d frames "
-      "rendered\n",
-      static_cast<double>(robot.board_cycles()) / 1e6, board_s, elapsed(),
-      static_cast<double>(robot.board_cycles()) / 1e6 / std::max(1e-9, elapsed()),
-      observer.frames());
-  std::printf(
-      "  CPU time of the run: %.1f s (board, daemon and observer on one thread, rendering on the "
-      "camera's worker)\n",
-      cpu_s);
+  print_throughput(robot, observer, elapsed, cpu_s);
   const std::string png = o.out_dir + "/paths.png";
   write_plot(png, m.field, observer.path_truth, observer.path_int, observer.path_odo,
              observer.path_img, drive);

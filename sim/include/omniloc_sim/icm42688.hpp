@@ -90,6 +90,9 @@ class Icm42688 {
   std::uint8_t read_reg(std::uint8_t addr);
   void write_reg(std::uint8_t addr, std::uint8_t value);
   void produce_sample();
+  void begin_transaction(double t);  // step()'s stages: CS falls, CS rises, a byte in
+  void end_transaction(double t);
+  void byte_boundary();
   void schedule_from(double t_s);
 
   Icm42688Params params_;
