@@ -4,7 +4,7 @@
 set -euo pipefail
 
 packages=(
-  build-essential cmake ninja-build pkg-config python3
+  build-essential cmake ninja-build pkg-config python3 dpkg-dev file
   verilator yosys nextpnr-ice40 fpga-icestorm z3
   libeigen3-dev libopencv-dev libusb-1.0-0-dev libsystemd-dev libceres-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
