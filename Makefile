@@ -14,6 +14,7 @@
 #                   (SOAK_DAEMON_MINUTES, default 60 simulated; SOAK_BOARD reference or verilated)
 #   make fuzz       the libFuzzer harnesses of tests/fuzz, FUZZ_SECONDS each (default 60; clang tree $(BUILD)/sanitize)
 #   make install    install the library, headers, programs and data under PREFIX (default /usr/local)
+#   make package    the robot's Debian package omniloc_<version>_<arch>.deb (robot-only Release tree $(BUILD)/package)
 #   make generate   regenerate headers and docs from common/regmap.json
 #   make clean      remove build/
 
@@ -24,7 +25,7 @@ CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 PREFIX     ?= /usr/local
 CTEST      := ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
 
-.PHONY: all deps configure build test demo lint formal mutate bitstream bench soak fuzz install generate clean
+.PHONY: all deps configure build test demo lint formal mutate bitstream bench soak fuzz install package generate clean
 
 all: build
 
@@ -76,6 +77,11 @@ fuzz: deps
 
 install: build
 	cmake --install $(BUILD) --prefix $(PREFIX)
+
+# CPack's DEB generator in a robot-only tree of its own (scripts/package.sh, cmake/Packaging.cmake);
+# the last line printed is the .deb's path. Install it on the robot: docs/HOWTO.md, "Install on the robot".
+package: deps
+	@bash scripts/package.sh . $(BUILD)/package
 
 generate:
 	python3 common/gen_regmap.py
