@@ -53,7 +53,7 @@ check_deb() {
 
   dpkg-deb --contents "$deb" | awk '{print $NF}' | sed 's|^\./||' >"$scratch/contents.txt" || fail "dpkg-deb --contents $deb"
   local expected=(usr/bin/omniloc usr/bin/omnilocd usr/lib/libomniloc.a
-    usr/include/omniloc/localizer.hpp usr/include/omniloc/regmap.hpp usr/include/omniloc/version.hpp
+    usr/include/omniloc/localizer.hpp usr/include/omniloc/regmap.hpp
     usr/lib/cmake/omniloc/omnilocConfig.cmake usr/lib/cmake/omniloc/omnilocConfigVersion.cmake
     usr/lib/pkgconfig/omniloc.pc
     usr/lib/systemd/system/omnilocd.service usr/lib/udev/rules.d/60-omniloc.rules)
