@@ -10,9 +10,9 @@
 #include <utility>
 #include <vector>
 
-#include "omniloc/board_clock.hpp"
 #include "omniloc/board_session.hpp"
 #include "omniloc/control.hpp"
+#include "omniloc/detail/board_clock.hpp"
 #include "omniloc/recording.hpp"
 
 namespace omniloc::daemon {
