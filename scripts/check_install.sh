@@ -5,8 +5,9 @@
 #     by name under PREFIX/share/omniloc, not in a source tree),
 #   - checks the systemd unit (systemd-analyze verify; ExecStart is PREFIX's omnilocd) and that the
 #     udev rule was installed (its contents are checked against the EEPROM by test_firmware_eeprom),
-#   - builds tests/install/consumer.cpp with find_package(omniloc) (CMake) and with pkg-config,
-#     runs both and compares their output with the field file's numbers and a hand-computed pose.
+#   - builds tests/install/consumer.cpp with find_package(omniloc) (CMake) and with pkg-config
+#     (--static: libomniloc.a's own dependencies are Requires.private), runs both and compares
+#     their output with the field file's numbers and a hand-computed pose.
 # Run by CTest (install_consumer); usage: check_install.sh SRC OUT
 set -euo pipefail
 src=$(realpath "$1")
@@ -55,8 +56,11 @@ got=$(OMNILOC_DATA_DIR="$prefix/share/omniloc" "$work/cmake/consumer") || fail "
 [ "$got" = "$expected" ] || fail "find_package consumer printed '$got', expected '$expected'"
 
 export PKG_CONFIG_PATH="$prefix/lib/pkgconfig"
+# libusb and libsystemd are the library's own (Requires.private): not in the plain link line.
+plain_libs=$(pkg-config --libs omniloc) || fail "pkg-config --libs omniloc"
+case "$plain_libs" in *usb*|*systemd*) fail "pkg-config --libs omniloc names a private dependency: $plain_libs" ;; esac
 # shellcheck disable=SC2046  # pkg-config prints several words
-c++ -O1 -o "$work/consumer-pc" "$src/tests/install/consumer.cpp" $(pkg-config --cflags --libs omniloc) \
+c++ -O1 -o "$work/consumer-pc" "$src/tests/install/consumer.cpp" $(pkg-config --static --cflags --libs omniloc) \
   >"$work/pc-build.log" 2>&1 || { cat "$work/pc-build.log"; fail "pkg-config consumer: build"; }
 got=$(OMNILOC_DATA_DIR="$prefix/share/omniloc" "$work/consumer-pc") || fail "pkg-config consumer did not run"
 [ "$got" = "$expected" ] || fail "pkg-config consumer printed '$got', expected '$expected'"
