@@ -5,6 +5,8 @@
 #     by name under PREFIX/share/omniloc, not in a source tree),
 #   - checks the systemd unit (systemd-analyze verify; ExecStart is PREFIX's omnilocd) and that the
 #     udev rule was installed (its contents are checked against the EEPROM by test_firmware_eeprom),
+#   - checks the installed headers: no internal header (host/src/include/) installed, each installed
+#     header includes only installed ones (check_installed_headers.py --installed),
 #   - builds tests/install/consumer.cpp with find_package(omniloc) (CMake) and with pkg-config
 #     (--static: libomniloc.a's own dependencies are Requires.private), runs both and compares
 #     their output with the field file's numbers and a hand-computed pose.
@@ -26,6 +28,14 @@ for f in bin/omniloc bin/omnilocd lib/libomniloc.a include/omniloc/localizer.hpp
          lib/systemd/system/omnilocd.service lib/udev/rules.d/60-omniloc.rules; do
   [ -e "$prefix/$f" ] || fail "$f was not installed"
 done
+
+# The installed API: the public headers only, closed under #include.
+for f in include/omniloc/detail include/omniloc/config_reader.hpp include/omniloc/calibration.hpp \
+         include/omniloc/live_view.hpp include/omniloc/ros2_bridge.hpp include/omniloc/data_files.hpp; do
+  [ ! -e "$prefix/$f" ] || fail "$f (internal) was installed"
+done
+python3 "$src/scripts/check_installed_headers.py" --installed "$prefix/include/omniloc" \
+  || fail "an installed header includes one that is not installed (above)"
 
 # The installed programs find their data relative to themselves (no OMNILOC_DATA_DIR, cwd /).
 (cd / && env -u OMNILOC_DATA_DIR "$prefix/bin/omniloc" version) >"$work/version.txt" || fail "installed omniloc version"
