@@ -8,7 +8,7 @@
 #   - checks the installed headers: no internal header (host/src/include/) installed, each installed
 #     header includes only installed ones (check_installed_headers.py --installed),
 #   - builds tests/install/consumer.cpp with find_package(omniloc) (CMake) and with pkg-config
-#     (--static: libomniloc.a's own dependencies are Requires.private), runs both and compares
+#     (--static: libomniloc.a's own dependencies are in Libs.private), runs both and compares
 #     their output with the field file's numbers and a hand-computed pose.
 # Run by CTest (install_consumer); usage: check_install.sh SRC OUT
 set -euo pipefail
@@ -66,7 +66,7 @@ got=$(OMNILOC_DATA_DIR="$prefix/share/omniloc" "$work/cmake/consumer") || fail "
 [ "$got" = "$expected" ] || fail "find_package consumer printed '$got', expected '$expected'"
 
 export PKG_CONFIG_PATH="$prefix/lib/pkgconfig"
-# libusb and libsystemd are the library's own (Requires.private): not in the plain link line.
+# libusb and libsystemd are the library's own (Libs.private): not in the plain link line.
 plain_libs=$(pkg-config --libs omniloc) || fail "pkg-config --libs omniloc"
 case "$plain_libs" in *usb*|*systemd*) fail "pkg-config --libs omniloc names a private dependency: $plain_libs" ;; esac
 # shellcheck disable=SC2046  # pkg-config prints several words
