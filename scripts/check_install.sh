@@ -5,8 +5,11 @@
 #     by name under PREFIX/share/omniloc, not in a source tree),
 #   - checks the systemd unit (systemd-analyze verify; ExecStart is PREFIX's omnilocd) and that the
 #     udev rule was installed (its contents are checked against the EEPROM by test_firmware_eeprom),
-#   - builds tests/install/consumer.cpp with find_package(omniloc) (CMake) and with pkg-config,
-#     runs both and compares their output with the field file's numbers and a hand-computed pose.
+#   - checks the installed headers: no internal header (host/src/include/) installed, each installed
+#     header includes only installed ones (check_installed_headers.py --installed),
+#   - builds tests/install/consumer.cpp with find_package(omniloc) (CMake) and with pkg-config
+#     (--static: libomniloc.a's own dependencies are in Libs.private), runs both and compares
+#     their output with the field file's numbers and a hand-computed pose.
 # Run by CTest (install_consumer); usage: check_install.sh SRC OUT
 set -euo pipefail
 src=$(realpath "$1")
@@ -25,6 +28,14 @@ for f in bin/omniloc bin/omnilocd lib/libomniloc.a include/omniloc/localizer.hpp
          lib/systemd/system/omnilocd.service lib/udev/rules.d/60-omniloc.rules; do
   [ -e "$prefix/$f" ] || fail "$f was not installed"
 done
+
+# The installed API: the public headers only, closed under #include.
+for f in include/omniloc/detail include/omniloc/config_reader.hpp include/omniloc/calibration.hpp \
+         include/omniloc/live_view.hpp include/omniloc/ros2_bridge.hpp include/omniloc/data_files.hpp; do
+  [ ! -e "$prefix/$f" ] || fail "$f (internal) was installed"
+done
+python3 "$src/scripts/check_installed_headers.py" --installed "$prefix/include/omniloc" \
+  || fail "an installed header includes one that is not installed (above)"
 
 # The installed programs find their data relative to themselves (no OMNILOC_DATA_DIR, cwd /).
 (cd / && env -u OMNILOC_DATA_DIR "$prefix/bin/omniloc" version) >"$work/version.txt" || fail "installed omniloc version"
@@ -55,8 +66,11 @@ got=$(OMNILOC_DATA_DIR="$prefix/share/omniloc" "$work/cmake/consumer") || fail "
 [ "$got" = "$expected" ] || fail "find_package consumer printed '$got', expected '$expected'"
 
 export PKG_CONFIG_PATH="$prefix/lib/pkgconfig"
+# libusb and libsystemd are the library's own (Libs.private): not in the plain link line.
+plain_libs=$(pkg-config --libs omniloc) || fail "pkg-config --libs omniloc"
+case "$plain_libs" in *usb*|*systemd*) fail "pkg-config --libs omniloc names a private dependency: $plain_libs" ;; esac
 # shellcheck disable=SC2046  # pkg-config prints several words
-c++ -O1 -o "$work/consumer-pc" "$src/tests/install/consumer.cpp" $(pkg-config --cflags --libs omniloc) \
+c++ -O1 -o "$work/consumer-pc" "$src/tests/install/consumer.cpp" $(pkg-config --static --cflags --libs omniloc) \
   >"$work/pc-build.log" 2>&1 || { cat "$work/pc-build.log"; fail "pkg-config consumer: build"; }
 got=$(OMNILOC_DATA_DIR="$prefix/share/omniloc" "$work/consumer-pc") || fail "pkg-config consumer did not run"
 [ "$got" = "$expected" ] || fail "pkg-config consumer printed '$got', expected '$expected'"

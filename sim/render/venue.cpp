@@ -11,7 +11,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "omniloc/camera.hpp"
-#include "omniloc/config_reader.hpp"
+#include "omniloc/detail/config_reader.hpp"
 
 namespace omniloc::sim {
 

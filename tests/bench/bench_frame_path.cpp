@@ -31,6 +31,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "../host/test_data_path.hpp"
+#include "omniloc/detail/line_extractor.hpp"
+#include "omniloc/detail/vision_reference.hpp"
 #include "omniloc/fuzzy.hpp"
 #include "omniloc/localizer.hpp"
 #include "omniloc/vision.hpp"
@@ -109,8 +111,9 @@ Setup* build(int which) {
   s->reference = std::make_unique<LineExtractor>(s->camera);
   // The first frame is walked twice (measuring the light): not what is measured.
   (void)s->fast->extract(s->image, s->config.scan_rays_per_degree);
-  (void)s->reference->extract_with(LineExtractor::Walk::kBinWalk, s->image,
-                                   s->config.scan_rays_per_degree);
+  (void)detail::LineExtractorAccess::extract_with(*s->reference,
+                                                  detail::LineExtractorAccess::Walk::kBinWalk,
+                                                  s->image, s->config.scan_rays_per_degree);
   return s.release();
 }
 
@@ -130,8 +133,9 @@ MatchOptions options(const Setup& s) {
 }
 
 BearingScan scan_step(const Setup& s, bool reference) {
-  return reference ? s.reference->extract_with(LineExtractor::Walk::kBinWalk, s.image,
-                                               s.config.scan_rays_per_degree)
+  return reference ? detail::LineExtractorAccess::extract_with(
+                         *s.reference, detail::LineExtractorAccess::Walk::kBinWalk, s.image,
+                         s.config.scan_rays_per_degree)
                    : s.fast->extract(s.image, s.config.scan_rays_per_degree);
 }
 

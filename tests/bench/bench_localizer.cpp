@@ -11,6 +11,7 @@
 #include <memory>
 #include <string>
 
+#include "omniloc/detail/vision_reference.hpp"
 #include "omniloc/fuzzy.hpp"
 #include "omniloc/localizer.hpp"
 #include "omniloc_sim/renderer.hpp"

@@ -15,8 +15,8 @@
 
 #include "daemon_cli.hpp"
 #include "fuzz_common.hpp"
-#include "omniloc/config_reader.hpp"
 #include "omniloc/daemon_config.hpp"
+#include "omniloc/detail/config_reader.hpp"
 
 namespace {
 

@@ -17,7 +17,7 @@
 #include <string_view>
 
 #include "fuzz_common.hpp"
-#include "omniloc/strict_number.hpp"
+#include "omniloc/detail/strict_number.hpp"
 
 namespace {
 

@@ -11,7 +11,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "omniloc/board_clock.hpp"
+#include "omniloc/detail/board_clock.hpp"
 #include "omniloc_sim/sim_clocks.hpp"
 
 namespace omniloc {

@@ -1,7 +1,7 @@
 // The cache directory rule of the XDG Base Directory Specification, by hand.
 #include <gtest/gtest.h>
 
-#include "omniloc/cache_dir.hpp"
+#include "omniloc/detail/cache_dir.hpp"
 
 namespace omniloc {
 namespace {

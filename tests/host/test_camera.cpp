@@ -7,7 +7,7 @@
 
 #include "config_test_util.hpp"
 #include "omniloc/camera.hpp"
-#include "omniloc/config_reader.hpp"
+#include "omniloc/detail/config_reader.hpp"
 
 namespace omniloc {
 namespace {

@@ -18,8 +18,8 @@
 #include <random>
 #include <vector>
 
-#include "omniloc/board_clock.hpp"
 #include "omniloc/daemon_config.hpp"
+#include "omniloc/detail/board_clock.hpp"
 #include "omniloc_sim/sim_clocks.hpp"
 #include "omniloc_sim/trajectory.hpp"
 

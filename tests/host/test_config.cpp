@@ -10,7 +10,7 @@
 
 #include "config_test_util.hpp"
 #include "omniloc/config.hpp"
-#include "omniloc/config_reader.hpp"
+#include "omniloc/detail/config_reader.hpp"
 
 namespace omniloc::config {
 namespace {

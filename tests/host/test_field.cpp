@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "config_test_util.hpp"
-#include "omniloc/config_reader.hpp"
 #include "omniloc/conventions.hpp"
+#include "omniloc/detail/config_reader.hpp"
 #include "omniloc/field.hpp"
 
 namespace omniloc {

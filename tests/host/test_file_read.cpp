@@ -10,8 +10,8 @@
 #include <string>
 
 #include "config_test_util.hpp"
-#include "omniloc/config_reader.hpp"
-#include "omniloc/file_read.hpp"
+#include "omniloc/detail/config_reader.hpp"
+#include "omniloc/detail/file_read.hpp"
 #include "omniloc/recording.hpp"
 
 namespace omniloc {

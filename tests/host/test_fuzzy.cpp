@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "config_test_util.hpp"
-#include "omniloc/config_reader.hpp"
+#include "omniloc/detail/config_reader.hpp"
 #include "omniloc/fuzzy.hpp"
 #include "omniloc/localizer.hpp"
 #include "omniloc/robot_config.hpp"

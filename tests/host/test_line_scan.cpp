@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <random>
 
+#include "omniloc/detail/vision_reference.hpp"
 #include "omniloc/line_scan.hpp"
 #include "omniloc_sim/renderer.hpp"
 

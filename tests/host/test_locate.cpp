@@ -20,7 +20,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "omniloc/config_reader.hpp"
+#include "omniloc/detail/config_reader.hpp"
 #include "omniloc/goals.hpp"
 #include "omniloc/localizer.hpp"
 #include "omniloc/locate.hpp"

@@ -8,6 +8,7 @@
 #include <memory>
 #include <random>
 
+#include "omniloc/detail/vision_reference.hpp"
 #include "omniloc/feature_db.hpp"
 #include "omniloc/localizer.hpp"
 #include "omniloc/matcher.hpp"

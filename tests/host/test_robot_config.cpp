@@ -11,8 +11,8 @@
 
 #include "config_test_util.hpp"
 #include "omniloc/board_session.hpp"
-#include "omniloc/config_reader.hpp"
 #include "omniloc/conventions.hpp"
+#include "omniloc/detail/config_reader.hpp"
 #include "omniloc/odometry.hpp"
 #include "omniloc/robot_config.hpp"
 #include "omniloc_sim/reference_board.hpp"

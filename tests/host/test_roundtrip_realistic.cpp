@@ -17,7 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "omniloc/calibration.hpp"
-#include "omniloc/config_reader.hpp"
+#include "omniloc/detail/config_reader.hpp"
 #include "omniloc/feature_db.hpp"
 #include "omniloc/goals.hpp"
 #include "omniloc/localizer.hpp"

@@ -7,7 +7,7 @@
 #include <limits>
 #include <string>
 
-#include "omniloc/strict_number.hpp"
+#include "omniloc/detail/strict_number.hpp"
 
 namespace omniloc {
 namespace {

@@ -20,7 +20,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "omniloc/camera.hpp"
-#include "omniloc/config_reader.hpp"
+#include "omniloc/detail/config_reader.hpp"
+#include "omniloc/detail/line_extractor.hpp"
 #include "omniloc/line_scan.hpp"
 #include "omniloc/recording.hpp"
 #include "omniloc/vision.hpp"
@@ -641,8 +642,9 @@ int expect_same_sequence(const CameraModel& cam, const std::vector<cv::Mat>& fra
   for (std::size_t i = 0; i < frames.size(); ++i) {
     ExtractionReport rf, rb, rr;
     const BearingScan bf = fast.extract(frames[i], rpd, &rf);
-    const BearingScan bb = bins.extract_with(LineExtractor::Walk::kBinWalk, frames[i], rpd, &rb);
-    const BearingScan br = ref.extract_reference(frames[i], rpd, &rr);
+    const BearingScan bb = detail::LineExtractorAccess::extract_with(
+        bins, detail::LineExtractorAccess::Walk::kBinWalk, frames[i], rpd, &rb);
+    const BearingScan br = detail::LineExtractorAccess::extract_reference(ref, frames[i], rpd, &rr);
     const std::string at =
         ", frame " + std::to_string(i) + ", " + std::to_string(rpd) + " rays/deg";
     expect_same(bf, rf, br, rr, what + at + ", fast walk");
@@ -681,7 +683,7 @@ TEST_F(VisionRendered, FastExtractionEqualsTheReferenceByteForByte) {
   {
     LineExtractor ex(cam);
     ExtractionReport rep;
-    (void)ex.extract_reference(frames[0], 4, &rep);
+    (void)detail::LineExtractorAccess::extract_reference(ex, frames[0], 4, &rep);
     given.vision.carpet_hsv = rep.carpet;
     given.vision.line_contrast = rep.contrast;
   }

@@ -13,8 +13,8 @@
 
 #include <CLI/CLI.hpp>
 
-#include "omniloc/config_reader.hpp"
 #include "omniloc/daemon_config.hpp"
+#include "omniloc/detail/config_reader.hpp"
 #include "omniloc/log.hpp"
 
 namespace omniloc::cli {

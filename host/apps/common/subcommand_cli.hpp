@@ -1,9 +1,10 @@
 // The command lines of `omniloc` (host/apps/omniloc) and `omniloc-sim` (sim/apps/omniloc_sim), with
 // CLI11 as omnilocd's (daemon_cli.hpp): one CLI11 subcommand per command, `--key value` and
 // `--key=value`, --help at the top and per command (every option, its default), --version.
-// Every number goes through the one strict parser (omniloc/strict_number.hpp) in the option's
-// callback, so "abc", "-1" for a count, "1.7" or "1e30" for an integer, "inf" are refused naming
-// the flag and the text. Exit codes: 0 success (and --help, --version), 1 failure, 2 bad usage.
+// Every number goes through the one strict parser (omniloc/detail/strict_number.hpp) in the
+// option's callback, so "abc", "-1" for a count, "1.7" or "1e30" for an integer, "inf" are refused
+// naming the flag and the text. Exit codes: 0 success (and --help, --version), 1 failure, 2 bad
+// usage.
 #pragma once
 
 #include <algorithm>
@@ -20,7 +21,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "omniloc/strict_number.hpp"
+#include "omniloc/detail/strict_number.hpp"
 #include "omniloc/version.hpp"
 
 namespace omniloc::cli {

@@ -17,8 +17,8 @@
 
 #include "commands.hpp"
 #include "omniloc/calibration.hpp"
+#include "omniloc/detail/strict_number.hpp"
 #include "omniloc/field.hpp"
-#include "omniloc/strict_number.hpp"
 
 namespace omniloc::cli {
 

@@ -17,7 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
-#include "omniloc/strict_number.hpp"
+#include "omniloc/detail/strict_number.hpp"
 
 namespace omniloc::cli {
 

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "commands.hpp"
-#include "omniloc/cache_dir.hpp"
+#include "omniloc/detail/cache_dir.hpp"
 #include "omniloc/field.hpp"
 #include "omniloc/gyro_heading.hpp"
 #include "omniloc/localizer.hpp"

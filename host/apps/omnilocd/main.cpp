@@ -15,7 +15,7 @@
 #include "omniloc/daemon.hpp"
 #include "omniloc/daemon_camera.hpp"
 #include "omniloc/daemon_config.hpp"
-#include "omniloc/service_notify.hpp"
+#include "omniloc/detail/service_notify.hpp"
 #include "omniloc/usb_transport.hpp"
 #include "omniloc/version.hpp"
 #include "ros2_attach.hpp"

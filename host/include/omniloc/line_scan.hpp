@@ -66,11 +66,6 @@ struct ScanParams {
 [[nodiscard]] Scan scan_image(const cv::Mat& bgr, const CameraModel& camera, double yaw_deg,
                               const ScanParams& params = {});
 
-/// The straightforward version: OpenCV cvtColor + inRange masks of the whole image, then the same
-/// rays. Same result as scan_image; kept as its reference and benchmark baseline.
-[[nodiscard]] Scan scan_image_reference(const cv::Mat& bgr, const CameraModel& camera,
-                                        double yaw_deg, const ScanParams& params = {});
-
 /// Scan in the robot frame at a finer angular step, for estimating the yaw: ray j has bearing
 /// j / rays_per_degree. rotate_to_field() picks, for each field direction, the nearest ray.
 struct BearingScan {

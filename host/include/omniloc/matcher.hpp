@@ -53,8 +53,6 @@ struct FieldScan {
 /// A scan already in the field frame (scan_image at a known yaw, a database entry).
 [[nodiscard]] FieldScan make_field_scan(const Scan& field_frame_scan);
 
-/// Equation (5) on the rays up to their ends, straightforward scalar code (the reference).
-[[nodiscard]] std::uint32_t sad_reference(const std::uint8_t* db_entry, const Scan& scan);
 /// The same sum, vectorised (AVX2 when the CPU has it, else a portable loop the compiler
 /// vectorises).
 [[nodiscard]] std::uint32_t sad_fast(const std::uint8_t* db_entry, const PreparedScan& scan);
@@ -77,12 +75,6 @@ struct CostTerms {
   std::uint32_t crossings = 0;
   bool operator==(const CostTerms&) const = default;
 };
-/// The bounded cost, straightforward scalar code on the raw scan (the reference). cap_px 1..127.
-[[nodiscard]] CostTerms bounded_cost_reference(const std::uint8_t* db_entry, const Scan& scan,
-                                               int cap_px);
-/// The same on a prepared scan, a portable loop (the fallback without AVX2).
-[[nodiscard]] CostTerms bounded_cost_portable(const std::uint8_t* db_entry,
-                                              const PreparedScan& scan, int cap_px);
 /// The same, AVX2 when the CPU has it (else bounded_cost_portable); equal bit for bit.
 [[nodiscard]] CostTerms bounded_cost_fast(const std::uint8_t* db_entry, const PreparedScan& scan,
                                           int cap_px);
@@ -140,9 +132,6 @@ struct MatchResult {
                                         const MatchOptions& options = {});
 [[nodiscard]] MatchResult global_search(const FeatureDb& db, const Scan& scan,
                                         const MatchOptions& options = {});
-/// Global search with sad_reference and no shortcuts: the test and benchmark reference.
-[[nodiscard]] MatchResult global_search_reference(const FeatureDb& db, const Scan& scan,
-                                                  const MatchOptions& options = {});
 /// Grid points within range_cm (per axis) of the grid point nearest to centre_cm: 0 -> 1 point,
 /// 10 -> 3 x 3, 20 -> 5 x 5, 30 -> 7 x 7 on a 10 cm grid (see local_search_reach_cells).
 [[nodiscard]] MatchResult local_search(const FeatureDb& db, const FieldScan& scan,
@@ -179,16 +168,6 @@ void interpolate_match(const FeatureDb& db, const Scan& scan, MatchResult& resul
 /// refine_probes and refine_casts.
 void refine_match(const FieldGeometry& field, const CameraModel& camera, const FieldScan& scan,
                   MatchResult& result, const MatchOptions& options = {});
-/// The plain pattern search (4 neighbours per step, re-cast on every visit, halving when none is
-/// better): the reference refine_match is measured against (bench_frame_path).
-void refine_match_reference(const FieldGeometry& field, const CameraModel& camera,
-                            const FieldScan& scan, MatchResult& result,
-                            const MatchOptions& options = {});
-/// refine_match as it stood before the speed work of issue 13 item 8 (the same walk and result):
-/// the reference bench_frame_path measures refine_match against.
-void refine_match_previous(const FieldGeometry& field, const CameraModel& camera,
-                           const FieldScan& scan, MatchResult& result,
-                           const MatchOptions& options = {});
 void refine_match(const FieldGeometry& field, const CameraModel& camera, const Scan& scan,
                   MatchResult& result, const MatchOptions& options = {});
 

@@ -118,7 +118,7 @@ void validate_robot_config(const RobotConfig& config, const std::string& source)
 [[nodiscard]] RobotConfig load_robot_config(const std::filesystem::path& path);
 
 /// Loads common/robots/<name>.json (or `name` itself if it is a path), located like the other
-/// shared data files (resolve_data_file, data_files.hpp).
+/// shared data files (resolve_data_file, config.hpp).
 [[nodiscard]] RobotConfig load_named_robot_config(const std::string& name_or_path);
 
 }  // namespace omniloc

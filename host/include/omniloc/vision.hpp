@@ -195,6 +195,10 @@ struct ExtractionReport {
   bool carpet_estimated = false;
 };
 
+namespace detail {
+struct LineExtractorAccess;
+}  // namespace detail
+
 /// Turns frames of one camera into bearing scans. Stateful only in its per-frame adaptation (the
 /// carpet estimate, the light level per sector, the estimated line steps); deterministic.
 class LineExtractor {
@@ -204,10 +208,21 @@ class LineExtractor {
   /// outside 1..20.
   [[nodiscard]] BearingScan extract(const cv::Mat& bgr, int rays_per_degree,
                                     ExtractionReport* report = nullptr);
+  ~LineExtractor();
+  LineExtractor(const LineExtractor&);
+  LineExtractor& operator=(const LineExtractor&);
+  LineExtractor(LineExtractor&&) noexcept;
+  LineExtractor& operator=(LineExtractor&&) noexcept;
+
+  /// The per-resolution ray layout (internal: omniloc/detail/line_extractor.hpp).
+  struct RayTable;
+
+ private:
+  friend struct detail::LineExtractorAccess;  // the reference walks, for tests and benchmarks
   /// The straightforward walk (every pixel's H, S, V computed on every ray that touches it): the
   /// reference extract() must equal byte for byte (tests) and is measured against (bench_vision).
-  [[nodiscard]] BearingScan extract_reference(const cv::Mat& bgr, int rays_per_degree,
-                                              ExtractionReport* report = nullptr);
+  BearingScan extract_reference(const cv::Mat& bgr, int rays_per_degree,
+                                ExtractionReport* report = nullptr);
 
   /// The ways of walking the rays; all give the same bytes (scan and report, frame after frame).
   enum class Walk {
@@ -217,39 +232,9 @@ class LineExtractor {
                  ///< lockstep walk)
     kReference,  ///< extract_reference()
   };
-  [[nodiscard]] BearingScan extract_with(Walk how, const cv::Mat& bgr, int rays_per_degree,
-                                         ExtractionReport* report = nullptr);
+  BearingScan extract_with(Walk how, const cv::Mat& bgr, int rays_per_degree,
+                           ExtractionReport* report = nullptr);
 
-  struct RayTable {
-    std::vector<std::int32_t> offset;  // byte offset of each pixel in the image
-    std::vector<std::uint8_t> bin;     // its integer radius
-    std::vector<std::int32_t> begin;   // ray j's pixels are [begin[j], begin[j + 1])
-    std::vector<std::uint8_t> sector;  // per ray
-    std::vector<bool> hidden;          // per ray: in a mast sector
-    int step_bytes = 0;                // image row size the offsets assume
-    // The fast walk's view of the same pixels: each pixel's index (row * width + column) in the
-    // per-frame code plane, and per image row the columns [row_u0, row_u1] any ray touches.
-    std::vector<std::int32_t> pixel;
-    std::vector<std::int32_t> row_u0, row_u1;
-    // ... and bin by bin: ray j's bins are [bin_begin[j], bin_begin[j + 1]), the first numbered
-    // first_bin[j] and the others following; a bin's pixels are bin_pixel and bin_pixel +
-    // bin_second.
-    bool bins_ok = false;
-    std::vector<std::int32_t> bin_begin, bin_pixel;
-    std::vector<std::int16_t> bin_second;  // 0, +-1 or +-width: a 4-connected neighbour
-    std::vector<std::uint8_t> first_bin;
-    // Where along the ray each pixel's centre lies (in samples: px / scan_step_px), and per bin its
-    // outer pixel's (a bin b holds the centres in (b - 1, b] and reports its brighter pixel, the
-    // outer one on a rising edge): where a line's edge is placed between two bins.
-    std::vector<float> along, bin_centre;
-    // The lockstep walk's layout: the rays that are not hidden, 8 to a group (one per lane, the
-    // last group padded with empty lanes). Group g's steps are [lock_begin[g], lock_begin[g + 1]);
-    // step s of lane l reads lock_pixel0/1[8 s + l] (the bin's two pixels, equal for a one-pixel
-    // bin; past the lane's bins, pixel 0). Per lane (8 g + l): its ray (-1: padding) and bins.
-    std::vector<std::int32_t> lock_begin, lock_pixel0, lock_pixel1, lock_ray, lock_bins;
-  };
-
- private:
   struct Frame;
   const RayTable& table(int rays_per_degree, std::size_t step_bytes);
   bool ensure_carpet(const cv::Mat& bgr, std::string* why);

@@ -1,5 +1,5 @@
 // Board-to-host clock model (board_clock.hpp): per-bucket minima of (arrival - board), Theil-Sen.
-#include "omniloc/board_clock.hpp"
+#include "omniloc/detail/board_clock.hpp"
 
 #include <algorithm>
 #include <cmath>

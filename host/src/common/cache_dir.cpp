@@ -1,4 +1,4 @@
-#include "omniloc/cache_dir.hpp"
+#include "omniloc/detail/cache_dir.hpp"
 
 #include <cstdlib>
 #include <string>

@@ -1,4 +1,4 @@
-#include "omniloc/file_read.hpp"
+#include "omniloc/detail/file_read.hpp"
 
 #include <cerrno>
 #include <cstdio>

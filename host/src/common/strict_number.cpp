@@ -1,4 +1,4 @@
-#include "omniloc/strict_number.hpp"
+#include "omniloc/detail/strict_number.hpp"
 
 #include <charconv>
 #include <cmath>

@@ -2,8 +2,8 @@
 #include <cmath>
 #include <set>
 
-#include "omniloc/config_reader.hpp"
-#include "omniloc/file_read.hpp"
+#include "omniloc/detail/config_reader.hpp"
+#include "omniloc/detail/file_read.hpp"
 
 namespace omniloc::config {
 

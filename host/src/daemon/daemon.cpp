@@ -11,9 +11,9 @@
 #include <utility>
 #include <vector>
 
-#include "omniloc/board_clock.hpp"
 #include "omniloc/board_session.hpp"
 #include "omniloc/control.hpp"
+#include "omniloc/detail/board_clock.hpp"
 #include "omniloc/recording.hpp"
 #include "omniloc/regmap.hpp"
 

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "omniloc/config_reader.hpp"
+#include "omniloc/detail/config_reader.hpp"
 #include "omniloc/ros2_bridge.hpp"
 
 namespace omniloc::daemon {

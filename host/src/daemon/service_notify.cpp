@@ -1,4 +1,4 @@
-#include "omniloc/service_notify.hpp"
+#include "omniloc/detail/service_notify.hpp"
 
 #include <systemd/sd-daemon.h>
 

@@ -7,7 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "omniloc/config_reader.hpp"
+#include "omniloc/detail/config_reader.hpp"
 
 namespace omniloc {
 

@@ -1,7 +1,7 @@
 // Localizer config file (common/localizer/default.json): its keys, reading and validation.
 #include <cmath>
 
-#include "omniloc/config_reader.hpp"
+#include "omniloc/detail/config_reader.hpp"
 #include "omniloc/localizer.hpp"
 
 namespace omniloc {

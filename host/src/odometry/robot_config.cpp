@@ -4,8 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "omniloc/config_reader.hpp"
 #include "omniloc/conventions.hpp"
+#include "omniloc/detail/config_reader.hpp"
 
 namespace omniloc {
 

@@ -16,10 +16,10 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
-#include "omniloc/config_reader.hpp"
-#include "omniloc/file_read.hpp"
+#include "omniloc/detail/config_reader.hpp"
+#include "omniloc/detail/file_read.hpp"
+#include "omniloc/detail/strict_number.hpp"
 #include "omniloc/gyro_heading.hpp"
-#include "omniloc/strict_number.hpp"
 
 namespace omniloc {
 

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "fnv.hpp"
-#include "omniloc/file_read.hpp"
+#include "omniloc/detail/file_read.hpp"
 
 namespace omniloc {
 

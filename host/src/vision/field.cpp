@@ -5,8 +5,8 @@
 #include <stdexcept>
 
 #include "fnv.hpp"
-#include "omniloc/config_reader.hpp"
 #include "omniloc/conventions.hpp"
+#include "omniloc/detail/config_reader.hpp"
 
 namespace omniloc {
 

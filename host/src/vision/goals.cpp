@@ -9,7 +9,7 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "omniloc/config_reader.hpp"
+#include "omniloc/detail/config_reader.hpp"
 
 namespace omniloc {
 

@@ -9,6 +9,7 @@
 
 #include "hsv_tables.hpp"
 #include "omniloc/conventions.hpp"
+#include "omniloc/detail/vision_reference.hpp"
 
 namespace omniloc {
 

@@ -11,6 +11,7 @@
 #include <Eigen/LU>
 
 #include "omniloc/conventions.hpp"
+#include "omniloc/detail/vision_reference.hpp"
 
 namespace omniloc {
 

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdlib>
 
+#include "omniloc/detail/vision_reference.hpp"
 #include "omniloc/matcher.hpp"
 
 #if defined(__x86_64__) || defined(__i386__)

@@ -9,6 +9,7 @@
 #include "hsv_tables.hpp"
 #include "omniloc/camera.hpp"
 #include "omniloc/conventions.hpp"
+#include "omniloc/detail/line_extractor.hpp"
 #include "omniloc/line_scan.hpp"
 #include "omniloc/vision.hpp"
 

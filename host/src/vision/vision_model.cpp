@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "omniloc/config_reader.hpp"
+#include "omniloc/detail/config_reader.hpp"
 #include "omniloc/vision.hpp"
 
 namespace omniloc {

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "omniloc/cache_dir.hpp"
+#include "omniloc/detail/cache_dir.hpp"
 #include "omniloc/localizer.hpp"
 #include "omniloc/odometry.hpp"
 #include "omniloc/recording.hpp"

@@ -13,7 +13,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "commands.hpp"
-#include "omniloc/config_reader.hpp"
+#include "omniloc/detail/config_reader.hpp"
 #include "omniloc_sim/venue.hpp"
 
 namespace omniloc::cli {
