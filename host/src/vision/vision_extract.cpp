@@ -1567,13 +1567,14 @@ std::array<bool, 180> carpet_hues(const CarpetHsv& carpet) {
 // at 1 ray per degree the rays skip most pixels beyond ~60 px and the scalar per-pixel walk is
 // cheaper). With AVX2 it always pays: the plane converts 8 pixels at a time and the lockstep walk
 // needs it (2 rays per degree, 1280 x 1024: 1.0 ms with it, 1.8 ms without, bench_frame_path).
-bool code_plane_pays(const LineExtractor::RayTable& t, LineExtractor::Walk how) {
+// (The walk is private to LineExtractor: the caller says whether it is the reference or the fast
+// one.)
+bool code_plane_pays(const LineExtractor::RayTable& t, bool reference_walk, bool fast_walk) {
   long plane_px = 0;
   for (std::size_t row = 0; row < t.row_u0.size(); ++row)
     plane_px += std::max(0, t.row_u1[row] - t.row_u0[row] + 1);
-  return how != LineExtractor::Walk::kReference && t.bins_ok &&
-         (static_cast<long>(t.pixel.size()) >= plane_px ||
-          (how == LineExtractor::Walk::kFast && cpu_has_avx2()));
+  return !reference_walk && t.bins_ok &&
+         (static_cast<long>(t.pixel.size()) >= plane_px || (fast_walk && cpu_has_avx2()));
 }
 
 // A pass's thresholds: each sector's carpet value window scaled by its light, the saturation
@@ -1667,7 +1668,7 @@ BearingScan LineExtractor::extract_once(const cv::Mat& bgr, int rpd, ExtractionR
   }
   hue_ok_ = carpet_hues(*carpet_);
   const RayTable& t = table(rpd, bgr.step[0]);
-  const bool coded = code_plane_pays(t, how);
+  const bool coded = code_plane_pays(t, how == Walk::kReference, how == Walk::kFast);
   if (coded) {
     const int sat_min = static_cast<int>(std::ceil(carpet_->sat_min));
     if (how == Walk::kBinWalk || !code_pixels_avx2(bgr, t, sat_min)) code_pixels(bgr, t, sat_min);
