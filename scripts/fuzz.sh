@@ -32,8 +32,13 @@ fail() { echo "fuzz: FAILED: $*" >&2; exit 1; }
 
 build() {
   mkdir -p "$out"
-  # (Re)configured when new or when made before the tree held the tests.
-  if ! grep -q '^OMNILOC_BUILD_TESTS:BOOL=ON' "$out/CMakeCache.txt" 2>/dev/null; then
+  # Configured when new or when made before the tree held the tests; an existing tree is
+  # reconfigured first (cheap), because a build that leaves the regeneration to ninja first builds
+  # the Verilator outputs CMake includes with the old flags (after an include path moved, that
+  # build fails before CMake runs again).
+  if grep -q '^OMNILOC_BUILD_TESTS:BOOL=ON' "$out/CMakeCache.txt" 2>/dev/null; then
+    cmake -S "$src" -B "$out" >"$out/configure.log" 2>&1 || { cat "$out/configure.log"; fail "reconfigure $out"; }
+  else
     CC=clang CXX=clang++ cmake -S "$src" -B "$out" "${gen[@]}" "${launcher[@]}" \
       -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -gline-tables-only" -DCMAKE_C_FLAGS_DEBUG="-O1 -gline-tables-only" \
       -DOMNILOC_FUZZ=ON -DOMNILOC_BUILD_SIM=ON -DOMNILOC_BUILD_TESTS=ON -DOMNILOC_BUILD_CALIBRATION=ON \
