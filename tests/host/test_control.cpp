@@ -90,6 +90,37 @@ TEST(ControlRequest, BadRequestsSayWhatIsWrong) {
   }
 }
 
+// Issue (hostile input): a key given twice was accepted, the last value winning, while every file
+// reader refuses it (config::parse_json_text). The channel refuses it with the readers' message,
+// naming the key and where it is; the id is echoed unless it is the key given twice.
+TEST(ControlRequest, DuplicateKeysAreRefusedLikeTheFileReaders) {
+  const std::vector<Bad> cases = {
+      {R"({"id": 6, "cmd": "set_pose", "x_cm": 1, "x_cm": 900, "y_cm": 2, "yaw_deg": 0})", 6,
+       "request:x_cm: duplicate key: an object may give a key only once (got \"x_cm\" a second "
+       "time)"},
+      {R"({"id": 6, "cmd": "set_pose", "x_cm": 1, "y_cm": 2, "yaw_deg": 0, "yaw_deg": 90})", 6,
+       "request:yaw_deg: duplicate key"},
+      {R"({"id": 6, "cmd": "status", "cmd": "set_pose", "x_cm": 1, "y_cm": 2, "yaw_deg": 0})", 6,
+       "request:cmd: duplicate key"},
+      {R"({"id": 6, "id": 7, "cmd": "status"})", std::nullopt, "request:id: duplicate key"},
+      {R"({"id": 9, "cmd": "set_side", "side": "blue", "side": "yellow"})", 9,
+       "request:side: duplicate key"},
+  };
+  for (const Bad& c : cases) {
+    try {
+      (void)parse_request(c.request);
+      ADD_FAILURE() << "accepted: " << c.request;
+    } catch (const ControlError& e) {
+      EXPECT_NE(std::string(e.what()).find(c.says), std::string::npos)
+          << c.request << " -> " << e.what();
+      EXPECT_EQ(e.id(), c.id) << c.request;
+    }
+  }
+  // The same keys once each are still fine.
+  EXPECT_NO_THROW((void)parse_request(R"({"id": 6, "cmd": "set_pose", "x_cm": 1, "y_cm": 2,
+                                          "yaw_deg": 0})"));
+}
+
 TEST(ControlReply, OneLineJsonWithTheIdEchoed) {
   const auto ok = nlohmann::json::parse(ok_reply(12, {{"x_cm", 1.5}}));
   EXPECT_EQ(ok, nlohmann::json::parse(R"({"id": 12, "ok": true, "x_cm": 1.5})"));

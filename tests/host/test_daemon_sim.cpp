@@ -12,12 +12,15 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -373,6 +376,94 @@ TEST(DaemonSim, NoCameraAndNoStartPoseIsOdometryOnly) {
   (void)d.run(&stop);
   ASSERT_EQ(statuses.size(), 50u);
   for (const DaemonStatus st : statuses) EXPECT_EQ(st, DaemonStatus::kOdometryOnly);
+}
+
+// Issue (hostile input): a window whose gyro yaw jumps further than any robot turns in 10 ms is a
+// fault in the daemon as in replay: the localizer's one check (GyroYawGuard) drops it, the
+// window's heading comes from the wheels, and the daemon warns, at most once every 10 s.
+class SpikyHeading final : public HeadingSource {
+ public:
+  SpikyHeading(HeadingSource& inner, std::map<std::uint32_t, double> spikes)
+      : inner_(inner), spikes_(std::move(spikes)) {}
+  double gyro_yaw_deg(const EncoderWindow& window) override {
+    const double yaw = inner_.gyro_yaw_deg(window);
+    const auto it = spikes_.find(window.seq);
+    return it == spikes_.end() ? yaw : it->second;
+  }
+  [[nodiscard]] bool is_absolute() const override { return inner_.is_absolute(); }
+
+ private:
+  HeadingSource& inner_;
+  std::map<std::uint32_t, double> spikes_;
+};
+
+struct SpikeRun {
+  std::vector<LocalizedPose> poses;
+  std::vector<std::string> warnings;
+};
+
+SpikeRun run_with_spikes(std::map<std::uint32_t, double> spikes, std::uint64_t seed) {
+  DaemonModels mod = models();
+  const sim::Trajectory traj = sim::make_trajectory("circle", seed);
+  mod.initial_pose = traj.start();
+  Rig rig(sim::WorldConfig::default_noise(mod.robot, seed), traj);
+  RigClock clock(rig);
+  DaemonConfig cfg;
+  cfg.camera = "none";
+  cfg.udp_port = 9;
+  SpikeRun run;
+  volatile std::sig_atomic_t stop = 0;
+  SpikyHeading heading(rig.log, std::move(spikes));
+  DaemonIo io;
+  io.clock = &clock;
+  io.open_board = [&rig]() -> std::unique_ptr<Transport> {
+    return std::make_unique<RigTransport>(rig);
+  };
+  io.heading = &heading;
+  io.observer.on_pose = [&](const PoseEvent& e) {
+    if (!e.from_window) return;
+    run.poses.push_back(e.localized);
+    if (run.poses.size() == 400) stop = 1;
+  };
+  io.logger = Logger(LogLevel::kWarning, [&](LogLevel, std::string_view line) {
+    if (line.find("gyro_yaw_deg") != std::string_view::npos) run.warnings.emplace_back(line);
+  });
+  Daemon d(cfg, mod, io);
+  (void)d.run(&stop);
+  return run;
+}
+
+TEST(DaemonSim, AnImplausibleGyroYawIsDroppedAndWarnedRateLimited) {
+  const std::uint64_t seed = 14;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  const SpikeRun clean = run_with_spikes({}, seed);
+  ASSERT_EQ(clean.poses.size(), 400u);
+  EXPECT_TRUE(clean.warnings.empty());
+  const std::uint32_t first = clean.poses[100].seq;
+  const SpikeRun spiky = run_with_spikes(
+      {{first, 1e6}, {first + 50, -400.0}, {first + 100, 3600.0}, {first + 150, 1e300}}, seed);
+  ASSERT_EQ(spiky.poses.size(), 400u);
+  // Four windows dropped within 1.5 s: one warning (the first), the rest counted for the next.
+  ASSERT_EQ(spiky.warnings.size(), 1u);
+  EXPECT_NE(spiky.warnings[0].find("window seq " + std::to_string(first) +
+                                   ": gyro_yaw_deg 1e+06 is outside +-360 deg"),
+            std::string::npos)
+      << spiky.warnings[0];
+  std::printf("%s\n", spiky.warnings[0].c_str());
+  int dropped = 0;
+  double worst_cm = 0.0, worst_deg = 0.0;
+  for (std::size_t i = 0; i < spiky.poses.size(); ++i) {
+    ASSERT_EQ(spiky.poses[i].seq, clean.poses[i].seq);
+    dropped += spiky.poses[i].gyro_yaw_dropped ? 1 : 0;
+    worst_cm = std::max(worst_cm, position_error(spiky.poses[i].pose, clean.poses[i].pose));
+    worst_deg = std::max(worst_deg, std::abs(angle_diff_deg(spiky.poses[i].pose.yaw_deg,
+                                                            clean.poses[i].pose.yaw_deg)));
+  }
+  std::printf("dropped %d; poses at most %.3f cm, %.3f deg from the clean run\n", dropped, worst_cm,
+              worst_deg);
+  EXPECT_EQ(dropped, 4);
+  EXPECT_LT(worst_cm, 2.0);
+  EXPECT_LT(worst_deg, 1.0);
 }
 
 TEST(DaemonSim, StopFlagEndsTheRunAndSwitchesStreamingOff) {

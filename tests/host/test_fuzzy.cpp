@@ -226,6 +226,61 @@ TEST(FuzzyConfig, ClearErrorsNameTheFieldPath) {
   expect_error(replaced(kGood, "\"range_max_cm\": 30,", ""), "range_max_cm", "missing (required)");
 }
 
+// Issue (hostile input): resolution_cm sizes the centroid's loop (range_max_cm / resolution_cm
+// midpoint steps on every frame), so it has a lower bound derived from that step count, not only
+// "> 0": 1e-300 was undefined behaviour (the step count overflowed int) and 2e-8 made a 15-frame
+// replay take over a minute.
+TEST(FuzzyConfig, ResolutionIsBoundedByTheStepsItMakes) {
+  struct Bad {
+    std::string value;
+    std::string why;
+  };
+  const std::vector<Bad> bad = {
+      {"1e-300",
+       "must be at least range_max_cm / 10000 = 0.003 cm: the centroid integrates range_max_cm / "
+       "resolution_cm steps on every frame (got 1e-300)"},
+      {"2e-8", "(got 2e-08)"},
+      {"0.001", "the centroid integrates range_max_cm / resolution_cm steps on every frame"},
+      {"0.0029", "(got 0.0029)"},
+      {"-1", "must be > 0 and at most a tenth of range_max_cm (got -1)"},
+      {"0", "must be > 0 and at most a tenth of range_max_cm (got 0)"},
+      {"3.5", "at most a tenth of range_max_cm (got 3.5)"},
+  };
+  for (const Bad& b : bad) {
+    const std::string e =
+        fuzzy_error_of(replaced(kGood, "\"resolution_cm\": 0.01", "\"resolution_cm\": " + b.value));
+    EXPECT_EQ(e.rfind("cfg.json:resolution_cm: ", 0), 0u) << b.value << ": " << e;
+    EXPECT_NE(e.find(b.why), std::string::npos) << b.value << ": want '" << b.why << "' in: " << e;
+  }
+  // The bound itself, and the bound follows range_max_cm (a wider universe allows a coarser step).
+  EXPECT_EQ(fuzzy_error_of(replaced(kGood, "\"resolution_cm\": 0.01", "\"resolution_cm\": 0.003")),
+            "(no error)");
+  FuzzyConfig c;
+  c.resolution_cm = c.range_max_cm / kFuzzyMaxSteps;
+  EXPECT_NO_THROW(c.validate("cfg.json"));
+  EXPECT_NO_THROW((void)fuzzy_search_range(c, 100.0));
+  c.resolution_cm = c.range_max_cm / kFuzzyMaxSteps * 0.99;
+  EXPECT_THROW(c.validate("cfg.json"), ConfigError);
+  // The other key that sizes a per-frame loop: the snap list (the terms and rules are four each,
+  // the coverage check samples a fixed 1001 speeds).
+  std::string many = "[0";
+  for (int i = 1; i <= kFuzzyMaxSnapRanges; ++i) many += ", " + std::to_string(i * 10);
+  many += "]";
+  const std::string snap = fuzzy_error_of(replaced(kGood, "[0, 10, 20, 30]", many));
+  EXPECT_EQ(snap.rfind("cfg.json:snap_ranges_cm: must list at most 64 ranges", 0), 0u) << snap;
+  EXPECT_NE(snap.find("(got 65)"), std::string::npos) << snap;
+  // Through the localizer file the path carries the block's name.
+  const std::string e = error_of([] {
+    (void)parse_localizer_config(
+        config::parse_json_text(
+            "{\"fuzzy\": " +
+                replaced(kGood, "\"resolution_cm\": 0.01", "\"resolution_cm\": 1e-300") + "}",
+            "loc.json")
+            .root());
+  });
+  EXPECT_EQ(e.rfind("loc.json:fuzzy.resolution_cm: must be at least", 0), 0u) << e;
+}
+
 // --- the localizer file
 // ---------------------------------------------------------------------------
 

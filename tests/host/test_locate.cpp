@@ -298,6 +298,38 @@ TEST_F(LocateProgram, UnreadableImageAndCameraOfAnotherSizeExitOne) {
   EXPECT_EQ(run(exe + img.string() + " --camera " + wide.string() + " --json", dir_, out, err), 1);
   EXPECT_NE(err.find("is 640 x 480 px but camera"), std::string::npos) << err;
   EXPECT_NE(err.find("800 x 480"), std::string::npos) << err;
+
+  // Issue (hostile input): a PNG whose IHDR says 20000 x 20000 px (the same bytes otherwise) was
+  // decoded (1.2 GB for locate, 5.5 GB and bad_alloc for calibrate) before its size was checked.
+  // Both programs refuse it from the header, at once, naming the file and its size.
+  std::string bytes;
+  {
+    std::ifstream in(img, std::ios::binary);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    bytes = ss.str();
+  }
+  ASSERT_GT(bytes.size(), 24u);
+  for (int i = 0; i < 2; ++i) {  // IHDR width, height: 20000 = 0x00004E20, big-endian
+    const std::size_t at = 16 + 4 * static_cast<std::size_t>(i);
+    bytes[at] = 0;
+    bytes[at + 1] = 0;
+    bytes[at + 2] = '\x4e';
+    bytes[at + 3] = '\x20';
+  }
+  const fs::path huge = dir_ / "huge.png";
+  std::ofstream(huge, std::ios::binary) << bytes;
+  const std::string want =
+      huge.string() + ": PNG image of 20000 x 20000 px, more than the 4096 x 4096 px";
+  EXPECT_EQ(run(exe + huge.string() + " --camera " + cam.string(), dir_, out, err), 1);
+  EXPECT_NE(err.find("omniloc locate: error: cannot read image: " + want), std::string::npos)
+      << err;
+  EXPECT_EQ(run(std::string(OMNILOC_CLI_PATH) + " calibrate " + huge.string() + " --out " +
+                    (dir_ / "huge-cam.json").string(),
+                dir_, out, err),
+            1);
+  EXPECT_NE(err.find("omniloc calibrate: error: cannot read image: " + want), std::string::npos)
+      << err;
   // Usage errors are 2: a heading that is not a number, no camera.
   EXPECT_EQ(
       run(exe + img.string() + " --camera " + cam.string() + " --yaw-deg 12x", dir_, out, err), 2);

@@ -12,6 +12,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+#include <optional>
+#include <vector>
 
 #include "omniloc/odometry.hpp"
 
@@ -280,6 +283,76 @@ TEST(PaperOdometry, Equation10UsesTheBoardsWindowPeriod) {
   const double d_i = counts_for(r, 0.0, 0.0, th)[0] * cm_per_count(r);
   EXPECT_NEAR(travel_after_first_window(8.0), 2.0 * (d_i - 20.0 * th / 2.0), 1e-9);
   EXPECT_EQ(travel_after_first_window(8.0), travel_after_first_window(10.0));
+}
+
+}  // namespace
+}  // namespace omniloc
+
+namespace omniloc {
+namespace {
+
+// Issue (hostile input): the one check of a window's gyro yaw (GyroYawGuard in
+// Localizer::on_window, for replay and the daemons alike), value by value.
+TEST(GyroYawCheck, NotFiniteOutOfRangeAndJumpsBeyondTheRobotsTurnRate) {
+  struct Case {
+    double yaw;
+    std::optional<double> previous;
+    double dt_s;
+    GyroYawFault fault;
+  };
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::vector<Case> cases = {
+      {10.0, std::nullopt, 0.01, GyroYawFault::kNone},
+      {10.0, 0.0, 0.01, GyroYawFault::kNone},      // 1000 deg/s: fast, possible
+      {-170.0, 175.0, 0.01, GyroYawFault::kNone},  // across the wrap: 15 deg
+      {16.0, 0.0, 0.01, GyroYawFault::kJump},      // 1600 deg/s > 1500
+      {16.0, 0.0, 0.02, GyroYawFault::kNone},      // ... but not over a 20 ms window
+      {nan, 0.0, 0.01, GyroYawFault::kNotFinite},
+      {inf, std::nullopt, 0.01, GyroYawFault::kNotFinite},
+      {1e6, 0.0, 0.01, GyroYawFault::kOutOfRange},
+      {-400.0, std::nullopt, 0.01, GyroYawFault::kOutOfRange},
+      {3600.0, 0.0, 0.01, GyroYawFault::kOutOfRange},
+      {1e300, 0.0, 0.01, GyroYawFault::kOutOfRange},
+      {-100.0, 30.0, 0.01, GyroYawFault::kJump},
+  };
+  for (const Case& c : cases) {
+    const GyroYawCheck g = check_gyro_yaw(c.yaw, c.previous, c.dt_s, 1500.0);
+    EXPECT_EQ(g.fault, c.fault) << c.yaw << " after " << c.previous.value_or(nan) << ": "
+                                << g.describe();
+  }
+  const GyroYawCheck jump = check_gyro_yaw(-100.0, 30.0, 0.01, 1500.0);
+  EXPECT_EQ(jump.describe(),
+            "gyro_yaw_deg -100 jumped -130.000 deg since the last window, more than the 15.000 deg "
+            "the robot can turn in it (max_yaw_rate_deg_per_s)");
+  EXPECT_EQ(check_gyro_yaw(1e300, 0.0, 0.01, 1500.0).describe(),
+            "gyro_yaw_deg 1e+300 is outside +-360 deg (headings are wrapped into (-180, 180])");
+}
+
+// A one-window spike is dropped and never followed (the wheels carry the heading over it); a
+// jump that stays (the simulator's kidnap) is followed from the next window.
+TEST(GyroYawGuard, DropsASpikeFollowsAStep) {
+  const RobotConfig robot;
+  GyroYawGuard guard(robot);
+  auto window = [](std::uint32_t seq, double yaw) {
+    EncoderWindow w;
+    w.seq = seq;
+    w.t_end_ms = 10.0 * seq;
+    w.gyro_yaw_deg = yaw;
+    return w;
+  };
+  std::vector<double> passed;
+  const std::vector<double> raw = {30, 30.1, 1e6, 30.3, 30.4, 90, 90.1, 90.2};
+  for (std::size_t i = 0; i < raw.size(); ++i) {
+    EncoderWindow w = window(static_cast<std::uint32_t>(i + 1), raw[i]);
+    (void)guard.screen(w);
+    passed.push_back(w.gyro_yaw_deg);
+  }
+  // The wheels did not turn (no counts): the spike's window keeps the last good heading.
+  const std::vector<double> want = {30, 30.1, 30.1, 30.3, 30.4, 30.4, 90.1, 90.2};
+  for (std::size_t i = 0; i < want.size(); ++i)
+    EXPECT_NEAR(passed[i], want[i], 1e-9) << "window " << i + 1;
+  EXPECT_EQ(guard.dropped(), 2u);
 }
 
 }  // namespace

@@ -6,12 +6,15 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "omniloc/recording.hpp"
 #include "omniloc_sim/record_sim.hpp"
@@ -207,6 +210,93 @@ TEST(ReplayCommand, WritesTheLibrarysPosesAndNamesABadLine) {
   const std::string err = read_text(dir / "stderr.txt");
   EXPECT_NE(err.find(enc.string() + ":5:"), std::string::npos) << err;
   std::printf("malformed line refused: %s", err.c_str());
+  fs::remove_all(dir);
+}
+
+// Issue (hostile input): one window of encoders.csv whose gyro_yaw_deg is 1e6, -400, 3600 or
+// 1e300 replayed with exit 0 and no warning, the next poses 10-34 cm and up to 110 deg off while
+// marked image or integrated. The localizer's GyroYawGuard drops such a yaw (the window's heading
+// from the wheels), the replay warns with the window's seq and the count, and the poses stay
+// within 2 cm / 1 deg of the clean run's.
+TEST(ReplayCommand, AnImplausibleGyroYawIsDroppedWarnedAndDoesNotMoveThePoses) {
+  const std::uint64_t seed = 23;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  const fs::path dir =
+      fs::temp_directory_path() / ("omniloc_test_replay_gyro_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const FieldGeometry field = load_field("fira-robosot");
+  const CameraModel camera = load_camera("default");
+  const RobotConfig robot = load_named_robot_config("default");
+  sim::OmniRenderer renderer(field, camera);
+  sim::SimRunOptions opt;
+  opt.render.seed = seed;
+  {
+    sim::Trajectory tr("replay gyro", Pose2{300, 250, 30});
+    tr.line_to({400, 300}, 40, sim::MotionLimits{}).wait(0.1);
+    sim::World world(sim::WorldConfig::default_noise(robot, seed), tr);
+    sim::record_simulation(dir / "rec", world, renderer, opt, "fira-robosot", std::nullopt);
+  }
+  const fs::path db_file = dir / "features.db";
+  const FeatureDb db = load_or_build_feature_db(field, camera, db_file, [](const std::string&) {});
+  const Recording clean = load_recording(dir / "rec");
+  const ReplayResult base = replay_recording(clean, LocalizerConfig{}, field, db);
+  ASSERT_GT(clean.windows.size(), 100u);
+  EXPECT_EQ(base.stats.gyro_yaw_dropped, 0);
+  const std::size_t k = clean.windows.size() / 2;  // moving, with fixes before and after
+  // The issue's four values (beyond +-360), and a plausible angle 90 deg from the last (a jump).
+  const double jump = wrap_deg(clean.windows[k - 1].gyro_yaw_deg + 90.0);
+  for (const double bad : {1e6, -400.0, 3600.0, 1e300, jump}) {
+    Recording rec = clean;
+    rec.windows[k].gyro_yaw_deg = bad;
+    ReplaySettings settings;
+    std::vector<std::string> warnings;
+    settings.warn = [&](const std::string& w) { warnings.push_back(w); };
+    const ReplayResult r = replay_recording(rec, LocalizerConfig{}, field, db, {}, settings);
+    ASSERT_EQ(warnings.size(), 1u) << "gyro_yaw_deg " << bad;
+    const std::string want =
+        "encoders.csv: window seq " + std::to_string(rec.windows[k].seq) + ": gyro_yaw_deg ";
+    EXPECT_NE(warnings[0].find(want), std::string::npos) << warnings[0];
+    EXPECT_NE(warnings[0].find("(1 window(s) dropped so far)"), std::string::npos) << warnings[0];
+    EXPECT_EQ(r.stats.gyro_yaw_dropped, 1);
+    ASSERT_TRUE(r.poses[k].gyro_yaw_dropped.has_value());
+    ASSERT_EQ(r.poses.size(), base.poses.size());
+    double worst_cm = 0.0, worst_deg = 0.0;
+    for (std::size_t i = k; i < r.poses.size(); ++i) {
+      worst_cm = std::max(worst_cm, distance_cm(r.poses[i].pose, base.poses[i].pose));
+      worst_deg =
+          std::max(worst_deg, std::abs(yaw_difference_deg(r.poses[i].pose, base.poses[i].pose)));
+    }
+    std::printf(
+        "gyro_yaw_deg %g at seq %u: %s; after it at most %.3f cm, %.3f deg from the clean "
+        "run\n",
+        bad, rec.windows[k].seq, warnings[0].c_str(), worst_cm, worst_deg);
+    EXPECT_LT(worst_cm, 2.0) << bad;
+    EXPECT_LT(worst_deg, 1.0) << bad;
+  }
+
+  // The program: exit 0, the warning on stderr names the file and the window, the count on stdout.
+  const fs::path enc = dir / "rec" / "encoders.csv";
+  std::ifstream in(enc);
+  std::vector<std::string> lines;
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
+  in.close();
+  std::string& line = lines[k + 1];  // the header is line 1
+  line = line.substr(0, line.rfind(',')) + ",1e6";
+  {
+    std::ofstream o(enc);
+    for (const auto& l : lines) o << l << "\n";
+  }
+  ASSERT_EQ(run_replay_command((dir / "rec").string() + " --db " + db_file.string(),
+                               dir / "stdout.txt", dir / "stderr.txt"),
+            0);
+  const std::string err = read_text(dir / "stderr.txt");
+  EXPECT_NE(
+      err.find("omniloc replay: warning: " + enc.string() + ": window seq " +
+               std::to_string(clean.windows[k].seq) + ": gyro_yaw_deg 1e+06 is outside +-360 deg"),
+      std::string::npos)
+      << err;
+  const std::string out = read_text(dir / "stdout.txt");
+  EXPECT_NE(out.find("gyro yaw dropped as implausible in 1 window(s)"), std::string::npos) << out;
   fs::remove_all(dir);
 }
 

@@ -28,8 +28,8 @@ const std::vector<std::string> kEveryKey = {"wheel_radius_cm",         "center_t
                                             "motor_angle_deg",         "gear_ratio",
                                             "counts_per_rev",          "decoding",
                                             "slip_threshold_cm_per_s", "wheel_noise_cm_per_sqrt_cm",
-                                            "max_accel_cm_per_s2",     "odometry_noise_fraction",
-                                            "gyro_arw_deg_per_sqrt_s"};
+                                            "max_accel_cm_per_s2",     "max_yaw_rate_deg_per_s",
+                                            "odometry_noise_fraction", "gyro_arw_deg_per_sqrt_s"};
 
 const std::string kEveryKeyJson = R"({
   "wheel_radius_cm": 4.5,
@@ -41,6 +41,7 @@ const std::string kEveryKeyJson = R"({
   "slip_threshold_cm_per_s": 7.5,
   "wheel_noise_cm_per_sqrt_cm": 0.02,
   "max_accel_cm_per_s2": 350,
+  "max_yaw_rate_deg_per_s": 900,
   "odometry_noise_fraction": 0.01,
   "gyro_arw_deg_per_sqrt_s": 0.03
 })";
@@ -71,6 +72,7 @@ TEST(RobotConfig, EveryKeyReachesItsMember) {
   EXPECT_EQ(c.slip_threshold_cm_per_s, 7.5);
   EXPECT_EQ(c.wheel_noise_cm_per_sqrt_cm, 0.02);
   EXPECT_EQ(c.max_accel_cm_per_s2, 350.0);
+  EXPECT_EQ(c.max_yaw_rate_deg_per_s, 900.0);
   EXPECT_EQ(c.odometry_noise_fraction, 0.01);
   EXPECT_EQ(c.gyro_arw_deg_per_sqrt_s, 0.03);
 }
@@ -98,6 +100,11 @@ TEST(RobotConfig, BadValuesNameTheFileFieldAndValue) {
       {
           {test::replaced(v, "\"wheel_radius_cm\": 5.0", "\"wheel_radius_cm\": -5.0"),
            "wheel_radius_cm", "must be > 0 (got -5)"},
+          {test::replaced(v, "\"decoding\": 4", "\"decoding\": 4, \"max_yaw_rate_deg_per_s\": 1"),
+           "max_yaw_rate_deg_per_s", "must be in [10, 36000] deg/s (got 1)"},
+          {test::replaced(v, "\"decoding\": 4",
+                          "\"decoding\": 4, \"max_yaw_rate_deg_per_s\": 1e300"),
+           "max_yaw_rate_deg_per_s", "(got 1e+300)"},
           {test::replaced(v, "\"decoding\": 4", "\"decoding\": 3"), "decoding",
            "unknown quadrature decoding mode: must be 1, 2 or 4 (got 3)"},
           {test::replaced(v, "\"counts_per_rev\": 500", "\"counts_per_rev\": 0"), "counts_per_rev",

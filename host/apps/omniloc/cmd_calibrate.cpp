@@ -19,6 +19,7 @@
 #include "omniloc/calibration.hpp"
 #include "omniloc/detail/strict_number.hpp"
 #include "omniloc/field.hpp"
+#include "omniloc/image_file.hpp"
 
 namespace omniloc::cli {
 
@@ -171,9 +172,11 @@ int read_frames(const CalibrateArgs& a, const std::vector<CalibrationFrame>& pos
     else
       f.position_cm = field.centre_cm();
     f.name = images[i];
-    f.image = cv::imread(images[i], cv::IMREAD_COLOR);
-    if (f.image.empty()) {
-      std::fprintf(stderr, "omniloc calibrate: error: cannot read image '%s'\n", images[i].c_str());
+    try {
+      f.image = read_image_file(images[i]);  // the size from the header first, refused above the
+                                             // limits
+    } catch (const ImageFileError& e) {
+      std::fprintf(stderr, "omniloc calibrate: error: cannot read image: %s\n", e.what());
       return 1;
     }
     std::printf("%s: %d x %d, robot at (%.1f, %.1f) cm, heading %s\n", f.name.c_str(), f.image.cols,

@@ -15,6 +15,7 @@
 #include "omniloc/feature_db.hpp"
 #include "omniloc/field.hpp"
 #include "omniloc/goals.hpp"
+#include "omniloc/image_file.hpp"
 #include "omniloc/locate.hpp"
 #include "omniloc/recording.hpp"
 #include "omniloc/vision.hpp"
@@ -86,9 +87,11 @@ void print_text(const SingleFrameResult& r, double e_th, double time_ms) {
 }
 
 int run_locate(const LocateArgs& a) {
-  const cv::Mat bgr = cv::imread(a.image, cv::IMREAD_COLOR);
-  if (bgr.empty()) {
-    std::fprintf(stderr, "omniloc locate: error: cannot read image '%s'\n", a.image.c_str());
+  cv::Mat bgr;
+  try {
+    bgr = read_image_file(a.image);  // the size from the header first, refused above the limits
+  } catch (const ImageFileError& e) {
+    std::fprintf(stderr, "omniloc locate: error: cannot read image: %s\n", e.what());
     return 1;
   }
   struct {

@@ -60,6 +60,11 @@ void print_replay_result(const ReplayResult& r, const Recording& rec) {
     std::printf("frames with no measurement %zu (the first at %.1f ms: %s)\n", no_measurement,
                 first_empty->t_ms, first_empty->no_measurement.c_str());
   }
+  if (s.gyro_yaw_dropped > 0)
+    std::printf(
+        "gyro yaw dropped as implausible in %d window(s): their heading came from the "
+        "wheels\n",
+        s.gyro_yaw_dropped);
   if (r.time_to_first_fix_ms) {
     std::printf("first fix %.2f s after the first window; decided by the side %d time(s)\n",
                 *r.time_to_first_fix_ms / 1000.0, s.decided_by_side);
@@ -94,6 +99,9 @@ int run_replay(const ReplayArgs& a) {
   if (a.heading != "recorded") settings.heading = parse_heading_trust(a.heading);
   if (a.side != "unknown")
     settings.side = a.side == "blue" ? GoalColour::kBlue : GoalColour::kYellow;
+  settings.warn = [](const std::string& w) {
+    std::fprintf(stderr, "\nomniloc replay: warning: %s\n", w.c_str());
+  };
   ReplayResult r;
   try {
     r = replay_recording(

@@ -32,6 +32,14 @@ struct Trapezoid {
   bool operator==(const Trapezoid&) const = default;
 };
 
+/// The most midpoint steps the centroid may take over [0, range_max_cm]: resolution_cm must be at
+/// least range_max_cm / kFuzzyMaxSteps. The integration runs on every frame (up to ~60 a second
+/// beside the search); 10000 steps (~0.1 ms) is over three times the shipped 3000 and far finer
+/// than the 10 cm snap ranges need. Without it a resolution of 2e-8 cm made 1.5e9 steps a frame.
+inline constexpr int kFuzzyMaxSteps = 10000;
+/// The most ranges snap_ranges_cm may list (the shipped list has 4; it is walked on every frame).
+inline constexpr int kFuzzyMaxSnapRanges = 64;
+
 /// The member initialisers are the shipped defaults: a test checks they equal every key of the
 /// "fuzzy" block of common/localizer/default.json.
 struct FuzzyConfig {
@@ -51,7 +59,8 @@ struct FuzzyConfig {
   /// (speed very low -> range very low, ..., very high -> very high).
   std::array<FuzzyTerm, kFuzzyTerms> rules{FuzzyTerm::kVeryLow, FuzzyTerm::kLow, FuzzyTerm::kHigh,
                                            FuzzyTerm::kVeryHigh};
-  /// Integration step of the centroid (midpoint rule over [0, range_max_cm]).
+  /// Integration step of the centroid (midpoint rule over [0, range_max_cm]); validation keeps it
+  /// in [range_max_cm / kFuzzyMaxSteps, range_max_cm / 10].
   double resolution_cm = 0.01;
   /// Ranges the database search offers; the crisp output snaps to the nearest (ties go up).
   std::vector<double> snap_ranges_cm{0.0, 10.0, 20.0, 30.0};
@@ -61,7 +70,8 @@ struct FuzzyConfig {
 
   /// Throws ConfigError "<at>.<field>: <why> (got <value>)": unordered or non-finite breakpoints,
   /// terms outside their universe, input terms that leave a speed uncovered, rule indices out of
-  /// range, a too coarse or non-positive resolution, empty or unsorted snap ranges.
+  /// range, a too coarse, too fine (more than kFuzzyMaxSteps steps) or non-positive resolution,
+  /// empty, unsorted or more than kFuzzyMaxSnapRanges snap ranges.
   void validate(const config::Origin& at) const;
   bool operator==(const FuzzyConfig&) const = default;
 };

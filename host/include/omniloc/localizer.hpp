@@ -178,6 +178,9 @@ struct LocalizedPose {
   double vx_cm_s = 0.0;  ///< robot-frame velocity from the odometry's last window
   double vy_cm_s = 0.0;
   double omega_deg_s = 0.0;  ///< yaw rate over the last window (the gyro's)
+  /// Set when this window's gyro_yaw_deg was dropped as implausible (GyroYawGuard, odometry.hpp):
+  /// what the check found. The window's heading came from the wheels.
+  std::optional<GyroYawCheck> gyro_yaw_dropped;
 };
 
 /// What happened to one frame.
@@ -220,6 +223,8 @@ struct LocalizerStats {
   int decided_by_side = 0;  ///< ambiguous global results decided by the kick-off rule (set_side)
   /// a relative gyro's alignment forgotten after failed searches
   int heading_alignments_dropped = 0;
+  /// windows whose gyro yaw was dropped as implausible (LocalizedPose::gyro_yaw_dropped)
+  int gyro_yaw_dropped = 0;
 };
 
 class Localizer {
@@ -233,7 +238,9 @@ class Localizer {
   Localizer& operator=(const Localizer&) = delete;
 
   /// Integrates one encoder window (times must increase), applies any waiting frames whose time
-  /// it covers, and returns the pose at the window's end.
+  /// it covers, and returns the pose at the window's end. The window's gyro yaw passes
+  /// GyroYawGuard first: an implausible one is dropped (the wheels give this window's heading),
+  /// counted in stats().gyro_yaw_dropped and reported in the pose's gyro_yaw_dropped.
   LocalizedPose on_window(const EncoderWindow& window);
 
   /// A camera frame taken at t_ms (same time base as the windows). Its lines are extracted now
@@ -412,6 +419,7 @@ class Localizer {
   [[nodiscard]] std::optional<SingleFrameResult> choose_by_side(
       const SingleFrameResult& global) const;
   Odometry odometry_;
+  GyroYawGuard gyro_guard_;  // every window passes it before odometry_
   LineExtractor extractor_;  ///< on_image(): this camera's line extraction (adapts frame to frame)
   std::deque<HistoryEntry> history_;
   std::deque<PendingFrame> pending_;

@@ -57,6 +57,62 @@ struct EncoderWindow {
   HeadingTrust heading_trust = HeadingTrust::kAbsolute;  ///< how far gyro_yaw_deg can be trusted
 };
 
+/// Why check_gyro_yaw refused a window's gyro_yaw_deg.
+enum class GyroYawFault {
+  kNone,        ///< plausible
+  kNotFinite,   ///< NaN or infinite
+  kOutOfRange,  ///< beyond +-kGyroYawMaxAbsDeg: no heading source gives such an angle
+  kJump,        ///< changed more than the robot can turn in the window (max_yaw_rate_deg_per_s)
+};
+[[nodiscard]] const char* gyro_yaw_fault_name(GyroYawFault fault);  ///< "jump", ...
+
+/// Every heading source reports gyro_yaw_deg wrapped into (-180, 180] (gyro_heading.hpp, the
+/// simulator's gyro); a value beyond +-360 cannot be one, whatever the previous window said.
+inline constexpr double kGyroYawMaxAbsDeg = 360.0;
+
+/// What check_gyro_yaw found for one window.
+struct GyroYawCheck {
+  GyroYawFault fault = GyroYawFault::kNone;
+  double yaw_deg = 0.0;     ///< the value checked
+  double change_deg = 0.0;  ///< its change from the previous good yaw (kJump), wrapped
+  double bound_deg = 0.0;   ///< the largest change the window allowed (kJump)
+  /// "gyro_yaw_deg 1e+06 is outside +-360 deg", "gyro_yaw_deg jumped 70.0 deg in 10.0 ms, more
+  /// than the robot can turn (15.0 deg at max_yaw_rate_deg_per_s 1500)", ...
+  [[nodiscard]] std::string describe() const;
+};
+
+/// The one check of a window's gyro yaw, shared by every path windows take into the odometry
+/// (Localizer::on_window: replay, omnilocd, omnilocd-sim): not finite, outside
+/// +-kGyroYawMaxAbsDeg, or a change from `previous_yaw_deg` (the last good one; none for the
+/// first window) larger than max_yaw_rate_deg_per_s * dt_s is a fault.
+[[nodiscard]] GyroYawCheck check_gyro_yaw(double yaw_deg, std::optional<double> previous_yaw_deg,
+                                          double dt_s, double max_yaw_rate_deg_per_s);
+
+/// Screens windows with check_gyro_yaw before the odometry sees them. A faulty gyro yaw is
+/// dropped: the window keeps its wheel motion and takes its heading from the wheels (the last good
+/// yaw plus the wheels' rotation over the window, as GyroHeading does for a flagged window), so
+/// the odometry integrates it like any other. A gyro that jumps and then stays (the next window
+/// agrees with the jumped value within the bound: a kidnapped simulated robot, a re-anchored
+/// heading) is followed from that next window; a one-window spike never is.
+class GyroYawGuard {
+ public:
+  explicit GyroYawGuard(const RobotConfig& robot);
+  /// Checks `window` (its t_end_ms after the previous window's) and replaces a faulty
+  /// gyro_yaw_deg as above; returns what the check found.
+  GyroYawCheck screen(EncoderWindow& window);
+  /// Windows whose gyro yaw was dropped so far.
+  [[nodiscard]] std::uint64_t dropped() const { return dropped_; }
+
+ private:
+  double max_rate_deg_per_s_;
+  Eigen::Matrix<double, 3, 4> pinv_;
+  RobotConfig robot_;
+  std::optional<double> last_good_deg_;  // the yaw passed on for the previous window
+  std::optional<double> last_raw_deg_;   // the previous window's own value, if finite, in range
+  double last_t_ms_ = 0.0;
+  std::uint64_t dropped_ = 0;
+};
+
 /// Per-wheel slip finding for one window.
 struct SlipReport {
   bool detected = false;

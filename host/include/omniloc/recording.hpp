@@ -265,6 +265,10 @@ struct ReplaySettings {
   std::optional<HeadingTrust> heading;
   /// The team's side (Localizer::set_side), as the daemon's `side` key.
   std::optional<GoalColour> side;
+  /// Called with a warning for each window whose gyro yaw the localizer dropped (GyroYawGuard):
+  /// "<dir>/encoders.csv: window seq 42: gyro_yaw_deg 1e+06 is outside ...: dropped, ... (1 so
+  /// far)". Unset: the warnings are only counted (ReplayResult::stats.gyro_yaw_dropped).
+  std::function<void(const std::string&)> warn;
 };
 
 /// Runs the localizer over a recording: windows and frames merged by time (a frame before the

@@ -65,6 +65,11 @@ struct RobotConfig {
   double max_accel_cm_per_s2 = 400.0;      ///< motion prior used to tell diagonal wheels apart
   double odometry_noise_fraction = 0.005;  ///< 1-sigma position uncertainty growth per cm driven
   double gyro_arw_deg_per_sqrt_s = 0.01;   ///< gyro angle random walk, for yaw uncertainty
+  /// The fastest the robot can turn (deg/s): a window's gyro yaw that changes by more than this
+  /// times the window's span is a fault and dropped (GyroYawGuard, odometry.hpp). 1500 deg/s
+  /// (over four turns a second) is beyond any wheeled soccer robot and below the board gyro's
+  /// +-2000 deg/s full scale.
+  double max_yaw_rate_deg_per_s = 1500.0;
 
   /// Throws ConfigError "<at>.<field>: <why> (got <value>)" for the first bad field.
   void validate(const config::Origin& at) const;

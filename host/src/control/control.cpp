@@ -11,6 +11,8 @@
 #include <map>
 #include <set>
 
+#include "omniloc/detail/config_reader.hpp"
+
 namespace omniloc::control {
 
 namespace {
@@ -74,6 +76,25 @@ std::optional<std::int64_t> read_id(const json& j) {
   return v.get<std::int64_t>();
 }
 
+// A key given twice, refused as every file reader refuses it (config::parse_json_text: "request:
+// x_cm: duplicate key: an object may give a key only once (got "x_cm" a second time)"); nlohmann
+// alone keeps the last value. The reply carries the id unless "id" is the key given twice.
+void refuse_duplicate_keys(std::string_view datagram, const json& parsed) {
+  try {
+    (void)config::parse_json_text(datagram, "request");
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    std::optional<std::int64_t> id;
+    if (what.rfind("request:id:", 0) != 0) {
+      try {
+        id = read_id(parsed);
+      } catch (const ControlError&) {
+      }
+    }
+    throw ControlError(id, what);
+  }
+}
+
 }  // namespace
 
 Request parse_request(std::string_view datagram) {
@@ -90,6 +111,7 @@ Request parse_request(std::string_view datagram) {
   if (!j.is_object())
     throw ControlError(std::nullopt,
                        "a request must be a JSON object (got " + std::string(j.type_name()) + ")");
+  refuse_duplicate_keys(datagram, j);
   Reader r{j, read_id(j), ""};
   if (!j.contains("cmd")) throw ControlError(r.id, "missing field 'cmd'");
   if (!j["cmd"].is_string())

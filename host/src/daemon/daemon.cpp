@@ -70,6 +70,10 @@ struct Daemon::Impl {
   LocalizedPose last_localized;
 
   std::string heading_described;  ///< io.heading->describe() as last logged
+  /// Gyro yaws dropped as implausible (Localizer::on_window): warned about at most every
+  /// kGyroWarningPeriodMs, with the count since the last warning.
+  std::optional<double> last_gyro_warning_ms;
+  int gyro_dropped_unwarned = 0;
 
   // Status line.
   double next_status_ms = 0.0;
@@ -274,6 +278,22 @@ struct Daemon::Impl {
     heading_described = std::move(now);
   }
 
+  // A window's gyro yaw dropped as implausible: a warning, at most one every 10 s (a gyro that
+  // keeps faulting would otherwise write 100 lines a second).
+  void note_gyro_dropped(const LocalizedPose& lp, double now_ms) {
+    static constexpr double kGyroWarningPeriodMs = 10000.0;
+    if (!lp.gyro_yaw_dropped) return;
+    ++gyro_dropped_unwarned;
+    if (last_gyro_warning_ms && now_ms - *last_gyro_warning_ms < kGyroWarningPeriodMs) return;
+    io.logger.warning(
+        "window seq " + std::to_string(lp.seq) + ": " + lp.gyro_yaw_dropped->describe() +
+        ": dropped, the window's heading taken from the wheels (" +
+        std::to_string(gyro_dropped_unwarned) + " window(s) since the last warning, " +
+        std::to_string(localizer.stats().gyro_yaw_dropped) + " in all)");
+    last_gyro_warning_ms = now_ms;
+    gyro_dropped_unwarned = 0;
+  }
+
   void on_board_window(const SessionWindow& w, const BoardClockEstimate& clock_at) {
     const double now = io.clock->now_ms();
     last_window_clock_ms = now;
@@ -289,6 +309,7 @@ struct Daemon::Impl {
     ew.heading_trust = io.heading->trust();
     note_heading();
     const LocalizedPose lp = localizer.on_window(ew);
+    note_gyro_dropped(lp, now);
     ++report.windows;
     last_localized = lp;
     record([&] {

@@ -59,8 +59,12 @@ FuzzyResult fuzzy_search_range(const FuzzyConfig& config, double speed_cm_per_s)
     const int out = static_cast<int>(config.rules[i]);
     r.output_clip[out] = std::max(r.output_clip[out], r.speed_degrees[i]);
   }
-  const int n =
-      std::max(1, static_cast<int>(std::ceil(config.range_max_cm / config.resolution_cm)));
+  // validate() bounds the step count by kFuzzyMaxSteps; the clamp keeps an unvalidated config
+  // from overflowing the int (undefined behaviour) or looping for minutes.
+  const double steps = std::ceil(config.range_max_cm / config.resolution_cm);
+  const int n = std::isfinite(steps)
+                    ? static_cast<int>(std::clamp(steps, 1.0, double{kFuzzyMaxSteps}))
+                    : kFuzzyMaxSteps;
   const double h = config.range_max_cm / n;
   double area = 0.0, moment = 0.0;
   for (int k = 0; k < n; ++k) {
@@ -139,7 +143,23 @@ void FuzzyConfig::validate(const Origin& at) const {
   }
   config::require(resolution_cm > 0.0 && resolution_cm <= range_max_cm / 10.0, at / "resolution_cm",
                   "must be > 0 and at most a tenth of range_max_cm", resolution_cm);
+  // The lower bound comes from the loop it sizes: fuzzy_search_range takes
+  // ceil(range_max_cm / resolution_cm) steps on every frame.
+  const double finest = range_max_cm / kFuzzyMaxSteps;
+  config::require(resolution_cm >= finest, at / "resolution_cm",
+                  "must be at least range_max_cm / " + std::to_string(kFuzzyMaxSteps) + " = " +
+                      config::show(finest) +
+                      " cm: the centroid integrates range_max_cm / resolution_cm steps on every "
+                      "frame",
+                  resolution_cm);
   if (snap_ranges_cm.empty()) (at / "snap_ranges_cm").fail("must list at least one range", "[]");
+  // The list is walked on every frame (snap_to_ranges) and each range checked against the grid.
+  config::require(snap_ranges_cm.size() <= static_cast<std::size_t>(kFuzzyMaxSnapRanges),
+                  at / "snap_ranges_cm",
+                  "must list at most " + std::to_string(kFuzzyMaxSnapRanges) +
+                      " ranges (the database search offers a handful; the list is walked on "
+                      "every frame), got this many",
+                  static_cast<double>(snap_ranges_cm.size()));
   for (std::size_t i = 0; i < snap_ranges_cm.size(); ++i) {
     const double r = snap_ranges_cm[i];
     config::require(std::isfinite(r) && r >= 0.0, (at / "snap_ranges_cm")[i],

@@ -162,6 +162,7 @@ Localizer::Localizer(const LocalizerConfig& config, const RobotConfig& robot,
       db_(db),
       goal_colours_(goal_colour_models(camera.vision)),
       odometry_(robot),
+      gyro_guard_(robot),
       extractor_(camera),
       heading_filter_(heading_filter_config(config)) {
   validate_localizer_config(config_, "localizer config");
@@ -271,14 +272,19 @@ void Localizer::trim_history() {
   }
 }
 
-LocalizedPose Localizer::on_window(const EncoderWindow& window) {
-  if (!history_.empty() && !(window.t_end_ms > history_.back().window.t_end_ms)) {
+LocalizedPose Localizer::on_window(const EncoderWindow& received) {
+  if (!history_.empty() && !(received.t_end_ms > history_.back().window.t_end_ms)) {
     std::ostringstream os;
-    os << "Localizer: encoder window seq " << window.seq << " at t=" << window.t_end_ms
+    os << "Localizer: encoder window seq " << received.seq << " at t=" << received.t_end_ms
        << " ms does not come after the previous one (seq " << history_.back().window.seq
        << " at t=" << history_.back().window.t_end_ms << " ms)";
     throw std::invalid_argument(os.str());
   }
+  // The one gyro yaw check of every path (replay, omnilocd, omnilocd-sim): an implausible yaw is
+  // replaced by the wheels' heading for this window, counted and reported with the pose.
+  EncoderWindow window = received;
+  const GyroYawCheck gyro = gyro_guard_.screen(window);
+  if (gyro.fault != GyroYawFault::kNone) ++stats_.gyro_yaw_dropped;
   set_heading_trust(window.heading_trust);
   odometry_.update(window);
   history_.push_back({window, odometry_});
@@ -290,6 +296,7 @@ LocalizedPose Localizer::on_window(const EncoderWindow& window) {
   }
   trim_history();
   last_pose_ = make_pose(window);
+  if (gyro.fault != GyroYawFault::kNone) last_pose_.gyro_yaw_dropped = gyro;
   return last_pose_;
 }
 

@@ -274,3 +274,96 @@ const OdometryEstimate& Odometry::update(const EncoderWindow& window) {
 }
 
 }  // namespace omniloc
+
+// --- the gyro yaw check --------------------------------------------------------------------------
+
+namespace omniloc {
+
+const char* gyro_yaw_fault_name(GyroYawFault fault) {
+  switch (fault) {
+    case GyroYawFault::kNone:
+      return "none";
+    case GyroYawFault::kNotFinite:
+      return "not finite";
+    case GyroYawFault::kOutOfRange:
+      return "out of range";
+    case GyroYawFault::kJump:
+      return "jump";
+  }
+  return "?";
+}
+
+std::string GyroYawCheck::describe() const {
+  std::ostringstream os;
+  os.precision(6);
+  os << "gyro_yaw_deg " << yaw_deg;
+  switch (fault) {
+    case GyroYawFault::kNone:
+      os << " is plausible";
+      break;
+    case GyroYawFault::kNotFinite:
+      os << " is not a finite number";
+      break;
+    case GyroYawFault::kOutOfRange:
+      os << " is outside +-" << kGyroYawMaxAbsDeg << " deg (headings are wrapped into (-180, 180])";
+      break;
+    case GyroYawFault::kJump:
+      os.precision(3);
+      os << " jumped " << std::fixed << change_deg << " deg since the last window, more than the "
+         << bound_deg << " deg the robot can turn in it (max_yaw_rate_deg_per_s)";
+      break;
+  }
+  return os.str();
+}
+
+GyroYawCheck check_gyro_yaw(double yaw_deg, std::optional<double> previous_yaw_deg, double dt_s,
+                            double max_yaw_rate_deg_per_s) {
+  GyroYawCheck c;
+  c.yaw_deg = yaw_deg;
+  if (!std::isfinite(yaw_deg)) {
+    c.fault = GyroYawFault::kNotFinite;
+  } else if (std::abs(yaw_deg) > kGyroYawMaxAbsDeg) {
+    c.fault = GyroYawFault::kOutOfRange;
+  } else if (previous_yaw_deg) {
+    c.change_deg = angle_diff_deg(yaw_deg, *previous_yaw_deg);
+    c.bound_deg = max_yaw_rate_deg_per_s * dt_s;
+    if (std::abs(c.change_deg) > c.bound_deg) c.fault = GyroYawFault::kJump;
+  }
+  return c;
+}
+
+GyroYawGuard::GyroYawGuard(const RobotConfig& robot)
+    : max_rate_deg_per_s_(robot.max_yaw_rate_deg_per_s),
+      pinv_(wheel_pseudo_inverse(robot)),
+      robot_(robot) {}
+
+GyroYawCheck GyroYawGuard::screen(EncoderWindow& window) {
+  const bool first = !last_good_deg_.has_value();
+  const double dt_s = first || !(window.t_end_ms > last_t_ms_)
+                          ? regmap::kWindowPeriodMs / 1000.0
+                          : (window.t_end_ms - last_t_ms_) / 1000.0;
+  GyroYawCheck c = check_gyro_yaw(window.gyro_yaw_deg, last_good_deg_, dt_s, max_rate_deg_per_s_);
+  const std::optional<double> raw_before = last_raw_deg_;
+  last_raw_deg_ = c.fault == GyroYawFault::kNone || c.fault == GyroYawFault::kJump
+                      ? std::optional(window.gyro_yaw_deg)
+                      : std::nullopt;
+  last_t_ms_ = window.t_end_ms;
+  // A jump the previous window already made, and this one keeps: the gyro moved and stayed.
+  if (c.fault == GyroYawFault::kJump && raw_before &&
+      check_gyro_yaw(window.gyro_yaw_deg, raw_before, dt_s, max_rate_deg_per_s_).fault ==
+          GyroYawFault::kNone)
+    c.fault = GyroYawFault::kNone;
+  if (c.fault == GyroYawFault::kNone) {
+    last_good_deg_ = window.gyro_yaw_deg;
+    return c;
+  }
+  // Dropped: the wheels' rotation over the window carries the last good heading on.
+  const double wheels_deg =
+      rad_to_deg(least_squares_motion(pinv_, wheel_travel_cm(robot_, window.counts)).z());
+  window.gyro_yaw_deg = wrap_deg(last_good_deg_.value_or(0.0) + wheels_deg);
+  last_good_deg_ = window.gyro_yaw_deg;
+  ++dropped_;
+  return c;
+}
+
+}  // namespace omniloc

@@ -132,6 +132,7 @@ const config::KeyTable<RobotConfig>& robot_config_keys() {
       key("slip_threshold_cm_per_s", &RobotConfig::slip_threshold_cm_per_s),
       key("wheel_noise_cm_per_sqrt_cm", &RobotConfig::wheel_noise_cm_per_sqrt_cm),
       key("max_accel_cm_per_s2", &RobotConfig::max_accel_cm_per_s2),
+      key("max_yaw_rate_deg_per_s", &RobotConfig::max_yaw_rate_deg_per_s),
       key("odometry_noise_fraction", &RobotConfig::odometry_noise_fraction),
       key("gyro_arw_deg_per_sqrt_s", &RobotConfig::gyro_arw_deg_per_sqrt_s),
       wheels_key(),
@@ -288,6 +289,10 @@ void RobotConfig::validate(const config::Origin& at) const {
            "must be at most 1e5 cm/s^2 (10 g)");
   in_range(odometry_noise_fraction, "odometry_noise_fraction", 0.0, 1.0, "must be in [0, 1]");
   in_range(gyro_arw_deg_per_sqrt_s, "gyro_arw_deg_per_sqrt_s", 0.0, 100.0, "must be in [0, 100]");
+  // Bounded both ways: it sizes the largest gyro jump a window may show (times 10 ms); below
+  // 10 deg/s a robot's ordinary turns would be dropped, above the gyro's full scale nothing would.
+  in_range(max_yaw_rate_deg_per_s, "max_yaw_rate_deg_per_s", 10.0, 36000.0,
+           "must be in [10, 36000] deg/s");
 }
 
 void validate_robot_config(const RobotConfig& c, const std::string& source) {

@@ -20,6 +20,7 @@
 #include "omniloc/detail/file_read.hpp"
 #include "omniloc/detail/strict_number.hpp"
 #include "omniloc/gyro_heading.hpp"
+#include "omniloc/image_file.hpp"
 
 namespace omniloc {
 
@@ -393,8 +394,12 @@ cv::Mat load_frame(const Recording& rec, std::size_t i) {
   const FrameRef& f = rec.frames.at(i);
   const fs::path p = rec.dir / f.file;
   const std::string where = (rec.dir / "camera.csv").string() + ":" + std::to_string(i + 2) + ": ";
-  cv::Mat img = cv::imread(p.string(), cv::IMREAD_COLOR);
-  if (img.empty()) throw RecordingError(where + "cannot read image '" + p.string() + "'");
+  cv::Mat img;
+  try {
+    img = read_image_file(p);  // the size from the header first, refused above the limits
+  } catch (const ImageFileError& e) {
+    throw RecordingError(where + "cannot read image: " + e.what());
+  }
   if (img.cols != rec.meta.camera.width_px || img.rows != rec.meta.camera.height_px) {
     std::ostringstream os;
     os << where << "image '" << p.string() << "' is " << img.cols << " x " << img.rows

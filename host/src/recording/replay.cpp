@@ -61,6 +61,17 @@ ErrorSummary summarize_errors(std::vector<double> e) {
   return s;
 }
 
+namespace {
+
+std::string gyro_warning(const Recording& rec, const EncoderWindow& w, const GyroYawCheck& check,
+                         int dropped) {
+  return (rec.dir / "encoders.csv").string() + ": window seq " + std::to_string(w.seq) + ": " +
+         check.describe() + ": dropped, the window's heading taken from the wheels (" +
+         std::to_string(dropped) + " window(s) dropped so far)";
+}
+
+}  // namespace
+
 ReplayResult replay_recording(const Recording& rec, const LocalizerConfig& config,
                               const FieldGeometry& field, const FeatureDb& db,
                               const std::function<void(std::size_t, std::size_t)>& progress,
@@ -81,6 +92,9 @@ ReplayResult replay_recording(const Recording& rec, const LocalizerConfig& confi
       EncoderWindow w = rec.windows[wi];
       if (settings.heading) w.heading_trust = *settings.heading;
       out.poses.push_back(loc.on_window(w));
+      if (out.poses.back().gyro_yaw_dropped && settings.warn)
+        settings.warn(
+            gyro_warning(rec, w, *out.poses.back().gyro_yaw_dropped, loc.stats().gyro_yaw_dropped));
       for (FrameReport& r : loc.take_frame_reports()) out.frames.push_back(std::move(r));
       if (!out.time_to_first_fix_ms && out.poses.back().source != PoseSource::kNone)
         out.time_to_first_fix_ms = w.t_end_ms - rec.windows.front().t_end_ms;
