@@ -176,8 +176,10 @@ struct Daemon::Impl {
     m.source = pose_source_name(lp.source);
     m.match_error = lp.match_error;
     m.search_range_cm = lp.search_range_cm;
-    m.uncertainty_cm = lp.sigma_xy_cm;
-    m.uncertainty_yaw_deg = lp.sigma_yaw_deg;
+    if (lp.source != PoseSource::kNone) {  // else no pose, no uncertainty (not 0: certain)
+      m.uncertainty_cm = lp.sigma_xy_cm;
+      m.uncertainty_yaw_deg = lp.sigma_yaw_deg;
+    }
     m.vx_cm_s = lp.vx_cm_s;
     m.vy_cm_s = lp.vy_cm_s;
     m.omega_deg_s = lp.omega_deg_s;
@@ -465,7 +467,6 @@ struct Daemon::Impl {
                         {"y_cm", last_message.y_cm},
                         {"yaw_deg", last_message.yaw_deg},
                         {"source", last_message.source},
-                        {"uncertainty_cm", last_message.uncertainty_cm},
                         {"windows", report.windows},
                         {"frames", report.frames},
                         {"published", publisher.sent()},
@@ -478,6 +479,7 @@ struct Daemon::Impl {
     if (last_message.match_error) j["match_error"] = *last_message.match_error;
     return j;
   }
+    if (last_message.uncertainty_cm) j["uncertainty_cm"] = *last_message.uncertainty_cm;
 
   void poll_control() {
     if (!control_socket) return;
