@@ -128,6 +128,7 @@ struct Daemon::Impl {
     } catch (const RecordingError& e) {
       ++report.recording_failures;
       report.recording_error = e.what();
+      report.recording_dir = record_dir;
       io.logger.error(std::string("recording could not be closed: ") + e.what());
     }
     recorder.reset();
@@ -142,6 +143,7 @@ struct Daemon::Impl {
     } catch (const RecordingError& e) {
       ++report.recording_failures;
       report.recording_error = e.what();
+      report.recording_dir = record_dir;
       recorder.reset();  // closes what is open; whole rows only are on disk
       io.logger.error(std::string("recording stopped: ") + e.what() + "; poses are still sent");
     }
@@ -477,9 +479,9 @@ struct Daemon::Impl {
                         {"heading_known", localizer.heading_known()}};
     if (!record_dir.empty()) j["record_dir"] = record_dir;
     if (last_message.match_error) j["match_error"] = *last_message.match_error;
+    if (last_message.uncertainty_cm) j["uncertainty_cm"] = *last_message.uncertainty_cm;
     return j;
   }
-    if (last_message.uncertainty_cm) j["uncertainty_cm"] = *last_message.uncertainty_cm;
 
   void poll_control() {
     if (!control_socket) return;
@@ -629,6 +631,16 @@ std::string report_line(const DaemonReport& r) {
       static_cast<unsigned long long>(r.telemetry_gaps),
       r.recording_failures > 0 ? ", recording stopped on a write error" : "");
   return buf;
+}
+
+int exit_code(const DaemonReport& r) {
+  return r.recording_failures > 0 ? kExitRecordingLost : 0;
+}
+
+std::string exit_reason(const DaemonReport& r) {
+  if (exit_code(r) == 0) return {};
+  return "exit " + std::to_string(kExitRecordingLost) + ": the recording to " + r.recording_dir +
+         " stopped part-way on a write error (" + r.recording_error + ")";
 }
 
 Daemon::Daemon(const DaemonConfig& config, const DaemonModels& models, DaemonIo io) {
