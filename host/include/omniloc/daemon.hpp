@@ -94,8 +94,9 @@ struct DaemonModels {
 };
 
 /// Loads field, camera, robot and localizer configs and loads or builds the database, as the
-/// config says (a `database` path that does not exist yet is built and saved there). `progress`
-/// receives human-readable lines.
+/// config says (a `database` path that does not exist yet is built and saved there; when the save
+/// fails the database is used from memory and `progress` gets a line starting "warning: ").
+/// `progress` receives human-readable lines.
 [[nodiscard]] DaemonModels load_models(
     const DaemonConfig& config, const std::function<void(const std::string&)>& progress = {});
 
