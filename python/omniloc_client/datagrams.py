@@ -13,7 +13,7 @@ from typing import Iterator, Optional
 POSE_KEYS = ("seq", "t_ms", "t_uncertainty_ms", "x_cm", "y_cm", "yaw_deg", "source", "match_error", "search_range_cm",
              "uncertainty_cm", "uncertainty_yaw_deg", "vx_cm_s", "vy_cm_s", "omega_deg_s", "mono_ms", "wall_ms",
              "status")
-OPTIONAL_KEYS = ("t_uncertainty_ms", "match_error", "search_range_cm")
+OPTIONAL_KEYS = ("t_uncertainty_ms", "match_error", "search_range_cm", "uncertainty_cm", "uncertainty_yaw_deg")
 SOURCES = ("none", "image", "integrated", "odometry", "lost")
 STATUSES = ("no_board", "degraded", "odometry_only", "starting", "lost", "ok")
 
@@ -33,8 +33,8 @@ class PoseDatagram:
     source: str
     match_error: Optional[float]
     search_range_cm: Optional[float]
-    uncertainty_cm: float
-    uncertainty_yaw_deg: float
+    uncertainty_cm: Optional[float]
+    uncertainty_yaw_deg: Optional[float]
     vx_cm_s: float
     vy_cm_s: float
     omega_deg_s: float
@@ -83,7 +83,8 @@ def parse_pose(data: bytes | str) -> PoseDatagram:
         yaw_deg=_number(obj, "yaw_deg"), source=obj["source"],
         match_error=_number(obj, "match_error") if "match_error" in obj else None,
         search_range_cm=_number(obj, "search_range_cm") if "search_range_cm" in obj else None,
-        uncertainty_cm=_number(obj, "uncertainty_cm"), uncertainty_yaw_deg=_number(obj, "uncertainty_yaw_deg"),
+        uncertainty_cm=_number(obj, "uncertainty_cm") if "uncertainty_cm" in obj else None,
+        uncertainty_yaw_deg=_number(obj, "uncertainty_yaw_deg") if "uncertainty_yaw_deg" in obj else None,
         vx_cm_s=_number(obj, "vx_cm_s"), vy_cm_s=_number(obj, "vy_cm_s"), omega_deg_s=_number(obj, "omega_deg_s"),
         mono_ms=_number(obj, "mono_ms"), wall_ms=_number(obj, "wall_ms"), status=obj["status"])
 

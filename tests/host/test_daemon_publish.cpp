@@ -67,6 +67,18 @@ TEST(DaemonPublish, DatagramTextIsExactlyTheDocumentedSchema) {
       R"({"seq":42,"t_ms":1234.500,"x_cm":375.125,"y_cm":-2.500,"yaw_deg":179.750,"source":"a\"b",)"
       R"("uncertainty_cm":1.500,"uncertainty_yaw_deg":0.250,"vx_cm_s":120.50,"vy_cm_s":-3.25,"omega_deg_s":45.00,)"
       R"("mono_ms":98765.432,"wall_ms":1796280000123.500,"status":"degraded"})");
+  // Issue 37 (hostile input): without a pose from a fix (no board, no fix yet) the datagrams said
+  // "uncertainty_cm":0.000, which reads as certain: both keys are left out, as match_error is.
+  PoseMessage no_pose = none;
+  no_pose.uncertainty_cm.reset();
+  no_pose.uncertainty_yaw_deg.reset();
+  no_pose.source = "none";
+  no_pose.status = DaemonStatus::kNoBoard;
+  EXPECT_EQ(
+      omniloc::daemon::pose_json(no_pose),
+      R"({"seq":42,"t_ms":1234.500,"x_cm":375.125,"y_cm":-2.500,"yaw_deg":179.750,"source":"none",)"
+      R"("vx_cm_s":120.50,"vy_cm_s":-3.25,"omega_deg_s":45.00,)"
+      R"("mono_ms":98765.432,"wall_ms":1796280000123.500,"status":"no_board"})");
 }
 
 TEST(DaemonPublish, StatusNamesAreTheDocumentedOnes) {
@@ -202,6 +214,9 @@ TEST(DaemonPublish, StatusLineShowsEveryFigure) {
             "t=12.0s odometry_only pose=(375.2,275.1,-90.0) src=odometry err=- sigma=3.2cm "
             "drift=-0.012deg/s win=100/s cam=0/s "
             "sent=1200 dropped=2 reconnects=1");
+  s.uncertainty_cm.reset();  // no pose from a fix: no sigma either
+  EXPECT_NE(omniloc::daemon::status_line(s).find(" err=- sigma=- drift="), std::string::npos)
+      << omniloc::daemon::status_line(s);
 }
 
 }  // namespace

@@ -466,6 +466,31 @@ TEST(DaemonSim, AnImplausibleGyroYawIsDroppedAndWarnedRateLimited) {
   EXPECT_LT(worst_deg, 1.0);
 }
 
+// Issue (hostile input): a daemon whose `database` path could not be written (a full disk, a
+// directory that is not there) stopped at start-up although the database it had just built was in
+// memory. It goes on with that database and says why it was not saved; nothing is left at the path.
+TEST(DaemonModelsLoad, ADatabaseThatCannotBeSavedIsUsedFromMemoryWithAWarning) {
+  DaemonConfig c;
+  c.grid_step_cm = 50.0;  // a coarse grid: the build is what is tested, not its size
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("omniloc_test_daemon_db_" + std::to_string(::getpid())) /
+                                    "no-such-dir";
+  c.database = (dir / "features.db").string();
+  std::vector<std::string> lines;
+  const DaemonModels m = load_models(c, [&](const std::string& s) { lines.push_back(s); });
+  const FeatureDb expected =
+      build_feature_db(m.field, m.camera, GridSpec::covering(m.field, c.grid_step_cm));
+  EXPECT_EQ(m.db.grid.nx, expected.grid.nx);
+  EXPECT_EQ(m.db.grid.ny, expected.grid.ny);
+  EXPECT_TRUE(m.db.features == expected.features);
+  ASSERT_FALSE(lines.empty());
+  const std::string& last = lines.back();
+  EXPECT_EQ(last.rfind("warning: feature database built, but not saved (", 0), 0u) << last;
+  EXPECT_NE(last.find(c.database), std::string::npos) << last;
+  EXPECT_FALSE(std::filesystem::exists(dir));
+  std::printf("%s\n", last.c_str());
+}
+
 TEST(DaemonSim, StopFlagEndsTheRunAndSwitchesStreamingOff) {
   // No camera, a known start pose: dead reckoning from the first window, flagged odometry_only; a
   // "signal" (the flag set from the pose observer after 150 poses) ends the run cleanly.

@@ -4,10 +4,14 @@
 // foreign or stale files are refused with a clear error.
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -272,6 +276,75 @@ TEST_F(FeatureDbTest, FileRoundTrip) {
   EXPECT_EQ(back.features, db_->features);
   EXPECT_EQ(back.radius_step_px, 1.0);  // the default camera's view is under 254 px
   EXPECT_EQ(fs::file_size(path_), 88u + 75u * 55u * 1440u + 8u);
+}
+
+// The disk filling up, for one scope: a file size limit (RLIMIT_FSIZE, which binds root too) with
+// SIGXFSZ ignored, so that write() fails part-way (EFBIG) as on a full disk (ENOSPC).
+class FileSizeLimit {
+ public:
+  explicit FileSizeLimit(rlim_t bytes) {
+    ::getrlimit(RLIMIT_FSIZE, &old_);
+    old_handler_ = std::signal(SIGXFSZ, SIG_IGN);
+    const rlimit limit{bytes, old_.rlim_max};
+    ::setrlimit(RLIMIT_FSIZE, &limit);
+  }
+  ~FileSizeLimit() {
+    ::setrlimit(RLIMIT_FSIZE, &old_);
+    std::signal(SIGXFSZ, old_handler_);
+  }
+  FileSizeLimit(const FileSizeLimit&) = delete;
+  FileSizeLimit& operator=(const FileSizeLimit&) = delete;
+
+ private:
+  rlimit old_{};
+  void (*old_handler_)(int) = nullptr;
+};
+
+// Files in the database's directory named after it, but for itself: temporaries left behind.
+std::vector<std::string> leftovers(const fs::path& path) {
+  std::vector<std::string> found;
+  for (const auto& e : fs::directory_iterator(path.parent_path())) {
+    const std::string name = e.path().filename().string();
+    if (name != path.filename().string() &&
+        name.find(path.filename().string()) != std::string::npos)
+      found.push_back(name);
+  }
+  return found;
+}
+
+// Issue (hostile input): a full disk while the database was written left a partial file at its
+// path, which replay and locate then refused to overwrite ("not overwriting it") until removed by
+// hand. Now the write goes to a temporary file beside it, renamed into place when complete: a
+// failure part-way leaves the path as it was (an older database, still loading; or nothing) and no
+// temporary behind, and the error names the path and the system's error.
+TEST_F(FeatureDbTest, AWriteFailingPartWayLeavesThePathAsItWasAndNoTemporary) {
+  const FeatureDb older =
+      build_feature_db(*field_, *camera_, GridSpec::covering(*field_, 50.0), {}, 1);
+  save_feature_db(older, path_);
+  const std::vector<char> before = read_file();
+  for (const bool existed : {true, false}) {
+    if (!existed) fs::remove(path_);
+    {
+      const FileSizeLimit full(64 << 10);  // the database is 5.9 MB
+      try {
+        save_feature_db(*db_, path_);
+        ADD_FAILURE() << "saved past the file size limit";
+      } catch (const std::runtime_error& e) {
+        EXPECT_EQ(std::string(e.what()).rfind(path_ + ": ", 0), 0u) << e.what();
+        EXPECT_NE(std::string(e.what()).find(std::strerror(EFBIG)), std::string::npos) << e.what();
+        std::printf("refused: %s\n", e.what());
+      }
+    }
+    if (existed) {
+      EXPECT_EQ(read_file(), before);
+      EXPECT_EQ(load_feature_db(path_, *field_, *camera_).grid.nx, older.grid.nx);
+    } else {
+      EXPECT_FALSE(fs::exists(path_)) << fs::file_size(path_) << " bytes left";
+    }
+    EXPECT_TRUE(leftovers(path_).empty()) << leftovers(path_).front();
+  }
+  save_feature_db(*db_, path_);  // the path is not blocked
+  EXPECT_EQ(load_feature_db(path_, *field_, *camera_).features, db_->features);
 }
 
 TEST_F(FeatureDbTest, RefusesTruncatedCorruptAndForeignFiles) {

@@ -343,6 +343,36 @@ TEST_F(LocateProgram, UnreadableImageAndCameraOfAnotherSizeExitOne) {
     EXPECT_NE(out.find(option), std::string::npos) << option << "\n" << out;
 }
 
+// Issue 37 (hostile input): a truncated JPEG was located with libjpeg's "Premature end of JPEG
+// file" printed without the file's name (the missing rows grey). locate and calibrate refuse it,
+// exit 1, naming the file, and libjpeg never gets to print its warning.
+TEST_F(LocateProgram, ATruncatedJpegIsRefusedNamingTheFile) {
+  const fs::path cam = dir_ / "cam.json";
+  write_camera(cam, std::nullopt);
+  std::vector<unsigned char> jpg;
+  cv::imencode(".jpg", renderer_->render({300, 200, 0}, sim::noise_free()), jpg);
+  const fs::path cut = dir_ / "cut.jpg";
+  std::ofstream(cut, std::ios::binary)
+      .write(reinterpret_cast<const char*>(jpg.data()),
+             static_cast<std::streamsize>(jpg.size() / 2));
+  const std::string want = cut.string() + ": truncated JPEG";
+  std::string out, err;
+  EXPECT_EQ(run(std::string(OMNILOC_CLI_PATH) + " locate " + cut.string() + " --camera " +
+                    cam.string() + " --yaw-deg 0",
+                dir_, out, err),
+            1);
+  EXPECT_NE(err.find("omniloc locate: error: cannot read image: " + want), std::string::npos)
+      << err;
+  EXPECT_EQ(err.find("Premature end"), std::string::npos) << err;
+  EXPECT_EQ(run(std::string(OMNILOC_CLI_PATH) + " calibrate " + cut.string() + " --out " +
+                    (dir_ / "cut-cam.json").string(),
+                dir_, out, err),
+            1);
+  EXPECT_NE(err.find("omniloc calibrate: error: cannot read image: " + want), std::string::npos)
+      << err;
+  EXPECT_EQ(err.find("Premature end"), std::string::npos) << err;
+}
+
 // The Localizer's own global search (no trusted heading) takes the same cue: with the goal colours
 // it relocalizes at the true pose where it refused the twin before.
 TEST_F(LocateProgram, LocalizerWithoutAHeadingRelocalizesByTheGoalColours) {

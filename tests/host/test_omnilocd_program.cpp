@@ -134,7 +134,9 @@ TEST(OmnilocdProgram, NotifiesSystemdReadyWatchdogAndStopping) {
 }
 
 // With no board the daemon still publishes, so a consumer can tell "no board" from "daemon down":
-// a datagram every 10 ms with status no_board and source none (no pose yet).
+// a datagram every 10 ms with status no_board and source none (no pose yet). Issue (hostile input):
+// they carried "uncertainty_cm":0.000, which reads as fully certain; without a pose the uncertainty
+// keys are left out, as match_error is.
 TEST(OmnilocdProgram, WithoutABoardItPublishesNoBoard) {
   omniloc::test::UdpReceiver rx;
   ASSERT_NE(rx.port(), 0);
@@ -150,6 +152,9 @@ TEST(OmnilocdProgram, WithoutABoardItPublishesNoBoard) {
     const auto j = nlohmann::json::parse(g);
     EXPECT_EQ(j.at("status"), "no_board") << g;
     EXPECT_EQ(j.at("source"), "none") << g;
+    EXPECT_FALSE(j.contains("uncertainty_cm")) << g;
+    EXPECT_FALSE(j.contains("uncertainty_yaw_deg")) << g;
+    EXPECT_FALSE(j.contains("match_error")) << g;
   }
 }
 

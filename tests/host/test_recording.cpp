@@ -177,6 +177,30 @@ TEST_F(RecordingFiles, CameraAndTruthErrors) {
   }
 }
 
+// Issue 37 (hostile input): a truncated JPEG frame was decoded with libjpeg's "Premature end of
+// JPEG file" on stderr, naming no file, and the grey-filled rest replayed as if seen. The replay's
+// frames go through read_image_file, which refuses it naming the line of camera.csv and the file.
+TEST_F(RecordingFiles, ATruncatedJpegFrameIsRefusedNamingTheFile) {
+  std::vector<unsigned char> jpg;
+  cv::imencode(".jpg", cv::Mat(480, 640, CV_8UC3, cv::Scalar(10, 100, 50)), jpg);
+  const fs::path frame = dir_ / "frames" / "000001.jpg";
+  std::ofstream(frame, std::ios::binary)
+      .write(reinterpret_cast<const char*>(jpg.data()),
+             static_cast<std::streamsize>(jpg.size() / 2));
+  write("camera.csv", "t_ms,file\n5,frames/000000.png\n21.5,frames/000001.jpg\n");
+  const Recording r = load_recording(dir_);
+  try {
+    (void)load_frame(r, 1);
+    FAIL() << "a truncated JPEG frame was read";
+  } catch (const RecordingError& e) {
+    const std::string s = e.what();
+    EXPECT_NE(s.find((dir_ / "camera.csv").string() + ":3: cannot read image: " + frame.string() +
+                     ": truncated JPEG"),
+              std::string::npos)
+        << s;
+  }
+}
+
 TEST_F(RecordingFiles, MetaErrorsNameTheFileAndFieldPath) {
   const std::string meta = (dir_ / "meta.json").string();
   const std::string robot =

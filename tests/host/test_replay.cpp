@@ -7,9 +7,11 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -140,10 +142,11 @@ std::string read_text(const fs::path& p) {
 }
 
 /// Runs `omniloc replay ARGS` as a child process (the program users run), stdout and stderr to
-/// files.
-int run_replay_command(const std::string& args, const fs::path& out, const fs::path& err) {
-  const std::string cmd = std::string(OMNILOC_CLI_PATH) + " replay " + args + " >" + out.string() +
-                          " 2>" + err.string();
+/// files; `prefix` goes before it on the shell's line.
+int run_replay_command(const std::string& args, const fs::path& out, const fs::path& err,
+                       const std::string& prefix = "") {
+  const std::string cmd = prefix + std::string(OMNILOC_CLI_PATH) + " replay " + args + " >" +
+                          out.string() + " 2>" + err.string();
   const int status = std::system(cmd.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
@@ -210,6 +213,53 @@ TEST(ReplayCommand, WritesTheLibrarysPosesAndNamesABadLine) {
   const std::string err = read_text(dir / "stderr.txt");
   EXPECT_NE(err.find(enc.string() + ":5:"), std::string::npos) << err;
   std::printf("malformed line refused: %s", err.c_str());
+  fs::remove_all(dir);
+}
+
+// Issue (hostile input): `omniloc replay --db` on a full disk aborted although the database it had
+// just built was in memory, and left a partial file at --db that then blocked the path ("not
+// overwriting it"). Now it warns, naming the file and the error, replays all the same (the poses of
+// a run with the cache saved), and leaves nothing at the path. The disk fills up as a file size
+// limit of 1 MiB (prlimit --fsize, binding root too; SIGXFSZ ignored, so write() fails part-way
+// with EFBIG as a full disk's does with ENOSPC): the 5.9 MB database does not fit, poses.csv does.
+TEST(ReplayCommand, AFullDiskForTheDatabaseCacheWarnsAndReplaysAnyway) {
+  if (std::system("command -v prlimit > /dev/null") != 0) GTEST_SKIP() << "no prlimit";
+  const std::uint64_t seed = 24;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  const fs::path dir =
+      fs::temp_directory_path() / ("omniloc_test_replay_full_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const RobotConfig robot = load_named_robot_config("default");
+  sim::OmniRenderer renderer(load_field("fira-robosot"), load_camera("default"));
+  sim::SimRunOptions opt;
+  opt.render.seed = seed;
+  {
+    sim::Trajectory tr("replay full disk", Pose2{300, 250, 15});
+    tr.line_to({340, 270}, 30, sim::MotionLimits{}).wait(0.1);
+    sim::World world(sim::WorldConfig::default_noise(robot, seed), tr);
+    sim::record_simulation(dir / "rec", world, renderer, opt, "fira-robosot", std::nullopt);
+  }
+  const fs::path db = dir / "cache" / "features.db";
+  const std::string args = (dir / "rec").string() + " --db " + db.string() + " --out ";
+  EXPECT_EQ(run_replay_command(args + (dir / "full.csv").string(), dir / "stdout.txt",
+                               dir / "stderr.txt", "trap '' XFSZ; prlimit --fsize=1048576 "),
+            0);
+  const std::string err = read_text(dir / "stderr.txt");
+  EXPECT_NE(err.find("warning: no cached database: built, but not saved (" + db.string() +
+                     ": write failed: " + std::strerror(EFBIG)),
+            std::string::npos)
+      << err;
+  std::printf("%s", err.substr(0, err.find('\n') + 1).c_str());
+  EXPECT_FALSE(fs::exists(db));
+  EXPECT_TRUE(fs::is_empty(db.parent_path())) << fs::directory_iterator(db.parent_path())->path();
+  // With room on the disk: the cache saved, the same poses.
+  EXPECT_EQ(run_replay_command(args + (dir / "room.csv").string(), dir / "stdout.txt",
+                               dir / "stderr.txt"),
+            0)
+      << read_text(dir / "stderr.txt");
+  EXPECT_TRUE(fs::exists(db));
+  EXPECT_FALSE(read_text(dir / "room.csv").empty());
+  EXPECT_EQ(read_text(dir / "full.csv"), read_text(dir / "room.csv"));
   fs::remove_all(dir);
 }
 

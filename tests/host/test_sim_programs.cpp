@@ -427,6 +427,7 @@ TEST(OmnilocdSim, ControlChannelServesCommandsWhileThePosesFlow) {
 // Issue 16 item 3: a write error (disk full) escaped Daemon::run, omnilocd exited and the pose
 // stream stopped. With a file size limit (SIGXFSZ ignored: writes fail with EFBIG as they fail
 // with ENOSPC on a full disk) the recording stops, says so, and the datagrams go on to the end.
+// Issue 37 (hostile input): the daemon then exited 0 as if all was well; it exits 3 and says why.
 TEST(OmnilocdSim, FullDiskStopsTheRecordingNotThePoses) {
   TempDir dir("omnilocd_sim_full");
   omniloc::test::UdpReceiver rx;
@@ -438,8 +439,12 @@ TEST(OmnilocdSim, FullDiskStopsTheRecordingNotThePoses) {
               " --trajectory circle --seed=6 --duration-s 2 --status-period-s 1 --udp-port " +
               std::to_string(rx.port()) + " --record-dir " + rec.string() + "\"",
           dir.path / "daemon.log", out);
-  ASSERT_EQ(rc, 0) << out;
+  EXPECT_EQ(rc, 3) << out;
   EXPECT_NE(out.find("omnilocd-sim: error: recording stopped: "), std::string::npos) << out;
+  EXPECT_NE(out.find("omnilocd-sim: error: exit 3: the recording to " + rec.string() +
+                     " stopped part-way on a write error ("),
+            std::string::npos)
+      << out;
   EXPECT_NE(out.find("write failed (File too large); poses are still sent"), std::string::npos)
       << out;
   EXPECT_NE(out.find("rec=stopped rec_failures=1"), std::string::npos) << out;

@@ -62,6 +62,17 @@ class ParsePose(unittest.TestCase):
             parse_pose(self.GOOD.replace('"t_uncertainty_ms":0.120', '"t_uncertainty_ms":-1.000'))
         self.assertIn("t_uncertainty_ms", str(e.exception))
 
+    def test_optional_pose_uncertainty(self):
+        # Without a pose from a fix (no board, no fix yet) the daemon leaves both keys out: 0 would
+        # read as certain.
+        p = parse_pose(self.GOOD)
+        self.assertEqual((p.uncertainty_cm, p.uncertainty_yaw_deg), (1.5, 0.25))
+        bare = self.GOOD.replace(',"uncertainty_cm":1.500,"uncertainty_yaw_deg":0.250', '')
+        self.assertNotEqual(bare, self.GOOD)
+        q = parse_pose(bare)
+        self.assertIsNone(q.uncertainty_cm)
+        self.assertIsNone(q.uncertainty_yaw_deg)
+
     def test_documented_example(self):
         p = parse_pose(self.GOOD)
         self.assertEqual((p.seq, p.x_cm, p.y_cm, p.yaw_deg, p.source, p.match_error, p.status),

@@ -56,13 +56,14 @@ class Ros2Attachment {
                         next = std::move(observer.on_pose)](const daemon::PoseEvent& e) {
       if (next) next(e);
       if (e.message.status == daemon::DaemonStatus::kNoBoard ||
-          e.message.status == daemon::DaemonStatus::kStarting)
+          e.message.status == daemon::DaemonStatus::kStarting || !e.message.uncertainty_cm ||
+          !e.message.uncertainty_yaw_deg)
         return;  // no pose yet: nothing to put on a pose topic
       ros2::Ros2Pose p;
       p.stamp_unix_ms = e.message.wall_ms;
       p.pose = Pose2{e.message.x_cm, e.message.y_cm, e.message.yaw_deg};
-      p.sigma_xy_cm = e.message.uncertainty_cm;
-      p.sigma_yaw_deg = e.message.uncertainty_yaw_deg;
+      p.sigma_xy_cm = *e.message.uncertainty_cm;
+      p.sigma_yaw_deg = *e.message.uncertainty_yaw_deg;
       p.vx_cm_s = e.message.vx_cm_s;
       p.vy_cm_s = e.message.vy_cm_s;
       p.omega_deg_s = e.message.omega_deg_s;

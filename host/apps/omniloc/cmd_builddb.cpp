@@ -21,6 +21,8 @@ struct BuilddbArgs {
 };
 
 int run_builddb(const BuilddbArgs& a) {
+  // Over nothing or an older database only, as replay and locate write their --db.
+  refuse_to_overwrite_foreign_file(a.out);
   const FieldGeometry field = load_field(a.field_name);
   const CameraModel camera = load_camera(a.camera_name);
   const GridSpec grid = GridSpec::covering(field, a.step_cm);

@@ -65,7 +65,8 @@ int run(const omniloc::daemon::DaemonConfig& config, const omniloc::Logger& log)
   const DaemonReport r = daemon.run(&omniloc::cli::g_stop_requested);
   service.stopping();
   log.info(report_line(r));
-  return 0;
+  if (exit_code(r) != 0) log.error(exit_reason(r));
+  return exit_code(r);
 }
 
 }  // namespace

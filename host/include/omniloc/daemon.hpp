@@ -94,8 +94,9 @@ struct DaemonModels {
 };
 
 /// Loads field, camera, robot and localizer configs and loads or builds the database, as the
-/// config says (a `database` path that does not exist yet is built and saved there). `progress`
-/// receives human-readable lines.
+/// config says (a `database` path that does not exist yet is built and saved there; when the save
+/// fails the database is used from memory and `progress` gets a line starting "warning: ").
+/// `progress` receives human-readable lines.
 [[nodiscard]] DaemonModels load_models(
     const DaemonConfig& config, const std::function<void(const std::string&)>& progress = {});
 
@@ -130,11 +131,20 @@ struct DaemonReport {
   std::string stop_reason;               ///< "signal", "duration"
   std::uint64_t recording_failures = 0;  ///< write errors (each stops the recording; poses go on)
   std::string recording_error;           ///< the last one, naming the file and the reason
+  std::string recording_dir;             ///< the recording it stopped (the last one)
   LocalizerStats localizer;
 };
 
 /// "stopped (signal) after 7.0 s: 600 windows, ..." for the end of a run.
 [[nodiscard]] std::string report_line(const DaemonReport& report);
+
+/// The daemons' exit code after a run that stopped cleanly when a write error (a full disk) stopped
+/// the recording part-way: the poses went on to the end, the recording did not.
+inline constexpr int kExitRecordingLost = 3;
+/// 0, or kExitRecordingLost; exit_reason says why ("" for 0): "exit 3: the recording to DIR stopped
+/// part-way on a write error (ERROR)".
+[[nodiscard]] int exit_code(const DaemonReport& report);
+[[nodiscard]] std::string exit_reason(const DaemonReport& report);
 
 /// Everything the daemon talks to.
 struct DaemonIo {

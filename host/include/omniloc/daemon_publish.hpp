@@ -35,8 +35,11 @@ struct PoseMessage {
   std::optional<double> match_error;
   /// Search range of that image result; none: a global search (sent as -1 beside a match_error).
   std::optional<double> search_range_cm;
-  double uncertainty_cm = 0.0;  ///< 1-sigma position uncertainty
-  double uncertainty_yaw_deg = 0.0;
+  /// 1-sigma position and heading uncertainty of the pose; none when the pose is not the
+  /// localizer's (source "none": no board, no fix yet), keys omitted: never 0, which reads as
+  /// certain.
+  std::optional<double> uncertainty_cm;
+  std::optional<double> uncertainty_yaw_deg;
   double vx_cm_s = 0.0;  ///< robot-frame velocity (+x forward, +y left) from the odometry
   double vy_cm_s = 0.0;
   double omega_deg_s = 0.0;  ///< yaw rate, counter-clockwise positive
@@ -81,11 +84,11 @@ struct StatusSnapshot {
   DaemonStatus status = DaemonStatus::kStarting;
   double x_cm = 0.0, y_cm = 0.0, yaw_deg = 0.0;
   std::string source;
-  std::optional<double> match_error;  ///< none: no image result ("err=-")
-  double uncertainty_cm = 0.0;
-  double gyro_drift_deg_per_s = 0.0;  ///< drift correction the localizer learnt from the images
-  double windows_per_s = 0.0;         ///< encoder windows received over the last period
-  double frames_per_s = 0.0;          ///< camera frames used over the last period
+  std::optional<double> match_error;     ///< none: no image result ("err=-")
+  std::optional<double> uncertainty_cm;  ///< none: no pose from a fix ("sigma=-")
+  double gyro_drift_deg_per_s = 0.0;     ///< drift correction the localizer learnt from the images
+  double windows_per_s = 0.0;            ///< encoder windows received over the last period
+  double frames_per_s = 0.0;             ///< camera frames used over the last period
   std::uint64_t published = 0;
   std::uint64_t send_failed = 0;
   std::string send_error;  ///< why the last failed send failed (shown when sends fail)

@@ -61,8 +61,16 @@ using BuildProgress = std::function<void(int done, int total)>;
 /// 2: radii are sample indices, the header says the step (a view beyond 254 px; 1 had px only).
 inline constexpr std::uint32_t kFeatureDbVersion = 2;
 
-/// Writes the file (throws std::runtime_error naming the path on I/O failure).
+/// Writes the file: to a temporary file beside it, renamed into place once complete, so that a
+/// failure part-way (a full disk) leaves the path as it was and no temporary behind. Throws
+/// std::runtime_error naming the path and the system's error on I/O failure.
 void save_feature_db(const FeatureDb& db, const std::string& path);
+
+/// Throws std::runtime_error "<path>: exists and is not an omniloc feature database; not
+/// overwriting it (<why>): remove it or give another database path" when something that is not a
+/// feature database (is_feature_db_file) is at `path`: a database may be written there only over
+/// nothing or over a database (any version, grid or checksum). `why` may be empty.
+void refuse_to_overwrite_foreign_file(const std::string& path, const std::string& why = {});
 
 /// True if `path` is a regular file that starts as a feature database does (its magic), whatever
 /// its version, grid or checksum: a cache may overwrite such a file, never anything else.

@@ -225,7 +225,10 @@ class PosesCsvWriter {
 };
 
 /// The database for a field and camera from `cache_path` if it holds the right one, else built
-/// (10 cm grid) and saved there (the folder is created). `log` gets one line on what was done.
+/// (10 cm grid) and saved there (the folder is created). `log` gets one line on what was done;
+/// when saving fails (a full disk), that line is a warning naming the file and the error and the
+/// database built is returned all the same. Something at `cache_path` that is not a feature
+/// database is never overwritten (std::runtime_error, refuse_to_overwrite_foreign_file).
 [[nodiscard]] FeatureDb load_or_build_feature_db(
     const FieldGeometry& field, const CameraModel& camera, const std::filesystem::path& cache_path,
     const std::function<void(const std::string&)>& log = {});

@@ -128,6 +128,7 @@ struct Daemon::Impl {
     } catch (const RecordingError& e) {
       ++report.recording_failures;
       report.recording_error = e.what();
+      report.recording_dir = record_dir;
       io.logger.error(std::string("recording could not be closed: ") + e.what());
     }
     recorder.reset();
@@ -142,6 +143,7 @@ struct Daemon::Impl {
     } catch (const RecordingError& e) {
       ++report.recording_failures;
       report.recording_error = e.what();
+      report.recording_dir = record_dir;
       recorder.reset();  // closes what is open; whole rows only are on disk
       io.logger.error(std::string("recording stopped: ") + e.what() + "; poses are still sent");
     }
@@ -176,8 +178,10 @@ struct Daemon::Impl {
     m.source = pose_source_name(lp.source);
     m.match_error = lp.match_error;
     m.search_range_cm = lp.search_range_cm;
-    m.uncertainty_cm = lp.sigma_xy_cm;
-    m.uncertainty_yaw_deg = lp.sigma_yaw_deg;
+    if (lp.source != PoseSource::kNone) {  // else no pose, no uncertainty (not 0: certain)
+      m.uncertainty_cm = lp.sigma_xy_cm;
+      m.uncertainty_yaw_deg = lp.sigma_yaw_deg;
+    }
     m.vx_cm_s = lp.vx_cm_s;
     m.vy_cm_s = lp.vy_cm_s;
     m.omega_deg_s = lp.omega_deg_s;
@@ -465,7 +469,6 @@ struct Daemon::Impl {
                         {"y_cm", last_message.y_cm},
                         {"yaw_deg", last_message.yaw_deg},
                         {"source", last_message.source},
-                        {"uncertainty_cm", last_message.uncertainty_cm},
                         {"windows", report.windows},
                         {"frames", report.frames},
                         {"published", publisher.sent()},
@@ -476,6 +479,7 @@ struct Daemon::Impl {
                         {"heading_known", localizer.heading_known()}};
     if (!record_dir.empty()) j["record_dir"] = record_dir;
     if (last_message.match_error) j["match_error"] = *last_message.match_error;
+    if (last_message.uncertainty_cm) j["uncertainty_cm"] = *last_message.uncertainty_cm;
     return j;
   }
 
@@ -627,6 +631,16 @@ std::string report_line(const DaemonReport& r) {
       static_cast<unsigned long long>(r.telemetry_gaps),
       r.recording_failures > 0 ? ", recording stopped on a write error" : "");
   return buf;
+}
+
+int exit_code(const DaemonReport& r) {
+  return r.recording_failures > 0 ? kExitRecordingLost : 0;
+}
+
+std::string exit_reason(const DaemonReport& r) {
+  if (exit_code(r) == 0) return {};
+  return "exit " + std::to_string(kExitRecordingLost) + ": the recording to " + r.recording_dir +
+         " stopped part-way on a write error (" + r.recording_error + ")";
 }
 
 Daemon::Daemon(const DaemonConfig& config, const DaemonModels& models, DaemonIo io) {

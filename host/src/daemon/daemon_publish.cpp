@@ -93,10 +93,15 @@ std::string pose_json(const PoseMessage& m) {
     out += ",\"search_range_cm\":";
     put_number(out, m.search_range_cm.value_or(-1.0), 1);
   }
-  out += ",\"uncertainty_cm\":";
-  put_number(out, m.uncertainty_cm, 3);
-  out += ",\"uncertainty_yaw_deg\":";
-  put_number(out, m.uncertainty_yaw_deg, 3);
+  // Absent too without a pose from a fix: 0 would read as certain.
+  if (m.uncertainty_cm) {
+    out += ",\"uncertainty_cm\":";
+    put_number(out, *m.uncertainty_cm, 3);
+  }
+  if (m.uncertainty_yaw_deg) {
+    out += ",\"uncertainty_yaw_deg\":";
+    put_number(out, *m.uncertainty_yaw_deg, 3);
+  }
   out += ",\"vx_cm_s\":";
   put_number(out, m.vx_cm_s, 2);
   out += ",\"vy_cm_s\":";
@@ -160,13 +165,18 @@ std::string status_line(const StatusSnapshot& s) {
     std::snprintf(err, sizeof err, "%.1f", *s.match_error);
   else
     std::snprintf(err, sizeof err, "-");
+  char sigma[32];
+  if (s.uncertainty_cm)
+    std::snprintf(sigma, sizeof sigma, "%.1fcm", *s.uncertainty_cm);
+  else
+    std::snprintf(sigma, sizeof sigma, "-");
   std::snprintf(
       buf, sizeof buf,
-      "t=%.1fs %s pose=(%.1f,%.1f,%.1f) src=%s err=%s sigma=%.1fcm drift=%+.3fdeg/s win=%.0f/s "
+      "t=%.1fs %s pose=(%.1f,%.1f,%.1f) src=%s err=%s sigma=%s drift=%+.3fdeg/s win=%.0f/s "
       "cam=%.0f/s "
       "sent=%llu dropped=%llu%s%s reconnects=%llu",
       s.t_s, std::string(to_string(s.status)).c_str(), s.x_cm, s.y_cm, s.yaw_deg,
-      s.source.empty() ? "-" : s.source.c_str(), err, s.uncertainty_cm, s.gyro_drift_deg_per_s,
+      s.source.empty() ? "-" : s.source.c_str(), err, sigma, s.gyro_drift_deg_per_s,
       s.windows_per_s, s.frames_per_s, static_cast<unsigned long long>(s.published),
       static_cast<unsigned long long>(s.send_failed),
       s.send_failed > 0 && !s.send_error.empty() ? " send_error=" : "",

@@ -25,6 +25,23 @@ void SteadyClock::wait_ms(double ms) {
     std::this_thread::sleep_for(std::chrono::microseconds(static_cast<std::int64_t>(ms * 1000.0)));
 }
 
+namespace {
+
+// The database is in memory: a failed save (a full disk, a missing directory) costs only the next
+// start its build, so the daemon says so and goes on, as `omniloc replay --db` does.
+void save_database(const FeatureDb& db, const std::string& path,
+                   const std::function<void(const std::string&)>& say) {
+  try {
+    save_feature_db(db, path);
+    say("saved feature database " + path);
+  } catch (const std::exception& e) {
+    say(std::string("warning: feature database built, but not saved (") + e.what() +
+        "); going on with the database in memory");
+  }
+}
+
+}  // namespace
+
 DaemonModels load_models(const DaemonConfig& config,
                          const std::function<void(const std::string&)>& progress) {
   auto say = [&](const std::string& s) {
@@ -43,10 +60,7 @@ DaemonModels load_models(const DaemonConfig& config,
     say("building feature database (" + std::to_string(grid.nx) + " x " + std::to_string(grid.ny) +
         " points)");
     m.db = build_feature_db(m.field, m.camera, grid);
-    if (!config.database.empty()) {
-      save_feature_db(m.db, config.database);
-      say("saved feature database " + config.database);
-    }
+    if (!config.database.empty()) save_database(m.db, config.database, say);
   }
   return m;
 }

@@ -88,15 +88,19 @@ function drawField() {
   if (!state.has_pose) return;
   const p = state.pose, px = m.x(p.x_cm), py = m.y(p.y_cm), yaw = p.yaw_deg * Math.PI / 180;
   // Heading uncertainty: a wedge of +-2 sigma around the heading; position: the 2-sigma circle.
-  const dyaw = Math.min(Math.PI, 2 * p.uncertainty_yaw_deg * Math.PI / 180);
-  c.fillStyle = WEDGE;
-  c.beginPath(); c.moveTo(px, py); c.arc(px, py, 34, -yaw - dyaw, -yaw + dyaw); c.closePath(); c.fill();
+  // Neither without an uncertainty (source none: no pose from a fix).
+  if (p.uncertainty_yaw_deg !== undefined) {
+    const dyaw = Math.min(Math.PI, 2 * p.uncertainty_yaw_deg * Math.PI / 180);
+    c.fillStyle = WEDGE;
+    c.beginPath(); c.moveTo(px, py); c.arc(px, py, 34, -yaw - dyaw, -yaw + dyaw); c.closePath(); c.fill();
+  }
   c.strokeStyle = HEADING;
   c.lineWidth = 2;
   c.beginPath(); c.moveTo(px, py); c.lineTo(px + 20 * Math.cos(yaw), py - 20 * Math.sin(yaw)); c.stroke();
   c.fillStyle = MARKER;
   c.beginPath(); c.arc(px, py, 7, 0, 2 * Math.PI); c.fill();
   // On top of the marker: a tracked pose's 2-sigma circle is often smaller than the marker.
+  if (p.uncertainty_cm === undefined) return;
   c.strokeStyle = SIGMA;
   c.lineWidth = 1.5;
   c.beginPath(); c.arc(px, py, Math.max(1, 2 * p.uncertainty_cm * m.s), 0, 2 * Math.PI); c.stroke();
@@ -151,7 +155,7 @@ function drawInfo() {
   el.textContent =
     'status   ' + p.status + '   source ' + p.source + '   seq ' + p.seq + '\n' +
     'pose     x ' + f1(p.x_cm) + ' cm   y ' + f1(p.y_cm) + ' cm   yaw ' + f1(p.yaw_deg) + ' deg\n' +
-    'sigma    ' + Number(p.uncertainty_cm).toFixed(2) + ' cm   ' + Number(p.uncertainty_yaw_deg).toFixed(2) + ' deg\n' +
+    'sigma    ' + (p.uncertainty_cm === undefined ? '-' : Number(p.uncertainty_cm).toFixed(2) + ' cm   ' + Number(p.uncertainty_yaw_deg).toFixed(2) + ' deg') + '\n' +
     'error    ' + (p.match_error === undefined ? '-' : Number(p.match_error).toFixed(2)) + '   (E_TH ' + state.e_th + ')\n' +
     'velocity ' + f1(p.vx_cm_s) + ', ' + f1(p.vy_cm_s) + ' cm/s   ' + f1(p.omega_deg_s) + ' deg/s\n' +
     'frame    t ' + f1(fr.overlay_t_ms) + ' ms   rays seen ' + fr.rays_seen + '   crossings ' + fr.crossings +

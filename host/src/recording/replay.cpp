@@ -28,11 +28,7 @@ FeatureDb load_or_build_feature_db(const FieldGeometry& field, const CameraModel
       return db;
     } catch (const std::exception& e) {
       // A stale or damaged database is a cache to rebuild; any other file is someone's data.
-      if (!is_feature_db_file(cache_path.string()))
-        throw std::runtime_error(
-            cache_path.string() +
-            ": exists and is not an omniloc feature database; not overwriting it (" + e.what() +
-            "): remove it or give another database path");
+      refuse_to_overwrite_foreign_file(cache_path.string(), e.what());
       why = std::string("cached database unusable (") + e.what() + ")";
     }
   }
@@ -40,7 +36,15 @@ FeatureDb load_or_build_feature_db(const FieldGeometry& field, const CameraModel
   std::error_code ec;
   if (cache_path.has_parent_path())
     std::filesystem::create_directories(cache_path.parent_path(), ec);
-  save_feature_db(db, cache_path.string());
+  try {
+    save_feature_db(db, cache_path.string());
+  } catch (const std::exception& e) {
+    // The database is in memory: only the next run pays for building it again.
+    if (log)
+      log("warning: " + why + ": built, but not saved (" + e.what() +
+          "); going on with the database in memory");
+    return db;
+  }
   if (log) log(why + ": built and saved to " + cache_path.string());
   return db;
 }

@@ -9,11 +9,13 @@
 #include <iterator>
 #include <mutex>
 #include <stdexcept>
+#include <string_view>
 #include <thread>
 #include <vector>
 
 #include "fnv.hpp"
 #include "omniloc/detail/file_read.hpp"
+#include "omniloc/detail/file_write.hpp"
 
 namespace omniloc {
 
@@ -121,14 +123,26 @@ void save_feature_db(const FeatureDb& db, const std::string& path) {
   }
   std::uint64_t sum = detail::fnv1a(&h, sizeof h);
   sum = detail::fnv1a(db.features.data(), db.features.size(), sum);
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) throw std::runtime_error(path + ": cannot open for writing");
-  out.write(reinterpret_cast<const char*>(&h), sizeof h);
-  out.write(reinterpret_cast<const char*>(db.features.data()),
-            static_cast<std::streamsize>(db.features.size()));
-  out.write(reinterpret_cast<const char*>(&sum), sizeof sum);
-  out.close();
-  if (!out) throw std::runtime_error(path + ": write failed");
+  // Beside the path and renamed into place: a full disk never leaves a partial database there.
+  const auto bytes = [](const void* p, std::size_t n) {
+    return std::string_view(static_cast<const char*>(p), n);
+  };
+  try {
+    write_file_replacing(path, {bytes(&h, sizeof h), bytes(db.features.data(), db.features.size()),
+                                bytes(&sum, sizeof sum)});
+  } catch (const FileWriteError& e) {
+    throw std::runtime_error(e.what());
+  }
+}
+
+void refuse_to_overwrite_foreign_file(const std::string& path, const std::string& why) {
+  std::error_code ec;
+  if (!std::filesystem::exists(std::filesystem::symlink_status(path, ec)) ||
+      is_feature_db_file(path))
+    return;
+  throw std::runtime_error(
+      path + ": exists and is not an omniloc feature database; not overwriting it" +
+      (why.empty() ? "" : " (" + why + ")") + ": remove it or give another database path");
 }
 
 namespace {

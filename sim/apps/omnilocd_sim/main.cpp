@@ -76,7 +76,8 @@ int run(const omniloc::daemon::DaemonConfig& config, const SimArgs& sim_args,
   const daemon::DaemonReport r = d.run(&omniloc::cli::g_stop_requested);
   if (truth_csv) truth_csv->close();
   say(daemon::report_line(r));
-  return 0;
+  if (daemon::exit_code(r) != 0) log.error(daemon::exit_reason(r));
+  return daemon::exit_code(r);
 }
 
 }  // namespace

@@ -11,8 +11,10 @@
 // overlay, encoding) runs in the server's thread when the frame is asked for, at most once per
 // frame_min_period_ms (5 Hz): requests in between get the last image again.
 //
-// LiveViewServer is the HTTP server (cpp-httplib) in its own thread, four worker threads. In a
-// build without cpp-httplib it throws at construction, saying so.
+// LiveViewServer is the HTTP server (cpp-httplib) in its own thread, four worker threads, and a
+// waiting room: a connection that has sent nothing yet waits there (one thread polls them all,
+// bounded in number and time), not in a worker, so idle connections cannot keep the page from
+// being served. In a build without cpp-httplib it throws at construction, saying so.
 //
 //   GET /            the page (text/html)
 //   GET /pose.json   the last pose datagram, exactly as sent over UDP (503 before the first)
@@ -51,6 +53,10 @@ struct LiveViewOptions {
   double path_step_ms = 50.0;     ///< ... a point every this many ms
   double error_history_s = 30.0;  ///< match errors shown: this many seconds, ...
   double error_step_ms = 100.0;   ///< ... one every this many ms
+  /// Connections that have sent nothing yet wait apart from the workers, this many at most (the
+  /// oldest is closed for a new one), each for first_byte_timeout_ms at most.
+  int max_waiting_connections = 256;
+  int first_byte_timeout_ms = 5000;
 };
 
 /// What the page shows; every method is thread-safe.
