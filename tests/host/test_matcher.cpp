@@ -41,7 +41,8 @@ class Matcher : public ::testing::Test {
   static void every_grid_point(int parity_i, int parity_j) {
     const GridSpec& g = db_->grid;
     const int rows = (g.ny - parity_j + 1) / 2;
-    const int row_step = rows / test::full_or_short(rows, (rows + 3) / 4, "grid rows");
+    const int n_rows = test::full_or_short(rows, (rows + 3) / 4, "grid rows");
+    const int row_step = (rows + n_rows - 1) / n_rows;
     int checked = 0, wrong = 0;
     for (int j = parity_j; j < g.ny; j += 2 * row_step) {
       for (int i = parity_i; i < g.nx; i += 2) {
