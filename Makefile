@@ -12,6 +12,8 @@
 #   make bench      benchmarks (each against a naive reference, ratio printed)
 #   make soak       long simulated runs: the localizer (SOAK_MINUTES, default 10), the daemon with faults
 #                   (SOAK_DAEMON_MINUTES, default 60 simulated; SOAK_BOARD reference or verilated)
+#   make sanitize   every host test under ASan + UBSan, nothing left out, the long tests in their short
+#                   mode (OMNILOC_TEST_SHORT=1; clang tree $(BUILD)/asan, scripts/sanitize.sh)
 #   make fuzz       the libFuzzer harnesses of tests/fuzz, FUZZ_SECONDS each (default 60; clang tree $(BUILD)/sanitize)
 #   make install    install the library, headers, programs and data under PREFIX (default /usr/local)
 #   make package    the robot's Debian package omniloc_<version>_<arch>.deb (robot-only Release tree $(BUILD)/package)
@@ -25,7 +27,7 @@ CMAKE_GEN  := $(shell command -v ninja >/dev/null 2>&1 && echo "-G Ninja")
 PREFIX     ?= /usr/local
 CTEST      := ctest --test-dir $(BUILD) --output-on-failure -j $(JOBS)
 
-.PHONY: all deps configure build test demo lint formal mutate bitstream bench soak fuzz install package generate clean
+.PHONY: all deps configure build test demo lint formal mutate bitstream bench soak sanitize fuzz install package generate clean
 
 all: build
 
@@ -69,6 +71,11 @@ SOAK_BOARD ?= reference
 soak: build
 	$(BUILD)/soak/soak_localizer --minutes $(SOAK_MINUTES)
 	$(BUILD)/soak/soak_daemon --minutes $(SOAK_DAEMON_MINUTES) --board $(SOAK_BOARD) --out $(BUILD)/soak/daemon
+
+# Every host test under ASan + UBSan in an optimised clang tree of its own (scripts/sanitize.sh,
+# docs/TESTING.md "Every test under ASan + UBSan"); make test runs only the short ones (sanitize_gtests).
+sanitize: deps
+	@bash scripts/sanitize.sh . $(BUILD)/asan
 
 # ASan + UBSan + libFuzzer in a clang tree of its own (scripts/fuzz.sh, docs/TESTING.md "Fuzzing").
 FUZZ_SECONDS ?= 60

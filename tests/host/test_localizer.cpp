@@ -11,6 +11,7 @@
 
 #include "omniloc/localizer.hpp"
 #include "omniloc_sim/record_sim.hpp"
+#include "short_mode.hpp"
 
 namespace omniloc {
 namespace {
@@ -73,13 +74,16 @@ RobotConfig LocalizerSim::robot_;
 
 /// Runs the points of one group, prints the table and checks the targets: mean below
 /// `mean_target_cm`, no point (nor any pose along the drives after the first fix) above 15 cm,
-/// yaw error below 1 degree.
-void check_group(const char* name, const Point* pts, int n, std::uint64_t seed,
+/// yaw error below 1 degree. In the short mode (short_mode.hpp) 3 points spread over the group,
+/// each with the seed it has in the full run, against the same targets.
+void check_group(const char* name, const Point* pts, int n_all, std::uint64_t seed,
                  double mean_target_cm,
                  sim::LocalizedRun (*drive)(const Point&, std::uint64_t, const LocalizerConfig&)) {
   std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  const int n = test::full_or_short(n_all, 3, "points");
   double sum = 0.0, worst = 0.0, worst_yaw = 0.0, worst_along = 0.0;
-  for (int i = 0; i < n; ++i) {
+  for (int k = 0; k < n; ++k) {
+    const int i = k * n_all / n;
     const sim::LocalizedRun run =
         drive(pts[i], seed + static_cast<std::uint64_t>(i), LocalizerConfig{});
     const LocalizedPose& last = run.poses.back();
@@ -263,6 +267,10 @@ TEST_F(LocalizerSim, ImageHeadingCorrectsADriftingGyro) {
   EXPECT_NEAR(learnt, -bias, 0.15);  // the learnt rate cancels the gyro's bias
   EXPECT_NE(run.poses.back().source, PoseSource::kLost);
 
+  if (test::short_mode()) {
+    std::printf("short mode (OMNILOC_TEST_SHORT): the run with the correction off left out\n");
+    return;
+  }
   double bias_off = 0.0, learnt_off = 0.0;
   const sim::LocalizedRun off = run_once(false, &bias_off, &learnt_off);
   const double final_yaw_off =

@@ -31,6 +31,7 @@
 #include "omniloc/conventions.hpp"
 #include "omniloc/recording.hpp"
 #include "run_command.hpp"
+#include "short_mode.hpp"
 #include "temp_dir.hpp"
 #include "udp_receiver.hpp"
 
@@ -315,9 +316,11 @@ TEST(OmnilocdSim, ControlChannelServesCommandsWhileThePosesFlow) {
   const auto pump = [&] {
     for (const auto& g : rx.drain()) grams.push_back(nlohmann::json::parse(g));
   };
-  // A patience, not a speed requirement: the simulated daemon runs at 0.1-0.4x real time here.
+  // A patience, not a speed requirement: the simulated daemon runs at 0.1-0.4x real time here, and
+  // some 30 times slower again under ASan (make sanitize's short mode: 5 times the patience).
+  const int patience = omniloc::test::short_mode() ? 5 * 18000 : 18000;
   const auto wait_for = [&](const std::function<bool()>& done) {
-    for (int i = 0; i < 18000 && !done(); ++i) {
+    for (int i = 0; i < patience && !done(); ++i) {
       ::usleep(10'000);
       pump();
     }

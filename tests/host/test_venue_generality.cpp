@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "short_mode.hpp"
 #include "venue_trial.hpp"
 
 namespace omniloc {
@@ -28,12 +29,15 @@ constexpr int kMinLocated = 1;
 // Lower it as the front end improves, never raise it.
 constexpr int kMaxWild = 1;
 
+// In the short mode (short_mode.hpp) the first 10 venues: the wild bound holds for them as it holds
+// for all 30; the floors at the same rate (a third of each, rounded down).
 TEST(VenueGenerality, ThirtySampledVenuesCalibrateAndLocate) {
   std::printf("venues %d of seed %llu (bench_venues: VENUES_COUNT=%d VENUES_SEED=%llu)\n", kVenues,
               static_cast<unsigned long long>(kSeed), kVenues,
               static_cast<unsigned long long>(kSeed));
+  const int n = test::full_or_short(kVenues, 10, "venues");
   int calib_good = 0, located = 0, wild = 0, reference = 0;
-  for (int i = 0; i < kVenues; ++i) {
+  for (int i = 0; i < n; ++i) {
     const test::VenueOutcome o =
         test::run_venue(sim::venue_seed(kSeed, static_cast<std::uint64_t>(i)));
     test::print_outcome(o);
@@ -45,9 +49,9 @@ TEST(VenueGenerality, ThirtySampledVenuesCalibrateAndLocate) {
   std::printf(
       "calibrated within the goal %d of %d, located %d of %d, accepted more than 20 cm off %d; "
       "with the true cameras located %d\n",
-      calib_good, kVenues, located, kVenues, wild, reference);
-  EXPECT_GE(calib_good, kMinCalibrated);
-  EXPECT_GE(located, kMinLocated);
+      calib_good, n, located, n, wild, reference);
+  EXPECT_GE(calib_good, kMinCalibrated * n / kVenues);
+  EXPECT_GE(located, kMinLocated * n / kVenues);
   EXPECT_LE(wild, kMaxWild);
 }
 

@@ -16,6 +16,7 @@
 #include "omniloc/matcher.hpp"
 #include "omniloc/vision.hpp"
 #include "omniloc_sim/renderer.hpp"
+#include "short_mode.hpp"
 
 namespace omniloc {
 namespace {
@@ -168,13 +169,14 @@ TEST_F(PaperPoints, BoundaryPointsTable2DaemonPath) {
 }
 
 // Beyond the 19 points: 300 random poses over the whole carpet (border included), noisy images
-// with 0-4 other robots, known heading, global search with the default interpolation.
+// with 0-4 other robots, known heading, global search with the default interpolation. In the short
+// mode (short_mode.hpp) the first 60 of them.
 TEST_F(PaperPoints, RandomPosesEverywhere) {
   const std::uint64_t seed = 2026;
   std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> ux(10, 740), uy(10, 540), uyaw(-180, 180);
-  const int n = 300;
+  const int n = test::full_or_short(300, 60, "random poses");
   double sum = 0.0, sum_grid = 0.0, worst = 0.0;
   int ambiguous = 0;
   for (int i = 0; i < n; ++i) {
