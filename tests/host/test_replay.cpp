@@ -151,27 +151,33 @@ int run_replay_command(const std::string& args, const fs::path& out, const fs::p
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+/// A short simulated straight drive recorded to DIR/rec (seed printed), for the command tests: a
+/// fresh DIR (removed first), the drive from `start` to `to`, turning to `yaw_deg`, then 0.1 s
+/// still.
+fs::path record_straight_drive(const std::string& name, std::uint64_t seed, const Pose2& start,
+                               const Eigen::Vector2d& to, double yaw_deg) {
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  const fs::path dir = fs::temp_directory_path() /
+                       ("omniloc_test_replay_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const RobotConfig robot = load_named_robot_config("default");
+  sim::OmniRenderer renderer(load_field("fira-robosot"), load_camera("default"));
+  sim::SimRunOptions opt;
+  opt.render.seed = seed;
+  sim::Trajectory tr("replay " + name, start);
+  tr.line_to(to, yaw_deg, sim::MotionLimits{}).wait(0.1);
+  sim::World world(sim::WorldConfig::default_noise(robot, seed), tr);
+  sim::record_simulation(dir / "rec", world, renderer, opt, "fira-robosot", std::nullopt);
+  return dir;
+}
+
 // The `omniloc replay` program itself: the poses it writes equal the library's replay of the same
 // recording, its summary prints the library's error figures, and a malformed encoders.csv line is
 // refused with the file and line named and a non-zero exit.
 TEST(ReplayCommand, WritesTheLibrarysPosesAndNamesABadLine) {
-  const std::uint64_t seed = 22;
-  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
-  const fs::path dir =
-      fs::temp_directory_path() / ("omniloc_test_replay_cmd_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
+  const fs::path dir = record_straight_drive("command", 22, Pose2{420, 300, -20}, {480, 250}, 30);
   const FieldGeometry field = load_field("fira-robosot");
   const CameraModel camera = load_camera("default");
-  const RobotConfig robot = load_named_robot_config("default");
-  sim::OmniRenderer renderer(field, camera);
-  sim::SimRunOptions opt;
-  opt.render.seed = seed;
-  {
-    sim::Trajectory tr("replay command", Pose2{420, 300, -20});
-    tr.line_to({480, 250}, 30, sim::MotionLimits{}).wait(0.1);
-    sim::World world(sim::WorldConfig::default_noise(robot, seed), tr);
-    sim::record_simulation(dir / "rec", world, renderer, opt, "fira-robosot", std::nullopt);
-  }
   const fs::path db_file = dir / "features.db";
   const FeatureDb db = load_or_build_feature_db(field, camera, db_file, [](const std::string&) {});
   const Recording rec = load_recording(dir / "rec");
@@ -224,21 +230,7 @@ TEST(ReplayCommand, WritesTheLibrarysPosesAndNamesABadLine) {
 // with EFBIG as a full disk's does with ENOSPC): the 5.9 MB database does not fit, poses.csv does.
 TEST(ReplayCommand, AFullDiskForTheDatabaseCacheWarnsAndReplaysAnyway) {
   if (std::system("command -v prlimit > /dev/null") != 0) GTEST_SKIP() << "no prlimit";
-  const std::uint64_t seed = 24;
-  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
-  const fs::path dir =
-      fs::temp_directory_path() / ("omniloc_test_replay_full_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  const RobotConfig robot = load_named_robot_config("default");
-  sim::OmniRenderer renderer(load_field("fira-robosot"), load_camera("default"));
-  sim::SimRunOptions opt;
-  opt.render.seed = seed;
-  {
-    sim::Trajectory tr("replay full disk", Pose2{300, 250, 15});
-    tr.line_to({340, 270}, 30, sim::MotionLimits{}).wait(0.1);
-    sim::World world(sim::WorldConfig::default_noise(robot, seed), tr);
-    sim::record_simulation(dir / "rec", world, renderer, opt, "fira-robosot", std::nullopt);
-  }
+  const fs::path dir = record_straight_drive("full-disk", 24, Pose2{300, 250, 15}, {340, 270}, 30);
   const fs::path db = dir / "cache" / "features.db";
   const std::string args = (dir / "rec").string() + " --db " + db.string() + " --out ";
   EXPECT_EQ(run_replay_command(args + (dir / "full.csv").string(), dir / "stdout.txt",
@@ -269,23 +261,9 @@ TEST(ReplayCommand, AFullDiskForTheDatabaseCacheWarnsAndReplaysAnyway) {
 // from the wheels), the replay warns with the window's seq and the count, and the poses stay
 // within 2 cm / 1 deg of the clean run's.
 TEST(ReplayCommand, AnImplausibleGyroYawIsDroppedWarnedAndDoesNotMoveThePoses) {
-  const std::uint64_t seed = 23;
-  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
-  const fs::path dir =
-      fs::temp_directory_path() / ("omniloc_test_replay_gyro_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
+  const fs::path dir = record_straight_drive("gyro", 23, Pose2{300, 250, 30}, {400, 300}, 40);
   const FieldGeometry field = load_field("fira-robosot");
   const CameraModel camera = load_camera("default");
-  const RobotConfig robot = load_named_robot_config("default");
-  sim::OmniRenderer renderer(field, camera);
-  sim::SimRunOptions opt;
-  opt.render.seed = seed;
-  {
-    sim::Trajectory tr("replay gyro", Pose2{300, 250, 30});
-    tr.line_to({400, 300}, 40, sim::MotionLimits{}).wait(0.1);
-    sim::World world(sim::WorldConfig::default_noise(robot, seed), tr);
-    sim::record_simulation(dir / "rec", world, renderer, opt, "fira-robosot", std::nullopt);
-  }
   const fs::path db_file = dir / "features.db";
   const FeatureDb db = load_or_build_feature_db(field, camera, db_file, [](const std::string&) {});
   const Recording clean = load_recording(dir / "rec");

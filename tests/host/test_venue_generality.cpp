@@ -30,12 +30,16 @@ constexpr int kMinLocated = 1;
 constexpr int kMaxWild = 1;
 
 // In the short mode (short_mode.hpp) the first 10 venues: the wild bound holds for them as it holds
-// for all 30; the floors at the same rate (a third of each, rounded down).
+// for all 30; the floors are what the front end reaches on those 10 today (Release, 2026-12-07:
+// 2 calibrated within the goal, 1 located; raise them with the full floors, never lower them).
+constexpr int kShortVenues = 10;
+constexpr int kMinCalibratedShort = 2;
+constexpr int kMinLocatedShort = 1;
 TEST(VenueGenerality, ThirtySampledVenuesCalibrateAndLocate) {
   std::printf("venues %d of seed %llu (bench_venues: VENUES_COUNT=%d VENUES_SEED=%llu)\n", kVenues,
               static_cast<unsigned long long>(kSeed), kVenues,
               static_cast<unsigned long long>(kSeed));
-  const int n = test::full_or_short(kVenues, 10, "venues");
+  const int n = test::full_or_short(kVenues, kShortVenues, "venues");
   int calib_good = 0, located = 0, wild = 0, reference = 0;
   for (int i = 0; i < n; ++i) {
     const test::VenueOutcome o =
@@ -50,8 +54,8 @@ TEST(VenueGenerality, ThirtySampledVenuesCalibrateAndLocate) {
       "calibrated within the goal %d of %d, located %d of %d, accepted more than 20 cm off %d; "
       "with the true cameras located %d\n",
       calib_good, n, located, n, wild, reference);
-  EXPECT_GE(calib_good, kMinCalibrated * n / kVenues);
-  EXPECT_GE(located, kMinLocated * n / kVenues);
+  EXPECT_GE(calib_good, n == kVenues ? kMinCalibrated : kMinCalibratedShort);
+  EXPECT_GE(located, n == kVenues ? kMinLocated : kMinLocatedShort);
   EXPECT_LE(wild, kMaxWild);
 }
 
