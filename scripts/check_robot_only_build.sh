@@ -6,10 +6,10 @@
 # Verilated symbol in omnilocd, no host/ source that includes a simulator header. Prints omnilocd's
 # dynamic libraries (ldd). Run by CTest (robot_only_build); usage: check_robot_only_build.sh SRC OUT
 set -euo pipefail
+# shellcheck source=scripts/robot_only.sh
+source "$(dirname "$0")/robot_only.sh"
 src=$(realpath "$1")
 out=$(realpath -m "$2")
-gen=()
-command -v ninja >/dev/null 2>&1 && gen=(-G Ninja)
 
 fail() { echo "robot_only_build: FAILED: $*" >&2; exit 1; }
 
@@ -17,11 +17,10 @@ if grep -rn --include='*.hpp' --include='*.cpp' -E '#include [<"](omniloc_sim/|V
   fail "host/ includes a simulator or Verilator header (above)"
 fi
 
-cmake -S "$src" -B "$out" "${gen[@]}" -DCMAKE_BUILD_TYPE=Release -DOMNILOC_BUILD_SIM=OFF -DOMNILOC_BUILD_TESTS=OFF -DOMNILOC_BUILD_CALIBRATION=OFF >"$out.configure.log" 2>&1 \
-  || { cat "$out.configure.log"; fail "configure"; }
+robot_only_configure "$src" "$out"
 if grep -q "^verilator_DIR" "$out/CMakeCache.txt"; then fail "the robot-only configuration looked for Verilator"; fi
 if grep -q "^Ceres_DIR" "$out/CMakeCache.txt"; then fail "the robot-only configuration looked for Ceres"; fi
-cmake --build "$out" --target omnilocd omniloc_cli -j "$(nproc)" >"$out.build.log" 2>&1 || { tail -50 "$out.build.log"; fail "build"; }
+robot_only_build "$out"
 for t in omniloc_sim omniloc_board_sim omniloc_sim_daemon vencoder_core; do
   if grep -q "^build [^:]*$t" "$out/build.ninja" 2>/dev/null; then fail "target $t exists in the robot-only build"; fi
 done
