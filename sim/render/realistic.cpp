@@ -353,7 +353,10 @@ RenderOptions realistic(std::uint64_t seed) {
 namespace {
 
 // The scene's random draws, in one sequence: every step below draws from it in turn, so their
-// order is the scene's seed.
+// order is the scene's seed. Two draws are never arguments of one call (or one parenthesised
+// constructor): C++ leaves the order of those open, gcc and clang take opposite ones, and a seed
+// named two scenes. Where draws were once arguments, they are now made one per statement in the
+// order gcc took (the right-most first), so each seed still names the scene it was tested on.
 struct SceneDraws {
   std::mt19937_64 rng;
   std::uniform_real_distribution<double> u01{0.0, 1.0};
@@ -410,7 +413,9 @@ void add_off_carpet(Scene& sc, const Room& room, const Eigen::Vector2d& p, int c
                     Make make) {
   const double m0 = room.m0, m1 = room.m1, m2 = room.m2, m3 = room.m3, X = room.X, Y = room.Y;
   for (int k = 0, attempt = 0; k < count && attempt < 2000; ++attempt) {
-    const Eigen::Vector2d q(d.uni(-m0, X + m1), d.uni(-m2, Y + m3));
+    const double qy = d.uni(-m2, Y + m3);  // y first (SceneDraws)
+    const double qx = d.uni(-m0, X + m1);
+    const Eigen::Vector2d q(qx, qy);
     Column c = make(q);
     const bool in_room = q.x() - c.radius_cm > -m0 && q.x() + c.radius_cm < X + m1 &&
                          q.y() - c.radius_cm > -m2 && q.y() + c.radius_cm < Y + m3;
@@ -466,8 +471,8 @@ Scene realistic_scene(const FieldGeometry& f, const Pose2& pose, const RenderOpt
   add_robots(sc, f, r, p, d);
   if (r.ball) add_ball(sc, f, r, p, d);
   add_off_carpet(sc, room, p, r.people, d, [&](const Eigen::Vector2d& q) {
-    const cv::Vec3f shirt(static_cast<float>(uni(20, 230)), static_cast<float>(uni(20, 230)),
-                          static_cast<float>(uni(20, 230)));
+    cv::Vec3f shirt;
+    for (int ch = 2; ch >= 0; --ch) shirt[ch] = static_cast<float>(uni(20, 230));  // red first
     return Column{q, 22.0, uni(160, 185), cv::Vec3f(60, 40, 30), shirt, false};
   });
   add_off_carpet(sc, room, p, r.furniture, d, [&](const Eigen::Vector2d& q) {
@@ -561,8 +566,10 @@ CeilingLights ceiling_lights(const FieldGeometry& f, const RenderOptions& opt) {
   std::uniform_real_distribution<double> u01(0.0, 1.0);
   CeilingLights lights;
   lights.unevenness = opt.realism.light_unevenness;
-  for (int k = 0; k < 3; ++k)
-    lights.at.emplace_back(u01(rng) * f.total_x_cm(), u01(rng) * f.total_y_cm());
+  for (int k = 0; k < 3; ++k) {
+    const double y = u01(rng) * f.total_y_cm();  // y first, as in SceneDraws
+    lights.at.emplace_back(u01(rng) * f.total_x_cm(), y);
+  }
   return lights;
 }
 

@@ -27,7 +27,10 @@ constexpr int kMaxRods = 4;
 constexpr double kMinRodPx = 2.0, kMaxRodPx = 15.0;
 constexpr double kMinLineCm = 5.0, kMaxLineCm = 12.5;
 
-// The venue's one random stream: every draw in a fixed order, so a seed is a venue.
+// The venue's one random stream: every draw in a fixed order, so a seed is a venue. Two draws are
+// never arguments of one call: C++ leaves their order open (gcc and clang differ), and a seed named
+// two venues. Draws that were once arguments are made in the order gcc took, the right-most first,
+// so each seed still names the venue it was tested on.
 struct Draw {
   std::mt19937_64 rng;
   double uni(double a, double b) {
@@ -54,6 +57,15 @@ cv::Vec3f bgr_of_hsv(double hue_deg, double s, double v) {
   cv::Mat3f out;
   cv::cvtColor(px, out, cv::COLOR_HSV2BGR);  // float HSV: hue in degrees, s and v in 0..1
   return out(0, 0) * 255.0f;
+}
+
+// A colour drawn in hue, saturation and value ranges: the value first, then saturation, then hue
+// (Draw).
+cv::Vec3f draw_hsv(Draw& d, std::pair<double, double> hue_deg, std::pair<double, double> s,
+                   std::pair<double, double> v) {
+  const double value = d.uni(v.first, v.second);
+  const double sat = d.uni(s.first, s.second);
+  return bgr_of_hsv(d.uni(hue_deg.first, hue_deg.second), sat, value);
 }
 
 void sample_image_size(Draw& d, TrueOptics& o) {
@@ -176,8 +188,8 @@ namespace {
 
 cv::Vec3f sample_carpet(Draw& d) {
   // Green (120 deg) through teal (165) to blue-green (185); a fifth are dark green.
-  if (d.chance(0.2)) return bgr_of_hsv(d.uni(105.0, 140.0), d.uni(0.5, 0.8), d.uni(0.22, 0.35));
-  return bgr_of_hsv(d.uni(110.0, 185.0), d.uni(0.45, 0.85), d.uni(0.35, 0.65));
+  if (d.chance(0.2)) return draw_hsv(d, {105.0, 140.0}, {0.5, 0.8}, {0.22, 0.35});
+  return draw_hsv(d, {110.0, 185.0}, {0.45, 0.85}, {0.35, 0.65});
 }
 
 cv::Vec3f sample_line_paint(Draw& d) {
@@ -211,17 +223,17 @@ void sample_look(Draw& d, SceneLook& lk) {
   lk.line_wear = d.chance(0.4) ? d.uni(0.1, 0.5) : 0.0;
   lk.walls = sample_walls(d);
   // Beyond the carpet: a dark floor (as today), or a light one (concrete, wood, lino).
-  lk.floor_beyond = d.chance(0.3)
-                        ? bgr_of_hsv(d.uni(20.0, 45.0), d.uni(0.0, 0.4), d.uni(0.55, 0.85))
-                        : bgr_of_hsv(d.uni(0.0, 360.0), d.uni(0.0, 0.2), d.uni(0.08, 0.2));
+  lk.floor_beyond = d.chance(0.3) ? draw_hsv(d, {20.0, 45.0}, {0.0, 0.4}, {0.55, 0.85})
+                                  : draw_hsv(d, {0.0, 360.0}, {0.0, 0.2}, {0.08, 0.2});
   lk.ceiling = cv::Vec3f::all(static_cast<float>(d.uni(120.0, 240.0)));
   lk.housing = cv::Vec3f::all(static_cast<float>(d.uni(20.0, 90.0)));
   lk.body = cv::Vec3f::all(static_cast<float>(d.uni(30.0, 110.0)));
   lk.rod = cv::Vec3f::all(static_cast<float>(d.uni(15.0, 50.0)));
-  lk.colour_cast = d.chance(0.6) ? cv::Vec3f(static_cast<float>(d.uni(0.85, 1.15)),
-                                             static_cast<float>(d.uni(0.9, 1.1)),
-                                             static_cast<float>(d.uni(0.85, 1.15)))
-                                 : cv::Vec3f(1.0f, 1.0f, 1.0f);
+  lk.colour_cast = cv::Vec3f(1.0f, 1.0f, 1.0f);
+  if (d.chance(0.6)) {
+    for (int ch = 2; ch >= 0; --ch)  // red first (Draw)
+      lk.colour_cast[ch] = static_cast<float>(ch == 1 ? d.uni(0.9, 1.1) : d.uni(0.85, 1.15));
+  }
   lk.goals = d.chance(0.75);
 }
 

@@ -244,7 +244,8 @@ Trajectory random_walk(std::uint64_t seed, const PlayingArea& f) {
     } else if (pick < 0.15) {
       t.wait(0.2 + 0.5 * u01(rng));
     } else {
-      t.line_to({ux(rng), uy(rng)}, uyaw(rng), lim);
+      const double yaw = uyaw(rng);  // before the point: the order gcc took as arguments
+      t.line_to({ux(rng), uy(rng)}, yaw, lim);
     }
   }
   return t.wait(0.3);

@@ -395,7 +395,8 @@ TEST_F(Matcher, YawFromTheScanOverRandomPoses) {
     opt.seed = seed + static_cast<std::uint64_t>(i);
     const BearingScan b =
         scan_image_bearings(renderer_->render(truth, opt), renderer_->camera(), 4);
-    const Eigen::Vector2d position(truth.x_cm + u1(rng), truth.y_cm + u1(rng));
+    const double dy_cm = u1(rng);  // y first: the order gcc took as constructor arguments
+    const Eigen::Vector2d position(truth.x_cm + u1(rng), truth.y_cm + dy_cm);
     const YawEstimate y = estimate_yaw(renderer_->field(), renderer_->camera(), b, position,
                                        truth.yaw_deg + 2.0 * u1(rng), 3.0);
     const double e = std::abs(angle_diff_deg(y.yaw_deg, truth.yaw_deg));

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <stdexcept>
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
@@ -17,6 +18,8 @@
 #include "omniloc/conventions.hpp"
 #include "omniloc/field.hpp"
 #include "omniloc_sim/renderer.hpp"
+#include "omniloc_sim/venue.hpp"
+#include "short_mode.hpp"
 #include "test_data_path.hpp"
 
 namespace omniloc {
@@ -196,25 +199,57 @@ TEST(RealisticRenderer, JpegIsTheLastStepAndTheDefaultRendererIsUnchanged) {
   EXPECT_EQ(ideal.at<cv::Vec3b>(240, 320 + 100), cv::Vec3b(45, 140, 40));  // carpet
 }
 
+// A seed names one scene and one venue, whichever compiler built the simulator: draws that were
+// arguments of one call (whose order C++ leaves open) once gave clang another scene than gcc for
+// the same seed. The values below are the gcc build's, the scenes every test was written on.
+TEST(RealisticRenderer, ASeedNamesTheSameSceneWhateverTheCompiler) {
+  const FieldGeometry field = load_field("fira-robosot");
+  const sim::Scene sc = sim::realistic_scene(field, {348.0, 392.0, 324.0}, sim::realistic(1404));
+  ASSERT_EQ(sc.columns.size(), 15u);  // 3 robots, the ball, 6 people, 5 pieces of furniture
+  const sim::Column& person = sc.columns[4];
+  EXPECT_NEAR(person.position_cm.x(), 193.001037, 1e-4);
+  EXPECT_NEAR(person.position_cm.y(), 577.828581, 1e-4);
+  EXPECT_NEAR(person.top_colour[0], 148.4398, 1e-3);  // the shirt, blue
+  EXPECT_NEAR(person.top_colour[2], 137.3250, 1e-3);  // red
+  const sim::SceneLook look = sim::sample_venue(sim::venue_seed(1, 0)).render.realism.look;
+  EXPECT_NEAR(look.carpet[0], 34.8932, 1e-3);
+  EXPECT_NEAR(look.carpet[2], 21.5294, 1e-3);
+  EXPECT_NEAR(look.colour_cast[0], 1.12538, 1e-5);
+  EXPECT_NEAR(look.colour_cast[2], 0.95943, 1e-5);
+}
+
 // The image analysis on realistic frames at spread poses: the rim (where the true optics put the
-// mirror's edge), the rods, line pixels. Includes frames (seeds 1404, 1410) where tall robots and
-// dark walls at the rim once made the rim finder take a large circle along one arc of the rim.
+// mirror's edge), the rods, line pixels, on 40 seeded frames (12 in the short mode), of which at
+// least 95 % must be right. Tall robots, dark walls and textured rooms at the rim once made the rim
+// finder take a large circle along one arc of the rim or the centre circle (35 of these 40 right;
+// 251 of 300 on seeds 1400-1699, 296 of 300 now); the frame of seed 1404 was one on clang's scene.
 TEST(RealisticRenderer, AnalysisFindsTheTrueRimOnSpreadPoses) {
   const FieldGeometry field = load_field("fira-robosot");
   const sim::TrueOptics o;
   const sim::RealisticRenderer rr(field, o);
-  for (std::uint64_t seed = 1400; seed < 1412; ++seed) {
+  const int n = test::full_or_short(40, 12, "frames");
+  int right = 0;
+  for (std::uint64_t seed = 1400; seed < 1400 + static_cast<std::uint64_t>(n); ++seed) {
     const Pose2 pose{100.0 + static_cast<double>((seed * 37) % 550),
                      80.0 + static_cast<double>((seed * 53) % 390),
                      static_cast<double>((seed * 71) % 360)};
-    std::printf("seed %llu at (%.0f, %.0f, %.0f)\n", static_cast<unsigned long long>(seed),
+    std::printf("seed %llu at (%.0f, %.0f, %.0f): ", static_cast<unsigned long long>(seed),
                 pose.x_cm, pose.y_cm, pose.yaw_deg);
-    const FrameAnalysis a = analyse_frame(rr.render(pose, sim::realistic(seed)), "realistic");
-    EXPECT_LT((a.rim.centre_px - o.centre_px).norm(), 1.5) << seed;
-    EXPECT_NEAR(a.rim.radius_px, o.mirror_radius_px, 1.5) << seed;
-    EXPECT_GE(a.masts_image.size(), o.rods.size()) << seed;
-    EXPECT_GT(a.line_pixels.size(), 2000u) << seed;
+    try {
+      const FrameAnalysis a = analyse_frame(rr.render(pose, sim::realistic(seed)), "realistic");
+      const double off_px = (a.rim.centre_px - o.centre_px).norm();
+      const double dr_px = a.rim.radius_px - o.mirror_radius_px;
+      const bool ok = off_px < 1.5 && std::abs(dr_px) < 1.5 &&
+                      a.masts_image.size() >= o.rods.size() && a.line_pixels.size() > 2000u;
+      std::printf("rim %.1f px off, radius %+.1f px, %zu masts, %zu line pixels%s\n", off_px, dr_px,
+                  a.masts_image.size(), a.line_pixels.size(), ok ? "" : ": WRONG");
+      right += ok ? 1 : 0;
+    } catch (const std::runtime_error& e) {
+      std::printf("refused: %s\n", e.what());
+    }
   }
+  std::printf("%d of %d frames right\n", right, n);
+  EXPECT_GE(right, static_cast<int>(std::ceil(0.95 * n)));
 }
 
 // --- the image analysis on another venue's frames

@@ -59,18 +59,23 @@ TEST(VenueGenerality, ThirtySampledVenuesCalibrateAndLocate) {
   EXPECT_LE(wild, kMaxWild);
 }
 
-// Cameras that fit their frame's line pixels (rms 0.9 and 1.2 px) but are wrong (the mapping 157 %
-// off the venue's true one, the centre 186 px off): calibrate's self-check refuses them, naming
-// itself. Judged against the sampler's true cameras (measured with the check off: docs/
-// CALIBRATION.md, step 8). Venue 2539317775091407530, refused by the self-check too in the Release
-// build, lies at the inlier check's edge (36-40 %): another compiler's rounding refuses it there.
+// Cameras that fit their frame's line pixels but are wrong: calibrate's self-check refuses them,
+// naming itself (venues 18273785850258396930 and 2539317775091407530: 29 % and 38 % of the fitted
+// camera's line points seen as lines, at least 40 % asked). Judged against the sampler's true
+// cameras (measured with the check off: docs/CALIBRATION.md, step 8). Venue 17316000990051603176,
+// whose low-contrast rim is found wrong, was the third the self-check refused (its rim then a
+// 370 px circle, the centre 186 px off); since the rim must enclose the best-supported circle its
+// rim is 46 px off and the carpet step refuses it first: no camera is written either way.
 TEST(VenueGenerality, SelfCheckRefusesWrongCamerasThatFitTheirPixels) {
-  for (const std::uint64_t seed : {18273785850258396930ull, 17316000990051603176ull}) {
+  for (const std::uint64_t seed : {18273785850258396930ull, 2539317775091407530ull}) {
     const test::VenueOutcome o = test::run_venue(seed);
     test::print_outcome(o);
     EXPECT_FALSE(o.calibrated) << seed;
     EXPECT_EQ(o.calib_step, "self-check") << seed << ": " << o.calib_error;
   }
+  const test::VenueOutcome o = test::run_venue(17316000990051603176ull);
+  test::print_outcome(o);
+  EXPECT_FALSE(o.calibrated) << o.calib_step << ": " << o.calib_error;
 }
 
 }  // namespace

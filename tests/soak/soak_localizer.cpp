@@ -83,8 +83,10 @@ sim::Trajectory long_random_walk(double seconds, std::uint64_t seed) {
       t.rotate_by(uyaw(rng), lim);
     else if (pick < 0.2)
       t.wait(0.5 + 2.0 * u01(rng));
-    else
-      t.line_to({ux(rng), uy(rng)}, uyaw(rng), lim);
+    else {
+      const double yaw = uyaw(rng);  // before the point: the order gcc took as arguments
+      t.line_to({ux(rng), uy(rng)}, yaw, lim);
+    }
   }
   return t;
 }

@@ -151,8 +151,28 @@ double inside_fraction(const Eigen::Vector2d& c, double r, const cv::Size& size)
   return static_cast<double>(in) / kSamples;
 }
 
-// One RANSAC pass: among circles supported by at least half the best support, the outermost (the
-// rim is outside every line and the centre circle, which may also be concentric with the image).
+struct RimHypothesis {
+  Eigen::Vector2d c;
+  double r, score;
+};
+
+// Among circles supported by at least half the best support and enclosing the best-supported
+// circle, the outermost: the rim is outside every line and the centre circle (which may also be
+// concentric with the image), and a larger circle that crosses the best-supported one (along one
+// arc of the rim and through steps beyond it) is not the rim.
+const RimHypothesis& outermost_enclosing(const std::vector<RimHypothesis>& hyps) {
+  const RimHypothesis* top = &hyps.front();
+  for (const auto& h : hyps)
+    if (h.score > top->score) top = &h;
+  const RimHypothesis* chosen = top;
+  for (const auto& h : hyps) {
+    const bool encloses = (h.c - top->c).norm() + top->r <= h.r + 2.0;
+    if (h.score >= 0.5 * top->score && encloses && h.r > chosen->r) chosen = &h;
+  }
+  return *chosen;
+}
+
+// One RANSAC pass: circles through random triples of steps, the rim chosen by outermost_enclosing.
 bool ransac_rim(const std::vector<EdgeCandidate>& cand, const cv::Size& size,
                 Eigen::Vector2d& centre, double& radius, int& rays) {
   if (cand.size() < 3) return false;
@@ -161,11 +181,7 @@ bool ransac_rim(const std::vector<EdgeCandidate>& cand, const cv::Size& size,
     by_ray[static_cast<std::size_t>(cand[i].ray)].push_back(static_cast<int>(i));
   std::mt19937 rng(1);  // fixed: the calibration is deterministic
   std::uniform_int_distribution<std::size_t> pick(0, cand.size() - 1);
-  struct Hyp {
-    Eigen::Vector2d c;
-    double r, score;
-  };
-  std::vector<Hyp> hyps;
+  std::vector<RimHypothesis> hyps;
   const double min_r = 0.15 * std::min(size.width, size.height);
   for (int it = 0; it < 3000; ++it) {
     const auto& a = cand[pick(rng)];
@@ -181,16 +197,11 @@ bool ransac_rim(const std::vector<EdgeCandidate>& cand, const cv::Size& size,
     hyps.push_back({cc, rr, circle_support(by_ray, cand, cc, rr, 2.0, nullptr)});
   }
   if (hyps.empty()) return false;
-  double best = 0.0;
-  for (const auto& h : hyps) best = std::max(best, h.score);
-  const Hyp* chosen = nullptr;
-  for (const auto& h : hyps) {
-    if (h.score >= 0.5 * best && (chosen == nullptr || h.r > chosen->r)) chosen = &h;
-  }
+  const RimHypothesis& chosen = outermost_enclosing(hyps);
   std::vector<Eigen::Vector2d> pts;
-  (void)circle_support(by_ray, cand, chosen->c, chosen->r, 2.0, &pts);
-  centre = chosen->c;
-  radius = chosen->r;
+  (void)circle_support(by_ray, cand, chosen.c, chosen.r, 2.0, &pts);
+  centre = chosen.c;
+  radius = chosen.r;
   if (!fit_circle(pts, centre, radius)) return false;
   pts.clear();
   (void)circle_support(by_ray, cand, centre, radius, 1.5, &pts);
