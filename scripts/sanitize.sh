@@ -46,13 +46,13 @@ build() {
   echo "sanitize: built in $((SECONDS - t0)) s ($out)"
 }
 
-# Seconds per executable in short mode, a guess for a fresh tree (no OUT/sanitize-times.txt yet) so
-# that the longest start first: the Release times of their tests, cut as the short mode cuts them.
+# Seconds per executable in short mode, for a fresh tree (no OUT/sanitize-times.txt yet) so that the
+# longest start first: the run of record's (docs/TESTING.md "Measured").
 default_seconds() {
   case "$1" in
-    test_localizer) echo 140 ;; test_sim_programs) echo 90 ;; test_calibration) echo 60 ;;
-    test_matcher) echo 40 ;; test_vision_paper) echo 30 ;; test_venue_generality) echo 30 ;;
-    test_daemon_sim) echo 20 ;; test_omnilocd_program) echo 15 ;; *) echo 1 ;;
+    test_venue_generality) echo 610 ;; test_localizer) echo 350 ;; test_sim_programs) echo 320 ;;
+    test_calibration) echo 180 ;; test_replay) echo 100 ;; test_replay_realistic) echo 80 ;;
+    test_venues) echo 70 ;; test_matcher) echo 60 ;; test_live_view) echo 30 ;; *) echo 1 ;;
   esac
 }
 
