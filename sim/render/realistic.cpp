@@ -567,7 +567,7 @@ CeilingLights ceiling_lights(const FieldGeometry& f, const RenderOptions& opt) {
   CeilingLights lights;
   lights.unevenness = opt.realism.light_unevenness;
   for (int k = 0; k < 3; ++k) {
-    const double y = u01(rng) * f.total_y_cm();  // y first, as in SceneDraws
+    const double y = u01(rng) * f.total_y_cm();  // y first: gcc's order (SceneDraws' comment)
     lights.at.emplace_back(u01(rng) * f.total_x_cm(), y);
   }
   return lights;

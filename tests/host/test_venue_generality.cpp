@@ -65,7 +65,7 @@ TEST(VenueGenerality, ThirtySampledVenuesCalibrateAndLocate) {
 // cameras (measured with the check off: docs/CALIBRATION.md, step 8). Venue 17316000990051603176,
 // whose low-contrast rim is found wrong, was the third the self-check refused (its rim then a
 // 370 px circle, the centre 186 px off); since the rim must enclose the best-supported circle its
-// rim is 46 px off and the carpet step refuses it first: no camera is written either way.
+// rim is 47 px off and the carpet step refuses it first: no camera is written either way.
 TEST(VenueGenerality, SelfCheckRefusesWrongCamerasThatFitTheirPixels) {
   for (const std::uint64_t seed : {18273785850258396930ull, 2539317775091407530ull}) {
     const test::VenueOutcome o = test::run_venue(seed);

@@ -165,10 +165,11 @@ TEST(UsbVerilatedBoard, StreamsGoldenWindowsThenReportsUnplug) {
   // (The board thread keeps the model running; its log is only read under the board's turn below.)
   std::vector<sim::Icm42688::Sample> reads;
   board.with_board([&] { reads = gyro.reads(); });
-  // The board polls the gyro from reset and the host enables the stream a little later (more board
-  // time passes first on a busy machine): samples read before the first streamed window are in no
-  // window. The log is taken from the first sample at which the first two windows with samples
-  // both sum exactly; every window after them must then sum exactly too.
+  // gyro_ctrl reads the part from reset, whatever the stream's state: the samples of any window
+  // ticked before the first one this test received are in the log but in no window it saw. (The
+  // test failed once at window 1 under load, not reproduced since; the offset is printed to tell.)
+  // The log is taken from the first sample at which the first two windows with samples both sum
+  // exactly; every window after them must then sum exactly too.
   const std::size_t first = first_streamed_sample(reads, windows);
   ASSERT_LT(first, reads.size()) << "no place in the gyro log sums to the first windows";
   std::printf("%zu gyro samples read before the first streamed window\n", first);
